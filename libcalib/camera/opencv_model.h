@@ -1,0 +1,175 @@
+// OpenCV's pinhole camera with up to 14 distortion coefficients, templated for
+// Ceres autodiff. Must agree with cv::projectPoints / cv::undistortPoints
+// (tests/camera/opencv_model_test.cc checks it against OpenCV itself).
+//
+// Camera frame (SPEC section 2): z along the optical axis, x = image +u,
+// y = image +v. Pixel (0,0) is the centre of the top-left pixel.
+//
+// Parameter blocks (one per zoom level):
+//   intrinsics[4]  = fx, fy, cx, cy                                   (pixels)
+//   distortion[14] = k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4 taux tauy   (OpenCV order)
+//
+// Projection of camera point X = (X, Y, Z), Z > 0:
+//   x' = X/Z, y' = Y/Z, r2 = x'^2 + y'^2
+//   radial = (1 + k1 r2 + k2 r2^2 + k3 r2^3) / (1 + k4 r2 + k5 r2^2 + k6 r2^3)
+//   x'' = x' radial + 2 p1 x'y' + p2 (r2 + 2x'^2) + s1 r2 + s2 r2^2
+//   y'' = y' radial + p1 (r2 + 2y'^2) + 2 p2 x'y' + s3 r2 + s4 r2^2
+//   [xt yt zt] = Tilt(taux, tauy) [x'' y'' 1]     (cv::computeTiltProjectionMatrix)
+//   u = fx xt/zt + cx,  v = fy yt/zt + cy
+#pragma once
+
+#include <cmath>
+
+namespace rtscalib::camera {
+
+constexpr int kNumIntrinsics = 4;
+constexpr int kNumDistortion = 14;
+
+enum DistortionIndex {
+  kK1 = 0, kK2, kP1, kP2, kK3, kK4, kK5, kK6, kS1, kS2, kS3, kS4, kTauX, kTauY
+};
+
+// OpenCV's tilt matrix: matProjZ * Ry(tauy) * Rx(taux) with OpenCV's sign
+// conventions, row-major 3x3.
+template <typename T>
+void TiltMatrix(const T& taux, const T& tauy, T m[9]) {
+  using std::cos;
+  using std::sin;
+  const T ctx = cos(taux), stx = sin(taux), cty = cos(tauy), sty = sin(tauy);
+  // matRotXY = matRotY * matRotX with
+  //   matRotX = [1 0 0; 0 ctx stx; 0 -stx ctx], matRotY = [cty 0 -sty; 0 1 0; sty 0 cty]
+  const T r[9] = {cty, sty * stx, -sty * ctx,  //
+                  T(0), ctx, stx,              //
+                  sty, -cty * stx, cty * ctx};
+  // matProjZ = [r22 0 -r02; 0 r22 -r12; 0 0 1]
+  const T p[9] = {r[8], T(0), -r[2], T(0), r[8], -r[5], T(0), T(0), T(1)};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      m[3 * i + j] = p[3 * i + 0] * r[0 + j] + p[3 * i + 1] * r[3 + j] + p[3 * i + 2] * r[6 + j];
+    }
+  }
+}
+
+// Distorts normalised coordinates (x', y') -> (x'', y'') before tilt.
+template <typename T>
+void DistortNormalized(const T* dist, const T& x, const T& y, T* xd, T* yd) {
+  const T r2 = x * x + y * y;
+  const T r4 = r2 * r2;
+  const T r6 = r4 * r2;
+  const T radial = (T(1) + dist[kK1] * r2 + dist[kK2] * r4 + dist[kK3] * r6) /
+                   (T(1) + dist[kK4] * r2 + dist[kK5] * r4 + dist[kK6] * r6);
+  *xd = x * radial + T(2) * dist[kP1] * x * y + dist[kP2] * (r2 + T(2) * x * x) +
+        dist[kS1] * r2 + dist[kS2] * r4;
+  *yd = y * radial + dist[kP1] * (r2 + T(2) * y * y) + T(2) * dist[kP2] * x * y +
+        dist[kS3] * r2 + dist[kS4] * r4;
+}
+
+// Projects a point in the camera frame to a pixel. Returns false for points on
+// or behind the image plane (Z <= 0): a cost function must then fail, never
+// zero its residual.
+template <typename T>
+bool ProjectToPixel(const T* intrinsics, const T* dist, const T* point, T* pixel) {
+  if (!(point[2] > T(0))) return false;
+  const T x = point[0] / point[2];
+  const T y = point[1] / point[2];
+  T xd, yd;
+  DistortNormalized(dist, x, y, &xd, &yd);
+  T m[9];
+  TiltMatrix(dist[kTauX], dist[kTauY], m);
+  const T xt = m[0] * xd + m[1] * yd + m[2];
+  const T yt = m[3] * xd + m[4] * yd + m[5];
+  const T zt = m[6] * xd + m[7] * yd + m[8];
+  pixel[0] = intrinsics[0] * xt / zt + intrinsics[2];
+  pixel[1] = intrinsics[1] * yt / zt + intrinsics[3];
+  return true;
+}
+
+// Back-projects a pixel to normalised coordinates (x', y') such that
+// ProjectToPixel((x', y', 1)) == pixel. Newton's method on the distortion
+// (converges quadratically; the fixed-point iteration of cv::undistortPoints is
+// the fallback reference in the tests). Valid region: where the distortion map
+// is monotone along rays, documented in docs/camera.md; returns false when the
+// iteration does not converge to 1e-12 in normalised units.
+template <typename T>
+bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
+                    int max_iterations = 20);
+
+// Unit ray in the camera frame for a pixel.
+template <typename T>
+bool PixelToRay(const T* intrinsics, const T* dist, const T* pixel, T* ray) {
+  T x, y;
+  if (!UndistortPixel(intrinsics, dist, pixel, &x, &y)) return false;
+  using std::sqrt;
+  const T n = sqrt(x * x + y * y + T(1));
+  ray[0] = x / n;
+  ray[1] = y / n;
+  ray[2] = T(1) / n;
+  return true;
+}
+
+// ---------------------------------------------------------------------------
+template <typename T>
+bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
+                    int max_iterations) {
+  using std::abs;
+  // Undo intrinsics and tilt: (xt/zt, yt/zt) -> (x'', y'').
+  const T a = (pixel[0] - intrinsics[2]) / intrinsics[0];
+  const T b = (pixel[1] - intrinsics[3]) / intrinsics[1];
+  T m[9];
+  TiltMatrix(dist[kTauX], dist[kTauY], m);
+  // Solve m * [xd yd 1]^T ~ [a b 1]^T: (m0 - a m6) xd + (m1 - a m7) yd = a m8 - m2, etc.
+  const T a00 = m[0] - a * m[6], a01 = m[1] - a * m[7], r0 = a * m[8] - m[2];
+  const T a10 = m[3] - b * m[6], a11 = m[4] - b * m[7], r1 = b * m[8] - m[5];
+  const T det = a00 * a11 - a01 * a10;
+  const T xd = (r0 * a11 - a01 * r1) / det;
+  const T yd = (a00 * r1 - r0 * a10) / det;
+
+  // Newton on f(x, y) = distort(x, y) - (xd, yd), Jacobian by forward-mode
+  // differences of the closed form (exact derivatives below).
+  T x = xd, y = yd;
+  for (int it = 0; it < max_iterations; ++it) {
+    const T r2 = x * x + y * y;
+    const T r4 = r2 * r2, r6 = r4 * r2;
+    const T num = T(1) + dist[kK1] * r2 + dist[kK2] * r4 + dist[kK3] * r6;
+    const T den = T(1) + dist[kK4] * r2 + dist[kK5] * r4 + dist[kK6] * r6;
+    const T radial = num / den;
+    const T dnum = dist[kK1] + T(2) * dist[kK2] * r2 + T(3) * dist[kK3] * r4;
+    const T dden = dist[kK4] + T(2) * dist[kK5] * r2 + T(3) * dist[kK6] * r4;
+    const T dradial_dr2 = (dnum * den - num * dden) / (den * den);
+    T fx, fy;
+    DistortNormalized(dist, x, y, &fx, &fy);
+    fx -= xd;
+    fy -= yd;
+    const T ds_x = dist[kS1] + T(2) * dist[kS2] * r2;  // d(s1 r2 + s2 r4)/dr2
+    const T ds_y = dist[kS3] + T(2) * dist[kS4] * r2;
+    // d r2/dx = 2x, d r2/dy = 2y
+    const T j00 = radial + x * dradial_dr2 * T(2) * x + T(2) * dist[kP1] * y +
+                  dist[kP2] * T(6) * x + ds_x * T(2) * x;
+    const T j01 = x * dradial_dr2 * T(2) * y + T(2) * dist[kP1] * x + dist[kP2] * T(2) * y +
+                  ds_x * T(2) * y;
+    const T j10 = y * dradial_dr2 * T(2) * x + dist[kP1] * T(2) * x + T(2) * dist[kP2] * y +
+                  ds_y * T(2) * x;
+    const T j11 = radial + y * dradial_dr2 * T(2) * y + dist[kP1] * T(6) * y +
+                  T(2) * dist[kP2] * x + ds_y * T(2) * y;
+    const T jdet = j00 * j11 - j01 * j10;
+    const T dx = (fx * j11 - j01 * fy) / jdet;
+    const T dy = (j00 * fy - fx * j10) / jdet;
+    x -= dx;
+    y -= dy;
+    if (abs(dx) + abs(dy) < T(1e-15)) {
+      // One more step so that autodiff derivatives are those of the converged
+      // fixed point (Newton's derivative propagation converges with it).
+      *xn = x;
+      *yn = y;
+      return true;
+    }
+  }
+  *xn = x;
+  *yn = y;
+  // Accept if the residual is tiny even when the step test did not trigger.
+  T fx, fy;
+  DistortNormalized(dist, x, y, &fx, &fy);
+  return abs(fx - xd) + abs(fy - yd) < T(1e-12);
+}
+
+}  // namespace rtscalib::camera

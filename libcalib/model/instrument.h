@@ -1,0 +1,108 @@
+// The instrument model: every physical thing owns one contiguous parameter
+// block that Ceres optimises in place.
+//
+//   base        ref_from_base pose: quaternion (Eigen x,y,z,w) + translation  [m]
+//   links[2]    DH link parameters {d, gamma_offset, alpha, a} (Klug Eq. 5)   [m, rad]
+//               joint angle gamma_i = control_i* + gamma_offset_i
+//   edm         flange_from_edm pose (EDM ray = +z of this frame)
+//   cams[z]     per zoom: flange_from_cam pose, intrinsics[4], distortion[14]
+//   effects[e]  one block per kinematic/EDM effect (effects.h), SI units
+//
+// Two kinematics share these blocks (kinematics.h has the formulas):
+//   dh         Klug Sec. 3:   ref_from_flange = Base * Z1 X1 * Z2 X2
+//   spherical  Klug Sec. 4.1 + SPEC 4: ref_from_flange = Base * Rz(-phi*) Ry(i) Rx(-theta*) Ry(c)
+// and both end in ref_from_tool = ref_from_flange * flange_from_tool (Eq. 9).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "libcalib/camera/opencv_model.h"
+#include "libcalib/geometry/rotation.h"
+#include "libcalib/model/effects.h"
+
+namespace rtscalib {
+
+enum class Kinematics { kDh, kSpherical };
+const char* KinematicsName(Kinematics k);
+
+// A pose parameter block pair: rotation as a unit quaternion (Eigen storage
+// order x, y, z, w) on a manifold, translation in metres.
+struct PoseBlock {
+  std::array<double, 4> q{0, 0, 0, 1};
+  std::array<double, 3> t{0, 0, 0};
+
+  Rigid3 ToRigid() const;
+  static PoseBlock FromRigid(const Rigid3& r);
+  // Euler angles [a, b, g] of Klug Eq. 83 (for reports and Tables 2/7).
+  Eigen::Vector3d Euler() const;
+};
+
+enum DhIndex { kDhD = 0, kDhGamma = 1, kDhAlpha = 2, kDhA = 3 };
+struct DhLink {
+  std::array<double, 4> p{0, 0, 0, 0};  // d, gamma_offset, alpha, a
+};
+
+struct CameraTool {
+  PoseBlock flange_from_cam;
+  std::array<double, camera::kNumIntrinsics> intrinsics{1000, 1000, 640, 480};
+  std::array<double, camera::kNumDistortion> distortion{};
+  int width = 1280;
+  int height = 960;
+};
+
+// Standard deviations for every parameter, filled by the fit (tangent-space
+// rotation sigmas in radians about the block's local axes).
+struct PoseSigma {
+  std::array<double, 3> rotation{};     // rad, about local x, y, z
+  std::array<double, 3> euler{};        // rad, of [a, b, g]
+  std::array<double, 3> t{};            // m
+};
+struct ModelSigmas {
+  bool valid = false;
+  PoseSigma base, edm;
+  std::array<std::array<double, 4>, 2> links{};
+  std::vector<PoseSigma> cam_tools;
+  std::vector<std::array<double, camera::kNumIntrinsics>> intrinsics;
+  std::vector<std::array<double, camera::kNumDistortion>> distortion;
+  std::array<std::array<double, 4>, kNumKinematicEffects> effect_cov{};  // 2x2 row major
+};
+
+struct InstrumentModel {
+  Kinematics kinematics = Kinematics::kDh;
+  EffectSet effects;
+  PoseBlock base;
+  std::array<DhLink, 2> links;
+  PoseBlock edm;
+  std::vector<CameraTool> cams;  // index = zoom level
+  std::array<std::array<double, kMaxEffectParams>, kNumKinematicEffects> effect_values{};
+  double edm_cyclic_unit_length = 1.5;  // U of edm_cyclic [m], an instrument constant
+  ModelSigmas sigmas;
+
+  int NumZooms() const { return static_cast<int>(cams.size()); }
+  std::array<double, 2>& EffectValue(Effect e) { return effect_values[static_cast<int>(e)]; }
+  const std::array<double, 2>& EffectValue(Effect e) const {
+    return effect_values[static_cast<int>(e)];
+  }
+};
+
+// Which face a (phi, theta) reading belongs to: face 1 for theta in [0, pi],
+// face 2 for theta in (pi, 2 pi).
+int FaceOf(double theta);
+// Face-2 reading of a face-1 pointing (SPEC 1).
+inline void OtherFace(double phi, double theta, double* phi2, double* theta2) {
+  double p = std::fmod(phi - M_PI, 2.0 * M_PI);
+  if (p < 0) p += 2.0 * M_PI;
+  *phi2 = p;
+  *theta2 = 2.0 * M_PI - theta;
+}
+// Zenith angle of a reading: theta in face 1, 2 pi - theta in face 2.
+inline double ZenithOf(double theta) { return theta <= M_PI ? theta : 2.0 * M_PI - theta; }
+
+// The ideal instrument of Klug Eq. 90/91 in both kinematics (no effects, ideal
+// tools, `num_zooms` identical ideal cameras): a starting point and a test fixture.
+InstrumentModel IdealModel(Kinematics k, int num_zooms, const CameraTool& camera);
+
+}  // namespace rtscalib
