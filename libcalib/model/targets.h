@@ -1,0 +1,68 @@
+// Known calibration targets: boards of AprilTags placed in the reference frame.
+//
+// A board is a grid of `rows` x `cols` tags of one family with consecutive ids
+// starting at `first_id` (row-major, row 0 at the board's top). In the board
+// frame the tags lie in the z = 0 plane, x to the right along a row, y down
+// along a column, z out of the back of the board (so a camera looking at the
+// printed side looks along +z). Tag (r, c)'s black square has edge `tag_size`
+// and its top-left corner at ((tag_size + spacing) * c, (tag_size + spacing) * r).
+// Corner order of one tag follows libapriltag's detection order (see
+// render/detector.cc): corner 0 = bottom-left, 1 = bottom-right, 2 = top-right,
+// 3 = top-left, as seen in an upright image of the printed tag.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "libcalib/geometry/rotation.h"
+
+namespace rtscalib {
+
+struct TagBoard {
+  std::string family = "tag36h11";
+  int first_id = 0;
+  int rows = 3;
+  int cols = 4;
+  double tag_size = 0.08;   // edge of the black square [m]
+  double spacing = 0.02;    // white gap between neighbouring tags [m]
+  Rigid3 ref_from_board;
+
+  int NumTags() const { return rows * cols; }
+  // The four corners of tag `index` (0 .. NumTags-1) in the board frame.
+  std::array<Eigen::Vector3d, 4> CornersInBoard(int index) const {
+    const int r = index / cols, c = index % cols;
+    const double x0 = (tag_size + spacing) * c, y0 = (tag_size + spacing) * r;
+    return {Eigen::Vector3d(x0, y0 + tag_size, 0), Eigen::Vector3d(x0 + tag_size, y0 + tag_size, 0),
+            Eigen::Vector3d(x0 + tag_size, y0, 0), Eigen::Vector3d(x0, y0, 0)};
+  }
+  Eigen::Vector3d CentreInRef() const {
+    const double w = cols * tag_size + (cols - 1) * spacing;
+    const double h = rows * tag_size + (rows - 1) * spacing;
+    return ref_from_board * Eigen::Vector3d(w / 2, h / 2, 0);
+  }
+};
+
+struct TargetCorner {
+  int target = 0;     // tag id
+  int corner = 0;     // 0..3
+  Eigen::Vector3d X;  // reference frame [m]
+};
+
+struct TargetScene {
+  std::vector<TagBoard> boards;
+
+  std::vector<TargetCorner> AllCorners() const {
+    std::vector<TargetCorner> out;
+    for (const TagBoard& b : boards) {
+      for (int i = 0; i < b.NumTags(); ++i) {
+        const auto corners = b.CornersInBoard(i);
+        for (int k = 0; k < 4; ++k) out.push_back({b.first_id + i, k, b.ref_from_board * corners[k]});
+      }
+    }
+    return out;
+  }
+};
+
+}  // namespace rtscalib

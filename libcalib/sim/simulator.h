@@ -1,0 +1,89 @@
+// The simulated instrument: a seeded truth model, an acquisition plan and
+// noise -> records (and, with targets, pixel observations). Every test of
+// rtscalib uses it as ground truth.
+//
+// Acquisition plan of Klug Sec. 4 (the "reduced" set):
+//   sweep1: theta = pi/2, phi = 0 .. 2pi (15 points, endpoint excluded)
+//   sweep2: phi = 0, theta = 0 .. pi (15 points, both ends included)
+//   at each pose: EDM at d = 1 m and 2 m; camera rays of length 1 m at the
+//   principal point and 1 px off it in u and in v, for every zoom level.
+// Cross-validation grid ("full" set): phi_steps x theta_steps poses over
+// phi in [0, 2pi), theta in (0, pi) with the same tool calls, plus extra
+// distances and pixels spread over the image (set = "grid").
+// Face 2 rows use the face-2 reading of each face-1 pointing (SPEC 1).
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "libcalib/model/instrument.h"
+#include "libcalib/model/observations.h"
+#include "libcalib/model/targets.h"
+
+namespace rtscalib {
+
+struct NoiseOptions {
+  double angle_rad = 0.0;     // sigma of phi and theta readings
+  double distance_m = 0.0;    // sigma of the EDM distance
+  double point_m = 0.0;       // sigma of each coordinate of a returned point
+  double pixel_px = 0.0;      // sigma of each pixel coordinate (pixels.csv)
+  std::string Check() const;  // empty if valid
+};
+
+struct AcquisitionPlan {
+  int sweep_points = 15;
+  std::vector<double> edm_distances{1.0, 2.0};
+  double cam_ray_length = 1.0;
+  double pixel_offset = 1.0;
+  bool sweeps = true;          // the paper's two joint sweeps ("sweep1", "sweep2")
+  int grid_phi_steps = 0;      // 0 = no grid
+  int grid_theta_steps = 0;
+  // Grid rows also use these distances and image points (fractions of the
+  // image size, e.g. 0.1 .. 0.9), so that held-out points differ in angle,
+  // distance and pixel.
+  std::vector<double> grid_edm_distances{1.0, 2.0, 5.0, 20.0};
+  std::vector<double> grid_cam_ray_lengths{1.0, 3.0};
+  int grid_pixels_per_axis = 3;  // n x n pixels over [0.1, 0.9] of the image
+  std::vector<int> faces{1};
+  std::vector<int> zooms{0};
+  std::string Check() const;
+};
+
+// Shots of known targets: for every zoom and face, the instrument aims at
+// each board from several directions so that the board fills the image.
+struct ShotPlan {
+  int shots_per_board = 4;       // per zoom and face
+  double fill = 0.7;             // fraction of the image the board should span
+  double pointing_jitter = 0.3;  // fraction of the field of view to vary aim by
+};
+
+struct SimulationOptions {
+  std::uint64_t seed = 1;
+  InstrumentModel truth;
+  NoiseOptions noise;
+  AcquisitionPlan plan;
+  TargetScene targets;   // empty = no pixel observations
+  ShotPlan shots;
+  std::string Check() const;
+};
+
+struct SimulatedData {
+  Observations obs;
+  // Exact (noise-free) values for checking: x for each record, uv for each pixel row.
+  std::vector<Eigen::Vector3d> exact_points;
+  std::vector<Eigen::Vector2d> exact_pixels;
+};
+
+// The truth resembling Klug's optimised PLT 300 (Tables 6/7), with one camera
+// per zoom level (640x480 px, f = 1000 px unless `camera` says otherwise).
+InstrumentModel PaperTruth(int num_zooms);
+
+SimulatedData Simulate(const SimulationOptions& options);
+
+// Records of the plan for a given model without noise (used for held-out
+// checks and by `Simulate`).
+std::vector<Record> PlanRecords(const AcquisitionPlan& plan, const InstrumentModel& model);
+
+}  // namespace rtscalib
