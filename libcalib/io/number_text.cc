@@ -1,0 +1,50 @@
+#include "libcalib/io/number_text.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+namespace rtscalib {
+
+std::optional<double> ParseDouble(std::string_view text) {
+  // from_chars rejects a leading '+', which people and other tools write.
+  if (!text.empty() && text.front() == '+') {
+    text.remove_prefix(1);
+    if (!text.empty() && text.front() == '-') return std::nullopt;  // "+-1"
+  }
+  double value = 0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ec != std::errc() || ptr != end) return std::nullopt;
+  return value;
+}
+
+std::optional<double> ParseFiniteDouble(std::string_view text) {
+  const std::optional<double> value = ParseDouble(text);
+  if (!value || !std::isfinite(*value)) return std::nullopt;
+  return value;
+}
+
+std::optional<long long> ParseInteger(std::string_view text) {
+  const std::optional<double> value = ParseFiniteDouble(text);
+  // 2^63 is the first double outside long long.
+  if (!value || std::trunc(*value) != *value || std::fabs(*value) >= 9.2233720368547758e18) {
+    return std::nullopt;
+  }
+  // Integers too large for a double to hold exactly are parsed as integers.
+  long long exact = 0;
+  std::string_view t = text;
+  if (!t.empty() && t.front() == '+') t.remove_prefix(1);  // "+-1" was rejected above
+  const char* end = t.data() + t.size();
+  const auto [ptr, ec] = std::from_chars(t.data(), end, exact);
+  if (ec == std::errc() && ptr == end) return exact;
+  return static_cast<long long>(*value);
+}
+
+std::string FormatDouble(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.17g", x);
+  return buffer;
+}
+
+}  // namespace rtscalib

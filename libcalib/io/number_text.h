@@ -1,0 +1,26 @@
+// Numbers as text, the same way in every file rtscalib reads or writes.
+//
+// Parsing is locale independent (std::from_chars), accepts an optional
+// leading '+', and rejects anything that is not completely a decimal number:
+// NaN, Inf, hexadecimal, trailing text. Writing uses %.17g, which reads back
+// to the same double bit for bit.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace rtscalib {
+
+// A finite double, or nullopt.
+std::optional<double> ParseFiniteDouble(std::string_view text);
+// Like ParseFiniteDouble, but also accepts nan/inf spellings (for sigmas,
+// which are NaN when a covariance could not be computed).
+std::optional<double> ParseDouble(std::string_view text);
+// An integer written as an integer or as an integral decimal ("2", "2.0",
+// "2e0"), in the range of long long; nullopt otherwise.
+std::optional<long long> ParseInteger(std::string_view text);
+// %.17g.
+std::string FormatDouble(double x);
+
+}  // namespace rtscalib

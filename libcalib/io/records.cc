@@ -1,0 +1,134 @@
+#include "libcalib/io/records.h"
+
+#include <limits>
+
+#include "libcalib/io/csv.h"
+#include "libcalib/io/errors.h"
+#include "libcalib/io/number_text.h"
+
+namespace rtscalib {
+namespace {
+
+int ReadFace(const CsvTable& t, int row) {
+  const std::optional<long long> face = ParseInteger(t.Text(row, "face"));
+  if (!face || (*face != 1 && *face != 2)) t.Fail(row, "face", "1 or 2");
+  return static_cast<int>(*face);
+}
+
+int ReadNonNegativeInt(const CsvTable& t, int row, const std::string& column, int max,
+                       const std::string& expected) {
+  const std::optional<long long> value = ParseInteger(t.Text(row, column));
+  if (!value || *value < 0 || *value > max) t.Fail(row, column, expected);
+  return static_cast<int>(*value);
+}
+
+int ReadZoom(const CsvTable& t, int row) {
+  return ReadNonNegativeInt(t, row, "zoom", std::numeric_limits<int>::max(),
+                            "a zoom level (integer >= 0)");
+}
+
+Eigen::Vector3d ReadPoint(const CsvTable& t, int row, const char* x, const char* y,
+                          const char* z) {
+  return {t.Number(row, x), t.Number(row, y), t.Number(row, z)};
+}
+
+}  // namespace
+
+RecordsFile ReadRecords(const std::string& path) {
+  const CsvTable t = CsvTable::Read(
+      path, {{"face", "zoom", "phi", "theta", "tool", "d", "x", "y", "z"}, {"u", "v", "set"}});
+  RecordsFile out;
+  out.notes = t.notes();
+  out.records.reserve(t.NumRows());
+  for (int row = 0; row < t.NumRows(); ++row) {
+    Record r;
+    r.line = t.Line(row);
+    r.face = ReadFace(t, row);
+    const std::string& tool = t.Text(row, "tool");
+    if (tool == "edm") {
+      r.tool = Tool::kEdm;
+    } else if (tool == "cam") {
+      r.tool = Tool::kCam;
+    } else {
+      t.Fail(row, "tool", "edm or cam");
+    }
+    // The zoom of an EDM row means nothing (SPEC 3), so it may be left empty.
+    r.zoom = (r.tool == Tool::kEdm && t.Empty(row, "zoom")) ? 0 : ReadZoom(t, row);
+    r.phi = t.Number(row, "phi");
+    r.theta = t.Number(row, "theta");
+    if (r.tool == Tool::kCam) {
+      for (const char* column : {"u", "v"}) {
+        if (!t.Has(column)) {
+          throw InputError::Cell(t.file(), r.line, column,
+                                 "a pixel coordinate for a cam row (the header has no '" +
+                                     std::string(column) + "' column)",
+                                 "");
+        }
+        if (t.Empty(row, column)) t.Fail(row, column, "a pixel coordinate for a cam row");
+      }
+    }
+    // EDM rows may carry u, v (ignored), but not garbage.
+    if (!t.Empty(row, "u")) r.u = t.Number(row, "u");
+    if (!t.Empty(row, "v")) r.v = t.Number(row, "v");
+    r.d = t.Number(row, "d");
+    if (!(r.d > 0)) {
+      t.Fail(row, "d", r.tool == Tool::kEdm ? "an EDM distance > 0 [m]" : "a ray length > 0 [m]");
+    }
+    r.x = ReadPoint(t, row, "x", "y", "z");
+    r.set = t.Text(row, "set");
+    out.records.push_back(std::move(r));
+  }
+  return out;
+}
+
+void WriteRecords(const std::string& path, const std::vector<Record>& records) {
+  CsvWriter w(path, {"face", "zoom", "phi", "theta", "tool", "u", "v", "d", "x", "y", "z", "set"});
+  for (const Record& r : records) {
+    const bool cam = r.tool == Tool::kCam;
+    w.Row({std::to_string(r.face), std::to_string(r.zoom), FormatDouble(r.phi),
+           FormatDouble(r.theta), cam ? "cam" : "edm", cam ? FormatDouble(r.u) : "",
+           cam ? FormatDouble(r.v) : "", FormatDouble(r.d), FormatDouble(r.x.x()),
+           FormatDouble(r.x.y()), FormatDouble(r.x.z()), r.set});
+  }
+  w.Close();
+}
+
+PixelsFile ReadPixels(const std::string& path) {
+  const CsvTable t = CsvTable::Read(path, {{"face", "zoom", "phi", "theta", "shot", "target",
+                                            "corner", "X", "Y", "Z", "u", "v"},
+                                           {}});
+  PixelsFile out;
+  out.notes = t.notes();
+  out.pixels.reserve(t.NumRows());
+  for (int row = 0; row < t.NumRows(); ++row) {
+    PixelObservation p;
+    p.line = t.Line(row);
+    p.face = ReadFace(t, row);
+    p.zoom = ReadZoom(t, row);
+    p.phi = t.Number(row, "phi");
+    p.theta = t.Number(row, "theta");
+    p.shot = t.Text(row, "shot");
+    if (p.shot.empty()) t.Fail(row, "shot", "a shot id (one per image)");
+    p.target = ReadNonNegativeInt(t, row, "target", std::numeric_limits<int>::max(),
+                                  "a target id (integer >= 0)");
+    p.corner = ReadNonNegativeInt(t, row, "corner", 3, "a corner index 0, 1, 2 or 3");
+    p.X = ReadPoint(t, row, "X", "Y", "Z");
+    p.uv = {t.Number(row, "u"), t.Number(row, "v")};
+    out.pixels.push_back(std::move(p));
+  }
+  return out;
+}
+
+void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels) {
+  CsvWriter w(path, {"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z",
+                     "u", "v"});
+  for (const PixelObservation& p : pixels) {
+    w.Row({std::to_string(p.face), std::to_string(p.zoom), FormatDouble(p.phi),
+           FormatDouble(p.theta), p.shot, std::to_string(p.target), std::to_string(p.corner),
+           FormatDouble(p.X.x()), FormatDouble(p.X.y()), FormatDouble(p.X.z()),
+           FormatDouble(p.uv.x()), FormatDouble(p.uv.y())});
+  }
+  w.Close();
+}
+
+}  // namespace rtscalib

@@ -1,0 +1,38 @@
+// records.csv and pixels.csv (SPEC 3): files <-> the observation structs of
+// libcalib/model/observations.h.
+//
+// records.csv columns: face, zoom, phi, theta, tool, u, v, d, x, y, z [, set]
+//   face   1 or 2                      zoom  integer >= 0 (may be empty on edm rows -> 0)
+//   tool   edm | cam                   u, v  pixels; required on cam rows, may be empty on edm rows
+//   d      > 0 [m]                     phi, theta, x, y, z  finite [rad, m]
+//   set    optional free label (the column may be absent)
+// pixels.csv columns: face, zoom, phi, theta, shot, target, corner, X, Y, Z, u, v
+//   shot   free label of one image     target  integer >= 0     corner  0..3
+// Every violation is an InputError naming file, line and column (csv.h has the
+// shared syntax rules); each struct keeps the line it came from so that later
+// messages (critical region, outliers) can point at it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "libcalib/model/observations.h"
+
+namespace rtscalib {
+
+struct RecordsFile {
+  std::vector<Record> records;
+  std::vector<std::string> notes;  // e.g. ignored extra columns
+};
+RecordsFile ReadRecords(const std::string& path);
+// Writes all columns including `set`, numbers with %.17g; u, v empty on edm rows.
+void WriteRecords(const std::string& path, const std::vector<Record>& records);
+
+struct PixelsFile {
+  std::vector<PixelObservation> pixels;
+  std::vector<std::string> notes;
+};
+PixelsFile ReadPixels(const std::string& path);
+void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels);
+
+}  // namespace rtscalib
