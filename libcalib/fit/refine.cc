@@ -1,0 +1,442 @@
+#include "libcalib/fit/refine.h"
+
+#include <ceres/ceres.h>
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "libcalib/eval/error_measures.h"
+#include "libcalib/fit/cost_functions.h"
+#include "libcalib/fit/manifolds.h"
+
+namespace rtscalib {
+
+std::string FitOptions::Check() const {
+  if (!(sigma_edm_m > 0) || !(sigma_cam_m > 0) || !(sigma_pixel_px > 0)) {
+    return "fit.sigmas must all be > 0";
+  }
+  if (!(loss_scale > 0)) return "fit.robust_loss.scale must be > 0";
+  if (max_iterations < 1) return "fit.max_iterations must be >= 1";
+  if (translation_bound_m < 0) return "fit.translation_bound_m must be >= 0";
+  if (!(min_zenith_rad < max_zenith_rad)) return "fit.critical_region: min_zenith must be < max_zenith";
+  if (num_threads < 1) return "fit.threads must be >= 1";
+  return "";
+}
+
+namespace {
+
+enum class Group { kEdm = 0, kCam = 1, kPixel = 2 };
+
+struct BlockInfo {
+  std::string name;
+  int size = 0;
+  bool is_quaternion = false;
+};
+
+// Which observation groups are present; decides what is observable.
+struct Presence {
+  bool edm = false;
+  std::set<int> cam_zooms;    // zooms with camera records
+  std::set<int> pixel_zooms;  // zooms with pixel observations
+  bool cams_span_image = false;
+};
+
+// The one place that turns the model's flags into free or frozen parameters,
+// manifolds and bounds (STYLE: ParameterizeCameras).
+class Parameterizer {
+ public:
+  // Bounds are windows around `start` (the values the refinement began from).
+  Parameterizer(ceres::Problem* problem, InstrumentModel* model, const InstrumentModel& start,
+                const FitOptions& o, const Presence& presence, FitSummary* summary)
+      : problem_(problem), model_(model), start_(start), options_(o), presence_(presence),
+        summary_(summary) {}
+
+  void Apply() {
+    InstrumentModel& m = *model_;
+    const bool dh = m.kinematics == Kinematics::kDh;
+    Quaternion(m.base.q.data(), "base.rotation");
+    Translation(m.base.t.data(), start_.base.t.data(), "base.t");
+    if (dh) {
+      // Gauge: gamma_1 (base rotation about axis 1) and d_1 (base translation
+      // along axis 1) are held; link 2 is held (the tools absorb it).
+      Subset(m.links[0].p.data(), 4, {kDhD, kDhGamma}, "link1");
+      Constant(m.links[1].p.data(), "link2");
+      summary_->fixed_gauges.push_back(
+          "link1.d and link1.gamma_offset held at their start values (equivalent to base translation along and rotation about axis 1)");
+      summary_->fixed_gauges.push_back(
+          "link2 {d, gamma_offset, alpha, a} held (the EDM and camera tool transforms absorb them)");
+    }
+    if (problem_->HasParameterBlock(m.edm.q.data())) {
+      if (dh) {
+        problem_->SetManifold(m.edm.q.data(), new QuaternionNoRollManifold);
+        Name(m.edm.q.data(), "edm.rotation", 4, true);
+        summary_->fixed_gauges.push_back(
+            "EDM roll about its ray held at the extraction's convention (Klug Eq. 79)");
+        Translation(m.edm.t.data(), start_.edm.t.data(), "edm.t");
+      } else {
+        // Spherical: the EDM ray is the line of sight; its offset along the
+        // ray is edm_offset's job.
+        Constant(m.edm.q.data(), "edm.rotation");
+        Subset(m.edm.t.data(), 3, {2}, "edm.t");
+        summary_->fixed_gauges.push_back(
+            "spherical: EDM rotation is the line of sight (held), EDM t_z held (edm_offset models it)");
+      }
+    }
+    for (int z = 0; z < m.NumZooms(); ++z) {
+      CameraTool& cam = m.cams[z];
+      if (!problem_->HasParameterBlock(cam.flange_from_cam.q.data())) continue;
+      const std::string zs = "cam[" + std::to_string(z) + "]";
+      Quaternion(cam.flange_from_cam.q.data(), zs + ".rotation");
+      Translation(cam.flange_from_cam.t.data(), start_.cams[z].flange_from_cam.t.data(), zs + ".t");
+      if (options_.fit_intrinsics) {
+        Name(cam.intrinsics.data(), zs + ".intrinsics", 4, false);
+      } else {
+        Constant(cam.intrinsics.data(), zs + ".intrinsics");
+      }
+      std::vector<int> frozen;
+      std::set<int> free_idx;
+      for (Effect e : m.effects.List()) {
+        if (IsDistortion(e)) {
+          for (int i : Info(e).distortion_indices) free_idx.insert(i);
+        }
+      }
+      for (int i = 0; i < camera::kNumDistortion; ++i) {
+        if (!free_idx.count(i)) frozen.push_back(i);
+      }
+      if (free_idx.empty()) {
+        Constant(cam.distortion.data(), zs + ".distortion");
+      } else {
+        Subset(cam.distortion.data(), camera::kNumDistortion, frozen, zs + ".distortion");
+      }
+    }
+    for (Effect e : m.effects.List()) {
+      if (!IsKinematic(e)) continue;
+      double* p = m.EffectValue(e).data();
+      if (problem_->HasParameterBlock(p)) Name(p, Info(e).name, Info(e).num_params, false);
+    }
+  }
+
+  const std::map<const double*, BlockInfo>& blocks() const { return blocks_; }
+
+ private:
+  void Name(double* p, const std::string& name, int size, bool quaternion) {
+    blocks_[p] = {name, size, quaternion};
+  }
+  void Quaternion(double* q, const std::string& name) {
+    if (!problem_->HasParameterBlock(q)) return;
+    problem_->SetManifold(q, new ceres::EigenQuaternionManifold);
+    Name(q, name, 4, true);
+  }
+  void Translation(double* t, const double* t_start, const std::string& name) {
+    if (!problem_->HasParameterBlock(t)) return;
+    Name(t, name, 3, false);
+    // Klug Eq. 98: |t| <= t_max. Applied as a window around the start value
+    // (the extraction is good to a fraction of it), so that a station far
+    // from the origin stays admissible.
+    if (options_.translation_bound_m > 0) {
+      for (int i = 0; i < 3; ++i) {
+        problem_->SetParameterLowerBound(t, i, t_start[i] - options_.translation_bound_m);
+        problem_->SetParameterUpperBound(t, i, t_start[i] + options_.translation_bound_m);
+      }
+    }
+  }
+  void Subset(double* p, int size, const std::vector<int>& frozen, const std::string& name) {
+    if (!problem_->HasParameterBlock(p)) return;
+    if (static_cast<int>(frozen.size()) == size) {
+      Constant(p, name);
+      return;
+    }
+    problem_->SetManifold(p, new ceres::SubsetManifold(size, frozen));
+    Name(p, name, size, false);
+  }
+  void Constant(double* p, const std::string& name) {
+    if (problem_->HasParameterBlock(p)) problem_->SetParameterBlockConstant(p);
+  }
+
+  ceres::Problem* problem_;
+  InstrumentModel* model_;
+  const InstrumentModel& start_;
+  const FitOptions& options_;
+  const Presence& presence_;
+  FitSummary* summary_;
+  std::map<const double*, BlockInfo> blocks_;
+};
+
+struct ResidualRef {
+  ceres::ResidualBlockId id;
+  Group group;
+  int index;  // into records or pixels
+};
+
+void FillSigmas(ceres::Problem* problem, const std::map<const double*, BlockInfo>& blocks,
+                InstrumentModel* model, FitSummary* summary, int num_threads) {
+  ceres::Covariance::Options copt;
+  copt.algorithm_type = ceres::DENSE_SVD;
+  copt.null_space_rank = -1;  // pseudo-inverse: rank deficiency is reported, not fatal
+  copt.min_reciprocal_condition_number = 1e-14;
+  copt.num_threads = num_threads;
+  std::vector<const double*> free_blocks;
+  for (const auto& [p, info] : blocks) {
+    if (!problem->IsParameterBlockConstant(const_cast<double*>(p))) free_blocks.push_back(p);
+  }
+  ceres::Covariance cov(copt);
+  if (!cov.Compute(free_blocks, problem)) {
+    summary->message += " covariance could not be computed;";
+    return;
+  }
+  // Joint tangent-space covariance of all free blocks.
+  std::vector<int> offsets;
+  int n = 0;
+  for (const double* p : free_blocks) {
+    offsets.push_back(n);
+    n += problem->ParameterBlockTangentSize(p);
+  }
+  Eigen::MatrixXd c(n, n);
+  if (!cov.GetCovarianceMatrixInTangentSpace(free_blocks, c.data())) return;
+  c.transposeInPlace();  // row-major -> column-major (symmetric anyway)
+
+  // Parameter names in tangent order (for the correlation list).
+  std::vector<std::string> names(n);
+  for (size_t b = 0; b < free_blocks.size(); ++b) {
+    const BlockInfo& info = blocks.at(free_blocks[b]);
+    const int ts = problem->ParameterBlockTangentSize(free_blocks[b]);
+    for (int i = 0; i < ts; ++i) names[offsets[b] + i] = info.name + "[" + std::to_string(i) + "]";
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      const double d = std::sqrt(c(i, i) * c(j, j));
+      if (d <= 0) continue;
+      const double rho = c(i, j) / d;
+      if (std::abs(rho) > 0.95) summary->strong_correlations.push_back({names[i] + " ~ " + names[j], rho});
+    }
+  }
+
+  ModelSigmas& s = model->sigmas;
+  s.valid = true;
+  s.cam_tools.assign(model->NumZooms(), PoseSigma{});
+  s.intrinsics.assign(model->NumZooms(), {});
+  s.distortion.assign(model->NumZooms(), {});
+  auto block_cov = [&](const double* p, Eigen::MatrixXd* out) -> bool {
+    for (size_t b = 0; b < free_blocks.size(); ++b) {
+      if (free_blocks[b] != p) continue;
+      const int ts = problem->ParameterBlockTangentSize(p);
+      *out = c.block(offsets[b], offsets[b], ts, ts);
+      return true;
+    }
+    return false;
+  };
+  // Ambient sigmas for Euclidean/subset blocks via the manifold's PlusJacobian.
+  auto ambient_sigma = [&](double* p, int size, double* sigma) {
+    Eigen::MatrixXd tc;
+    if (!block_cov(p, &tc)) return;
+    const ceres::Manifold* man = problem->GetManifold(p);
+    Eigen::MatrixXd j = Eigen::MatrixXd::Identity(size, tc.rows());
+    if (man) {
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr(size, tc.rows());
+      man->PlusJacobian(p, jr.data());
+      j = jr;
+    }
+    const Eigen::MatrixXd ac = j * tc * j.transpose();
+    for (int i = 0; i < size; ++i) sigma[i] = std::sqrt(std::max(ac(i, i), 0.0));
+  };
+  auto pose_sigma = [&](PoseBlock& pose, PoseSigma* out) {
+    ambient_sigma(pose.t.data(), 3, out->t.data());
+    Eigen::MatrixXd rc;
+    if (!block_cov(pose.q.data(), &rc)) return;
+    // Tangent-space sigmas (rotation about axes) and Euler sigmas by numeric
+    // propagation through the manifold.
+    const ceres::Manifold* man = problem->GetManifold(pose.q.data());
+    const int ts = static_cast<int>(rc.rows());
+    for (int i = 0; i < std::min(ts, 3); ++i) out->rotation[i] = std::sqrt(std::max(rc(i, i), 0.0));
+    Eigen::MatrixXd je(3, ts);
+    const Eigen::Vector3d e0 = pose.Euler();
+    for (int k = 0; k < ts; ++k) {
+      const double h = 1e-7;
+      Eigen::VectorXd delta = Eigen::VectorXd::Zero(ts);
+      delta[k] = h;
+      PoseBlock moved = pose;
+      man->Plus(pose.q.data(), delta.data(), moved.q.data());
+      Eigen::Vector3d e1 = moved.Euler();
+      for (int i = 0; i < 3; ++i) je(i, k) = WrapAngle(e1[i] - e0[i]) / h;
+    }
+    const Eigen::Matrix3d ec = je * rc * je.transpose();
+    for (int i = 0; i < 3; ++i) out->euler[i] = std::sqrt(std::max(ec(i, i), 0.0));
+  };
+  pose_sigma(model->base, &s.base);
+  pose_sigma(model->edm, &s.edm);
+  for (int k = 0; k < 2; ++k) ambient_sigma(model->links[k].p.data(), 4, s.links[k].data());
+  for (int z = 0; z < model->NumZooms(); ++z) {
+    pose_sigma(model->cams[z].flange_from_cam, &s.cam_tools[z]);
+    ambient_sigma(model->cams[z].intrinsics.data(), 4, s.intrinsics[z].data());
+    ambient_sigma(model->cams[z].distortion.data(), camera::kNumDistortion, s.distortion[z].data());
+  }
+  for (Effect e : model->effects.List()) {
+    if (!IsKinematic(e)) continue;
+    Eigen::MatrixXd ec;
+    if (!block_cov(model->EffectValue(e).data(), &ec)) continue;
+    auto& out = s.effect_cov[static_cast<int>(e)];
+    out = {ec(0, 0), ec.rows() > 1 ? ec(0, 1) : 0.0, ec.rows() > 1 ? ec(1, 0) : 0.0,
+           ec.rows() > 1 ? ec(1, 1) : 0.0};
+  }
+}
+
+}  // namespace
+
+FitSummary Refine(const Observations& obs, const FitOptions& options, InstrumentModel* model) {
+  const std::string msg = options.Check();
+  if (!msg.empty()) throw std::invalid_argument(msg);
+  const auto t0 = std::chrono::steady_clock::now();
+  FitSummary summary;
+  InstrumentModel& m = *model;
+
+  // Effects that the dh kinematics already contains are never fitted twice.
+  if (m.kinematics == Kinematics::kDh) {
+    for (Effect e : m.effects.List()) {
+      if (Info(e).redundant_in_dh) {
+        m.effects.Remove(e);
+        summary.message += std::string(" ") + Info(e).name + " is redundant with the dh model (not fitted);";
+      }
+    }
+  }
+
+  Presence presence;
+  std::vector<const Record*> records;
+  for (const Record& r : obs.records) {
+    if (InCriticalRegion(r.theta, options.min_zenith_rad, options.max_zenith_rad)) {
+      ++summary.excluded_critical;
+      continue;
+    }
+    if (r.tool == Tool::kCam && r.zoom >= m.NumZooms()) {
+      throw std::invalid_argument(obs.records_source + ":" + std::to_string(r.line) +
+                                  ": zoom " + std::to_string(r.zoom) + " has no camera in the model");
+    }
+    records.push_back(&r);
+    if (r.tool == Tool::kEdm) presence.edm = true;
+    else presence.cam_zooms.insert(r.zoom);
+  }
+  std::vector<const PixelObservation*> pixels;
+  for (const PixelObservation& p : obs.pixels) {
+    if (InCriticalRegion(p.theta, options.min_zenith_rad, options.max_zenith_rad)) {
+      ++summary.excluded_critical;
+      continue;
+    }
+    if (p.zoom >= m.NumZooms()) {
+      throw std::invalid_argument(obs.pixels_source + ":" + std::to_string(p.line) + ": zoom " +
+                                  std::to_string(p.zoom) + " has no camera in the model");
+    }
+    pixels.push_back(&p);
+    presence.pixel_zooms.insert(p.zoom);
+  }
+  if (records.empty() && pixels.empty()) {
+    throw std::invalid_argument("nothing to fit: every observation is in the critical region or none was given");
+  }
+
+  double sigma[3] = {options.sigma_edm_m, options.sigma_cam_m, options.sigma_pixel_px};
+  const int rounds = options.reestimate_sigmas ? 3 : 1;
+  ceres::Solver::Summary solver_summary;
+  std::vector<ResidualRef> refs;
+  std::unique_ptr<ceres::Problem> problem;
+  std::unique_ptr<Parameterizer> param;
+  const InstrumentModel start = m;
+  for (int round = 0; round < rounds; ++round) {
+    // Each round warm-starts from the previous one; bounds stay around `start`.
+    ceres::Problem::Options popt;
+    popt.manifold_ownership = ceres::TAKE_OWNERSHIP;
+    problem = std::make_unique<ceres::Problem>(popt);
+    refs.clear();
+    auto loss = [&]() -> ceres::LossFunction* {
+      switch (options.loss) {
+        case RobustLoss::kHuber: return new ceres::HuberLoss(options.loss_scale);
+        case RobustLoss::kCauchy: return new ceres::CauchyLoss(options.loss_scale);
+        default: return nullptr;
+      }
+    };
+    for (const Record* r : records) {
+      const Group g = r->tool == Tool::kEdm ? Group::kEdm : Group::kCam;
+      ceres::CostFunction* cost = MakeRecordCost(*r, &m, sigma[static_cast<int>(g)]);
+      const BlockLayout layout = LayoutFor(&m, r->tool == Tool::kEdm ? -1 : r->zoom);
+      refs.push_back({problem->AddResidualBlock(cost, loss(), layout.blocks), g,
+                      static_cast<int>(r - obs.records.data())});
+    }
+    for (const PixelObservation* p : pixels) {
+      ceres::CostFunction* cost = MakePixelCost(*p, &m, sigma[2]);
+      const BlockLayout layout = LayoutFor(&m, p->zoom);
+      refs.push_back({problem->AddResidualBlock(cost, loss(), layout.blocks), Group::kPixel,
+                      static_cast<int>(p - obs.pixels.data())});
+    }
+    param = std::make_unique<Parameterizer>(problem.get(), &m, start, options, presence, &summary);
+    summary.fixed_gauges.clear();
+    param->Apply();
+
+    ceres::Solver::Options sopt;
+    sopt.linear_solver_type = ceres::DENSE_QR;
+    sopt.max_num_iterations = options.max_iterations;
+    sopt.num_threads = options.num_threads;
+    sopt.function_tolerance = 1e-16;
+    sopt.gradient_tolerance = 1e-16;
+    sopt.parameter_tolerance = 1e-16;
+    sopt.minimizer_progress_to_stdout = options.verbose;
+    ceres::Solve(sopt, problem.get(), &solver_summary);
+    if (round == 0) summary.initial_cost = solver_summary.initial_cost;
+
+    if (!options.reestimate_sigmas) break;
+    // Variance-component estimate per group: s0^2 = sum r^2 / redundancy,
+    // redundancy approximated by n_g * (1 - n_params / n_obs).
+    double sum2[3] = {0, 0, 0};
+    int count[3] = {0, 0, 0};
+    for (const ResidualRef& ref : refs) {
+      double cost = 0;
+      problem->EvaluateResidualBlock(ref.id, false, &cost, nullptr, nullptr);
+      sum2[static_cast<int>(ref.group)] += 2.0 * cost;
+      count[static_cast<int>(ref.group)] += ref.group == Group::kPixel ? 2 : 3;
+    }
+    const int n_obs = count[0] + count[1] + count[2];
+    const double redundancy = std::max(0.05, 1.0 - double(problem->NumParameters()) / std::max(n_obs, 1));
+    bool changed = false;
+    for (int g = 0; g < 3; ++g) {
+      if (count[g] == 0) continue;
+      const double f = std::sqrt(sum2[g] / (count[g] * redundancy));
+      // Never shrink below a floor that would make exact data ill-posed.
+      const double floor = g == 2 ? 1e-9 : 1e-15;
+      const double next = std::max(sigma[g] * f, floor);
+      if (std::abs(next / sigma[g] - 1.0) > 0.05) changed = true;
+      sigma[g] = next;
+    }
+    if (!changed) break;
+  }
+
+  summary.converged = solver_summary.termination_type == ceres::CONVERGENCE ||
+                      solver_summary.termination_type == ceres::USER_SUCCESS;
+  summary.iterations = static_cast<int>(solver_summary.iterations.size());
+  summary.final_cost = solver_summary.final_cost;
+  summary.num_residuals = problem->NumResiduals();
+  summary.num_parameters = problem->NumParameters();
+  summary.sigma0_records = sigma[0] / options.sigma_edm_m;
+  summary.sigma0_pixels = sigma[2] / options.sigma_pixel_px;
+  summary.message += " " + solver_summary.message;
+
+  if (options.loss != RobustLoss::kNone) {
+    for (const ResidualRef& ref : refs) {
+      double cost = 0;
+      problem->EvaluateResidualBlock(ref.id, false, &cost, nullptr, nullptr);
+      if (std::sqrt(2.0 * cost) > options.loss_scale) {
+        summary.downweighted.push_back(
+            (ref.group == Group::kPixel ? obs.pixels_source : obs.records_source) + ":" +
+            std::to_string(ref.group == Group::kPixel ? obs.pixels[ref.index].line
+                                                      : obs.records[ref.index].line));
+      }
+    }
+  }
+  if (options.compute_covariance) {
+    FillSigmas(problem.get(), param->blocks(), &m, &summary, options.num_threads);
+  }
+  summary.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+}  // namespace rtscalib

@@ -1,0 +1,284 @@
+#include "libcalib/sim/simulator.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "libcalib/camera/opencv_model.h"
+#include "libcalib/model/kinematics.h"
+
+namespace rtscalib {
+namespace {
+
+// One pointing of the plan in face 1; face-2 readings are derived (SPEC 1).
+struct Pose {
+  double phi, theta;
+  const char* set;
+};
+
+std::vector<Pose> PlanPoses(const AcquisitionPlan& plan) {
+  std::vector<Pose> poses;
+  const int n = plan.sweep_points;
+  if (plan.sweeps) {
+    for (int k = 0; k < n; ++k) poses.push_back({2.0 * M_PI * k / n, M_PI / 2, "sweep1"});
+    for (int k = 0; k < n; ++k) poses.push_back({0.0, M_PI * k / (n - 1), "sweep2"});
+  }
+  for (int i = 0; i < plan.grid_phi_steps; ++i) {
+    for (int j = 0; j < plan.grid_theta_steps; ++j) {
+      poses.push_back({2.0 * M_PI * i / plan.grid_phi_steps,
+                       M_PI * (j + 0.5) / plan.grid_theta_steps, "grid"});
+    }
+  }
+  return poses;
+}
+
+void Reading(int face, const Pose& p, double* phi, double* theta) {
+  if (face == 1) {
+    *phi = p.phi;
+    *theta = p.theta;
+  } else {
+    OtherFace(p.phi, p.theta, phi, theta);
+  }
+}
+
+}  // namespace
+
+std::string NoiseOptions::Check() const {
+  if (angle_rad < 0 || distance_m < 0 || point_m < 0 || pixel_px < 0) {
+    return "noise sigmas must be >= 0";
+  }
+  return "";
+}
+
+std::string AcquisitionPlan::Check() const {
+  if (sweeps && sweep_points < 4) return "plan.sweep_points must be >= 4 (got " + std::to_string(sweep_points) + ")";
+  if (edm_distances.empty()) return "plan.edm_distances must not be empty";
+  for (double d : edm_distances) {
+    if (!(d > 0)) return "plan.edm_distances must be > 0";
+  }
+  if (!(cam_ray_length > 0)) return "plan.cam_ray_length must be > 0";
+  if (grid_phi_steps < 0 || grid_theta_steps < 0) return "plan.grid steps must be >= 0";
+  for (int f : faces) {
+    if (f != 1 && f != 2) return "plan.faces entries must be 1 or 2 (got " + std::to_string(f) + ")";
+  }
+  if (faces.empty()) return "plan.faces must not be empty";
+  for (int z : zooms) {
+    if (z < 0) return "plan.zooms entries must be >= 0";
+  }
+  return "";
+}
+
+std::string SimulationOptions::Check() const {
+  std::string msg = noise.Check();
+  if (msg.empty()) msg = plan.Check();
+  if (msg.empty()) {
+    for (int z : plan.zooms) {
+      if (z >= truth.NumZooms()) {
+        return "plan.zooms has zoom " + std::to_string(z) + " but the truth has " +
+               std::to_string(truth.NumZooms()) + " camera(s)";
+      }
+    }
+  }
+  return msg;
+}
+
+InstrumentModel PaperTruth(int num_zooms) {
+  InstrumentModel m;
+  m.kinematics = Kinematics::kDh;
+  // Klug Table 7 (optimised base and tools) and Table 6 (optimised DH).
+  m.base = PoseBlock::FromRigid(
+      Rigid3::FromEuler({3.1416, 0.0, 0.0504}, {5.915e-9, 7.216e-9, 3.312e-9}));
+  m.links[0].p = {0.0, -1.5203, 1.570808, 0.0};
+  m.links[1].p = {0.0684e-3, -0.4432e-3, 0.2055e-3, -0.1117e-3};
+  m.edm = PoseBlock::FromRigid(
+      Rigid3::FromEuler({-1.4219, 1.5693, 3.2910}, {0.1421e-3, 1.415e-6, -9.014e-5}));
+  for (int z = 0; z < num_zooms; ++z) {
+    CameraTool cam;
+    // Each zoom level: its own small tool change and a longer focal length
+    // (the PLT 300 has 7 calibrated zoom positions; values are illustrative).
+    cam.flange_from_cam = PoseBlock::FromRigid(Rigid3::FromEuler(
+        {-1.4632 + 1.5e-4 * z, 1.5646 - 0.8e-4 * z, 3.2103 + 1.2e-4 * z},
+        {-0.1451e-3 + 2e-5 * z, -2.152e-9 + 1e-5 * z, 0.1505e-3 - 1.5e-5 * z}));
+    cam.width = 1280;
+    cam.height = 960;
+    const double f = 1500.0 * std::pow(2.0, z);
+    cam.intrinsics = {f, f * (1.0 + 2e-4), 640.0 + 3.0 * z - 2.5, 480.0 - 2.0 * z + 1.5};
+    cam.distortion.fill(0.0);
+    m.cams.push_back(cam);
+  }
+  return m;
+}
+
+std::vector<Record> PlanRecords(const AcquisitionPlan& plan, const InstrumentModel& model) {
+  std::vector<Record> out;
+  for (int face : plan.faces) {
+    for (const Pose& pose : PlanPoses(plan)) {
+      double phi, theta;
+      Reading(face, pose, &phi, &theta);
+      const bool grid = std::string(pose.set) == "grid";
+      for (double d : grid ? plan.grid_edm_distances : plan.edm_distances) {
+        Record r;
+        r.face = face;
+        r.zoom = 0;
+        r.phi = phi;
+        r.theta = theta;
+        r.tool = Tool::kEdm;
+        r.d = d;
+        r.set = pose.set;
+        out.push_back(r);
+      }
+      for (int zoom : plan.zooms) {
+        const CameraTool& cam = model.cams.at(zoom);
+        const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
+        std::vector<std::pair<double, double>> pixels;
+        std::vector<double> lengths;
+        if (grid) {
+          const int n = plan.grid_pixels_per_axis;
+          for (int i = 0; i < n; ++i) {
+            for (int j = 0; j < n; ++j) {
+              const double fu = n == 1 ? 0.5 : 0.1 + 0.8 * i / (n - 1);
+              const double fv = n == 1 ? 0.5 : 0.1 + 0.8 * j / (n - 1);
+              pixels.emplace_back(fu * (cam.width - 1), fv * (cam.height - 1));
+            }
+          }
+          lengths = plan.grid_cam_ray_lengths;
+        } else {
+          pixels = {{cx, cy}, {cx + plan.pixel_offset, cy}, {cx, cy + plan.pixel_offset}};
+          lengths = {plan.cam_ray_length};
+        }
+        for (double len : lengths) {
+          for (const auto& [u, v] : pixels) {
+            Record r;
+            r.face = face;
+            r.zoom = zoom;
+            r.phi = phi;
+            r.theta = theta;
+            r.tool = Tool::kCam;
+            r.u = u;
+            r.v = v;
+            r.d = len;
+            r.set = pose.set;
+            out.push_back(r);
+          }
+        }
+      }
+    }
+  }
+  for (Record& r : out) {
+    r.x = r.tool == Tool::kEdm ? PredictEdm(model, r.phi, r.theta, r.d)
+                               : PredictCam(model, r.zoom, r.phi, r.theta, r.u, r.v, r.d);
+  }
+  return out;
+}
+
+namespace {
+
+// Pointing (face 1) that makes the ideal line of sight pass through `target`
+// from the station origin `origin` (SPEC 1: phi clockwise from +y, theta from zenith).
+void AimAt(const Eigen::Vector3d& origin, const Eigen::Vector3d& target, double* phi,
+           double* theta) {
+  const Eigen::Vector3d v = target - origin;
+  *phi = std::atan2(v.x(), v.y());
+  if (*phi < 0) *phi += 2.0 * M_PI;
+  *theta = std::acos(std::clamp(v.z() / v.norm(), -1.0, 1.0));
+}
+
+void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedData* data) {
+  const InstrumentModel& truth = o.truth;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  const Eigen::Vector3d origin = RefFromFlange(truth, 0.0, M_PI / 2).translation;
+  const std::vector<TargetCorner> corners = o.targets.AllCorners();
+  int shot_index = 0;
+  for (int zoom : o.plan.zooms) {
+    const CameraTool& cam = truth.cams.at(zoom);
+    const double fov_u = std::atan2(0.5 * cam.width, cam.intrinsics[0]);
+    const double fov_v = std::atan2(0.5 * cam.height, cam.intrinsics[1]);
+    for (int face : o.plan.faces) {
+      for (size_t b = 0; b < o.targets.boards.size(); ++b) {
+        const TagBoard& board = o.targets.boards[b];
+        const Eigen::Vector3d centre = board.CentreInRef();
+        const double dist = (centre - origin).norm();
+        const double half_w = 0.5 * (board.cols * board.tag_size + (board.cols - 1) * board.spacing);
+        const double half_h = 0.5 * (board.rows * board.tag_size + (board.rows - 1) * board.spacing);
+        // Angular half extents of the board and of the field of view.
+        const double board_u = std::atan2(half_w, dist), board_v = std::atan2(half_h, dist);
+        // Aim offsets: when the board is larger than the view, wander over the
+        // board so each image is full of tags; when smaller, move the board
+        // around the image so the shots span the image.
+        const double span_u = std::abs(board_u - fov_u * o.shots.fill) + o.shots.pointing_jitter * fov_u * 0.2;
+        const double span_v = std::abs(board_v - fov_v * o.shots.fill) + o.shots.pointing_jitter * fov_v * 0.2;
+        double phi0, theta0;
+        AimAt(origin, centre, &phi0, &theta0);
+        for (int s = 0; s < o.shots.shots_per_board; ++s) {
+          double phi = phi0 + uniform(rng) * span_u / std::max(std::sin(theta0), 0.2);
+          double theta = theta0 + uniform(rng) * span_v;
+          if (face == 2) OtherFace(phi, theta, &phi, &theta);
+          const std::string shot = "z" + std::to_string(zoom) + "f" + std::to_string(face) + "s" +
+                                   std::to_string(shot_index++);
+          std::vector<PixelObservation> rows;
+          std::vector<Eigen::Vector2d> exact;
+          for (const TargetCorner& c : corners) {
+            Eigen::Vector2d uv;
+            if (!PredictPixel(truth, zoom, phi, theta, c.X, &uv)) continue;
+            const double margin = 2.0;
+            if (uv.x() < margin || uv.y() < margin || uv.x() > cam.width - 1 - margin ||
+                uv.y() > cam.height - 1 - margin) {
+              continue;
+            }
+            PixelObservation p;
+            p.face = face;
+            p.zoom = zoom;
+            p.phi = phi;
+            p.theta = theta;
+            p.shot = shot;
+            p.target = c.target;
+            p.corner = c.corner;
+            p.X = c.X;
+            p.uv = uv + o.noise.pixel_px * Eigen::Vector2d(normal(rng), normal(rng));
+            rows.push_back(p);
+            exact.push_back(uv);
+          }
+          if (rows.size() < 8) continue;  // a shot that shows almost nothing is not taken
+          data->obs.pixels.insert(data->obs.pixels.end(), rows.begin(), rows.end());
+          data->exact_pixels.insert(data->exact_pixels.end(), exact.begin(), exact.end());
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+SimulatedData Simulate(const SimulationOptions& o) {
+  const std::string msg = o.Check();
+  if (!msg.empty()) throw std::invalid_argument("simulation options: " + msg);
+  SimulatedData data;
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<Record> records = PlanRecords(o.plan, o.truth);
+  data.exact_points.reserve(records.size());
+  for (Record& r : records) {
+    data.exact_points.push_back(r.x);
+    if (o.noise.angle_rad > 0 || o.noise.distance_m > 0) {
+      // The instrument reads phi, theta but truly points at phi + n, theta + n.
+      const double phi = r.phi + o.noise.angle_rad * normal(rng);
+      const double theta = r.theta + o.noise.angle_rad * normal(rng);
+      if (r.tool == Tool::kEdm) {
+        r.x = PredictEdm(o.truth, phi, theta, r.d + o.noise.distance_m * normal(rng));
+      } else {
+        r.x = PredictCam(o.truth, r.zoom, phi, theta, r.u, r.v, r.d);
+      }
+    }
+    if (o.noise.point_m > 0) {
+      r.x += o.noise.point_m * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    }
+  }
+  data.obs.records = std::move(records);
+  data.obs.records_source = "simulated records";
+  data.obs.pixels_source = "simulated pixels";
+  if (!o.targets.boards.empty()) SimulatePixels(o, rng, &data);
+  return data;
+}
+
+}  // namespace rtscalib
