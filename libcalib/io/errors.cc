@@ -58,10 +58,11 @@ InputError InputError::Key(const std::string& file, const std::string& key, int 
 }
 
 InputError InputError::File(const std::string& file, int line, const std::string& subject,
-                            const std::string& expected, const std::string& got) {
+                            const std::string& expected, const std::string& got, int position) {
   InputError e("");
   e.file = file;
   e.line = line;
+  e.position = position;
   e.subject = subject;
   e.expected = expected;
   e.got = got;

@@ -34,7 +34,7 @@ struct InputError : std::runtime_error {
                         const std::string& expected, const std::string& got);
   // Anything else about a file (cannot open, no rows, bad header).
   static InputError File(const std::string& file, int line, const std::string& subject,
-                         const std::string& expected, const std::string& got);
+                         const std::string& expected, const std::string& got, int position = 0);
   // One error carrying several: the first one's fields, every message in
   // what() (one per line), so a user sees all typos of a config at once.
   static InputError Combine(const std::vector<InputError>& errors);

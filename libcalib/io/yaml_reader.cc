@@ -1,0 +1,362 @@
+#include "libcalib/io/yaml_reader.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "libcalib/io/number_text.h"
+
+namespace rtscalib {
+namespace yaml_internal {
+
+struct State {
+  std::string file;
+  YAML::Node root;
+  std::set<std::string> used;   // paths of mapping entries that were read
+  std::set<std::string> whole;  // subtrees consumed whole (keys checked elsewhere)
+  std::map<std::string, std::vector<std::string>> known;  // mapping path -> keys asked for
+};
+
+}  // namespace yaml_internal
+
+namespace {
+
+using yaml_internal::State;
+
+int Line(const YAML::Mark& m) { return m.is_null() ? 0 : m.line + 1; }
+int Column(const YAML::Mark& m) { return m.is_null() ? 0 : m.column + 1; }
+
+std::string ChildOf(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+std::string Join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& s : items) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+// A short one-line rendering of a value for "got '...'".
+std::string Brief(const YAML::Node& node) {
+  if (!node.IsDefined() || node.IsNull()) return "";
+  if (node.IsScalar()) return node.Scalar();
+  YAML::Emitter e;
+  e << YAML::Flow << node;
+  std::string text = e.c_str();
+  constexpr size_t kMaxChars = 60;
+  if (text.size() > kMaxChars) text = text.substr(0, kMaxChars - 3) + "...";
+  return text;
+}
+
+size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// "one of a, b, c" plus "(did you mean 'b'?)" when a typo is likely.
+std::string OneOf(const std::vector<std::string>& valid, const std::string& got) {
+  std::string out = "one of " + Join(valid);
+  const std::string* best = nullptr;
+  size_t best_distance = std::numeric_limits<size_t>::max();
+  for (const std::string& v : valid) {
+    const size_t d = EditDistance(v, got);
+    if (d < best_distance) {
+      best_distance = d;
+      best = &v;
+    }
+  }
+  if (best && best_distance > 0 && best_distance <= std::max<size_t>(1, best->size() / 3)) {
+    out += " (did you mean '" + *best + "'?)";
+  }
+  return out;
+}
+
+void CollectUnused(const State& s, const YAML::Node& node, const std::string& path,
+                   std::vector<InputError>* out) {
+  if (s.whole.count(path)) return;
+  if (node.IsMap()) {
+    std::set<std::string> seen;
+    const auto known = s.known.find(path);
+    const std::vector<std::string> valid =
+        known == s.known.end() ? std::vector<std::string>{} : known->second;
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      const YAML::Mark mark = it->first.Mark();
+      if (!it->first.IsScalar()) {
+        out->push_back(InputError::Key(s.file, path.empty() ? "(top level)" : path, Line(mark),
+                                       Column(mark), "a plain key", Brief(it->first)));
+        continue;
+      }
+      const std::string& key = it->first.Scalar();
+      const std::string key_path = ChildOf(path, key);
+      if (!seen.insert(key).second) {
+        out->push_back(InputError::Key(s.file, key_path, Line(mark), Column(mark),
+                                       "each key once in its mapping (this one is repeated)", key));
+        continue;
+      }
+      if (!s.used.count(key_path)) {
+        const std::string where = path.empty() ? "the top level" : "'" + path + "'";
+        const std::string expected =
+            valid.empty() ? "no keys in " + where : "a key of " + where + ", " + OneOf(valid, key);
+        out->push_back(InputError::Key(s.file, key_path, Line(mark), Column(mark), expected, key));
+        continue;
+      }
+      CollectUnused(s, it->second, key_path, out);
+    }
+  } else if (node.IsSequence()) {
+    for (size_t i = 0; i < node.size(); ++i) {
+      CollectUnused(s, node[i], path + "[" + std::to_string(i) + "]", out);
+    }
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// YamlNode
+
+const std::string& YamlNode::file() const { return state_->file; }
+int YamlNode::line() const { return Line(mark_); }
+int YamlNode::column() const { return Column(mark_); }
+
+std::string YamlNode::ChildPath(const std::string& key) const { return ChildOf(path_, key); }
+
+InputError YamlNode::Error(const std::string& expected) const {
+  return InputError::Key(state_->file, path_.empty() ? "(top level)" : path_, line(), column(),
+                         expected, Brief(node_));
+}
+
+void YamlNode::Fail(const std::string& expected) const { throw Error(expected); }
+
+void YamlNode::FailChoice(const std::vector<std::string>& valid) const {
+  Fail(OneOf(valid, node_.IsScalar() ? node_.Scalar() : ""));
+}
+
+void YamlNode::RequireMap() const {
+  if (!IsMap()) Fail("a mapping (key: value pairs)");
+}
+
+std::optional<YamlNode> YamlNode::Find(const std::string& key) const {
+  RequireMap();
+  std::vector<std::string>& known = state_->known[path_];
+  if (std::find(known.begin(), known.end(), key) == known.end()) known.push_back(key);
+  if (node_.IsNull()) return std::nullopt;
+  for (auto it = node_.begin(); it != node_.end(); ++it) {
+    if (!it->first.IsScalar() || it->first.Scalar() != key) continue;
+    const std::string child_path = ChildPath(key);
+    state_->used.insert(child_path);
+    // An empty value (`key:`) has no useful mark of its own; point at the key.
+    const YAML::Mark mark = it->second.IsNull() || it->second.Mark().is_null()
+                                ? it->first.Mark()
+                                : it->second.Mark();
+    return YamlNode(state_, it->second, child_path, mark);
+  }
+  return std::nullopt;
+}
+
+YamlNode YamlNode::Require(const std::string& key) const {
+  std::optional<YamlNode> child = Find(key);
+  if (!child) {
+    throw InputError::Key(state_->file, ChildPath(key), line(), column(),
+                          "a value (this key is required)", "nothing");
+  }
+  return *child;
+}
+
+std::vector<std::pair<std::string, YamlNode>> YamlNode::Entries() const {
+  RequireMap();
+  std::vector<std::pair<std::string, YamlNode>> out;
+  if (node_.IsNull()) return out;
+  for (auto it = node_.begin(); it != node_.end(); ++it) {
+    if (!it->first.IsScalar()) {
+      YamlNode(state_, it->first, path_, it->first.Mark()).Fail("a plain key");
+    }
+    std::optional<YamlNode> child = Find(it->first.Scalar());
+    out.emplace_back(it->first.Scalar(), *child);
+  }
+  return out;
+}
+
+std::vector<YamlNode> YamlNode::Items() const {
+  if (!IsSequence()) Fail("a list");
+  std::vector<YamlNode> out;
+  if (node_.IsNull()) return out;
+  for (size_t i = 0; i < node_.size(); ++i) {
+    const YAML::Node item = node_[i];
+    const YAML::Mark mark = item.Mark().is_null() ? mark_ : item.Mark();
+    out.push_back(YamlNode(state_, item, path_ + "[" + std::to_string(i) + "]", mark));
+  }
+  return out;
+}
+
+const std::string& YamlNode::ScalarText(const std::string& expected) const {
+  if (!node_.IsScalar()) Fail(expected);
+  return node_.Scalar();
+}
+
+double YamlNode::AsDouble() const {
+  const std::optional<double> value = ParseFiniteDouble(ScalarText("a finite number"));
+  if (!value) Fail("a finite number");
+  return *value;
+}
+
+double YamlNode::AsDoubleOrNan() const {
+  const std::string& text = ScalarText("a number");
+  // YAML's own spellings of the special values (what yaml-cpp writes).
+  static const std::map<std::string, double> kSpecial = {
+      {".nan", std::numeric_limits<double>::quiet_NaN()},
+      {".NaN", std::numeric_limits<double>::quiet_NaN()},
+      {".NAN", std::numeric_limits<double>::quiet_NaN()},
+      {".inf", std::numeric_limits<double>::infinity()},
+      {".Inf", std::numeric_limits<double>::infinity()},
+      {"+.inf", std::numeric_limits<double>::infinity()},
+      {"-.inf", -std::numeric_limits<double>::infinity()},
+      {"-.Inf", -std::numeric_limits<double>::infinity()}};
+  const auto special = kSpecial.find(text);
+  if (special != kSpecial.end()) return special->second;
+  const std::optional<double> value = ParseDouble(text);
+  if (!value) Fail("a number");
+  return *value;
+}
+
+int YamlNode::AsInt() const {
+  const std::optional<long long> value = ParseInteger(ScalarText("an integer"));
+  if (!value || *value < std::numeric_limits<int>::min() ||
+      *value > std::numeric_limits<int>::max()) {
+    Fail("an integer");
+  }
+  return static_cast<int>(*value);
+}
+
+std::uint64_t YamlNode::AsUint64() const {
+  const std::optional<long long> value = ParseInteger(ScalarText("an integer >= 0"));
+  if (!value || *value < 0) Fail("an integer >= 0");
+  return static_cast<std::uint64_t>(*value);
+}
+
+bool YamlNode::AsBool() const {
+  ScalarText("true or false");
+  bool value = false;
+  if (!YAML::convert<bool>::decode(node_, value)) Fail("true or false");
+  return value;
+}
+
+std::string YamlNode::AsString() const { return ScalarText("a text value"); }
+
+std::vector<double> YamlNode::AsDoubles() const {
+  if (!IsSequence()) Fail("a list of numbers");
+  std::vector<double> out;
+  for (const YamlNode& item : Items()) out.push_back(item.AsDouble());
+  return out;
+}
+
+std::vector<double> YamlNode::AsDoubles(size_t size) const {
+  const std::string expected = "a list of " + std::to_string(size) + " numbers";
+  if (!IsSequence() || node_.size() != size) Fail(expected);
+  return AsDoubles();
+}
+
+std::vector<int> YamlNode::AsInts() const {
+  if (!IsSequence()) Fail("a list of integers");
+  std::vector<int> out;
+  for (const YamlNode& item : Items()) out.push_back(item.AsInt());
+  return out;
+}
+
+bool YamlNode::Read(const std::string& key, double* value) const {
+  const std::optional<YamlNode> child = Find(key);
+  if (child) *value = child->AsDouble();
+  return child.has_value();
+}
+bool YamlNode::Read(const std::string& key, int* value) const {
+  const std::optional<YamlNode> child = Find(key);
+  if (child) *value = child->AsInt();
+  return child.has_value();
+}
+bool YamlNode::Read(const std::string& key, bool* value) const {
+  const std::optional<YamlNode> child = Find(key);
+  if (child) *value = child->AsBool();
+  return child.has_value();
+}
+bool YamlNode::Read(const std::string& key, std::string* value) const {
+  const std::optional<YamlNode> child = Find(key);
+  if (child) *value = child->AsString();
+  return child.has_value();
+}
+bool YamlNode::Read(const std::string& key, std::vector<double>* value) const {
+  const std::optional<YamlNode> child = Find(key);
+  if (child) *value = child->AsDoubles();
+  return child.has_value();
+}
+bool YamlNode::Read(const std::string& key, std::vector<int>* value) const {
+  const std::optional<YamlNode> child = Find(key);
+  if (child) *value = child->AsInts();
+  return child.has_value();
+}
+
+void YamlNode::ConsumeAll() const { state_->whole.insert(path_); }
+
+std::string YamlNode::Dump() const {
+  YAML::Emitter e;
+  e << node_;
+  return e.c_str();
+}
+
+// ---------------------------------------------------------------------------
+// YamlDocument
+
+YamlDocument YamlDocument::Load(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw InputError::File(path, 0, "cannot open file", "a readable YAML file",
+                           std::strerror(errno));
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return Parse(text.str(), path);
+}
+
+YamlDocument YamlDocument::Parse(const std::string& text, const std::string& name) {
+  auto state = std::make_shared<State>();
+  state->file = name;
+  try {
+    state->root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError::File(name, Line(e.mark), "YAML syntax", "valid YAML", e.msg,
+                           Column(e.mark));
+  }
+  YamlDocument doc(state);
+  doc.Root().RequireMap();
+  return doc;
+}
+
+YamlNode YamlDocument::Root() const {
+  return YamlNode(state_, state_->root, "", state_->root.Mark());
+}
+
+std::vector<InputError> YamlDocument::UnusedKeys() const {
+  std::vector<InputError> out;
+  CollectUnused(*state_, state_->root, "", &out);
+  return out;
+}
+
+void YamlDocument::CheckAllKeysUsed() const {
+  const std::vector<InputError> unused = UnusedKeys();
+  if (!unused.empty()) throw InputError::Combine(unused);
+}
+
+}  // namespace rtscalib
