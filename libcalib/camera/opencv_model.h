@@ -20,6 +20,11 @@
 
 #include <cmath>
 
+namespace ceres {
+template <typename T, int N>
+struct Jet;  // as in ceres/jet_fwd.h; this header does not need Ceres itself
+}  // namespace ceres
+
 namespace rtscalib::camera {
 
 constexpr int kNumIntrinsics = 4;
@@ -84,12 +89,32 @@ bool ProjectToPixel(const T* intrinsics, const T* dist, const T* point, T* pixel
   return true;
 }
 
+// Trusted region of the back-projection (docs/camera.md). The radial part of
+// the distortion maps the undistorted normalised radius r = |(x', y')| to
+//   g(r) = r * radial(r^2).
+// Back-projection is unique and well conditioned only while g is strictly
+// increasing and the rational denominator is positive. MaxTrustedRadius
+// returns the first r > 0 where g'(r) = 0 or the denominator vanishes (roots of
+// polynomials in s = r^2 of degree <= 6 and <= 3, isolated exactly by the
+// roots of their derivatives), or +infinity if there is none. Units: normalised
+// image coordinates (r = tan of the angle off the optical axis).
+// `dist` holds the 14 coefficients in OpenCV order.
+double MaxTrustedRadius(const double* dist);
+// g(MaxTrustedRadius(dist)): the largest distorted radius (before tilt) of the
+// trusted region, normalised units; +infinity if unbounded.
+double MaxTrustedDistortedRadius(const double* dist);
+
 // Back-projects a pixel to normalised coordinates (x', y') such that
-// ProjectToPixel((x', y', 1)) == pixel. Newton's method on the distortion
-// (converges quadratically; the fixed-point iteration of cv::undistortPoints is
-// the fallback reference in the tests). Valid region: where the distortion map
-// is monotone along rays, documented in docs/camera.md; returns false when the
-// iteration does not converge to 1e-12 in normalised units.
+// ProjectToPixel((x', y', 1)) == pixel. Newton's method with backtracking on
+// the distortion (cv::undistortPoints uses a fixed-point iteration instead;
+// both agree inside the trusted region, tests/camera/opencv_model_test.cc).
+// Returns false unless the solution
+//   - reproduces the distorted point to 1e-12 (normalised units, ~1e-9 px),
+//   - lies inside the trusted region: r < MaxTrustedRadius(dist), and
+//   - has a positive Jacobian determinant of the full distortion map (so the
+//     tangential, thin-prism terms have not folded the image either).
+// Works with ceres::Jet: derivatives are those of the converged solution
+// (implicit function theorem), because Newton's update propagates them too.
 template <typename T>
 bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
                     int max_iterations = 20);
@@ -108,6 +133,63 @@ bool PixelToRay(const T* intrinsics, const T* dist, const T* pixel, T* ray) {
 }
 
 // ---------------------------------------------------------------------------
+namespace internal {
+
+// Value of a double or of a (possibly nested) ceres::Jet; the Jet overload is
+// only instantiated when the caller has included Ceres.
+inline double ScalarPart(double v) { return v; }
+template <typename S, int N>
+double ScalarPart(const ceres::Jet<S, N>& v) {
+  return ScalarPart(v.a);
+}
+
+// MaxTrustedRadius for the last coefficients seen by this thread: a fit
+// evaluates many residuals with the same distortion block.
+inline double CachedMaxTrustedRadius(const double* dist) {
+  thread_local double key[6] = {0, 0, 0, 0, 0, 0};
+  thread_local double value = -1;  // -1: not computed yet
+  const double k[6] = {dist[kK1], dist[kK2], dist[kK3], dist[kK4], dist[kK5], dist[kK6]};
+  bool same = value >= 0;
+  for (int i = 0; i < 6 && same; ++i) same = k[i] == key[i];
+  if (!same) {
+    for (int i = 0; i < 6; ++i) key[i] = k[i];
+    value = MaxTrustedRadius(dist);
+  }
+  return value;
+}
+
+// Distortion residual f = distort(x, y) - (xd, yd) and its Jacobian
+// J = d distort / d(x, y), row-major.
+template <typename T>
+void DistortionResidual(const T* dist, const T& x, const T& y, const T& xd, const T& yd, T f[2],
+                        T J[4]) {
+  const T r2 = x * x + y * y;
+  const T r4 = r2 * r2, r6 = r4 * r2;
+  const T num = T(1) + dist[kK1] * r2 + dist[kK2] * r4 + dist[kK3] * r6;
+  const T den = T(1) + dist[kK4] * r2 + dist[kK5] * r4 + dist[kK6] * r6;
+  const T radial = num / den;
+  const T dnum = dist[kK1] + T(2) * dist[kK2] * r2 + T(3) * dist[kK3] * r4;
+  const T dden = dist[kK4] + T(2) * dist[kK5] * r2 + T(3) * dist[kK6] * r4;
+  const T dradial_dr2 = (dnum * den - num * dden) / (den * den);
+  const T ds_x = dist[kS1] + T(2) * dist[kS2] * r2;  // d(s1 r2 + s2 r4)/dr2
+  const T ds_y = dist[kS3] + T(2) * dist[kS4] * r2;
+  f[0] = x * radial + T(2) * dist[kP1] * x * y + dist[kP2] * (r2 + T(2) * x * x) +
+         dist[kS1] * r2 + dist[kS2] * r4 - xd;
+  f[1] = y * radial + dist[kP1] * (r2 + T(2) * y * y) + T(2) * dist[kP2] * x * y +
+         dist[kS3] * r2 + dist[kS4] * r4 - yd;
+  // d r2/dx = 2x, d r2/dy = 2y
+  J[0] = radial + T(2) * x * x * dradial_dr2 + T(2) * dist[kP1] * y + T(6) * dist[kP2] * x +
+         T(2) * ds_x * x;
+  J[1] = T(2) * x * y * dradial_dr2 + T(2) * dist[kP1] * x + T(2) * dist[kP2] * y +
+         T(2) * ds_x * y;
+  J[2] = T(2) * x * y * dradial_dr2 + T(2) * dist[kP1] * x + T(2) * dist[kP2] * y +
+         T(2) * ds_y * x;
+  J[3] = radial + T(2) * y * y * dradial_dr2 + T(6) * dist[kP1] * y + T(2) * dist[kP2] * x +
+         T(2) * ds_y * y;
+}
+
+}  // namespace internal
+
 template <typename T>
 bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
                     int max_iterations) {
@@ -121,55 +203,64 @@ bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T
   const T a00 = m[0] - a * m[6], a01 = m[1] - a * m[7], r0 = a * m[8] - m[2];
   const T a10 = m[3] - b * m[6], a11 = m[4] - b * m[7], r1 = b * m[8] - m[5];
   const T det = a00 * a11 - a01 * a10;
+  if (!(abs(det) > T(0))) return false;
   const T xd = (r0 * a11 - a01 * r1) / det;
   const T yd = (a00 * r1 - r0 * a10) / det;
 
-  // Newton on f(x, y) = distort(x, y) - (xd, yd), Jacobian by forward-mode
-  // differences of the closed form (exact derivatives below).
+  double dist_values[kNumDistortion];
+  for (int i = 0; i < kNumDistortion; ++i) dist_values[i] = internal::ScalarPart(dist[i]);
+  const double r_max = internal::CachedMaxTrustedRadius(dist_values);
+
+  // Newton on f(x, y) = distort(x, y) - (xd, yd) from the distorted point,
+  // halving a step that does not reduce |f|_1 (bounded), so that an
+  // overshoot cannot jump onto another branch of a folded map.
   T x = xd, y = yd;
+  T f[2], J[4];
+  internal::DistortionResidual(dist, x, y, xd, yd, f, J);
   for (int it = 0; it < max_iterations; ++it) {
-    const T r2 = x * x + y * y;
-    const T r4 = r2 * r2, r6 = r4 * r2;
-    const T num = T(1) + dist[kK1] * r2 + dist[kK2] * r4 + dist[kK3] * r6;
-    const T den = T(1) + dist[kK4] * r2 + dist[kK5] * r4 + dist[kK6] * r6;
-    const T radial = num / den;
-    const T dnum = dist[kK1] + T(2) * dist[kK2] * r2 + T(3) * dist[kK3] * r4;
-    const T dden = dist[kK4] + T(2) * dist[kK5] * r2 + T(3) * dist[kK6] * r4;
-    const T dradial_dr2 = (dnum * den - num * dden) / (den * den);
-    T fx, fy;
-    DistortNormalized(dist, x, y, &fx, &fy);
-    fx -= xd;
-    fy -= yd;
-    const T ds_x = dist[kS1] + T(2) * dist[kS2] * r2;  // d(s1 r2 + s2 r4)/dr2
-    const T ds_y = dist[kS3] + T(2) * dist[kS4] * r2;
-    // d r2/dx = 2x, d r2/dy = 2y
-    const T j00 = radial + x * dradial_dr2 * T(2) * x + T(2) * dist[kP1] * y +
-                  dist[kP2] * T(6) * x + ds_x * T(2) * x;
-    const T j01 = x * dradial_dr2 * T(2) * y + T(2) * dist[kP1] * x + dist[kP2] * T(2) * y +
-                  ds_x * T(2) * y;
-    const T j10 = y * dradial_dr2 * T(2) * x + dist[kP1] * T(2) * x + T(2) * dist[kP2] * y +
-                  ds_y * T(2) * x;
-    const T j11 = radial + y * dradial_dr2 * T(2) * y + dist[kP1] * T(6) * y +
-                  T(2) * dist[kP2] * x + ds_y * T(2) * y;
-    const T jdet = j00 * j11 - j01 * j10;
-    const T dx = (fx * j11 - j01 * fy) / jdet;
-    const T dy = (j00 * fy - fx * j10) / jdet;
-    x -= dx;
-    y -= dy;
-    if (abs(dx) + abs(dy) < T(1e-15)) {
-      // One more step so that autodiff derivatives are those of the converged
-      // fixed point (Newton's derivative propagation converges with it).
-      *xn = x;
-      *yn = y;
-      return true;
+    const T jdet = J[0] * J[3] - J[1] * J[2];
+    if (!(jdet > T(0))) return false;  // folded (or degenerate) map at the iterate
+    const T dx = (f[0] * J[3] - J[1] * f[1]) / jdet;
+    const T dy = (J[0] * f[1] - f[0] * J[2]) / jdet;
+    const double f_norm = internal::ScalarPart(abs(f[0]) + abs(f[1]));
+    T scale(1.0);
+    T x_new = x - dx, y_new = y - dy;
+    T f_new[2], J_new[4];
+    internal::DistortionResidual(dist, x_new, y_new, xd, yd, f_new, J_new);
+    for (int halvings = 0;
+         halvings < 30 && !(internal::ScalarPart(abs(f_new[0]) + abs(f_new[1])) <= f_norm);
+         ++halvings) {
+      scale = scale * T(0.5);
+      x_new = x - scale * dx;
+      y_new = y - scale * dy;
+      internal::DistortionResidual(dist, x_new, y_new, xd, yd, f_new, J_new);
     }
+    x = x_new;
+    y = y_new;
+    for (int i = 0; i < 2; ++i) f[i] = f_new[i];
+    for (int i = 0; i < 4; ++i) J[i] = J_new[i];
+    // Relative step test: at convergence the step is rounding noise of x.
+    if (internal::ScalarPart(abs(dx) + abs(dy)) <=
+        1e-15 * (1.0 + internal::ScalarPart(abs(x) + abs(y)))) {
+      break;
+    }
+  }
+  // One full Newton step at the converged point: its derivative part is
+  // -J^-1 df/dparams whatever the iterate's derivative part was (backtracking
+  // may have scaled earlier updates), i.e. exactly the implicit-function
+  // derivative. For doubles it is a no-op up to rounding.
+  {
+    const T jdet = J[0] * J[3] - J[1] * J[2];
+    if (!(jdet > T(0))) return false;
+    x = x - (f[0] * J[3] - J[1] * f[1]) / jdet;
+    y = y - (J[0] * f[1] - f[0] * J[2]) / jdet;
+    internal::DistortionResidual(dist, x, y, xd, yd, f, J);
   }
   *xn = x;
   *yn = y;
-  // Accept if the residual is tiny even when the step test did not trigger.
-  T fx, fy;
-  DistortNormalized(dist, x, y, &fx, &fy);
-  return abs(fx - xd) + abs(fy - yd) < T(1e-12);
+  const double r2 = internal::ScalarPart(x * x + y * y);
+  return internal::ScalarPart(abs(f[0]) + abs(f[1])) < 1e-12 && r2 < r_max * r_max &&
+         internal::ScalarPart(J[0] * J[3] - J[1] * J[2]) > 0.0;
 }
 
 }  // namespace rtscalib::camera
