@@ -47,4 +47,17 @@ std::string FormatDouble(double x) {
   return buffer;
 }
 
+std::string FormatShortestDouble(double x) {
+  char buffer[32];
+  const auto [ptr, ec] = std::to_chars(buffer, buffer + sizeof(buffer), x);
+  if (ec != std::errc()) return FormatDouble(x);
+  return std::string(buffer, ptr);
+}
+
+std::string YamlDouble(double x, bool shortest) {
+  if (std::isnan(x)) return ".nan";
+  if (std::isinf(x)) return x > 0 ? ".inf" : "-.inf";
+  return shortest ? FormatShortestDouble(x) : FormatDouble(x);
+}
+
 }  // namespace rtscalib

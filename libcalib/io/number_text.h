@@ -20,7 +20,13 @@ std::optional<double> ParseDouble(std::string_view text);
 // An integer written as an integer or as an integral decimal ("2", "2.0",
 // "2e0"), in the range of long long; nullopt otherwise.
 std::optional<long long> ParseInteger(std::string_view text);
-// %.17g.
+// %.17g: what the data files and model.yaml use.
 std::string FormatDouble(double x);
+// The shortest text that reads back to the same double ("1e-05" rather than
+// "1.0000000000000001e-05"): for files that people read, such as configs.
+std::string FormatShortestDouble(double x);
+// A YAML scalar for x: FormatDouble or FormatShortestDouble, and YAML's own
+// .nan/.inf/-.inf for the non-finite values.
+std::string YamlDouble(double x, bool shortest = false);
 
 }  // namespace rtscalib

@@ -177,16 +177,15 @@ YamlNode YamlNode::Require(const std::string& key) const {
   return *child;
 }
 
-std::vector<std::pair<std::string, YamlNode>> YamlNode::Entries() const {
+std::vector<YamlNode::Entry> YamlNode::Entries() const {
   RequireMap();
-  std::vector<std::pair<std::string, YamlNode>> out;
+  std::vector<Entry> out;
   if (node_.IsNull()) return out;
   for (auto it = node_.begin(); it != node_.end(); ++it) {
-    if (!it->first.IsScalar()) {
-      YamlNode(state_, it->first, path_, it->first.Mark()).Fail("a plain key");
-    }
-    std::optional<YamlNode> child = Find(it->first.Scalar());
-    out.emplace_back(it->first.Scalar(), *child);
+    const YamlNode key(state_, it->first, path_, it->first.Mark());
+    if (!it->first.IsScalar()) key.Fail("a plain key");
+    YamlNode value = *Find(it->first.Scalar());
+    out.push_back({YamlNode(state_, it->first, value.path(), it->first.Mark()), value});
   }
   return out;
 }

@@ -66,9 +66,11 @@ class YamlNode {
     if (child) *value = child->AsEnum(names);
     return child.has_value();
   }
-  // Keys in document order (for maps whose keys are data, e.g. effect names);
-  // each returned child counts as used.
-  std::vector<std::pair<std::string, YamlNode>> Entries() const;
+  // Entries in document order, for mappings whose keys are data (effect
+  // names): `key` is the key as a node (AsString() is its text, errors point
+  // at it), `value` its value; each counts as used.
+  struct Entry;
+  std::vector<Entry> Entries() const;
 
   // --- lists --------------------------------------------------------------
   std::vector<YamlNode> Items() const;
@@ -118,6 +120,11 @@ class YamlNode {
   YAML::Node node_;
   std::string path_;
   YAML::Mark mark_;  // of the value, or of the key when the value has none
+};
+
+struct YamlNode::Entry {
+  YamlNode key;
+  YamlNode value;
 };
 
 class YamlDocument {

@@ -1,0 +1,654 @@
+#include "libcalib/io/config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <set>
+
+#include "libcalib/io/errors.h"
+#include "libcalib/io/number_text.h"
+#include "libcalib/io/yaml_reader.h"
+
+namespace rtscalib {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kRadPerDeg = M_PI / 180.0;
+constexpr double kRadPerArcsec = M_PI / (180.0 * 3600.0);
+
+template <typename E>
+using Names = std::vector<std::pair<std::string, E>>;
+
+const Names<Kinematics> kKinematicsNames = {{"dh", Kinematics::kDh},
+                                            {"spherical", Kinematics::kSpherical}};
+const Names<FaceMode> kFaceModeNames = {{"joint", FaceMode::kJoint},
+                                        {"separate", FaceMode::kSeparate}};
+const Names<IntrinsicsMode> kIntrinsicsNames = {{"auto", IntrinsicsMode::kAuto},
+                                                {"fit", IntrinsicsMode::kFit},
+                                                {"fixed", IntrinsicsMode::kFixed}};
+const Names<RobustLoss> kLossNames = {{"none", RobustLoss::kNone},
+                                      {"huber", RobustLoss::kHuber},
+                                      {"cauchy", RobustLoss::kCauchy}};
+
+template <typename E>
+const std::string& NameOf(const Names<E>& names, E value) {
+  for (const auto& [name, v] : names) {
+    if (v == value) return name;
+  }
+  static const std::string kUnknown = "?";
+  return kUnknown;
+}
+
+std::vector<std::string> AllEffectNames() {
+  std::vector<std::string> out;
+  for (const EffectInfo& info : EffectCatalogue()) out.emplace_back(info.name);
+  return out;
+}
+
+std::string Resolve(const std::string& dir, const std::string& path) {
+  fs::path p(path);
+  if (p.is_relative()) p = fs::path(dir) / p;
+  return p.lexically_normal().string();
+}
+
+// --- checked reads: each failure points at the key that holds the value ----
+
+using DoubleCheck = bool (*)(double);
+bool IsPositive(double x) { return x > 0; }
+bool IsNonNegative(double x) { return x >= 0; }
+
+// Reads `key` into *value if present; `expected` describes a valid value.
+void ReadNumber(const YamlNode& m, const std::string& key, double* value, DoubleCheck ok,
+                const std::string& expected) {
+  if (const std::optional<YamlNode> n = m.Find(key)) {
+    const double x = n->AsDouble();
+    if (!ok(x)) n->Fail(expected);
+    *value = x;
+  }
+}
+
+void ReadCount(const YamlNode& m, const std::string& key, int* value, int min,
+               const std::string& what) {
+  if (const std::optional<YamlNode> n = m.Find(key)) {
+    const int x = n->AsInt();
+    if (x < min) n->Fail(what + " (an integer >= " + std::to_string(min) + ")");
+    *value = x;
+  }
+}
+
+// A non-empty list of numbers that all pass `ok`.
+void ReadNumbers(const YamlNode& m, const std::string& key, std::vector<double>* value,
+                 DoubleCheck ok, const std::string& expected) {
+  if (const std::optional<YamlNode> n = m.Find(key)) {
+    std::vector<double> out;
+    for (const YamlNode& item : n->Items()) {
+      const double x = item.AsDouble();
+      if (!ok(x)) item.Fail(expected);
+      out.push_back(x);
+    }
+    if (out.empty()) n->Fail("a non-empty list of " + expected);
+    *value = out;
+  }
+}
+
+Eigen::Vector3d ToVector3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
+
+// {euler: [a, b, g], t: [x, y, z]} (Klug Eq. 83), each key optional: what is
+// absent keeps *pose's value.
+void ReadPoseFields(const YamlNode& m, Rigid3* pose) {
+  if (const std::optional<YamlNode> n = m.Find("euler")) {
+    pose->rotation = RotationFromEuler<double>(ToVector3(n->AsDoubles(3)));
+  }
+  if (const std::optional<YamlNode> n = m.Find("t")) pose->translation = ToVector3(n->AsDoubles(3));
+}
+
+void ReadPoseFields(const YamlNode& m, PoseBlock* pose) {
+  Rigid3 rigid = pose->ToRigid();
+  ReadPoseFields(m, &rigid);
+  *pose = PoseBlock::FromRigid(rigid);
+}
+
+// Image size, intrinsics and distortion of one zoom level. `required`: all of
+// width, height, fx, fy, cx, cy must be given (model.cameras); otherwise
+// absent keys keep *cam's values (simulated truth).
+void ReadCameraFields(const YamlNode& m, bool required, CameraTool* cam) {
+  auto get = [&](const std::string& key) {
+    return required ? std::optional<YamlNode>(m.Require(key)) : m.Find(key);
+  };
+  for (auto [key, value] : {std::pair<const char*, int*>{"width", &cam->width},
+                            std::pair<const char*, int*>{"height", &cam->height}}) {
+    if (const std::optional<YamlNode> n = get(key)) {
+      *value = n->AsInt();
+      if (*value <= 0) n->Fail(std::string("an image ") + key + " > 0 [px]");
+    }
+  }
+  const char* names[camera::kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
+  for (int i = 0; i < camera::kNumIntrinsics; ++i) {
+    if (const std::optional<YamlNode> n = get(names[i])) {
+      const double x = n->AsDouble();
+      if (i < 2 && !(x > 0)) n->Fail(std::string("a focal length ") + names[i] + " > 0 [px]");
+      cam->intrinsics[i] = x;
+    }
+  }
+  if (const std::optional<YamlNode> n = m.Find("distortion")) {
+    const std::vector<double> d = n->AsDoubles();
+    if (d.size() > camera::kNumDistortion) {
+      n->Fail("at most 14 OpenCV coefficients k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4 taux tauy");
+    }
+    cam->distortion.fill(0.0);
+    std::copy(d.begin(), d.end(), cam->distortion.begin());
+  }
+}
+
+// --- sections ---------------------------------------------------------------
+
+void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) {
+  for (auto [key, path] : {std::pair<const char*, std::string*>{"records", &out->records_path},
+                           std::pair<const char*, std::string*>{"pixels", &out->pixels_path}}) {
+    if (const std::optional<YamlNode> n = m.Find(key)) {
+      const std::string resolved = Resolve(config_dir, n->AsString());
+      if (!fs::is_regular_file(resolved)) {
+        n->Fail("an existing file (relative paths start at the config's folder " + config_dir +
+                ")");
+      }
+      *path = resolved;
+    }
+  }
+}
+
+void ReadModel(const YamlNode& m, ModelSettings* out) {
+  m.ReadEnum("kinematics", kKinematicsNames, &out->kinematics);
+  if (const std::optional<YamlNode> effects = m.Find("effects")) {
+    for (const YamlNode& item : effects->Items()) {
+      const std::optional<Effect> e = EffectFromName(item.AsString());
+      if (!e) item.FailChoice(AllEffectNames());
+      if (out->effects.Has(*e)) item.Fail("each effect once");
+      // SPEC 4: in dh these are already in the links and tools; fitting them
+      // again would make the problem singular.
+      if (out->kinematics == Kinematics::kDh && Info(*e).redundant_in_dh) {
+        item.Fail(
+            "an effect that the dh kinematics does not already hold (collimation, "
+            "tilting_axis, vertical_index and edm_offset are part of its DH links and tools; "
+            "use kinematics: spherical to fit them as effects)");
+      }
+      out->effects.Add(*e);
+    }
+  }
+  if (const std::optional<YamlNode> cyclic = m.Find("edm_cyclic")) {
+    ReadNumber(*cyclic, "unit_length", &out->edm_cyclic_unit_length, IsPositive,
+               "a unit length U > 0 [m]");
+  }
+  m.ReadEnum("faces", kFaceModeNames, &out->faces);
+  m.ReadEnum("intrinsics", kIntrinsicsNames, &out->intrinsics);
+  if (const std::optional<YamlNode> cameras = m.Find("cameras")) {
+    out->cameras.clear();
+    for (const YamlNode& item : cameras->Items()) {
+      CameraTool cam;
+      ReadCameraFields(item, /*required=*/true, &cam);
+      out->cameras.push_back(cam);
+    }
+  }
+}
+
+void ReadFit(const YamlNode& m, FitOptions* out) {
+  if (const std::optional<YamlNode> s = m.Find("sigmas")) {
+    ReadNumber(*s, "edm_m", &out->sigma_edm_m, IsPositive, "a sigma > 0 [m]");
+    ReadNumber(*s, "cam_m", &out->sigma_cam_m, IsPositive, "a sigma > 0 [m]");
+    ReadNumber(*s, "pixel_px", &out->sigma_pixel_px, IsPositive, "a sigma > 0 [px]");
+  }
+  m.Read("reestimate_sigmas", &out->reestimate_sigmas);
+  if (const std::optional<YamlNode> loss = m.Find("robust_loss")) {
+    loss->ReadEnum("type", kLossNames, &out->loss);
+    ReadNumber(*loss, "scale", &out->loss_scale, IsPositive, "a scale > 0 [sigmas]");
+  }
+  ReadCount(m, "max_iterations", &out->max_iterations, 1, "an iteration limit");
+  ReadNumber(m, "translation_bound_m", &out->translation_bound_m, IsPositive,
+             "a translation bound > 0 [m]");
+  if (const std::optional<YamlNode> region = m.Find("critical_region")) {
+    double min_deg = out->min_zenith_rad / kRadPerDeg;
+    double max_deg = out->max_zenith_rad / kRadPerDeg;
+    auto in_range = [](double x) { return x >= 0 && x <= 180; };
+    ReadNumber(*region, "min_zenith_deg", &min_deg, in_range, "a zenith angle in [0, 180] [deg]");
+    ReadNumber(*region, "max_zenith_deg", &max_deg, in_range, "a zenith angle in [0, 180] [deg]");
+    if (!(min_deg < max_deg)) {
+      const std::optional<YamlNode> at = region->Find("max_zenith_deg");
+      (at ? *at : *region)
+          .Fail("max_zenith_deg > min_zenith_deg (" + FormatShortestDouble(min_deg) + ")");
+    }
+    out->min_zenith_rad = min_deg * kRadPerDeg;
+    out->max_zenith_rad = max_deg * kRadPerDeg;
+  }
+  ReadCount(m, "threads", &out->num_threads, 1, "a thread count");
+  m.Read("covariance", &out->compute_covariance);
+  m.Read("verbose", &out->verbose);
+}
+
+void ReadNoise(const YamlNode& m, NoiseOptions* out) {
+  double angle_arcsec = out->angle_rad / kRadPerArcsec;
+  ReadNumber(m, "angle_arcsec", &angle_arcsec, IsNonNegative, "a sigma >= 0 [arcsec]");
+  out->angle_rad = angle_arcsec * kRadPerArcsec;
+  ReadNumber(m, "distance_m", &out->distance_m, IsNonNegative, "a sigma >= 0 [m]");
+  ReadNumber(m, "point_m", &out->point_m, IsNonNegative, "a sigma >= 0 [m]");
+  ReadNumber(m, "pixel_px", &out->pixel_px, IsNonNegative, "a sigma >= 0 [px]");
+}
+
+// A non-empty list of distinct integers, each checked by `ok`.
+std::vector<int> ReadIndexList(const YamlNode& n, bool (*ok)(int), const std::string& expected) {
+  std::vector<int> out;
+  for (const YamlNode& item : n.Items()) {
+    const int x = item.AsInt();
+    if (!ok(x)) item.Fail(expected);
+    if (std::find(out.begin(), out.end(), x) != out.end()) item.Fail(expected + ", each once");
+    out.push_back(x);
+  }
+  if (out.empty()) n.Fail("a non-empty list of " + expected);
+  return out;
+}
+
+void ReadPlan(const YamlNode& m, AcquisitionPlan* out) {
+  ReadCount(m, "sweep_points", &out->sweep_points, 2, "points per sweep");
+  m.Read("sweeps", &out->sweeps);
+  ReadNumbers(m, "edm_distances", &out->edm_distances, IsPositive, "distances > 0 [m]");
+  ReadNumber(m, "cam_ray_length", &out->cam_ray_length, IsPositive, "a ray length > 0 [m]");
+  ReadNumber(m, "pixel_offset", &out->pixel_offset, IsPositive, "a pixel offset > 0 [px]");
+  if (const std::optional<YamlNode> grid = m.Find("grid")) {
+    out->grid_phi_steps = 0;
+    out->grid_theta_steps = 0;
+    grid->Require("phi_steps");
+    grid->Require("theta_steps");
+    ReadCount(*grid, "phi_steps", &out->grid_phi_steps, 1, "grid steps in phi");
+    ReadCount(*grid, "theta_steps", &out->grid_theta_steps, 1, "grid steps in theta");
+    ReadNumbers(*grid, "edm_distances", &out->grid_edm_distances, IsPositive,
+                "distances > 0 [m]");
+    ReadNumbers(*grid, "cam_ray_lengths", &out->grid_cam_ray_lengths, IsPositive,
+                "ray lengths > 0 [m]");
+    ReadCount(*grid, "pixels_per_axis", &out->grid_pixels_per_axis, 1, "pixels per image axis");
+  }
+  if (const std::optional<YamlNode> faces = m.Find("faces")) {
+    out->faces = ReadIndexList(*faces, [](int f) { return f == 1 || f == 2; }, "faces 1 or 2");
+  }
+  if (const std::optional<YamlNode> zooms = m.Find("zooms")) {
+    out->zooms = ReadIndexList(*zooms, [](int z) { return z >= 0; }, "zoom levels >= 0");
+  }
+}
+
+TagBoard ReadBoard(const YamlNode& m) {
+  TagBoard b;
+  if (const std::optional<YamlNode> n = m.Find("family")) {
+    b.family = n->AsString();
+    if (b.family.empty()) n->Fail("an AprilTag family name such as tag36h11");
+  }
+  ReadCount(m, "first_id", &b.first_id, 0, "the first tag id");
+  ReadCount(m, "rows", &b.rows, 1, "tag rows");
+  ReadCount(m, "cols", &b.cols, 1, "tag columns");
+  ReadNumber(m, "tag_size", &b.tag_size, IsPositive, "a tag size > 0 [m]");
+  ReadNumber(m, "spacing", &b.spacing, IsNonNegative, "a spacing >= 0 [m]");
+  // A board at the instrument's origin is never meant: the placement is required.
+  m.Require("t");
+  ReadPoseFields(m, &b.ref_from_board);
+  return b;
+}
+
+void ReadShots(const YamlNode& m, ShotPlan* out) {
+  ReadCount(m, "shots_per_board", &out->shots_per_board, 1, "shots per board");
+  ReadNumber(m, "fill", &out->fill, [](double x) { return x > 0 && x <= 1; },
+             "a fraction of the image in (0, 1]");
+  ReadNumber(m, "pointing_jitter", &out->pointing_jitter, IsNonNegative,
+             "a fraction of the field of view >= 0");
+}
+
+// The truth instrument: starts from the ideal model of its kinematics (with
+// the configured cameras' intrinsics), then every given key overrides.
+InstrumentModel ReadTruth(const YamlNode& m, const ModelSettings& model, int plan_zooms) {
+  Kinematics kinematics = model.kinematics;
+  m.ReadEnum("kinematics", kKinematicsNames, &kinematics);
+  const std::optional<YamlNode> cameras = m.Find("cameras");
+  const std::vector<YamlNode> camera_nodes = cameras ? cameras->Items() : std::vector<YamlNode>{};
+  if (cameras && camera_nodes.empty()) cameras->Fail("a non-empty list of cameras (one per zoom)");
+  const int num_zooms = cameras ? static_cast<int>(camera_nodes.size()) : plan_zooms;
+
+  InstrumentModel truth = IdealModel(kinematics, num_zooms, CameraTool{});
+  truth.edm_cyclic_unit_length = model.edm_cyclic_unit_length;
+  for (int z = 0; z < num_zooms && z < static_cast<int>(model.cameras.size()); ++z) {
+    const PoseBlock ideal_pose = truth.cams[z].flange_from_cam;
+    truth.cams[z] = model.cameras[z];
+    truth.cams[z].flange_from_cam = ideal_pose;
+  }
+  for (int z = 0; z < static_cast<int>(camera_nodes.size()); ++z) {
+    ReadPoseFields(camera_nodes[z], &truth.cams[z].flange_from_cam);
+    ReadCameraFields(camera_nodes[z], /*required=*/false, &truth.cams[z]);
+  }
+  if (const std::optional<YamlNode> n = m.Find("base")) ReadPoseFields(*n, &truth.base);
+  if (const std::optional<YamlNode> n = m.Find("edm")) ReadPoseFields(*n, &truth.edm);
+  if (const std::optional<YamlNode> n = m.Find("links")) {
+    if (kinematics != Kinematics::kDh) n->Fail("no DH links in the spherical kinematics");
+    const std::vector<YamlNode> links = n->Items();
+    if (links.size() != 2) n->Fail("2 links [[d, gamma_offset, alpha, a], [...]]");
+    for (int i = 0; i < 2; ++i) {
+      const std::vector<double> p = links[i].AsDoubles(4);
+      std::copy(p.begin(), p.end(), truth.links[i].p.begin());
+    }
+  }
+  ReadNumber(m, "edm_cyclic_unit_length", &truth.edm_cyclic_unit_length, IsPositive,
+             "a unit length U > 0 [m]");
+  if (const std::optional<YamlNode> effects = m.Find("effects")) {
+    for (const YamlNode::Entry& entry : effects->Entries()) {
+      const std::optional<Effect> e = EffectFromName(entry.key.AsString());
+      if (!e) entry.key.FailChoice(AllEffectNames());
+      const EffectInfo& info = Info(*e);
+      if (IsDistortion(*e)) {
+        entry.key.Fail("a kinematic or EDM effect (distortion coefficients go in "
+                       "simulate.truth.cameras[zoom].distortion)");
+      }
+      if (kinematics == Kinematics::kDh && info.redundant_in_dh) {
+        entry.key.Fail("an effect that the dh kinematics does not already hold (put it into "
+                       "the links and tools, or use kinematics: spherical)");
+      }
+      std::string expected = std::to_string(info.num_params) + " value(s) in report units [";
+      for (int i = 0; i < info.num_params; ++i) {
+        expected += std::string(i ? ", " : "") + info.param_names[i] + " (" +
+                    info.report_units[i] + ")";
+      }
+      expected += "]";
+      const std::vector<double> report = entry.value.IsScalar()
+                                             ? std::vector<double>{entry.value.AsDouble()}
+                                             : entry.value.AsDoubles();
+      if (static_cast<int>(report.size()) != info.num_params) entry.value.Fail(expected);
+      truth.effects.Add(*e);
+      truth.EffectValue(*e) = FromReportUnits(*e, {report[0], info.num_params > 1 ? report[1] : 0});
+    }
+  }
+  // Distortion groups are switched on by their coefficients, so that the
+  // truth's effect list says what the simulated data contain.
+  for (const EffectInfo& info : EffectCatalogue()) {
+    for (const CameraTool& cam : truth.cams) {
+      for (int index : info.distortion_indices) {
+        if (cam.distortion[index] != 0) truth.effects.Add(info.effect);
+      }
+    }
+  }
+  return truth;
+}
+
+void ReadSimulate(const YamlNode& m, const ModelSettings& model, SimulationOptions* out,
+                  bool* truth_from_paper) {
+  if (const std::optional<YamlNode> n = m.Find("seed")) out->seed = n->AsUint64();
+  if (const std::optional<YamlNode> n = m.Find("noise")) ReadNoise(*n, &out->noise);
+  const std::optional<YamlNode> plan = m.Find("plan");
+  if (plan) ReadPlan(*plan, &out->plan);
+  if (const std::optional<YamlNode> n = m.Find("targets")) {
+    for (const YamlNode& item : n->Items()) out->targets.boards.push_back(ReadBoard(item));
+  }
+  if (const std::optional<YamlNode> n = m.Find("shots")) ReadShots(*n, &out->shots);
+  const int plan_zooms = PlanNumZooms(out->plan);
+  const std::optional<YamlNode> truth = m.Find("truth");
+  *truth_from_paper = !truth;
+  if (!truth) return;
+  out->truth = ReadTruth(*truth, model, plan_zooms);
+  if (out->truth.NumZooms() < plan_zooms) {
+    const std::string expected = "zoom levels < " + std::to_string(out->truth.NumZooms()) +
+                                 " (simulate.truth.cameras has one camera per zoom)";
+    if (plan) plan->Require("zooms").Fail(expected);
+    m.Fail(expected);
+  }
+}
+
+void ReadDiagnose(const YamlNode& m, DiagnoseOptions* out) {
+  m.Read("enabled", &out->enabled);
+  m.Read("auto", &out->auto_add);
+  ReadNumber(m, "significance", &out->significance, [](double x) { return x > 0 && x < 1; },
+             "a test level in (0, 1)");
+}
+
+// --- dump ---------------------------------------------------------------------
+
+// Numbers go through Num() rather than the emitter's own double output, which
+// writes 1e-05 as 1.0000000000000001e-05.
+std::string Num(double x) { return YamlDouble(x, /*shortest=*/true); }
+
+void EmitNumbers(YAML::Emitter& e, const double* x, size_t n) {
+  e << YAML::Flow << YAML::BeginSeq;
+  for (size_t i = 0; i < n; ++i) e << Num(x[i]);
+  e << YAML::EndSeq;
+}
+void EmitNumbers(YAML::Emitter& e, const std::vector<double>& x) { EmitNumbers(e, x.data(), x.size()); }
+void EmitInts(YAML::Emitter& e, const std::vector<int>& x) {
+  e << YAML::Flow << YAML::BeginSeq;
+  for (int v : x) e << v;
+  e << YAML::EndSeq;
+}
+
+void EmitPose(YAML::Emitter& e, const Rigid3& pose) {
+  const Eigen::Vector3d euler = EulerFromRotation(pose.rotation);
+  e << YAML::Key << "euler" << YAML::Value;
+  EmitNumbers(e, euler.data(), 3);
+  e << YAML::Key << "t" << YAML::Value;
+  EmitNumbers(e, pose.translation.data(), 3);
+}
+
+void EmitCameraFields(YAML::Emitter& e, const CameraTool& cam) {
+  e << YAML::Key << "width" << YAML::Value << cam.width;
+  e << YAML::Key << "height" << YAML::Value << cam.height;
+  const char* names[camera::kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
+  for (int i = 0; i < camera::kNumIntrinsics; ++i) {
+    e << YAML::Key << names[i] << YAML::Value << Num(cam.intrinsics[i]);
+  }
+  e << YAML::Key << "distortion" << YAML::Value;
+  EmitNumbers(e, cam.distortion.data(), cam.distortion.size());
+}
+
+void EmitTruth(YAML::Emitter& e, const InstrumentModel& truth) {
+  e << YAML::BeginMap;
+  e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(truth.kinematics);
+  e << YAML::Key << "base" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  EmitPose(e, truth.base.ToRigid());
+  e << YAML::EndMap;
+  if (truth.kinematics == Kinematics::kDh) {
+    e << YAML::Key << "links" << YAML::Value << YAML::BeginSeq;
+    for (const DhLink& link : truth.links) EmitNumbers(e, link.p.data(), link.p.size());
+    e << YAML::EndSeq;
+  }
+  e << YAML::Key << "edm" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  EmitPose(e, truth.edm.ToRigid());
+  e << YAML::EndMap;
+  e << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
+  for (const CameraTool& cam : truth.cams) {
+    e << YAML::Flow << YAML::BeginMap;
+    EmitPose(e, cam.flange_from_cam.ToRigid());
+    EmitCameraFields(e, cam);
+    e << YAML::EndMap;
+  }
+  e << YAML::EndSeq;
+  e << YAML::Key << "effects" << YAML::Value << YAML::BeginMap;
+  for (Effect effect : truth.effects.List()) {
+    if (!IsKinematic(effect)) continue;  // distortion lives in the cameras
+    const EffectReportValue report = ToReportUnits(effect, truth.EffectValue(effect), {});
+    e << YAML::Key << Info(effect).name << YAML::Value;
+    EmitNumbers(e, report.value.data(), report.num);
+  }
+  e << YAML::EndMap;
+  e << YAML::Key << "edm_cyclic_unit_length" << YAML::Value << Num(truth.edm_cyclic_unit_length);
+  e << YAML::EndMap;
+}
+
+void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_from_paper) {
+  e << YAML::BeginMap;
+  e << YAML::Key << "seed" << YAML::Value << sim.seed;
+  if (!truth_from_paper) {
+    e << YAML::Key << "truth" << YAML::Value;
+    EmitTruth(e, sim.truth);
+  }
+  e << YAML::Key << "noise" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "angle_arcsec" << YAML::Value << Num(sim.noise.angle_rad / kRadPerArcsec);
+  e << YAML::Key << "distance_m" << YAML::Value << Num(sim.noise.distance_m);
+  e << YAML::Key << "point_m" << YAML::Value << Num(sim.noise.point_m);
+  e << YAML::Key << "pixel_px" << YAML::Value << Num(sim.noise.pixel_px);
+  e << YAML::EndMap;
+  const AcquisitionPlan& p = sim.plan;
+  e << YAML::Key << "plan" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "sweeps" << YAML::Value << p.sweeps;
+  e << YAML::Key << "sweep_points" << YAML::Value << p.sweep_points;
+  e << YAML::Key << "edm_distances" << YAML::Value;
+  EmitNumbers(e, p.edm_distances);
+  e << YAML::Key << "cam_ray_length" << YAML::Value << Num(p.cam_ray_length);
+  e << YAML::Key << "pixel_offset" << YAML::Value << Num(p.pixel_offset);
+  if (p.grid_phi_steps > 0 && p.grid_theta_steps > 0) {
+    e << YAML::Key << "grid" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    e << YAML::Key << "phi_steps" << YAML::Value << p.grid_phi_steps;
+    e << YAML::Key << "theta_steps" << YAML::Value << p.grid_theta_steps;
+    e << YAML::Key << "edm_distances" << YAML::Value;
+    EmitNumbers(e, p.grid_edm_distances);
+    e << YAML::Key << "cam_ray_lengths" << YAML::Value;
+    EmitNumbers(e, p.grid_cam_ray_lengths);
+    e << YAML::Key << "pixels_per_axis" << YAML::Value << p.grid_pixels_per_axis;
+    e << YAML::EndMap;
+  }
+  e << YAML::Key << "faces" << YAML::Value;
+  EmitInts(e, p.faces);
+  e << YAML::Key << "zooms" << YAML::Value;
+  EmitInts(e, p.zooms);
+  e << YAML::EndMap;
+  e << YAML::Key << "targets" << YAML::Value << YAML::BeginSeq;
+  for (const TagBoard& b : sim.targets.boards) {
+    e << YAML::Flow << YAML::BeginMap;
+    e << YAML::Key << "family" << YAML::Value << b.family;
+    e << YAML::Key << "first_id" << YAML::Value << b.first_id;
+    e << YAML::Key << "rows" << YAML::Value << b.rows;
+    e << YAML::Key << "cols" << YAML::Value << b.cols;
+    e << YAML::Key << "tag_size" << YAML::Value << Num(b.tag_size);
+    e << YAML::Key << "spacing" << YAML::Value << Num(b.spacing);
+    EmitPose(e, b.ref_from_board);
+    e << YAML::EndMap;
+  }
+  e << YAML::EndSeq;
+  e << YAML::Key << "shots" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "shots_per_board" << YAML::Value << sim.shots.shots_per_board;
+  e << YAML::Key << "fill" << YAML::Value << Num(sim.shots.fill);
+  e << YAML::Key << "pointing_jitter" << YAML::Value << Num(sim.shots.pointing_jitter);
+  e << YAML::EndMap;
+  e << YAML::EndMap;
+}
+
+}  // namespace
+
+const char* FaceModeName(FaceMode m) { return NameOf(kFaceModeNames, m).c_str(); }
+const char* IntrinsicsModeName(IntrinsicsMode m) { return NameOf(kIntrinsicsNames, m).c_str(); }
+
+int PlanNumZooms(const AcquisitionPlan& plan) {
+  int max_zoom = -1;
+  for (int z : plan.zooms) max_zoom = std::max(max_zoom, z);
+  return max_zoom + 1;
+}
+
+RunConfig LoadConfig(const std::string& path) {
+  const YamlDocument doc = YamlDocument::Load(path);
+  const YamlNode root = doc.Root();
+  RunConfig config;
+  const fs::path absolute = fs::absolute(path).lexically_normal();
+  config.config_path = absolute.string();
+  config.config_dir = absolute.parent_path().string();
+
+  if (const std::optional<YamlNode> n = root.Find("data")) ReadData(*n, config.config_dir, &config);
+  if (const std::optional<YamlNode> n = root.Find("model")) ReadModel(*n, &config.model);
+  if (const std::optional<YamlNode> n = root.Find("fit")) ReadFit(*n, &config.fit);
+  config.fit.fit_intrinsics = config.model.intrinsics == IntrinsicsMode::kFit;
+  const std::optional<YamlNode> simulate = root.Find("simulate");
+  if (simulate) {
+    config.simulate.emplace();
+    ReadSimulate(*simulate, config.model, &*config.simulate, &config.truth_from_paper);
+  }
+  if (const std::optional<YamlNode> n = root.Find("render")) {
+    n->ConsumeAll();
+    config.render_yaml = n->Dump();
+  }
+  if (const std::optional<YamlNode> n = root.Find("diagnose")) ReadDiagnose(*n, &config.diagnose);
+  std::string output = "out";
+  root.Read("output", &output);
+  config.output_dir = Resolve(config.config_dir, output);
+
+  doc.CheckAllKeysUsed();
+
+  const bool have_data = !config.records_path.empty() || !config.pixels_path.empty();
+  if (!have_data && !simulate) {
+    throw InputError::Key(path, "data", 0, 0,
+                          "data.records and/or data.pixels, or a simulate section",
+                          "neither");
+  }
+  if (have_data && simulate) {
+    config.notes.push_back(path + ": the simulate section is not used because data files are given");
+  }
+  return config;
+}
+
+std::string DumpConfig(const RunConfig& c) {
+  YAML::Emitter e;
+  e << YAML::BeginMap;
+  if (!c.records_path.empty() || !c.pixels_path.empty()) {
+    e << YAML::Key << "data" << YAML::Value << YAML::BeginMap;
+    if (!c.records_path.empty()) e << YAML::Key << "records" << YAML::Value << c.records_path;
+    if (!c.pixels_path.empty()) e << YAML::Key << "pixels" << YAML::Value << c.pixels_path;
+    e << YAML::EndMap;
+  }
+
+  const ModelSettings& m = c.model;
+  e << YAML::Key << "model" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(m.kinematics);
+  e << YAML::Key << "effects" << YAML::Value << YAML::Flow << m.effects.Names();
+  e << YAML::Key << "edm_cyclic" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+    << "unit_length" << YAML::Value << Num(m.edm_cyclic_unit_length) << YAML::EndMap;
+  e << YAML::Key << "faces" << YAML::Value << FaceModeName(m.faces);
+  e << YAML::Key << "intrinsics" << YAML::Value << IntrinsicsModeName(m.intrinsics);
+  if (!m.cameras.empty()) {
+    e << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
+    for (const CameraTool& cam : m.cameras) {
+      e << YAML::Flow << YAML::BeginMap;
+      EmitCameraFields(e, cam);
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq;
+  }
+  e << YAML::EndMap;
+
+  const FitOptions& f = c.fit;
+  e << YAML::Key << "fit" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "sigmas" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "edm_m" << YAML::Value << Num(f.sigma_edm_m);
+  e << YAML::Key << "cam_m" << YAML::Value << Num(f.sigma_cam_m);
+  e << YAML::Key << "pixel_px" << YAML::Value << Num(f.sigma_pixel_px);
+  e << YAML::EndMap;
+  e << YAML::Key << "reestimate_sigmas" << YAML::Value << f.reestimate_sigmas;
+  e << YAML::Key << "robust_loss" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "type" << YAML::Value << NameOf(kLossNames, f.loss);
+  e << YAML::Key << "scale" << YAML::Value << Num(f.loss_scale);
+  e << YAML::EndMap;
+  e << YAML::Key << "max_iterations" << YAML::Value << f.max_iterations;
+  e << YAML::Key << "translation_bound_m" << YAML::Value << Num(f.translation_bound_m);
+  e << YAML::Key << "critical_region" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "min_zenith_deg" << YAML::Value << Num(f.min_zenith_rad / kRadPerDeg);
+  e << YAML::Key << "max_zenith_deg" << YAML::Value << Num(f.max_zenith_rad / kRadPerDeg);
+  e << YAML::EndMap;
+  e << YAML::Key << "threads" << YAML::Value << f.num_threads;
+  e << YAML::Key << "covariance" << YAML::Value << f.compute_covariance;
+  e << YAML::Key << "verbose" << YAML::Value << f.verbose;
+  e << YAML::EndMap;
+
+  if (c.simulate) {
+    e << YAML::Key << "simulate" << YAML::Value;
+    EmitSimulate(e, *c.simulate, c.truth_from_paper);
+  }
+  if (!c.render_yaml.empty()) {
+    e << YAML::Key << "render" << YAML::Value << YAML::Load(c.render_yaml);
+  }
+  e << YAML::Key << "diagnose" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "enabled" << YAML::Value << c.diagnose.enabled;
+  e << YAML::Key << "auto" << YAML::Value << c.diagnose.auto_add;
+  e << YAML::Key << "significance" << YAML::Value << Num(c.diagnose.significance);
+  e << YAML::EndMap;
+  e << YAML::Key << "output" << YAML::Value << c.output_dir;
+  e << YAML::EndMap;
+  return std::string(e.c_str()) + "\n";
+}
+
+}  // namespace rtscalib

@@ -1,0 +1,321 @@
+#include "libcalib/io/model_io.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+#include "libcalib/io/errors.h"
+#include "libcalib/io/number_text.h"
+#include "libcalib/io/yaml_reader.h"
+
+namespace rtscalib {
+namespace {
+
+constexpr const char* kFormat = "rtscalib-model";
+constexpr int kVersion = 1;
+const char* const kIntrinsicNames[camera::kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
+const char* const kDistortionNames[camera::kNumDistortion] = {
+    "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "taux", "tauy"};
+const char* const kDhNames[4] = {"d", "gamma_offset", "alpha", "a"};
+
+// Derived values (Euler angles, report units) must match their parameter
+// blocks to this relative tolerance; %.17g text and the trigonometry between
+// them lose ~1e-15.
+constexpr double kDerivedTolerance = 1e-9;
+// Quaternions are written normalised; more than this off unit length means a
+// hand edit, which would scale every prediction.
+constexpr double kUnitQuaternionTolerance = 1e-9;
+
+std::string Num(double x) { return YamlDouble(x); }
+
+void EmitNumbers(YAML::Emitter& e, const double* x, int n) {
+  e << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < n; ++i) e << Num(x[i]);
+  e << YAML::EndSeq;
+}
+
+// {name: value, ...} in flow style.
+void EmitNamed(YAML::Emitter& e, const char* const* names, const double* x, int n) {
+  e << YAML::Flow << YAML::BeginMap;
+  for (int i = 0; i < n; ++i) e << YAML::Key << names[i] << YAML::Value << Num(x[i]);
+  e << YAML::EndMap;
+}
+
+void EmitPose(YAML::Emitter& e, const PoseBlock& pose, const PoseSigma* sigma) {
+  e << YAML::BeginMap;
+  e << YAML::Key << "q" << YAML::Value;
+  EmitNumbers(e, pose.q.data(), 4);
+  e << YAML::Key << "t" << YAML::Value;
+  EmitNumbers(e, pose.t.data(), 3);
+  const Eigen::Vector3d euler = pose.Euler();
+  e << YAML::Key << "euler" << YAML::Value;
+  EmitNumbers(e, euler.data(), 3);
+  if (sigma) {
+    e << YAML::Key << "sigma" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    e << YAML::Key << "rotation" << YAML::Value;
+    EmitNumbers(e, sigma->rotation.data(), 3);
+    e << YAML::Key << "euler" << YAML::Value;
+    EmitNumbers(e, sigma->euler.data(), 3);
+    e << YAML::Key << "t" << YAML::Value;
+    EmitNumbers(e, sigma->t.data(), 3);
+    e << YAML::EndMap;
+  }
+  e << YAML::EndMap;
+}
+
+void EmitEffect(YAML::Emitter& e, const InstrumentModel& model, Effect effect) {
+  const EffectInfo& info = Info(effect);
+  e << YAML::BeginMap;
+  e << YAML::Key << "name" << YAML::Value << info.name;
+  if (IsKinematic(effect)) {
+    const std::array<double, 4>& cov = model.sigmas.effect_cov[static_cast<int>(effect)];
+    e << YAML::Key << "si" << YAML::Value;
+    EmitNumbers(e, model.EffectValue(effect).data(), info.num_params);
+    if (model.sigmas.valid) {
+      e << YAML::Key << "covariance" << YAML::Value;
+      EmitNumbers(e, cov.data(), 4);
+    }
+    const EffectReportValue report = ToReportUnits(effect, model.EffectValue(effect), cov);
+    e << YAML::Key << "report" << YAML::Value << YAML::BeginMap;
+    for (int i = 0; i < info.num_params; ++i) {
+      e << YAML::Key << info.param_names[i] << YAML::Value << YAML::Flow << YAML::BeginMap;
+      e << YAML::Key << "value" << YAML::Value << Num(report.value[i]);
+      if (model.sigmas.valid) e << YAML::Key << "sigma" << YAML::Value << Num(report.sigma[i]);
+      e << YAML::Key << "unit" << YAML::Value << info.report_units[i];
+      e << YAML::EndMap;
+    }
+    e << YAML::EndMap;
+  }
+  e << YAML::EndMap;
+}
+
+void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
+  const CameraTool& cam = model.cams[zoom];
+  const ModelSigmas& s = model.sigmas;
+  e << YAML::BeginMap;
+  e << YAML::Key << "zoom" << YAML::Value << zoom;
+  e << YAML::Key << "width" << YAML::Value << cam.width;
+  e << YAML::Key << "height" << YAML::Value << cam.height;
+  e << YAML::Key << "flange_from_cam" << YAML::Value;
+  EmitPose(e, cam.flange_from_cam, s.valid ? &s.cam_tools[zoom] : nullptr);
+  e << YAML::Key << "intrinsics" << YAML::Value;
+  EmitNamed(e, kIntrinsicNames, cam.intrinsics.data(), camera::kNumIntrinsics);
+  e << YAML::Key << "distortion" << YAML::Value;
+  EmitNamed(e, kDistortionNames, cam.distortion.data(), camera::kNumDistortion);
+  if (s.valid) {
+    e << YAML::Key << "intrinsics_sigma" << YAML::Value;
+    EmitNamed(e, kIntrinsicNames, s.intrinsics[zoom].data(), camera::kNumIntrinsics);
+    e << YAML::Key << "distortion_sigma" << YAML::Value;
+    EmitNamed(e, kDistortionNames, s.distortion[zoom].data(), camera::kNumDistortion);
+  }
+  e << YAML::EndMap;
+}
+
+// --- reading ----------------------------------------------------------------
+
+void ReadNumbersInto(const YamlNode& n, double* out, int size, bool allow_nan = false) {
+  const std::vector<YamlNode> items = n.Items();
+  if (static_cast<int>(items.size()) != size) {
+    n.Fail("a list of " + std::to_string(size) + " numbers");
+  }
+  for (int i = 0; i < size; ++i) out[i] = allow_nan ? items[i].AsDoubleOrNan() : items[i].AsDouble();
+}
+
+void ReadNamedInto(const YamlNode& m, const char* const* names, double* out, int size,
+                   bool allow_nan = false) {
+  for (int i = 0; i < size; ++i) {
+    const YamlNode n = m.Require(names[i]);
+    out[i] = allow_nan ? n.AsDoubleOrNan() : n.AsDouble();
+  }
+}
+
+PoseBlock ReadPose(const YamlNode& m, bool with_sigma, PoseSigma* sigma) {
+  PoseBlock pose;
+  const YamlNode q = m.Require("q");
+  ReadNumbersInto(q, pose.q.data(), 4);
+  const double norm = std::sqrt(pose.q[0] * pose.q[0] + pose.q[1] * pose.q[1] +
+                                pose.q[2] * pose.q[2] + pose.q[3] * pose.q[3]);
+  if (std::fabs(norm - 1.0) > kUnitQuaternionTolerance) {
+    q.Fail("a unit quaternion [x, y, z, w] (norm " + FormatShortestDouble(norm) + ")");
+  }
+  ReadNumbersInto(m.Require("t"), pose.t.data(), 3);
+  const YamlNode euler_node = m.Require("euler");
+  double euler[3];
+  ReadNumbersInto(euler_node, euler, 3);
+  const Eigen::Matrix3d from_euler =
+      RotationFromEuler<double>(Eigen::Vector3d(euler[0], euler[1], euler[2]));
+  if ((from_euler - pose.ToRigid().rotation).cwiseAbs().maxCoeff() > kDerivedTolerance) {
+    euler_node.Fail("the Euler angles [a, b, g] of q (predictions use q; edit both together)");
+  }
+  if (with_sigma) {
+    const YamlNode s = m.Require("sigma");
+    ReadNumbersInto(s.Require("rotation"), sigma->rotation.data(), 3, true);
+    ReadNumbersInto(s.Require("euler"), sigma->euler.data(), 3, true);
+    ReadNumbersInto(s.Require("t"), sigma->t.data(), 3, true);
+  }
+  return pose;
+}
+
+void ReadEffect(const YamlNode& m, bool with_sigma, InstrumentModel* model) {
+  const YamlNode name = m.Require("name");
+  const std::optional<Effect> effect = EffectFromName(name.AsString());
+  if (!effect) {
+    std::vector<std::string> valid;
+    for (const EffectInfo& info : EffectCatalogue()) valid.emplace_back(info.name);
+    name.FailChoice(valid);
+  }
+  if (model->effects.Has(*effect)) name.Fail("each effect once");
+  model->effects.Add(*effect);
+  if (!IsKinematic(*effect)) return;
+  const EffectInfo& info = Info(*effect);
+  std::array<double, 2>& si = model->EffectValue(*effect);
+  ReadNumbersInto(m.Require("si"), si.data(), info.num_params);
+  std::array<double, 4>& cov = model->sigmas.effect_cov[static_cast<int>(*effect)];
+  if (with_sigma) ReadNumbersInto(m.Require("covariance"), cov.data(), 4, true);
+  // The report values are derived; they must still say what si says.
+  const YamlNode report = m.Require("report");
+  std::array<double, 2> values{0, 0};
+  for (int i = 0; i < info.num_params; ++i) {
+    const YamlNode p = report.Require(info.param_names[i]);
+    values[i] = p.Require("value").AsDouble();
+    if (with_sigma) p.Require("sigma").AsDoubleOrNan();
+    const YamlNode unit = p.Require("unit");
+    if (unit.AsString() != info.report_units[i]) unit.Fail(info.report_units[i]);
+  }
+  const std::array<double, 2> from_report = FromReportUnits(*effect, values);
+  // Relative to the effect's amplitude: a polar pair's small component may
+  // carry the whole conversion error of the large one.
+  const double amplitude = std::hypot(si[0], si[1]);
+  for (int i = 0; i < info.num_params; ++i) {
+    if (std::fabs(from_report[i] - si[i]) > kDerivedTolerance * amplitude) {
+      report.Fail("report values that convert to si (predictions use si; edit both together)");
+    }
+  }
+}
+
+}  // namespace
+
+void WriteModelYaml(const std::string& path, const InstrumentModel& model,
+                    const ModelMetadata& metadata) {
+  const ModelSigmas& s = model.sigmas;
+  YAML::Emitter e;
+  e << YAML::Comment(
+      "rtscalib instrument model. Radians, metres, pixels. q = [x, y, z, w]; "
+      "euler = [a, b, g] with R = Rz(g) Ry(b) Rx(a) (derived from q, for reading). "
+      "Effects: si = the values predictions use, report = the same in report units.");
+  e << YAML::BeginMap;
+  e << YAML::Key << "format" << YAML::Value << kFormat;
+  e << YAML::Key << "version" << YAML::Value << kVersion;
+  e << YAML::Key << "metadata" << YAML::Value << YAML::BeginMap;
+  for (const auto& [key, value] : metadata) e << YAML::Key << key << YAML::Value << value;
+  e << YAML::EndMap;
+  e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(model.kinematics);
+  e << YAML::Key << "edm_cyclic_unit_length" << YAML::Value << Num(model.edm_cyclic_unit_length);
+  e << YAML::Key << "uncertainties" << YAML::Value << s.valid;
+  e << YAML::Key << "base" << YAML::Value;
+  EmitPose(e, model.base, s.valid ? &s.base : nullptr);
+  e << YAML::Key << "edm" << YAML::Value;
+  EmitPose(e, model.edm, s.valid ? &s.edm : nullptr);
+  if (model.kinematics == Kinematics::kDh) {
+    e << YAML::Key << "links" << YAML::Value << YAML::BeginSeq;
+    for (int i = 0; i < 2; ++i) {
+      e << YAML::Flow << YAML::BeginMap;
+      for (int k = 0; k < 4; ++k) e << YAML::Key << kDhNames[k] << YAML::Value << Num(model.links[i].p[k]);
+      if (s.valid) {
+        e << YAML::Key << "sigma" << YAML::Value;
+        EmitNamed(e, kDhNames, s.links[i].data(), 4);
+      }
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq;
+  }
+  e << YAML::Key << "effects" << YAML::Value << YAML::BeginSeq;
+  for (Effect effect : model.effects.List()) EmitEffect(e, model, effect);
+  e << YAML::EndSeq;
+  e << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
+  for (int z = 0; z < model.NumZooms(); ++z) EmitCamera(e, model, z);
+  e << YAML::EndSeq;
+  e << YAML::EndMap;
+  if (!e.good()) throw std::logic_error("model.yaml emitter: " + e.GetLastError());
+
+  std::ofstream out(path, std::ios::binary);
+  out << e.c_str() << "\n";
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) {
+  const YamlDocument doc = YamlDocument::Load(path);
+  const YamlNode root = doc.Root();
+  const YamlNode format = root.Require("format");
+  if (format.AsString() != kFormat) format.Fail(kFormat);
+  const YamlNode version = root.Require("version");
+  if (version.AsInt() != kVersion) version.Fail("version " + std::to_string(kVersion));
+
+  ModelMetadata meta;
+  if (const std::optional<YamlNode> m = root.Find("metadata")) {
+    for (const YamlNode::Entry& entry : m->Entries()) {
+      meta.emplace_back(entry.key.AsString(), entry.value.AsString());
+    }
+  }
+
+  InstrumentModel model;
+  model.kinematics = root.Require("kinematics")
+                         .AsEnum<Kinematics>({{"dh", Kinematics::kDh},
+                                              {"spherical", Kinematics::kSpherical}});
+  const YamlNode unit = root.Require("edm_cyclic_unit_length");
+  model.edm_cyclic_unit_length = unit.AsDouble();
+  if (!(model.edm_cyclic_unit_length > 0)) unit.Fail("a unit length > 0 [m]");
+  const bool with_sigma = root.Require("uncertainties").AsBool();
+  ModelSigmas& s = model.sigmas;
+  s.valid = with_sigma;
+  model.base = ReadPose(root.Require("base"), with_sigma, &s.base);
+  model.edm = ReadPose(root.Require("edm"), with_sigma, &s.edm);
+  if (model.kinematics == Kinematics::kDh) {
+    const YamlNode links = root.Require("links");
+    const std::vector<YamlNode> items = links.Items();
+    if (items.size() != 2) links.Fail("2 DH links");
+    for (int i = 0; i < 2; ++i) {
+      ReadNamedInto(items[i], kDhNames, model.links[i].p.data(), 4);
+      if (with_sigma) ReadNamedInto(items[i].Require("sigma"), kDhNames, s.links[i].data(), 4, true);
+    }
+  }
+  for (const YamlNode& item : root.Require("effects").Items()) ReadEffect(item, with_sigma, &model);
+
+  const YamlNode cameras = root.Require("cameras");
+  for (const YamlNode& item : cameras.Items()) {
+    const int zoom = model.NumZooms();
+    const YamlNode zoom_node = item.Require("zoom");
+    if (zoom_node.AsInt() != zoom) zoom_node.Fail("zoom " + std::to_string(zoom) + " (cameras are listed in zoom order)");
+    CameraTool cam;
+    for (auto [key, value] : {std::pair<const char*, int*>{"width", &cam.width},
+                              std::pair<const char*, int*>{"height", &cam.height}}) {
+      const YamlNode n = item.Require(key);
+      *value = n.AsInt();
+      if (*value <= 0) n.Fail(std::string("an image ") + key + " > 0 [px]");
+    }
+    PoseSigma tool_sigma;
+    cam.flange_from_cam = ReadPose(item.Require("flange_from_cam"), with_sigma, &tool_sigma);
+    ReadNamedInto(item.Require("intrinsics"), kIntrinsicNames, cam.intrinsics.data(),
+                  camera::kNumIntrinsics);
+    ReadNamedInto(item.Require("distortion"), kDistortionNames, cam.distortion.data(),
+                  camera::kNumDistortion);
+    if (with_sigma) {
+      s.cam_tools.push_back(tool_sigma);
+      s.intrinsics.emplace_back();
+      ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicNames, s.intrinsics.back().data(),
+                    camera::kNumIntrinsics, true);
+      s.distortion.emplace_back();
+      ReadNamedInto(item.Require("distortion_sigma"), kDistortionNames,
+                    s.distortion.back().data(), camera::kNumDistortion, true);
+    }
+    model.cams.push_back(cam);
+  }
+  doc.CheckAllKeysUsed();
+  if (metadata) *metadata = std::move(meta);
+  return model;
+}
+
+}  // namespace rtscalib
