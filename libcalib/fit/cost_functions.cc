@@ -33,20 +33,4 @@ BlockLayout LayoutFor(InstrumentModel* model, int zoom) {
   return l;
 }
 
-ceres::CostFunction* MakeRecordCost(const Record& r, InstrumentModel* model, double sigma) {
-  if (r.tool == Tool::kEdm) {
-    auto* f = new EdmPointResidual{LayoutFor(model, -1), r.phi, r.theta, r.d, r.x, 1.0 / sigma};
-    return MakeCost<EdmPointResidual, 3>(f);
-  }
-  auto* f =
-      new CamPointResidual{LayoutFor(model, r.zoom), r.phi, r.theta, r.u, r.v, r.d, r.x, 1.0 / sigma};
-  return MakeCost<CamPointResidual, 3>(f);
-}
-
-ceres::CostFunction* MakePixelCost(const PixelObservation& p, InstrumentModel* model,
-                                   double sigma) {
-  auto* f = new ReprojectionResidual{LayoutFor(model, p.zoom), p.phi, p.theta, p.X, p.uv, 1.0 / sigma};
-  return MakeCost<ReprojectionResidual, 2>(f);
-}
-
 }  // namespace rtscalib

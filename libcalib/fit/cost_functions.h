@@ -1,15 +1,17 @@
 // Residuals of the refinement, all created through one helper (`MakeCost`).
 //
 // Every functor evaluates the templated kinematics (libcalib/model/kinematics.h)
-// on a `BlockLayout`: the list of parameter blocks one observation touches,
-// each a pointer into the InstrumentModel's own memory, in this order:
+// on a `BlockLayout`: the list of parameter blocks one group of observations
+// touches, each a pointer into the InstrumentModel's own memory, in this order:
 //   base_q(4) base_t(3) [link0(4) link1(4) if dh] tool_q(4) tool_t(3)
 //   [intrinsics(4) distortion(14) for camera tools] [one block per enabled
 //   kinematic effect, in catalogue order]
-// Residuals are whitened by the observation group's sigma.
-//   EdmPointResidual:   (F_EDM(phi, theta, d) - x) / sigma           3 values [1]
-//   CamPointResidual:   (F_CAM(phi, theta, u, v, d) - x) / sigma      3 values [1]
-//   ReprojectionResidual: (project(X) - uv) / sigma                   2 values [1]
+// Observations that share a pointing share one residual block, so that the
+// chain ref_from_tool(phi, theta) is differentiated once per pointing, not
+// once per point (with a robust loss every observation gets its own block,
+// because the loss acts per block). Residuals are whitened by their sigma:
+//   records of one pose and tool:  (F_EDM / F_CAM - x) / sigma     3 per row
+//   pixels of one shot:            (project(X) - uv) / sigma        2 per point
 #pragma once
 
 #include <ceres/dynamic_autodiff_cost_function.h>
@@ -22,10 +24,6 @@
 #include "libcalib/model/observations.h"
 
 namespace rtscalib {
-
-// Jet width of the dynamic autodiff: every residual touches at most
-// 7 + 8 + 7 + 4 + 14 + 16 = 56 parameters, so one pass suffices.
-constexpr int kCostStride = 56;
 
 struct BlockLayout {
   Kinematics kinematics = Kinematics::kDh;
@@ -56,77 +54,95 @@ struct BlockLayout {
   }
 };
 
-// Layout for an EDM observation or a camera observation at `zoom` (-1 = EDM).
+// Layout for EDM observations (zoom = -1) or camera observations at `zoom`.
 BlockLayout LayoutFor(InstrumentModel* model, int zoom);
 
-struct EdmPointResidual {
+// Records of one pointing and one tool (the EDM, or the camera at one zoom).
+struct RecordGroupResidual {
+  struct Row {
+    double u = 0, v = 0, d = 0;
+    Eigen::Vector3d x;
+    double inv_sigma = 1;
+  };
   BlockLayout layout;
-  double phi, theta, d;
-  Eigen::Vector3d x;
-  double inv_sigma;
+  bool edm = true;
+  double phi = 0, theta = 0;
+  std::vector<Row> rows;
 
   template <typename T>
   bool operator()(T const* const* p, T* r) const {
     const ModelView<T> view = layout.View(p);
-    const Vec3<T> calc =
-        EdmPoint(view, p[layout.tool_q], p[layout.tool_t], T(phi), T(theta), T(d));
-    for (int i = 0; i < 3; ++i) r[i] = (calc[i] - T(x[i])) * T(inv_sigma);
-    return true;
-  }
-};
-
-struct CamPointResidual {
-  BlockLayout layout;
-  double phi, theta, u, v, d;
-  Eigen::Vector3d x;
-  double inv_sigma;
-
-  template <typename T>
-  bool operator()(T const* const* p, T* r) const {
-    const ModelView<T> view = layout.View(p);
-    const T pixel[2] = {T(u), T(v)};
-    Vec3<T> calc;
-    if (!CamPoint(view, p[layout.tool_q], p[layout.tool_t], p[layout.intrinsics],
-                  p[layout.distortion], T(phi), T(theta), pixel, T(d), &calc)) {
-      return false;
+    const RigidT<T> ref_from_tool =
+        RefFromFlange(view, T(phi), T(theta)) * PoseFromBlocks(p[layout.tool_q], p[layout.tool_t]);
+    for (size_t k = 0; k < rows.size(); ++k) {
+      const Row& row = rows[k];
+      Vec3<T> local;
+      if (edm) {
+        local = Vec3<T>(T(0), T(0), TrueDistance(view, T(row.d)));  // Klug Eq. 76
+      } else {
+        const T pixel[2] = {T(row.u), T(row.v)};
+        T ray[3];
+        if (!camera::PixelToRay(p[layout.intrinsics], p[layout.distortion], pixel, ray)) {
+          return false;
+        }
+        local = Vec3<T>(ray[0], ray[1], ray[2]) * T(row.d);  // SPEC 2: ray LENGTH d
+      }
+      const Vec3<T> calc = ref_from_tool * local;
+      for (int i = 0; i < 3; ++i) r[3 * k + i] = (calc[i] - T(row.x[i])) * T(row.inv_sigma);
     }
-    for (int i = 0; i < 3; ++i) r[i] = (calc[i] - T(x[i])) * T(inv_sigma);
     return true;
   }
 };
 
-struct ReprojectionResidual {
+// Image observations of one shot (one pointing, one zoom).
+struct ShotResidual {
+  struct Point {
+    Eigen::Vector3d X;
+    Eigen::Vector2d uv;
+  };
   BlockLayout layout;
-  double phi, theta;
-  Eigen::Vector3d X;
-  Eigen::Vector2d uv;
-  double inv_sigma;
+  double phi = 0, theta = 0;
+  double inv_sigma = 1;
+  std::vector<Point> points;
 
   template <typename T>
   bool operator()(T const* const* p, T* r) const {
     const ModelView<T> view = layout.View(p);
-    T pixel[2];
-    if (!ProjectPoint(view, p[layout.tool_q], p[layout.tool_t], p[layout.intrinsics],
-                      p[layout.distortion], T(phi), T(theta), Vec3<T>(T(X[0]), T(X[1]), T(X[2])),
-                      pixel)) {
-      return false;  // behind the camera: the solver must reject the step
+    const RigidT<T> ref_from_cam =
+        RefFromFlange(view, T(phi), T(theta)) * PoseFromBlocks(p[layout.tool_q], p[layout.tool_t]);
+    const Mat3<T> cam_from_ref_R = ref_from_cam.R.transpose();
+    for (size_t k = 0; k < points.size(); ++k) {
+      const Vec3<T> x_cam = cam_from_ref_R * (points[k].X.cast<T>() - ref_from_cam.t);
+      T pixel[2];
+      if (!camera::ProjectToPixel(p[layout.intrinsics], p[layout.distortion], x_cam.data(), pixel)) {
+        return false;  // behind the camera: the solver must reject the step
+      }
+      r[2 * k + 0] = (pixel[0] - T(points[k].uv[0])) * T(inv_sigma);
+      r[2 * k + 1] = (pixel[1] - T(points[k].uv[1])) * T(inv_sigma);
     }
-    r[0] = (pixel[0] - T(uv[0])) * T(inv_sigma);
-    r[1] = (pixel[1] - T(uv[1])) * T(inv_sigma);
     return true;
   }
 };
 
-// The one helper that turns a functor into a Ceres cost function over its layout.
-template <typename Functor, int kNumResiduals>
-ceres::CostFunction* MakeCost(Functor* functor) {
-  auto* cost = new ceres::DynamicAutoDiffCostFunction<Functor, kCostStride>(functor);
+// The one helper that turns a functor into a Ceres cost function over its
+// layout. `active` = number of parameters in non-constant blocks: the jet
+// width is chosen to cover them in one pass (DynamicAutoDiffCostFunction
+// skips constant blocks).
+template <int kStride, typename Functor>
+ceres::CostFunction* MakeCostWithStride(Functor* functor, int num_residuals) {
+  auto* cost = new ceres::DynamicAutoDiffCostFunction<Functor, kStride>(functor);
   for (int size : functor->layout.sizes) cost->AddParameterBlock(size);
-  cost->SetNumResiduals(kNumResiduals);
+  cost->SetNumResiduals(num_residuals);
   return cost;
 }
 
-ceres::CostFunction* MakeRecordCost(const Record& r, InstrumentModel* model, double sigma);
-ceres::CostFunction* MakePixelCost(const PixelObservation& p, InstrumentModel* model, double sigma);
+template <typename Functor>
+ceres::CostFunction* MakeCost(Functor* functor, int num_residuals, int active) {
+  if (active <= 12) return MakeCostWithStride<12>(functor, num_residuals);
+  if (active <= 20) return MakeCostWithStride<20>(functor, num_residuals);
+  if (active <= 28) return MakeCostWithStride<28>(functor, num_residuals);
+  if (active <= 40) return MakeCostWithStride<40>(functor, num_residuals);
+  return MakeCostWithStride<56>(functor, num_residuals);
+}
 
 }  // namespace rtscalib

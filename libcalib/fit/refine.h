@@ -45,7 +45,8 @@ struct FitSummary {
   double seconds = 0;
   int num_residuals = 0, num_parameters = 0;
   int excluded_critical = 0;
-  double sigma0_records = 1, sigma0_pixels = 1;  // a-posteriori variance factors
+  double sigma0_records = 1, sigma0_pixels = 1;  // a-posteriori / a-priori sigma
+  double sigma_edm_m = 0, sigma_cam_m = 0, sigma_pixel_px = 0;  // a-posteriori sigmas
   std::vector<std::string> fixed_gauges;         // human-readable
   std::vector<std::pair<std::string, double>> strong_correlations;  // "a ~ b", rho
   std::vector<std::string> downweighted;         // robust loss: observations down-weighted
