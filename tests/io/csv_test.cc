@@ -1,0 +1,96 @@
+#include "libcalib/io/csv.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "tests/io/io_test_util.h"
+
+namespace rtscalib {
+namespace {
+
+using testing_io::CatchInputError;
+using ::testing::HasSubstr;
+
+CsvTable ParseText(const std::string& text, const CsvTable::Columns& columns) {
+  std::istringstream in(text);
+  return CsvTable::Parse(in, "t.csv", columns);
+}
+
+TEST(Csv, HeaderCommentsBlanksTrimmingAndQuotes) {
+  const CsvTable t = ParseText(
+      "\xEF\xBB\xBF# leading comment\n"
+      "\n"
+      " b , a ,note\r\n"
+      "  # indented comment\n"
+      "2, 1 , \"x, \"\"y\"\" \"\r\n"
+      "\n"
+      "4,3,\n",
+      {{"a", "b"}, {"note"}});
+  ASSERT_EQ(t.NumRows(), 2);
+  EXPECT_EQ(t.Line(0), 5);
+  EXPECT_EQ(t.Line(1), 7);
+  EXPECT_EQ(t.Number(0, "a"), 1.0);
+  EXPECT_EQ(t.Integer(1, "b"), 4);
+  EXPECT_EQ(t.Text(0, "note"), "x, \"y\" ");
+  EXPECT_TRUE(t.Empty(1, "note"));
+  EXPECT_TRUE(t.notes().empty());
+}
+
+TEST(Csv, AbsentOptionalColumnReadsEmpty) {
+  const CsvTable t = ParseText("a\n1\n", {{"a"}, {"set"}});
+  EXPECT_FALSE(t.Has("set"));
+  EXPECT_EQ(t.Text(0, "set"), "");
+}
+
+TEST(Csv, ExtraColumnsAreNoted) {
+  const CsvTable t = ParseText("a,zz,yy\n1,2,3\n", {{"a"}, {}});
+  ASSERT_EQ(t.notes().size(), 1u);
+  EXPECT_THAT(t.notes()[0], HasSubstr("t.csv:1"));
+  EXPECT_THAT(t.notes()[0], HasSubstr("yy, zz"));
+}
+
+TEST(Csv, RaggedRowIsAnError) {
+  const InputError e = CatchInputError([] { ParseText("a,b\n1,2\n1,2,3\n", {{"a"}, {}}); });
+  EXPECT_EQ(e.line, 3);
+  EXPECT_THAT(e.what(), HasSubstr("t.csv:3: row: expected 2 fields"));
+}
+
+TEST(Csv, UnclosedQuoteIsAnError) {
+  const InputError e = CatchInputError([] { ParseText("a\n\"oops\n", {{"a"}, {}}); });
+  EXPECT_EQ(e.line, 2);
+}
+
+TEST(Csv, DuplicateColumnIsAnError) {
+  const InputError e = CatchInputError([] { ParseText("a,b,a\n1,2,3\n", {{"a"}, {}}); });
+  EXPECT_EQ(e.column, "a");
+  EXPECT_EQ(e.line, 1);
+}
+
+TEST(Csv, MissingFileNamesThePath) {
+  const InputError e =
+      CatchInputError([] { CsvTable::Read("/nonexistent/dir/x.csv", {{"a"}, {}}); });
+  EXPECT_EQ(e.file, "/nonexistent/dir/x.csv");
+  EXPECT_THAT(e.what(), HasSubstr("cannot open"));
+}
+
+TEST(Csv, WriterQuotesWhatTheReaderWouldChange) {
+  testing_io::TempDir dir;
+  const std::string path = dir.Path("w.csv");
+  {
+    CsvWriter w(path, {"a", "b"});
+    w.Row({"x,y", " padded "});
+    w.Row({"#hash", "say \"hi\""});
+    w.Close();
+  }
+  const CsvTable t = CsvTable::Read(path, {{"a", "b"}, {}});
+  ASSERT_EQ(t.NumRows(), 2);
+  EXPECT_EQ(t.Text(0, "a"), "x,y");
+  EXPECT_EQ(t.Text(0, "b"), " padded ");
+  EXPECT_EQ(t.Text(1, "a"), "#hash");
+  EXPECT_EQ(t.Text(1, "b"), "say \"hi\"");
+}
+
+}  // namespace
+}  // namespace rtscalib

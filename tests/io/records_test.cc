@@ -1,0 +1,304 @@
+#include "libcalib/io/records.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "tests/io/io_test_util.h"
+
+namespace rtscalib {
+namespace {
+
+using testing_io::CatchInputError;
+using testing_io::TempDir;
+using ::testing::HasSubstr;
+
+constexpr const char* kHeader = "face,zoom,phi,theta,tool,u,v,d,x,y,z,set\n";
+constexpr const char* kEdmRow = "1,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,sweep1\n";
+
+// Writes header + rows, reads it, and returns the error (which must come).
+InputError RecordsError(const TempDir& dir, const std::string& text) {
+  const std::string path = dir.Write("records.csv", text);
+  return CatchInputError([&] { ReadRecords(path); });
+}
+
+// Checks that a bad cell on data line 3 (line 1 comment, line 2 header) is
+// reported with file, line and column in the message.
+void ExpectCellError(const TempDir& dir, const std::string& row, const std::string& column,
+                     const std::string& got) {
+  const InputError e = RecordsError(dir, std::string("# test\n") + kHeader + row);
+  EXPECT_EQ(e.file, dir.Path("records.csv"));
+  EXPECT_EQ(e.line, 3);
+  EXPECT_EQ(e.column, column);
+  EXPECT_EQ(e.got, got);
+  EXPECT_THAT(e.what(), HasSubstr(dir.Path("records.csv") + ":3: column '" + column + "'"));
+}
+
+TEST(Records, ReadsEdmAndCamRowsWithCommentsInAnyColumnOrder) {
+  TempDir dir;
+  const std::string path = dir.Write("records.csv",
+                                     "# device export\n"
+                                     "set , tool, d, z, y, x, theta, phi, zoom, face, v, u\n"
+                                     "\n"
+                                     "grid, edm, 2.5, 3, 2, 1, 1.5, 0.25, , 2, ,\n"
+                                     "# a comment between rows\n"
+                                     "train, cam, 1, -3, -2, -1, 1.25, 0.5, 1, 1, 240.5, 320.25\n");
+  const RecordsFile file = ReadRecords(path);
+  ASSERT_EQ(file.records.size(), 2u);
+  EXPECT_TRUE(file.notes.empty());
+  const Record& edm = file.records[0];
+  EXPECT_EQ(edm.line, 4);
+  EXPECT_EQ(edm.face, 2);
+  EXPECT_EQ(edm.zoom, 0);
+  EXPECT_EQ(edm.tool, Tool::kEdm);
+  EXPECT_EQ(edm.phi, 0.25);
+  EXPECT_EQ(edm.theta, 1.5);
+  EXPECT_EQ(edm.d, 2.5);
+  EXPECT_EQ(edm.x, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(edm.set, "grid");
+  const Record& cam = file.records[1];
+  EXPECT_EQ(cam.line, 6);
+  EXPECT_EQ(cam.tool, Tool::kCam);
+  EXPECT_EQ(cam.zoom, 1);
+  EXPECT_EQ(cam.u, 320.25);
+  EXPECT_EQ(cam.v, 240.5);
+  EXPECT_EQ(cam.set, "train");
+}
+
+TEST(Records, SetColumnMayBeAbsentAndEdmRowsNeedNoUV) {
+  TempDir dir;
+  const std::string path =
+      dir.Write("records.csv", "face,zoom,phi,theta,tool,d,x,y,z\n1,0,0,1.5,edm,1,0,1,0\n");
+  const RecordsFile file = ReadRecords(path);
+  ASSERT_EQ(file.records.size(), 1u);
+  EXPECT_EQ(file.records[0].set, "");
+}
+
+TEST(Records, MissingColumnNamesFileAndColumn) {
+  TempDir dir;
+  const InputError e =
+      RecordsError(dir, "face,zoom,phi,theta,tool,u,v,x,y,z\n1,0,0,1.5,edm,,,0,1,0\n");
+  EXPECT_EQ(e.column, "d");
+  EXPECT_EQ(e.line, 1);
+  EXPECT_THAT(e.what(), HasSubstr(dir.Path("records.csv") + ":1: column 'd'"));
+  EXPECT_THAT(e.what(), HasSubstr("face, zoom, phi, theta, tool, u, v, x, y, z"));
+}
+
+TEST(Records, AllMissingColumnsAreListed) {
+  TempDir dir;
+  const InputError e = RecordsError(dir, "face,zoom,phi,theta,tool,u,v,y\n1,0,0,1.5,edm,,,1\n");
+  EXPECT_EQ(e.column, "d");
+  EXPECT_THAT(e.expected, HasSubstr("also missing: x, z"));
+}
+
+TEST(Records, UnknownTool) {
+  TempDir dir;
+  ExpectCellError(dir, "1,0,0.5,1.5,gps,,,2,0.1,0.2,0.3,\n", "tool", "gps");
+}
+
+TEST(Records, FaceMustBeOneOrTwo) {
+  TempDir dir;
+  ExpectCellError(dir, "3,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,\n", "face", "3");
+  ExpectCellError(dir, "0,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,\n", "face", "0");
+  ExpectCellError(dir, "1.5,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,\n", "face", "1.5");
+}
+
+TEST(Records, NegativeZoom) {
+  TempDir dir;
+  ExpectCellError(dir, "1,-1,0.5,1.5,cam,1,2,2,0.1,0.2,0.3,\n", "zoom", "-1");
+  ExpectCellError(dir, "1,-1,0.5,1.5,edm,,,2,0.1,0.2,0.3,\n", "zoom", "-1");
+  ExpectCellError(dir, "1,0.5,0.5,1.5,cam,1,2,2,0.1,0.2,0.3,\n", "zoom", "0.5");
+  ExpectCellError(dir, "1,,0.5,1.5,cam,1,2,2,0.1,0.2,0.3,\n", "zoom", "");
+}
+
+TEST(Records, DistanceMustBePositive) {
+  TempDir dir;
+  ExpectCellError(dir, "1,0,0.5,1.5,edm,,,0,0.1,0.2,0.3,\n", "d", "0");
+  ExpectCellError(dir, "1,0,0.5,1.5,cam,1,2,-1,0.1,0.2,0.3,\n", "d", "-1");
+}
+
+TEST(Records, NanInfAndTextAreRejected) {
+  TempDir dir;
+  ExpectCellError(dir, "1,0,0.5,1.5,edm,,,2,nan,0.2,0.3,\n", "x", "nan");
+  ExpectCellError(dir, "1,0,0.5,1.5,edm,,,2,0.1,NaN,0.3,\n", "y", "NaN");
+  ExpectCellError(dir, "1,0,inf,1.5,edm,,,2,0.1,0.2,0.3,\n", "phi", "inf");
+  ExpectCellError(dir, "1,0,0.5,-Infinity,edm,,,2,0.1,0.2,0.3,\n", "theta", "-Infinity");
+  ExpectCellError(dir, "1,0,0.5,abc,edm,,,2,0.1,0.2,0.3,\n", "theta", "abc");
+  ExpectCellError(dir, "1,0,0.5,1.5,edm,,,2,0.1,0.2,1.2.3,\n", "z", "1.2.3");
+  ExpectCellError(dir, "1,0,0.5,1.5,edm,,,2 m,0.1,0.2,0.3,\n", "d", "2 m");
+  ExpectCellError(dir, "1,0,0.5,1.5,edm,,,2,0.1,,0.3,\n", "y", "");
+}
+
+TEST(Records, CamRowsNeedPixels) {
+  TempDir dir;
+  ExpectCellError(dir, "1,0,0.5,1.5,cam,,240,1,0.1,0.2,0.3,\n", "u", "");
+  ExpectCellError(dir, "1,0,0.5,1.5,cam,320,,1,0.1,0.2,0.3,\n", "v", "");
+  // A file without u/v columns may hold edm rows only.
+  const InputError e = RecordsError(
+      dir, "face,zoom,phi,theta,tool,d,x,y,z\n1,0,0,1.5,edm,1,0,1,0\n1,0,0,1.5,cam,1,0,1,0\n");
+  EXPECT_EQ(e.line, 3);
+  EXPECT_EQ(e.column, "u");
+}
+
+TEST(Records, ExtraColumnIsIgnoredWithANote) {
+  TempDir dir;
+  const std::string path = dir.Write(
+      "records.csv", "face,zoom,phi,theta,tool,u,v,d,x,y,z,set,temperature\n"
+                     "1,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,,21.5\n");
+  const RecordsFile file = ReadRecords(path);
+  EXPECT_EQ(file.records.size(), 1u);
+  ASSERT_EQ(file.notes.size(), 1u);
+  EXPECT_THAT(file.notes[0], HasSubstr(path + ":1"));
+  EXPECT_THAT(file.notes[0], HasSubstr("temperature"));
+}
+
+TEST(Records, WrongFieldCountNamesTheLine) {
+  TempDir dir;
+  const InputError e = RecordsError(dir, std::string(kHeader) + kEdmRow + "1,0,0.5,1.5,edm\n");
+  EXPECT_EQ(e.line, 3);
+  EXPECT_THAT(e.what(), HasSubstr(":3: row: expected 12 fields"));
+}
+
+TEST(Records, EmptyFileAndHeaderOnlyHaveNoRows) {
+  TempDir dir;
+  for (const std::string& text : std::vector<std::string>{
+           "", "# only a comment\n\n", kHeader, "# c\n" + std::string(kHeader) + "# c\n"}) {
+    const InputError e = RecordsError(dir, text);
+    EXPECT_THAT(e.what(), HasSubstr("no rows")) << text;
+    EXPECT_EQ(e.file, dir.Path("records.csv"));
+  }
+}
+
+TEST(Records, WriteThenReadIsBitExact) {
+  TempDir dir;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unif(-10, 10);
+  std::vector<Record> records;
+  for (int i = 0; i < 200; ++i) {
+    Record r;
+    r.face = 1 + i % 2;
+    r.zoom = i % 3;
+    r.phi = unif(rng);
+    r.theta = unif(rng);
+    r.tool = i % 4 == 0 ? Tool::kCam : Tool::kEdm;
+    if (r.tool == Tool::kCam) {
+      r.u = unif(rng) * 100;
+      r.v = unif(rng) * 100;
+    }
+    r.d = std::abs(unif(rng)) + 1e-3;
+    r.x = Eigen::Vector3d(unif(rng), unif(rng), unif(rng)) / 3.0;
+    r.set = i % 5 == 0 ? "held, out \"A\"" : (i % 5 == 1 ? "" : "sweep1");
+    records.push_back(r);
+  }
+  const std::string path = dir.Path("out.csv");
+  WriteRecords(path, records);
+  const RecordsFile back = ReadRecords(path);
+  ASSERT_EQ(back.records.size(), records.size());
+  for (size_t i = 0; i < records.size(); ++i) {
+    const Record& a = records[i];
+    const Record& b = back.records[i];
+    EXPECT_EQ(b.line, static_cast<int>(i) + 2);
+    EXPECT_EQ(a.face, b.face);
+    EXPECT_EQ(a.zoom, b.zoom);
+    EXPECT_EQ(a.phi, b.phi);
+    EXPECT_EQ(a.theta, b.theta);
+    EXPECT_EQ(a.tool, b.tool);
+    EXPECT_EQ(a.u, b.u);
+    EXPECT_EQ(a.v, b.v);
+    EXPECT_EQ(a.d, b.d);
+    EXPECT_EQ(a.x, b.x);
+    EXPECT_EQ(a.set, b.set);
+  }
+}
+
+// --- pixels.csv ---------------------------------------------------------------
+
+constexpr const char* kPixelsHeader = "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v\n";
+
+InputError PixelsError(const TempDir& dir, const std::string& text) {
+  const std::string path = dir.Write("pixels.csv", text);
+  return CatchInputError([&] { ReadPixels(path); });
+}
+
+TEST(Pixels, ReadsRowsInAnyOrder) {
+  TempDir dir;
+  const std::string path = dir.Write("pixels.csv",
+                                     "u,v,X,Y,Z,corner,target,shot,theta,phi,zoom,face\n"
+                                     "# shot s0\n"
+                                     "10.5,20.25,1,2,3,3,17,s0,1.5,0.5,2,2\n");
+  const PixelsFile file = ReadPixels(path);
+  ASSERT_EQ(file.pixels.size(), 1u);
+  const PixelObservation& p = file.pixels[0];
+  EXPECT_EQ(p.line, 3);
+  EXPECT_EQ(p.face, 2);
+  EXPECT_EQ(p.zoom, 2);
+  EXPECT_EQ(p.shot, "s0");
+  EXPECT_EQ(p.target, 17);
+  EXPECT_EQ(p.corner, 3);
+  EXPECT_EQ(p.X, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(p.uv, Eigen::Vector2d(10.5, 20.25));
+}
+
+TEST(Pixels, BadCellsNameLineAndColumn) {
+  TempDir dir;
+  struct Case {
+    std::string row, column, got;
+  };
+  for (const Case& c : std::vector<Case>{{"1,0,0,1,s,1,4,0,0,0,1,1", "corner", "4"},
+                                         {"1,0,0,1,s,-2,0,0,0,0,1,1", "target", "-2"},
+                                         {"3,0,0,1,s,1,0,0,0,0,1,1", "face", "3"},
+                                         {"1,-1,0,1,s,1,0,0,0,0,1,1", "zoom", "-1"},
+                                         {"1,0,0,1,,1,0,0,0,0,1,1", "shot", ""},
+                                         {"1,0,0,1,s,1,0,0,0,0,nan,1", "u", "nan"},
+                                         {"1,0,0,1,s,1,0,0,inf,0,1,1", "Y", "inf"}}) {
+    const InputError e = PixelsError(dir, std::string(kPixelsHeader) + c.row + "\n");
+    EXPECT_EQ(e.line, 2) << c.row;
+    EXPECT_EQ(e.column, c.column) << c.row;
+    EXPECT_EQ(e.got, c.got) << c.row;
+    EXPECT_THAT(e.what(), HasSubstr("pixels.csv:2: column '" + c.column + "'"));
+  }
+}
+
+TEST(Pixels, MissingColumnAndNoRows) {
+  TempDir dir;
+  const InputError missing =
+      PixelsError(dir, "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u\n1,0,0,1,s,1,0,0,0,0,1\n");
+  EXPECT_EQ(missing.column, "v");
+  EXPECT_THAT(PixelsError(dir, kPixelsHeader).what(), HasSubstr("no rows"));
+}
+
+TEST(Pixels, WriteThenReadIsBitExact) {
+  TempDir dir;
+  std::vector<PixelObservation> pixels;
+  for (int i = 0; i < 20; ++i) {
+    PixelObservation p;
+    p.face = 1 + i % 2;
+    p.zoom = i % 3;
+    p.phi = 0.1 * i / 3.0;
+    p.theta = 1.0 + i / 7.0;
+    p.shot = "z" + std::to_string(p.zoom) + "_s" + std::to_string(i / 4);
+    p.target = i / 4;
+    p.corner = i % 4;
+    p.X = Eigen::Vector3d(i / 3.0, -i / 7.0, 2.0 / (i + 1));
+    p.uv = Eigen::Vector2d(100.0 / 3.0 + i, 200.0 / 7.0 + i);
+    pixels.push_back(p);
+  }
+  WritePixels(dir.Path("p.csv"), pixels);
+  const PixelsFile back = ReadPixels(dir.Path("p.csv"));
+  ASSERT_EQ(back.pixels.size(), pixels.size());
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    EXPECT_EQ(back.pixels[i].face, pixels[i].face);
+    EXPECT_EQ(back.pixels[i].zoom, pixels[i].zoom);
+    EXPECT_EQ(back.pixels[i].phi, pixels[i].phi);
+    EXPECT_EQ(back.pixels[i].theta, pixels[i].theta);
+    EXPECT_EQ(back.pixels[i].shot, pixels[i].shot);
+    EXPECT_EQ(back.pixels[i].target, pixels[i].target);
+    EXPECT_EQ(back.pixels[i].corner, pixels[i].corner);
+    EXPECT_EQ(back.pixels[i].X, pixels[i].X);
+    EXPECT_EQ(back.pixels[i].uv, pixels[i].uv);
+  }
+}
+
+}  // namespace
+}  // namespace rtscalib
