@@ -1,0 +1,293 @@
+#include "render/detector.h"
+
+#include <apriltag.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "render/tag_family.h"
+
+namespace rtscalib::render {
+namespace {
+
+// One edge in its own frame: p(t) = origin + t dir + s(t) normal with
+// s(t) = c0 + c1 t + c2 t^2, t in [0, length].
+struct EdgeCurve {
+  Eigen::Vector2d origin, dir, normal;
+  double length = 0;
+  Eigen::Vector3d coef = Eigen::Vector3d::Zero();
+
+  double S(double t) const { return coef[0] + t * (coef[1] + t * coef[2]); }
+  double DS(double t) const { return coef[1] + 2 * t * coef[2]; }
+  Eigen::Vector2d At(double t) const { return origin + t * dir + S(t) * normal; }
+  Eigen::Vector2d Tangent(double t) const { return dir + DS(t) * normal; }
+};
+
+EdgeCurve StraightEdge(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  EdgeCurve e;
+  e.origin = a;
+  e.length = (b - a).norm();
+  e.dir = (b - a) / e.length;
+  e.normal = Eigen::Vector2d(-e.dir.y(), e.dir.x());
+  return e;
+}
+
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Sub-pixel points of one edge by strip areas. The edge is crossed by strips
+// of whole pixels along the image axis closest to its normal (rows for steep
+// edges, columns for flat ones), one strip per pixel row/column, centred on
+// the current curve and reaching `half_width` either side along the normal.
+// With plateau levels a (strip start) and b (strip end), a strip of pixels
+// i0..i1 puts the edge at
+//   e = i1 + 1/2 - sum_i (f_i - a) / (b - a),
+// the length of the a-side of the strip. A pixel's value is the area average of
+// the scene over the pixel, so the sum is the exact area of the b side; any
+// blur that is point-symmetric moves as much area across the edge as back
+// (unlike the mid-level crossing of an interpolated profile, which is biased
+// by up to ~0.05 px depending on where the edge falls within a pixel).
+// Strips within `end_gap` of the curve's ends (the corners) are skipped.
+bool EdgePoints(const cv::Mat& img, const EdgeCurve& e, double half_width, double end_gap,
+                std::vector<Eigen::Vector2d>* points) {
+  points->clear();
+  // a: axis the strips run along; o: the axis that indexes the strips.
+  const int a = std::abs(e.dir.x()) < std::abs(e.dir.y()) ? 0 : 1;
+  const int o = 1 - a;
+  const int size_a = a == 0 ? img.cols : img.rows, size_o = a == 0 ? img.rows : img.cols;
+  const Eigen::Vector2d p0 = e.At(end_gap), p1 = e.At(e.length - end_gap);
+  if (!(p1[o] != p0[o])) return false;
+  const int q0 = static_cast<int>(std::ceil(std::min(p0[o], p1[o])));
+  const int q1 = static_cast<int>(std::floor(std::max(p0[o], p1[o])));
+  struct Strip {
+    int q, i0, i1;
+    double first, last, sum;
+  };
+  std::vector<Strip> strips;
+  std::vector<double> firsts, lasts;
+  for (int q = q0; q <= q1; ++q) {
+    if (q < 0 || q >= size_o) continue;
+    // The curve's crossing of line o = q (Newton on At(t)[o] = q).
+    double t = end_gap + (q - p0[o]) / (p1[o] - p0[o]) * (e.length - 2 * end_gap);
+    for (int it = 0; it < 5; ++it) t -= (e.At(t)[o] - q) / e.Tangent(t)[o];
+    const Eigen::Vector2d tangent = e.Tangent(t).normalized();
+    const double cos_axis = std::abs(tangent[o]);  // = |unit normal component along a|
+    const double c = e.At(t)[a];
+    const double reach = half_width / cos_axis;
+    const int i0 = static_cast<int>(std::lround(c - reach));
+    const int i1 = static_cast<int>(std::lround(c + reach));
+    if (i0 < 0 || i1 >= size_a || i1 - i0 < 3) continue;
+    const int m = i1 - i0 >= 9 ? 2 : 1;  // plateau pixels at each end
+    Strip s{q, i0, i1, 0, 0, 0};
+    for (int i = i0; i <= i1; ++i) {
+      const double f = a == 0 ? img.at<uint8_t>(q, i) : img.at<uint8_t>(i, q);
+      s.sum += f;
+      if (i < i0 + m) s.first += f / m;
+      if (i > i1 - m) s.last += f / m;
+    }
+    strips.push_back(s);
+    firsts.push_back(s.first);
+    lasts.push_back(s.last);
+  }
+  if (strips.size() < 4) return false;
+  // One pair of levels per edge: the ink and the paper are uniform along it,
+  // and medians are not fooled by a strip that grazes another feature.
+  const double la = Median(firsts), lb = Median(lasts);
+  if (std::abs(lb - la) < 10.0) return false;
+  for (const Strip& s : strips) {
+    const int n = s.i1 - s.i0 + 1;
+    const double edge = s.i1 + 0.5 - (s.sum - n * la) / (lb - la);
+    if (edge < s.i0 - 0.5 || edge > s.i1 + 0.5) continue;  // not a step here
+    Eigen::Vector2d p;
+    p[a] = edge;
+    p[o] = s.q;
+    points->push_back(p);
+  }
+  return points->size() >= 4;
+}
+
+// Fits s(t) to the points, in the frame of `edge` (replaces its coefficients,
+// keeping the frame).
+bool FitEdge(const std::vector<double>& ts, const std::vector<double>& ss, bool quadratic,
+             EdgeCurve* edge) {
+  const int n = static_cast<int>(ts.size());
+  const int m = quadratic ? 3 : 2;
+  if (n < m + 3) return false;
+  Eigen::MatrixXd a(n, m);
+  Eigen::VectorXd b(n);
+  const double scale = edge->length;  // conditions the columns
+  for (int i = 0; i < n; ++i) {
+    const double u = ts[i] / scale;
+    a(i, 0) = 1;
+    a(i, 1) = u;
+    if (quadratic) a(i, 2) = u * u;
+    b(i) = ss[i];
+  }
+  const Eigen::VectorXd x = a.colPivHouseholderQr().solve(b);
+  edge->coef = Eigen::Vector3d(x(0), x(1) / scale, quadratic ? x(2) / (scale * scale) : 0.0);
+  return true;
+}
+
+// The intersection of `a` near its end (t = length) and `b` near its start
+// (t = 0), by Newton's method on a(ta) - b(tb) = 0.
+bool Intersect(const EdgeCurve& a, const EdgeCurve& b, Eigen::Vector2d* corner) {
+  double ta = a.length, tb = 0;
+  for (int it = 0; it < 20; ++it) {
+    const Eigen::Vector2d f = a.At(ta) - b.At(tb);
+    Eigen::Matrix2d j;
+    j.col(0) = a.Tangent(ta);
+    j.col(1) = -b.Tangent(tb);
+    const double det = j.determinant();
+    if (std::abs(det) < 1e-9) return false;
+    const Eigen::Vector2d step = j.inverse() * f;
+    ta -= step(0);
+    tb -= step(1);
+    if (step.norm() < 1e-10) break;
+  }
+  *corner = 0.5 * (a.At(ta) + b.At(tb));
+  return corner->allFinite();
+}
+
+}  // namespace
+
+std::string DetectorOptions::Check() const {
+  if (families.empty()) return "families: expected at least one tag family";
+  for (const std::string& f : families) {
+    if (std::find(KnownTagFamilies().begin(), KnownTagFamilies().end(), f) ==
+        KnownTagFamilies().end()) {
+      return "families: unknown tag family '" + f + "'";
+    }
+  }
+  if (threads < 1) return "threads: expected >= 1, got " + std::to_string(threads);
+  if (!(quad_sigma >= 0)) return "quad_sigma: expected >= 0";
+  if (!(decode_sharpening >= 0)) return "decode_sharpening: expected >= 0";
+  if (max_hamming < 0 || max_hamming > 3) {
+    return "max_hamming: expected 0..3, got " + std::to_string(max_hamming);
+  }
+  if (!(min_bit_pixels >= 1.5)) return "min_bit_pixels: expected >= 1.5";
+  if (!(max_refine_shift > 0)) return "max_refine_shift: expected > 0";
+  return "";
+}
+
+bool RefineTagCorners(const cv::Mat& gray, int width_at_border, const DetectorOptions& options,
+                      std::array<Eigen::Vector2d, 4>* corners) {
+  std::array<Eigen::Vector2d, 4> c = *corners;
+  double min_len = 1e9;
+  for (int k = 0; k < 4; ++k) min_len = std::min(min_len, (c[(k + 1) % 4] - c[k]).norm());
+  const double bit = min_len / width_at_border;
+  if (bit < options.min_bit_pixels) return false;
+  // The strips must stay on the two bits either side of the edge (the next
+  // bit edges are one bit away), less rounding to whole pixels, a pixel's own
+  // half width and the rendered/optical blur: bit - 2 px; 8 px of plateau is
+  // plenty for any blur worth detecting.
+  const double half_width = std::clamp(bit - 2.0, 1.5, 8.0);
+
+  std::array<EdgeCurve, 4> edges;
+  for (int k = 0; k < 4; ++k) edges[k] = StraightEdge(c[k], c[(k + 1) % 4]);
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    std::array<EdgeCurve, 4> fitted;
+    for (int k = 0; k < 4; ++k) {
+      const EdgeCurve& e = edges[k];
+      // Keep the profiles clear of the neighbouring edges at the corners.
+      const double end_gap = std::max(half_width + 1.5, 0.5 * bit);
+      std::vector<Eigen::Vector2d> points;
+      if (!EdgePoints(gray, e, half_width, end_gap, &points)) return false;
+      std::vector<double> ts, ss;
+      for (const Eigen::Vector2d& p : points) {
+        ts.push_back((p - e.origin).dot(e.dir));
+        ss.push_back((p - e.origin).dot(e.normal));
+      }
+      fitted[k] = e;
+      // Curvature only pays on long edges; short ones keep a straight line.
+      const bool quadratic = e.length > 60.0;
+      if (ts.size() < 0.5 * (e.length - 2 * end_gap) || !FitEdge(ts, ss, quadratic, &fitted[k])) {
+        return false;
+      }
+    }
+    for (int k = 0; k < 4; ++k) {
+      if (!Intersect(fitted[(k + 3) % 4], fitted[k], &c[k])) return false;
+    }
+    for (int k = 0; k < 4; ++k) {
+      // Re-centre: new straight frames through the new corners, carrying the
+      // curvature of the fit over to the next sampling.
+      EdgeCurve e = StraightEdge(c[k], c[(k + 1) % 4]);
+      e.coef[2] = fitted[k].coef[2];
+      e.coef[1] = -e.coef[2] * e.length;  // s(0) = s(L) = 0 on the new chord
+      edges[k] = e;
+    }
+  }
+  for (int k = 0; k < 4; ++k) {
+    if ((c[k] - (*corners)[k]).norm() > options.max_refine_shift) return false;
+  }
+  *corners = c;
+  return true;
+}
+
+struct TagDetector::Impl {
+  DetectorOptions options;
+  std::vector<TagFamilyPtr> families;
+  std::map<std::string, int> width_at_border;
+  apriltag_detector_t* detector = nullptr;
+
+  ~Impl() {
+    if (detector != nullptr) apriltag_detector_destroy(detector);
+  }
+};
+
+TagDetector::TagDetector(const DetectorOptions& options) : impl_(std::make_unique<Impl>()) {
+  if (const std::string msg = options.Check(); !msg.empty()) {
+    throw std::invalid_argument("DetectorOptions: " + msg);
+  }
+  impl_->options = options;
+  impl_->detector = apriltag_detector_create();
+  apriltag_detector_t* td = impl_->detector;
+  td->nthreads = options.threads;
+  td->quad_decimate = 1.0f;
+  td->quad_sigma = options.quad_sigma;
+  td->refine_edges = true;
+  td->decode_sharpening = options.decode_sharpening;
+  for (const std::string& name : options.families) {
+    impl_->families.push_back(CreateTagFamily(name));
+    apriltag_detector_add_family_bits(td, impl_->families.back().get(), std::max(2, options.max_hamming));
+    impl_->width_at_border[name] = impl_->families.back()->width_at_border;
+  }
+}
+
+TagDetector::~TagDetector() = default;
+
+const DetectorOptions& TagDetector::options() const { return impl_->options; }
+
+std::vector<TagDetection> TagDetector::Detect(const cv::Mat& gray) {
+  if (gray.type() != CV_8UC1) throw std::invalid_argument("TagDetector::Detect: expected a CV_8UC1 image");
+  cv::Mat img = gray.isContinuous() ? gray : gray.clone();
+  image_u8_t im{img.cols, img.rows, static_cast<int32_t>(img.step[0]), img.data};
+  zarray_t* found = apriltag_detector_detect(impl_->detector, &im);
+  std::vector<TagDetection> out;
+  out.reserve(zarray_size(found));
+  for (int i = 0; i < zarray_size(found); ++i) {
+    apriltag_detection_t* det;
+    zarray_get(found, i, &det);
+    if (det->hamming > impl_->options.max_hamming) continue;
+    TagDetection d;
+    d.family = det->family->name;
+    d.id = det->id;
+    d.hamming = det->hamming;
+    d.decision_margin = det->decision_margin;
+    // libapriltag's pixel (x, y) spans [x, x+1): its coordinates are OpenCV's + 0.5.
+    for (int k = 0; k < 4; ++k) d.apriltag_corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
+    d.corners = d.apriltag_corners;
+    if (impl_->options.refine_corners) {
+      d.refined = RefineTagCorners(img, impl_->width_at_border[d.family], impl_->options, &d.corners);
+    }
+    out.push_back(d);
+  }
+  apriltag_detections_destroy(found);
+  return out;
+}
+
+}  // namespace rtscalib::render

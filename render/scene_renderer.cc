@@ -1,0 +1,447 @@
+#include "render/scene_renderer.h"
+
+#include <vtkActor.h>
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkFloatArray.h>
+#include <vtkImageData.h>
+#include <vtkMatrix4x4.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkSmartPointer.h>
+#include <vtkTexture.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "libcalib/camera/opencv_model.h"
+
+namespace rtscalib::render {
+namespace {
+
+template <typename T>
+using Ptr = vtkSmartPointer<T>;
+
+bool HasDistortion(const CameraTool& cam) {
+  for (double d : cam.distortion) {
+    if (d != 0.0) return true;
+  }
+  return false;
+}
+
+// The ideal (undistorted) image the distortion map samples from: the
+// intrinsics fx, fy with the principal point shifted so that canvas pixel
+// (0, 0) is ideal pixel (u0, v0).
+struct Canvas {
+  int width = 0, height = 0;
+  double u0 = 0, v0 = 0;
+};
+
+struct DistortionMap {
+  std::array<double, camera::kNumIntrinsics> intrinsics{};
+  std::array<double, camera::kNumDistortion> distortion{};
+  int width = 0, height = 0;
+  bool identity = true;
+  Canvas canvas;
+  cv::Mat map_x, map_y;  // CV_32FC1, output pixel -> canvas pixel (-1: none)
+
+  bool Matches(const CameraTool& cam) const {
+    return cam.intrinsics == intrinsics && cam.distortion == distortion && cam.width == width &&
+           cam.height == height;
+  }
+};
+
+DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor) {
+  DistortionMap m;
+  m.intrinsics = cam.intrinsics;
+  m.distortion = cam.distortion;
+  m.width = cam.width;
+  m.height = cam.height;
+  m.identity = !HasDistortion(cam);
+  m.canvas = {cam.width, cam.height, 0, 0};
+  if (m.identity) return m;
+
+  const double fx = cam.intrinsics[0], fy = cam.intrinsics[1];
+  const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
+  cv::Mat ideal_u(cam.height, cam.width, CV_64FC1), ideal_v(cam.height, cam.width, CV_64FC1);
+  cv::parallel_for_(cv::Range(0, cam.height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        const double pixel[2] = {double(u), double(v)};
+        double xn, yn;
+        if (camera::UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
+            std::isfinite(xn) && std::isfinite(yn)) {
+          ideal_u.at<double>(v, u) = fx * xn + cx;
+          ideal_v.at<double>(v, u) = fy * yn + cy;
+        } else {
+          ideal_u.at<double>(v, u) = std::numeric_limits<double>::quiet_NaN();
+          ideal_v.at<double>(v, u) = std::numeric_limits<double>::quiet_NaN();
+        }
+      }
+    }
+  });
+
+  // Canvas: the bounding box of all ideal pixels (+2 px for bilinear support),
+  // clipped to max_canvas_factor times the image around the image itself.
+  double umin = 0, umax = cam.width - 1, vmin = 0, vmax = cam.height - 1;
+  const double lim_u0 = -(max_canvas_factor - 1) / 2 * cam.width;
+  const double lim_u1 = cam.width - 1 - lim_u0;
+  const double lim_v0 = -(max_canvas_factor - 1) / 2 * cam.height;
+  const double lim_v1 = cam.height - 1 - lim_v0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      const double iu = ideal_u.at<double>(v, u), iv = ideal_v.at<double>(v, u);
+      if (!(iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1)) continue;
+      umin = std::min(umin, iu);
+      umax = std::max(umax, iu);
+      vmin = std::min(vmin, iv);
+      vmax = std::max(vmax, iv);
+    }
+  }
+  m.canvas.u0 = std::floor(umin) - 2;
+  m.canvas.v0 = std::floor(vmin) - 2;
+  m.canvas.width = static_cast<int>(std::ceil(umax) + 2 - m.canvas.u0) + 1;
+  m.canvas.height = static_cast<int>(std::ceil(vmax) + 2 - m.canvas.v0) + 1;
+
+  m.map_x.create(cam.height, cam.width, CV_32FC1);
+  m.map_y.create(cam.height, cam.width, CV_32FC1);
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      const double iu = ideal_u.at<double>(v, u), iv = ideal_v.at<double>(v, u);
+      const bool ok = iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1;
+      m.map_x.at<float>(v, u) = ok ? static_cast<float>(iu - m.canvas.u0) : -10.f;
+      m.map_y.at<float>(v, u) = ok ? static_cast<float>(iv - m.canvas.v0) : -10.f;
+    }
+  }
+  return m;
+}
+
+// splitmix64: decorrelates (seed, image_seed) pairs for the noise generator.
+std::uint64_t Mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+struct BoardActors {
+  Ptr<vtkActor> front, back;
+  Rigid3 ref_from_board;
+  std::array<Eigen::Vector3d, 4> outline;  // texture rectangle corners, board frame
+};
+
+}  // namespace
+
+std::string RenderOptions::Check() const {
+  if (supersample < 1 || supersample > 8) {
+    return "supersample: expected 1..8, got " + std::to_string(supersample);
+  }
+  if (!(background >= 0 && background <= 255)) return "background: expected a grey level in [0, 255]";
+  if (ink >= paper) return "ink/paper: expected ink < paper";
+  if (!(exposure > 0)) return "exposure: expected > 0";
+  if (!(blur_sigma >= 0)) return "blur_sigma: expected >= 0";
+  if (!(noise_sigma >= 0)) return "noise_sigma: expected >= 0";
+  if (max_anisotropy < 1 || max_anisotropy > 16) {
+    return "max_anisotropy: expected 1..16, got " + std::to_string(max_anisotropy);
+  }
+  if (!(max_canvas_factor >= 1)) return "max_canvas_factor: expected >= 1";
+  if (const std::string t = texture.Check(); !t.empty()) return "texture." + t;
+  return "";
+}
+
+Eigen::Matrix4d OpenGlProjection(double fx, double fy, double cx, double cy, int width, int height,
+                                 double near_z, double far_z) {
+  // View coordinates (x_v, y_v, z_v) = (x, -y, -z); clip w = -z_v = z.
+  //   x_ndc = 2 (u + 1/2) / W - 1           (GL samples pixel centres at i + 1/2)
+  //   y_ndc = 1 - 2 (v + 1/2) / H           (GL window rows count from the bottom)
+  // with u = fx x/z + cx, v = fy y/z + cy give the first two rows.
+  Eigen::Matrix4d p = Eigen::Matrix4d::Zero();
+  p(0, 0) = 2.0 * fx / width;
+  p(0, 2) = 1.0 - 2.0 * (cx + 0.5) / width;
+  p(1, 1) = 2.0 * fy / height;
+  p(1, 2) = 2.0 * (cy + 0.5) / height - 1.0;
+  p(2, 2) = -(far_z + near_z) / (far_z - near_z);
+  p(2, 3) = -2.0 * far_z * near_z / (far_z - near_z);
+  p(3, 2) = -1.0;
+  return p;
+}
+
+struct SceneRenderer::Impl {
+  TargetScene scene;
+  RenderOptions options;
+  Ptr<vtkRenderWindow> window;
+  Ptr<vtkRenderer> renderer;
+  std::vector<BoardActors> boards;
+  Ptr<vtkUnsignedCharArray> pixels;
+  DistortionMap map;
+  cv::Mat canvas;     // CV_32FC1 ideal image after downsampling
+  cv::Mat distorted;  // CV_32FC1
+
+  void Build();
+  // Renders the ideal image of `cam`'s intrinsics on `canvas` into `out`.
+  void RenderCanvas(const Rigid3& ref_from_cam, const CameraTool& cam, const Canvas& canvas,
+                    cv::Mat* out);
+};
+
+void SceneRenderer::Impl::Build() {
+  window = Ptr<vtkRenderWindow>::New();
+  window->SetOffScreenRendering(1);
+  window->SetMultiSamples(0);
+  window->SetAlphaBitPlanes(0);
+  window->SetSize(64, 64);
+  renderer = Ptr<vtkRenderer>::New();
+  const double bg = options.background / 255.0;
+  renderer->SetBackground(bg, bg, bg);
+  renderer->SetUseFXAA(false);
+  renderer->SetAutomaticLightCreation(true);
+  renderer->LightFollowCameraOn();
+  window->AddRenderer(renderer);
+
+  vtkCamera* camera = renderer->GetActiveCamera();
+  camera->SetPosition(0, 0, 0);
+  camera->SetFocalPoint(0, 0, -1);
+  camera->SetViewUp(0, 1, 0);
+  camera->UseExplicitProjectionTransformMatrixOn();
+
+  TagTextureOptions topt = options.texture;
+  topt.black = options.ink;
+  topt.white = options.paper;
+  for (const TagBoard& board : scene.boards) {
+    const TagTexture tex = MakeTagTexture(board, topt);
+    const int nx = static_cast<int>(tex.x_board.size()), ny = static_cast<int>(tex.y_board.size());
+    auto points = Ptr<vtkPoints>::New();
+    points->SetDataTypeToDouble();
+    auto tcoords = Ptr<vtkFloatArray>::New();
+    tcoords->SetNumberOfComponents(2);
+    tcoords->SetName("tcoords");
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        points->InsertNextPoint(tex.x_board[i], tex.y_board[j], 0.0);
+        const float st[2] = {static_cast<float>(tex.x_texel[i] / tex.image.cols),
+                             static_cast<float>(tex.y_texel[j] / tex.image.rows)};
+        tcoords->InsertNextTuple(st);
+      }
+    }
+    // Counter-clockwise in the GL window (= front) when seen from the board's
+    // -z side, the printed side (targets.h).
+    auto quads = Ptr<vtkCellArray>::New();
+    for (int j = 0; j + 1 < ny; ++j) {
+      for (int i = 0; i + 1 < nx; ++i) {
+        const vtkIdType a = j * nx + i;
+        const vtkIdType ids[4] = {a, a + nx, a + nx + 1, a + 1};
+        quads->InsertNextCell(4, ids);
+      }
+    }
+    auto poly = Ptr<vtkPolyData>::New();
+    poly->SetPoints(points);
+    poly->SetPolys(quads);
+    poly->GetPointData()->SetTCoords(tcoords);
+    auto normals = Ptr<vtkFloatArray>::New();
+    normals->SetNumberOfComponents(3);
+    for (vtkIdType k = 0; k < points->GetNumberOfPoints(); ++k) normals->InsertNextTuple3(0, 0, -1);
+    poly->GetPointData()->SetNormals(normals);
+
+    auto image = Ptr<vtkImageData>::New();
+    image->SetDimensions(tex.image.cols, tex.image.rows, 1);
+    image->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+    // vtkImageData row 0 is texture t = 0, which the tcoords give to board y_min.
+    auto* dst = static_cast<unsigned char*>(image->GetScalarPointer());
+    for (int r = 0; r < tex.image.rows; ++r) {
+      std::memcpy(dst + static_cast<size_t>(r) * tex.image.cols, tex.image.ptr<uint8_t>(r),
+                  tex.image.cols);
+    }
+    auto texture = Ptr<vtkTexture>::New();
+    texture->SetInputData(image);
+    texture->SetColorModeToDirectScalars();
+    texture->InterpolateOn();
+    texture->MipmapOn();
+    texture->SetMaximumAnisotropicFiltering(static_cast<float>(options.max_anisotropy));
+    texture->RepeatOff();
+    texture->EdgeClampOn();
+
+    auto mapper = Ptr<vtkPolyDataMapper>::New();
+    mapper->SetInputData(poly);
+    mapper->ScalarVisibilityOff();
+    BoardActors ba;
+    ba.ref_from_board = board.ref_from_board;
+    ba.outline = {Eigen::Vector3d(tex.x_min(), tex.y_min(), 0), Eigen::Vector3d(tex.x_max(), tex.y_min(), 0),
+                  Eigen::Vector3d(tex.x_max(), tex.y_max(), 0), Eigen::Vector3d(tex.x_min(), tex.y_max(), 0)};
+    ba.front = Ptr<vtkActor>::New();
+    ba.front->SetMapper(mapper);
+    ba.front->SetTexture(texture);
+    vtkProperty* prop = ba.front->GetProperty();
+    prop->SetColor(1, 1, 1);
+    prop->SetSpecular(0);
+    prop->BackfaceCullingOn();
+    if (options.lighting) {
+      prop->SetAmbient(0.3);
+      prop->SetDiffuse(0.7);
+    } else {
+      prop->SetAmbient(1.0);
+      prop->SetDiffuse(0.0);
+    }
+    // The unprinted back: plain, a little darker than the paper.
+    // Its own mapper: a mapper shared by a textured and an untextured actor
+    // keeps one actor's shader for both (VTK 9.1).
+    auto back_mapper = Ptr<vtkPolyDataMapper>::New();
+    back_mapper->SetInputData(poly);
+    back_mapper->ScalarVisibilityOff();
+    ba.back = Ptr<vtkActor>::New();
+    ba.back->SetMapper(back_mapper);
+    vtkProperty* back = ba.back->GetProperty();
+    const double grey = 0.6 * options.paper / 255.0;
+    back->SetColor(grey, grey, grey);
+    back->SetAmbient(1.0);
+    back->SetDiffuse(0.0);
+    back->SetSpecular(0);
+    back->FrontfaceCullingOn();
+    renderer->AddActor(ba.front);
+    renderer->AddActor(ba.back);
+    boards.push_back(ba);
+  }
+  pixels = Ptr<vtkUnsignedCharArray>::New();
+}
+
+void SceneRenderer::Impl::RenderCanvas(const Rigid3& ref_from_cam, const CameraTool& cam,
+                                       const Canvas& cv_canvas, cv::Mat* out) {
+  const int k = options.supersample;
+  const int w = cv_canvas.width * k, h = cv_canvas.height * k;
+  out->create(cv_canvas.height, cv_canvas.width, CV_32FC1);
+
+  // Pose: VTK's camera sits at the origin looking down -z with +y up, so every
+  // board gets view_from_board = diag(1, -1, -1) * cam_from_ref * ref_from_board.
+  const Rigid3 cam_from_ref = ref_from_cam.Inverse();
+  double z_min = std::numeric_limits<double>::infinity(), z_max = 0;
+  for (const BoardActors& b : boards) {
+    const Rigid3 cam_from_board = cam_from_ref * b.ref_from_board;
+    for (const Eigen::Vector3d& p : b.outline) {
+      const double z = (cam_from_board * p).z();
+      if (z > 0) z_min = std::min(z_min, z);
+      z_max = std::max(z_max, z);
+    }
+    Eigen::Matrix4d view = cam_from_board.Matrix();
+    view.row(1) *= -1;
+    view.row(2) *= -1;
+    auto m = Ptr<vtkMatrix4x4>::New();
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) m->SetElement(r, c, view(r, c));
+    }
+    b.front->SetUserMatrix(m);
+    b.back->SetUserMatrix(m);
+  }
+  if (!(z_max > 0)) {  // every board behind the camera
+    out->setTo(options.background);
+    return;
+  }
+  // Depth range: a board may cross the camera plane; near then falls back to a
+  // small fraction of the far distance (24-bit depth keeps ample resolution).
+  const double far_z = 1.5 * z_max;
+  const double near_z = std::max(0.5 * std::min(z_min, z_max), 1e-5 * z_max);
+
+  // Supersampled pixel i covers output pixel i / k: u_k + 1/2 = k (u + 1/2).
+  const double fx = cam.intrinsics[0] * k, fy = cam.intrinsics[1] * k;
+  const double cx = k * (cam.intrinsics[2] - cv_canvas.u0 + 0.5) - 0.5;
+  const double cy = k * (cam.intrinsics[3] - cv_canvas.v0 + 0.5) - 0.5;
+  const Eigen::Matrix4d p = OpenGlProjection(fx, fy, cx, cy, w, h, near_z, far_z);
+  auto proj = Ptr<vtkMatrix4x4>::New();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) proj->SetElement(r, c, p(r, c));
+  }
+  renderer->GetActiveCamera()->SetExplicitProjectionTransformMatrix(proj);
+
+  const int* size = window->GetSize();
+  if (size[0] != w || size[1] != h) window->SetSize(w, h);
+  window->Render();
+  if (window->GetRGBACharPixelData(0, 0, w - 1, h - 1, /*front=*/0, pixels) == 0) {
+    throw std::runtime_error("SceneRenderer: reading back the rendered image failed");
+  }
+  const unsigned char* rgba = pixels->GetPointer(0);
+
+  // k x k box average of the red channel (the scene is grey), flipping GL's
+  // bottom-up rows to image rows.
+  const float scale = 1.0f / (k * k);
+  cv::parallel_for_(cv::Range(0, cv_canvas.height), [&](const cv::Range& rows) {
+    std::vector<int> acc(cv_canvas.width);
+    for (int r = rows.start; r < rows.end; ++r) {
+      std::fill(acc.begin(), acc.end(), 0);
+      for (int i = 0; i < k; ++i) {
+        const int gl_row = h - 1 - (r * k + i);
+        const unsigned char* src = rgba + static_cast<size_t>(gl_row) * w * 4;
+        if (k == 2) {
+          for (int c = 0; c < cv_canvas.width; ++c) acc[c] += src[8 * c] + src[8 * c + 4];
+        } else {
+          for (int c = 0; c < cv_canvas.width; ++c) {
+            for (int j = 0; j < k; ++j) acc[c] += src[4 * (c * k + j)];
+          }
+        }
+      }
+      float* dst = out->ptr<float>(r);
+      for (int c = 0; c < cv_canvas.width; ++c) dst[c] = acc[c] * scale;
+    }
+  });
+}
+
+SceneRenderer::SceneRenderer(const TargetScene& scene, const RenderOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  if (const std::string msg = options.Check(); !msg.empty()) {
+    throw std::invalid_argument("RenderOptions: " + msg);
+  }
+  impl_->scene = scene;
+  impl_->options = options;
+  impl_->Build();
+}
+
+SceneRenderer::~SceneRenderer() {
+  if (impl_ && impl_->window) impl_->window->Finalize();
+}
+
+const RenderOptions& SceneRenderer::options() const { return impl_->options; }
+
+cv::Mat SceneRenderer::RenderPinhole(const Rigid3& ref_from_cam, const CameraTool& cam) {
+  cv::Mat out;
+  impl_->RenderCanvas(ref_from_cam, cam, Canvas{cam.width, cam.height, 0, 0}, &out);
+  return out;
+}
+
+cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
+                              std::uint64_t image_seed) {
+  Impl& im = *impl_;
+  const RenderOptions& o = im.options;
+  if (!im.map.Matches(cam) || im.map.width == 0) {
+    im.map = BuildDistortionMap(cam, o.max_canvas_factor);
+  }
+  im.RenderCanvas(ref_from_cam, cam, im.map.canvas, &im.canvas);
+  cv::Mat* img = &im.canvas;
+  if (!im.map.identity) {
+    cv::remap(im.canvas, im.distorted, im.map.map_x, im.map.map_y, cv::INTER_LINEAR,
+              cv::BORDER_CONSTANT, cv::Scalar(o.background));
+    img = &im.distorted;
+  }
+  if (o.blur_sigma > 0) cv::GaussianBlur(*img, *img, cv::Size(), o.blur_sigma, o.blur_sigma);
+  if (o.exposure != 1.0) *img *= o.exposure;
+  if (o.noise_sigma > 0) {
+    cv::Mat noise(img->size(), CV_32FC1);
+    cv::RNG rng(Mix(o.seed ^ Mix(image_seed)));
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, o.noise_sigma);
+    *img += noise;
+  }
+  cv::Mat out;
+  img->convertTo(out, CV_8UC1);  // rounds and saturates
+  return out;
+}
+
+}  // namespace rtscalib::render

@@ -1,0 +1,148 @@
+#include "render/tag_texture.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+#include "render/tag_family.h"
+
+namespace rtscalib::render {
+namespace {
+
+bool IsPowerOfTwo(int n) { return n > 0 && (n & (n - 1)) == 0; }
+
+double Interpolate(const std::vector<double>& from, const std::vector<double>& to, double v) {
+  // Extrapolates linearly beyond the ends (the margins are uniform anyway).
+  size_t i = std::upper_bound(from.begin(), from.end(), v) - from.begin();
+  i = std::clamp<size_t>(i, 1, from.size() - 1);
+  const double t = (v - from[i - 1]) / (from[i] - from[i - 1]);
+  return to[i - 1] + t * (to[i] - to[i - 1]);
+}
+
+// Breakpoints along one axis with `count` code images of `code_bits` bits,
+// code image k starting at board coordinate start0 + k * pitch.
+// Texels: margin_bits, then code, gap, code, ..., margin_bits (in bits, times ppb).
+void AxisBreakpoints(int count, double start0, double pitch, double bit, int code_bits,
+                     int gap_bits, int margin_bits, double margin, int ppb,
+                     std::vector<double>* board, std::vector<double>* texel) {
+  board->clear();
+  texel->clear();
+  const double code = code_bits * bit;
+  double t = 0;
+  board->push_back(start0 - margin);
+  texel->push_back(t);
+  t += margin_bits * ppb;
+  for (int k = 0; k < count; ++k) {
+    const double s = start0 + k * pitch;
+    if (k > 0 && gap_bits > 0) t += gap_bits * ppb;
+    if (k == 0 || gap_bits > 0) {  // a zero gap shares the previous code's end
+      board->push_back(s);
+      texel->push_back(t);
+    }
+    t += code_bits * ppb;
+    board->push_back(s + code);
+    texel->push_back(t);
+  }
+  t += margin_bits * ppb;
+  board->push_back(start0 + (count - 1) * pitch + code + margin);
+  texel->push_back(t);
+}
+
+}  // namespace
+
+std::string TagTextureOptions::Check() const {
+  if (pixels_per_bit != 0 && !IsPowerOfTwo(pixels_per_bit)) {
+    return "pixels_per_bit: expected 0 (auto) or a power of two, got " + std::to_string(pixels_per_bit);
+  }
+  if (!IsPowerOfTwo(max_pixels_per_bit)) {
+    return "max_pixels_per_bit: expected a power of two, got " + std::to_string(max_pixels_per_bit);
+  }
+  if (max_texture_size < 16) {
+    return "max_texture_size: expected >= 16, got " + std::to_string(max_texture_size);
+  }
+  if (black >= white) return "black/white: expected black < white";
+  return "";
+}
+
+Eigen::Vector2d TagTexture::TexelFromBoard(double x, double y) const {
+  return {Interpolate(x_board, x_texel, x), Interpolate(y_board, y_texel, y)};
+}
+
+TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& options) {
+  if (const std::string msg = options.Check(); !msg.empty()) {
+    throw std::invalid_argument("TagTextureOptions: " + msg);
+  }
+  if (board.rows < 1 || board.cols < 1 || !(board.tag_size > 0) || board.spacing < 0) {
+    throw std::invalid_argument("TagBoard: expected rows, cols >= 1, tag_size > 0, spacing >= 0");
+  }
+  const TagFamilyPtr family = CreateTagFamily(board.family);
+  const TagFamilyInfo info = GetTagFamilyInfo(board.family);
+  if (board.first_id < 0 || board.first_id + board.NumTags() > info.num_codes) {
+    throw std::invalid_argument("TagBoard: ids " + std::to_string(board.first_id) + ".." +
+                                std::to_string(board.first_id + board.NumTags() - 1) +
+                                " do not fit family " + board.family + " (ids 0.." +
+                                std::to_string(info.num_codes - 1) + ")");
+  }
+
+  TagTexture tex;
+  const double bit = board.tag_size / info.width_at_border;
+  tex.bit_size = bit;
+  const int off = info.border_offset();
+  const int code_bits = info.total_width;
+  const double pitch = board.tag_size + board.spacing;
+  // White between neighbouring code images, in bits. A code image may not
+  // overlap its neighbour; floating-point slack of 1e-9 bit is tolerated.
+  const double gap = (pitch - code_bits * bit) / bit;
+  if (gap < -1e-9) {
+    throw std::invalid_argument(
+        "TagBoard: spacing " + std::to_string(board.spacing) + " m is too small for " +
+        board.family + ": its code images extend " + std::to_string(off) +
+        " bit(s) beyond the tag square, so spacing must be >= " + std::to_string(2 * off * bit) + " m");
+  }
+  // A gap is printed as a whole number of white bits; a gap of (almost) zero
+  // width lets neighbouring code images touch.
+  const int gap_bits = gap < 1e-9 ? 0 : std::max(1, static_cast<int>(std::lround(gap)));
+  const double margin = options.margin < 0 ? bit : options.margin;
+  const int margin_bits = static_cast<int>(std::ceil(margin / bit - 1e-9));
+
+  const int bits_x = 2 * margin_bits + board.cols * code_bits + (board.cols - 1) * gap_bits;
+  const int bits_y = 2 * margin_bits + board.rows * code_bits + (board.rows - 1) * gap_bits;
+  int ppb = options.pixels_per_bit;
+  if (ppb == 0) {
+    ppb = options.max_pixels_per_bit;
+    while (ppb > 1 && std::max(bits_x, bits_y) * ppb > options.max_texture_size) ppb /= 2;
+  }
+  if (std::max(bits_x, bits_y) * ppb > options.max_texture_size) {
+    throw std::invalid_argument("TagBoard: " + std::to_string(bits_x) + " x " + std::to_string(bits_y) +
+                                " bits at " + std::to_string(ppb) +
+                                " texel(s) per bit exceed max_texture_size " +
+                                std::to_string(options.max_texture_size));
+  }
+  tex.pixels_per_bit = ppb;
+
+  AxisBreakpoints(board.cols, -off * bit, pitch, bit, code_bits, gap_bits, margin_bits, margin, ppb,
+                  &tex.x_board, &tex.x_texel);
+  AxisBreakpoints(board.rows, -off * bit, pitch, bit, code_bits, gap_bits, margin_bits, margin, ppb,
+                  &tex.y_board, &tex.y_texel);
+
+  tex.image = cv::Mat(bits_y * ppb, bits_x * ppb, CV_8UC1, cv::Scalar(options.white));
+  const int step = (code_bits + gap_bits) * ppb;
+  for (int i = 0; i < board.NumTags(); ++i) {
+    const int r = i / board.cols, c = i % board.cols;
+    cv::Mat code = TagCodeImage(family.get(), board.first_id + i);
+    cv::Mat levels;
+    cv::Mat lut(1, 256, CV_8UC1, cv::Scalar(options.white));
+    lut.at<uint8_t>(0) = options.black;
+    cv::LUT(code, lut, levels);
+    code = levels;
+    cv::Mat scaled;
+    cv::resize(code, scaled, cv::Size(), ppb, ppb, cv::INTER_NEAREST);
+    const int x = margin_bits * ppb + c * step, y = margin_bits * ppb + r * step;
+    scaled.copyTo(tex.image(cv::Rect(x, y, scaled.cols, scaled.rows)));
+  }
+  return tex;
+}
+
+}  // namespace rtscalib::render
