@@ -1,1 +1,38 @@
-int main() { return 0; }
+// rtscalib: calibration of robotic total stations. One binary, a flat table of
+// subcommands; each parses straight into the library's option structs.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "app/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"rtscalib - kinematic and camera calibration of robotic total stations"};
+  app.require_subcommand(0, 1);
+
+  rtscalib::app::RunArgs run;
+  app.add_option("--config", run.config, "run the pipeline a config describes (configs/*.yaml)");
+  app.add_option("--output", run.output, "output folder (overrides the config's `output`)");
+  app.add_option("--write-config", run.write_config, "also write the effective config to this new file");
+  app.add_flag("--quiet", run.quiet, "no progress lines on stderr");
+
+  rtscalib::app::PredictArgs predict;
+  CLI::App* pred = app.add_subcommand("predict", "predict records (x, y, z) or pixels (u, v) with a model");
+  pred->add_option("--model", predict.model, "model.yaml written by a run")->required();
+  pred->add_option("--records", predict.records, "records.csv whose x, y, z are predicted");
+  pred->add_option("--pixels", predict.pixels, "pixels.csv whose u, v are predicted");
+  pred->add_option("--out", predict.out, "output CSV")->required();
+  pred->add_flag("--force", predict.force, "replace --out if it exists");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (pred->parsed()) return rtscalib::app::RunPredict(predict);
+    if (run.config.empty()) {
+      std::cerr << app.help();
+      return 2;
+    }
+    return rtscalib::app::RunCalibration(run);
+  } catch (const std::exception& e) {
+    std::cerr << "rtscalib: error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,26 @@
+// The subcommands of the rtscalib binary (a flat table in main.cc). Each
+// returns the process exit code and reports bad input as one clear message.
+#pragma once
+
+#include <string>
+
+namespace rtscalib::app {
+
+struct RunArgs {
+  std::string config;
+  std::string output;        // overrides the config's output folder
+  std::string write_config;  // write the effective config here and continue
+  bool quiet = false;
+};
+int RunCalibration(const RunArgs& args);
+
+struct PredictArgs {
+  std::string model;
+  std::string records;
+  std::string pixels;
+  std::string out;
+  bool force = false;  // allow replacing an existing --out file
+};
+int RunPredict(const PredictArgs& args);
+
+}  // namespace rtscalib::app

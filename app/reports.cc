@@ -1,0 +1,312 @@
+#include "app/reports.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include "libcalib/model/kinematics.h"
+
+namespace rtscalib::app {
+namespace {
+
+using nlohmann::json;
+
+constexpr double kArcsec = 180.0 * 3600.0 / M_PI;
+
+std::string Fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), f, v);
+  return buf;
+}
+
+json PoseJson(const PoseBlock& p, const PoseSigma* s) {
+  const Eigen::Vector3d e = p.Euler();
+  json j = {{"euler", {e[0], e[1], e[2]}}, {"t", {p.t[0], p.t[1], p.t[2]}},
+            {"q", {p.q[0], p.q[1], p.q[2], p.q[3]}}};
+  if (s) {
+    j["euler_sigma"] = {s->euler[0], s->euler[1], s->euler[2]};
+    j["t_sigma"] = {s->t[0], s->t[1], s->t[2]};
+  }
+  return j;
+}
+
+json LinksJson(const InstrumentModel& m) {
+  json links = json::array();
+  if (m.kinematics != Kinematics::kDh) return links;
+  for (int i = 0; i < 2; ++i) {
+    json l = {{"d", m.links[i].p[kDhD]},
+              {"gamma_offset", m.links[i].p[kDhGamma]},
+              {"alpha", m.links[i].p[kDhAlpha]},
+              {"a", m.links[i].p[kDhA]}};
+    if (m.sigmas.valid) l["sigma"] = m.sigmas.links[i];
+    links.push_back(l);
+  }
+  return links;
+}
+
+json ModelJson(const InstrumentModel& m) {
+  const bool s = m.sigmas.valid;
+  json j = {{"kinematics", KinematicsName(m.kinematics)},
+            {"effects", m.effects.Names()},
+            {"base", PoseJson(m.base, s ? &m.sigmas.base : nullptr)},
+            {"links", LinksJson(m)},
+            {"edm", PoseJson(m.edm, s ? &m.sigmas.edm : nullptr)}};
+  json cams = json::array();
+  for (int z = 0; z < m.NumZooms(); ++z) {
+    const CameraTool& c = m.cams[z];
+    json cj = {{"zoom", z},
+               {"tool", PoseJson(c.flange_from_cam, s && z < (int)m.sigmas.cam_tools.size() ? &m.sigmas.cam_tools[z] : nullptr)},
+               {"intrinsics", c.intrinsics},
+               {"distortion", c.distortion}};
+    if (s && z < (int)m.sigmas.intrinsics.size()) cj["intrinsics_sigma"] = m.sigmas.intrinsics[z];
+    cams.push_back(cj);
+  }
+  j["cameras"] = cams;
+  json eff = json::object();
+  for (Effect e : m.effects.List()) {
+    if (!IsKinematic(e)) continue;
+    const EffectInfo& info = Info(e);
+    const EffectReportValue v =
+        ToReportUnits(e, m.EffectValue(e), m.sigmas.effect_cov[static_cast<int>(e)]);
+    json ej = json::object();
+    for (int k = 0; k < v.num; ++k) {
+      ej[info.param_names[k]] = {{"value", v.value[k]}, {"sigma", v.sigma[k]}, {"unit", info.report_units[k]}};
+    }
+    eff[info.name] = ej;
+  }
+  j["effect_values"] = eff;
+  return j;
+}
+
+json ErrorsJson(const ModelErrors& e) {
+  return {{"edm", StatsJson(e.edm)}, {"cam", StatsJson(e.cam)}, {"compound", StatsJson(e.compound)}};
+}
+
+json FitJson(const FitSummary& f) {
+  json corr = json::array();
+  for (const auto& [name, rho] : f.strong_correlations) corr.push_back({{"pair", name}, {"rho", rho}});
+  return {{"converged", f.converged},
+          {"iterations", f.iterations},
+          {"initial_cost", f.initial_cost},
+          {"final_cost", f.final_cost},
+          {"seconds", f.seconds},
+          {"residuals", f.num_residuals},
+          {"parameters", f.num_parameters},
+          {"excluded_critical_region", f.excluded_critical},
+          {"sigma_edm_m", f.sigma_edm_m},
+          {"sigma_cam_m", f.sigma_cam_m},
+          {"sigma_pixel_px", f.sigma_pixel_px},
+          {"fixed_gauges", f.fixed_gauges},
+          {"strong_correlations", corr},
+          {"downweighted", f.downweighted},
+          {"message", f.message}};
+}
+
+}  // namespace
+
+json StatsJson(const ErrorStats& s) {
+  return {{"mean_m", s.mean_m}, {"std_m", s.std_m}, {"rms_m", s.rms_m}, {"max_m", s.max_m}, {"n", s.n}};
+}
+
+json HistoryJson(const OutputFolder& out) {
+  json runs = json::array();
+  for (const HistoryEntry& h : out.earlier()) {
+    std::ifstream in(h.dir + "/report.json");
+    if (!in) continue;
+    json r;
+    try {
+      in >> r;
+    } catch (const std::exception&) {
+      continue;
+    }
+    json entry = {{"run", h.name}};
+    if (r.contains("model")) entry["kinematics"] = r["model"].value("kinematics", "");
+    if (r.contains("model")) entry["effects"] = r["model"].value("effects", json::array());
+    if (r.contains("final")) entry["final"] = r["final"];
+    runs.push_back(entry);
+  }
+  return runs;
+}
+
+json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFolder& out) {
+  json j;
+  j["rtscalib"] = {{"version", "0.1.0"}, {"config", config.config_path}, {"run", out.run().name}};
+  j["data"] = {{"records", r.obs.records.size()},
+               {"pixels", r.obs.pixels.size()},
+               {"records_source", r.obs.records_source},
+               {"pixels_source", r.obs.pixels_source},
+               {"simulated", r.simulated},
+               {"excluded_critical_region", r.fit.excluded_critical}};
+  if (r.extraction) {
+    const ExtractionResult& e = *r.extraction;
+    json joints = json::array();
+    for (const JointFeature& f : e.joints) {
+      joints.push_back({{"joint", f.joint},
+                        {"trajectory", TrajectoryName(f.trajectory)},
+                        {"points", f.num_points},
+                        {"center", {f.center.x(), f.center.y(), f.center.z()}},
+                        {"axis", {f.axis.x(), f.axis.y(), f.axis.z()}},
+                        {"radius_m", f.radius},
+                        {"circle_rms_m", f.circle_rms},
+                        {"plane_rms_m", f.plane_rms}});
+    }
+    j["extraction"] = {{"model", ModelJson(e.model)},
+                       {"joints", joints},
+                       {"excluded_face2", e.excluded.face2},
+                       {"excluded_critical_region", e.excluded.critical_zenith},
+                       {"notes", e.notes}};
+  }
+  if (r.simplified) {
+    j["simplification"] = {{"model", ModelJson(*r.simplified)}, {"closed_form", r.closed_form}};
+  }
+  if (r.table4) {
+    j["table4"] = {{"A", {{"dh", ErrorsJson(r.table4->dh_a)}, {"simplified", ErrorsJson(r.table4->simplified_a)}}},
+                   {"B", {{"dh", ErrorsJson(r.table4->dh_b)}, {"simplified", ErrorsJson(r.table4->simplified_b)}}}};
+  }
+  j["table5"] = {{"reduced", ErrorsJson(r.table5.reduced)},
+                 {"cross", r.table5.has_cross ? ErrorsJson(r.table5.cross) : json()},
+                 {"full", ErrorsJson(r.table5.full)},
+                 {"reduced_rows", r.table5.reduced_rows},
+                 {"full_rows", r.table5.full_rows},
+                 {"scalarised_objective_full", ScalarisedObjective(r.table5.full.compound)}};
+  j["model"] = ModelJson(r.model);
+  j["fit"] = FitJson(r.fit);
+  j["fit"]["intrinsics_fitted"] = r.intrinsics_fitted;
+  if (r.faces) {
+    const FaceComparison& f = *r.faces;
+    j["faces"] = {{"valid", f.valid},
+                  {"note", f.note},
+                  {"collimation_arcsec", f.collimation * kArcsec},
+                  {"tilting_axis_arcsec", f.tilting_axis * kArcsec},
+                  {"vertical_index_arcsec", f.vertical_index * kArcsec},
+                  {"face1", ModelJson(f.face1)},
+                  {"face2", ModelJson(f.face2)}};
+  }
+  j["final"] = {{"records", {{"edm", StatsJson(r.final_errors.edm)}, {"cam", StatsJson(r.final_errors.cam)}}},
+                {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
+  j["notes"] = r.notes;
+  j["history"] = HistoryJson(out);
+  return j;
+}
+
+// ---------------------------------------------------------------------------
+std::string ReportText(const RunConfig& config, const PipelineResult& r) {
+  std::ostringstream o;
+  auto stats = [](const ErrorStats& s) {
+    return s.n == 0 ? std::string("        -          ") : Fmt("%.2e", s.mean_m) + " +- " + Fmt("%.2e", s.std_m);
+  };
+  auto dh_table = [&](const InstrumentModel& m, const char* title) {
+    o << title << "\n  joint   alpha_i        a_i [m]        gamma_i                  d_i [m]\n";
+    const char* var[2] = {"phi", "theta"};
+    for (int i = 0; i < 2; ++i) {
+      const auto& p = m.links[i].p;
+      o << "  " << i + 1 << "       " << Fmt("%+.6f", p[kDhAlpha]) << "     " << Fmt("%+.4e", p[kDhA])
+        << "    " << var[i] << " " << (p[kDhGamma] < 0 ? "- " : "+ ") << Fmt("%.6f", std::abs(p[kDhGamma]))
+        << "      " << Fmt("%+.4e", p[kDhD]) << "\n";
+    }
+  };
+  auto pose_row = [&](const char* name, const PoseBlock& p) {
+    const Eigen::Vector3d e = p.Euler();
+    o << "  " << std::left << std::setw(12) << name << std::right;
+    for (int i = 0; i < 3; ++i) o << Fmt("%+.4f", e[i]) << "  ";
+    for (int i = 0; i < 3; ++i) o << Fmt("%+.4e", p.t[i]) << "  ";
+    o << "\n";
+  };
+  auto transforms = [&](const InstrumentModel& m, const char* title) {
+    o << title << "\n  transform   alpha    beta     gamma    t_x [m]      t_y [m]      t_z [m]\n";
+    pose_row("M_B", m.base);
+    for (int z = 0; z < m.NumZooms(); ++z) pose_row(("M_T(CAM" + std::to_string(z) + ")").c_str(), m.cams[z].flange_from_cam);
+    pose_row("M_T(EDM)", m.edm);
+  };
+
+  o << "rtscalib report\n===============\nconfig: " << config.config_path << "\n";
+  o << "data: " << r.obs.records.size() << " records (" << r.obs.records_source << "), "
+    << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "") << "\n\n";
+  if (r.extraction) {
+    dh_table(r.extraction->model, "Table 1 - extracted DH parameters (Klug Sec. 3)");
+    o << "\n";
+    transforms(r.extraction->model, "Table 2 - extracted base and tool transforms (Euler a, b, g: Eq. 83)");
+    o << "\n";
+  }
+  if (!r.closed_form.empty()) o << "Simplified model (Sec. 4.1):\n" << r.closed_form << "\n\n";
+  if (r.table4) {
+    o << "Table 4 - error of the extracted (DH) and the simplified model [m], mean +- std (Eq. 92/93)\n";
+    o << "  method  tool        e_DH                    e_simplified\n";
+    const ModelErrors* rows[4] = {&r.table4->dh_a, &r.table4->simplified_a, &r.table4->dh_b, &r.table4->simplified_b};
+    for (int m = 0; m < 2; ++m) {
+      const ModelErrors& dh = *rows[2 * m];
+      const ModelErrors& si = *rows[2 * m + 1];
+      const char* method = m == 0 ? "(A)" : "(B)";
+      o << "  " << method << "     EDM       " << stats(dh.edm) << "   " << stats(si.edm) << "\n";
+      o << "          camera    " << stats(dh.cam) << "   " << stats(si.cam) << "\n";
+      o << "          compound  " << stats(dh.compound) << "   " << stats(si.compound) << "\n";
+    }
+    o << "\n";
+  }
+  o << "Table 5 - refined model, method B [m]\n  tool        e_optimized             e_optimized,cross       e_optimized,full\n";
+  const Table5& t = r.table5;
+  auto row5 = [&](const char* name, const ErrorStats& a, const ErrorStats& b, const ErrorStats& c) {
+    o << "  " << std::left << std::setw(10) << name << std::right << stats(a) << "   "
+      << (t.has_cross ? stats(b) : std::string("       n/a         ")) << "   " << stats(c) << "\n";
+  };
+  row5("EDM", t.reduced.edm, t.cross.edm, t.full.edm);
+  row5("camera", t.reduced.cam, t.cross.cam, t.full.cam);
+  row5("compound", t.reduced.compound, t.cross.compound, t.full.compound);
+  o << "  (reduced set: " << t.reduced_rows << " records; full set: " << t.full_rows << " records)\n\n";
+  if (r.model.kinematics == Kinematics::kDh) {
+    dh_table(r.model, "Table 6 - refined DH parameters");
+    o << "\n";
+  }
+  transforms(r.model, "Table 7 - refined base and tool transforms");
+  o << "\n";
+  if (r.model.sigmas.valid) {
+    o << "Intrinsics per zoom (fx, fy, cx, cy [px] +- sigma)\n";
+    for (int z = 0; z < r.model.NumZooms(); ++z) {
+      const auto& k = r.model.cams[z].intrinsics;
+      const auto& s = r.model.sigmas.intrinsics[z];
+      o << "  zoom " << z << ":";
+      for (int i = 0; i < 4; ++i) o << "  " << Fmt("%.3f", k[i]) << " +- " << Fmt("%.3f", s[i]);
+      o << "\n";
+    }
+    o << "\n";
+  }
+  if (!r.model.effects.Empty()) {
+    o << "Effects (report units)\n";
+    for (Effect e : r.model.effects.List()) {
+      if (!IsKinematic(e)) {
+        o << "  " << Info(e).name << " (per zoom, see model.yaml)\n";
+        continue;
+      }
+      const EffectReportValue v = ToReportUnits(e, r.model.EffectValue(e), r.model.sigmas.effect_cov[static_cast<int>(e)]);
+      o << "  " << std::left << std::setw(16) << Info(e).name << std::right;
+      for (int k = 0; k < v.num; ++k) {
+        o << "  " << Info(e).param_names[k] << " = " << Fmt("%.4g", v.value[k]) << " +- " << Fmt("%.2g", v.sigma[k]) << " " << Info(e).report_units[k];
+      }
+      o << "\n";
+    }
+    o << "\n";
+  }
+  if (r.faces && r.faces->valid) {
+    o << "Two-face check (one model per face)\n  collimation " << Fmt("%.2f", r.faces->collimation * kArcsec)
+      << "\"  tilting axis " << Fmt("%.2f", r.faces->tilting_axis * kArcsec) << "\"  vertical index "
+      << Fmt("%.2f", r.faces->vertical_index * kArcsec) << "\"\n\n";
+  }
+  const FinalErrors& f = r.final_errors;
+  o << "Final (all observations): EDM " << stats(f.edm) << " m (n=" << f.edm.n << "), camera "
+    << stats(f.cam) << " m (n=" << f.cam.n << ")";
+  if (f.pixels.n > 0) o << ", pixels rms " << Fmt("%.3f", f.pixels.rms_px) << " px (n=" << f.pixels.n << ")";
+  o << "\nRefinement: " << (r.fit.converged ? "converged" : "NOT converged") << " in " << r.fit.iterations
+    << " iterations, " << Fmt("%.3f", r.fit.seconds) << " s; excluded (critical region): " << r.fit.excluded_critical << "\n";
+  o << "Gauge freedoms held:\n";
+  for (const std::string& g : r.fit.fixed_gauges) o << "  - " << g << "\n";
+  if (!r.fit.strong_correlations.empty()) {
+    o << "Strongly correlated parameters (|rho| > 0.95):\n";
+    for (const auto& [pair, rho] : r.fit.strong_correlations) o << "  " << pair << "  rho = " << Fmt("%+.3f", rho) << "\n";
+  }
+  for (const std::string& n : r.notes) o << "note: " << n << "\n";
+  return o.str();
+}
+
+}  // namespace rtscalib::app

@@ -1,0 +1,24 @@
+// Turns a PipelineResult into files: report.json (SPEC 6), report.txt (the
+// analogues of Klug Tables 1, 2, 4, 5, 6, 7 for a person) and model.yaml.
+// The reports only format what the pipeline computed.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "app/output_folder.h"
+#include "app/pipeline.h"
+
+namespace rtscalib::app {
+
+nlohmann::json ReportJson(const RunConfig& config, const PipelineResult& result,
+                          const OutputFolder& out);
+std::string ReportText(const RunConfig& config, const PipelineResult& result);
+
+// Key figures of earlier runs, read back from their report.json (for the
+// ladder of errors across runs).
+nlohmann::json HistoryJson(const OutputFolder& out);
+
+nlohmann::json StatsJson(const ErrorStats& s);
+
+}  // namespace rtscalib::app
