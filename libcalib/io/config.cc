@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <set>
 
@@ -59,14 +60,16 @@ using DoubleCheck = bool (*)(double);
 bool IsPositive(double x) { return x > 0; }
 bool IsNonNegative(double x) { return x >= 0; }
 
-// Reads `key` into *value if present; `expected` describes a valid value.
-void ReadNumber(const YamlNode& m, const std::string& key, double* value, DoubleCheck ok,
+// Reads `key` into *value if present (returns whether it was); `expected`
+// describes a valid value.
+bool ReadNumber(const YamlNode& m, const std::string& key, double* value, DoubleCheck ok,
                 const std::string& expected) {
-  if (const std::optional<YamlNode> n = m.Find(key)) {
-    const double x = n->AsDouble();
-    if (!ok(x)) n->Fail(expected);
-    *value = x;
-  }
+  const std::optional<YamlNode> n = m.Find(key);
+  if (!n) return false;
+  const double x = n->AsDouble();
+  if (!ok(x)) n->Fail(expected);
+  *value = x;
+  return true;
 }
 
 void ReadCount(const YamlNode& m, const std::string& key, int* value, int min,
@@ -95,19 +98,54 @@ void ReadNumbers(const YamlNode& m, const std::string& key, std::vector<double>*
 
 Eigen::Vector3d ToVector3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
 
-// {euler: [a, b, g], t: [x, y, z]} (Klug Eq. 83), each key optional: what is
-// absent keeps *pose's value.
-void ReadPoseFields(const YamlNode& m, Rigid3* pose) {
-  if (const std::optional<YamlNode> n = m.Find("euler")) {
-    pose->rotation = RotationFromEuler<double>(ToVector3(n->AsDoubles(3)));
+// A hand-written quaternion is taken as it is (so that a dumped config reads
+// back bit for bit), but it must be a rotation.
+constexpr double kUnitQuaternionTolerance = 1e-9;
+
+// The number y, written shortest, for which y * scale == x exactly if one
+// exists next to x / scale: so that dumped degrees and arcseconds give back
+// the same radians.
+std::string ExactScaled(double x, double scale) {
+  double best = x / scale, up = best, down = best;
+  for (int step = 0; step < 4 && best * scale != x; ++step) {
+    up = std::nextafter(up, INFINITY);
+    down = std::nextafter(down, -INFINITY);
+    if (up * scale == x) best = up;
+    if (down * scale == x) best = down;
   }
-  if (const std::optional<YamlNode> n = m.Find("t")) pose->translation = ToVector3(n->AsDoubles(3));
+  return YamlDouble(best, /*shortest=*/true);
 }
 
+// A pose {euler: [a, b, g] (Klug Eq. 83) | q: [x, y, z, w], t: [x, y, z]}.
+// Each key is optional: what is absent keeps *pose's value. People write
+// Euler angles; DumpConfig writes quaternions, which read back bit for bit
+// (Euler angles lose digits near b = +-pi/2, where the ideal tools sit).
 void ReadPoseFields(const YamlNode& m, PoseBlock* pose) {
-  Rigid3 rigid = pose->ToRigid();
-  ReadPoseFields(m, &rigid);
-  *pose = PoseBlock::FromRigid(rigid);
+  const std::optional<YamlNode> euler = m.Find("euler");
+  const std::optional<YamlNode> q = m.Find("q");
+  if (euler && q) q->Fail("either euler or q, not both");
+  if (q) {
+    const std::vector<double> v = q->AsDoubles(4);
+    const double norm = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+    if (std::fabs(norm - 1.0) > kUnitQuaternionTolerance) {
+      q->Fail("a unit quaternion [x, y, z, w] (norm " + FormatShortestDouble(norm) + ")");
+    }
+    std::copy(v.begin(), v.end(), pose->q.begin());
+  } else if (euler) {
+    const Rigid3 rotation{RotationFromEuler<double>(ToVector3(euler->AsDoubles(3))),
+                          Eigen::Vector3d::Zero()};
+    pose->q = PoseBlock::FromRigid(rotation).q;
+  }
+  if (const std::optional<YamlNode> t = m.Find("t")) {
+    const std::vector<double> v = t->AsDoubles(3);
+    std::copy(v.begin(), v.end(), pose->t.begin());
+  }
+}
+
+void ReadPoseFields(const YamlNode& m, Rigid3* pose) {
+  PoseBlock block = PoseBlock::FromRigid(*pose);
+  ReadPoseFields(m, &block);
+  *pose = block.ToRigid();
 }
 
 // Image size, intrinsics and distortion of one zoom level. `required`: all of
@@ -207,18 +245,23 @@ void ReadFit(const YamlNode& m, FitOptions* out) {
   ReadNumber(m, "translation_bound_m", &out->translation_bound_m, IsPositive,
              "a translation bound > 0 [m]");
   if (const std::optional<YamlNode> region = m.Find("critical_region")) {
-    double min_deg = out->min_zenith_rad / kRadPerDeg;
-    double max_deg = out->max_zenith_rad / kRadPerDeg;
+    // Only given limits are converted, so that a default is never rewritten
+    // by a degree round trip.
     auto in_range = [](double x) { return x >= 0 && x <= 180; };
-    ReadNumber(*region, "min_zenith_deg", &min_deg, in_range, "a zenith angle in [0, 180] [deg]");
-    ReadNumber(*region, "max_zenith_deg", &max_deg, in_range, "a zenith angle in [0, 180] [deg]");
-    if (!(min_deg < max_deg)) {
-      const std::optional<YamlNode> at = region->Find("max_zenith_deg");
-      (at ? *at : *region)
-          .Fail("max_zenith_deg > min_zenith_deg (" + FormatShortestDouble(min_deg) + ")");
+    const std::string expected = "a zenith angle in [0, 180] [deg]";
+    double deg = 0;
+    if (ReadNumber(*region, "min_zenith_deg", &deg, in_range, expected)) {
+      out->min_zenith_rad = deg * kRadPerDeg;
     }
-    out->min_zenith_rad = min_deg * kRadPerDeg;
-    out->max_zenith_rad = max_deg * kRadPerDeg;
+    if (ReadNumber(*region, "max_zenith_deg", &deg, in_range, expected)) {
+      out->max_zenith_rad = deg * kRadPerDeg;
+    }
+    if (!(out->min_zenith_rad < out->max_zenith_rad)) {
+      const std::optional<YamlNode> at = region->Find("max_zenith_deg");
+      (at ? *at : *region->Find("min_zenith_deg"))
+          .Fail("max_zenith_deg > min_zenith_deg (" +
+                FormatShortestDouble(out->min_zenith_rad / kRadPerDeg) + " deg)");
+    }
   }
   ReadCount(m, "threads", &out->num_threads, 1, "a thread count");
   m.Read("covariance", &out->compute_covariance);
@@ -226,9 +269,10 @@ void ReadFit(const YamlNode& m, FitOptions* out) {
 }
 
 void ReadNoise(const YamlNode& m, NoiseOptions* out) {
-  double angle_arcsec = out->angle_rad / kRadPerArcsec;
-  ReadNumber(m, "angle_arcsec", &angle_arcsec, IsNonNegative, "a sigma >= 0 [arcsec]");
-  out->angle_rad = angle_arcsec * kRadPerArcsec;
+  double angle_arcsec = 0;
+  if (ReadNumber(m, "angle_arcsec", &angle_arcsec, IsNonNegative, "a sigma >= 0 [arcsec]")) {
+    out->angle_rad = angle_arcsec * kRadPerArcsec;
+  }
   ReadNumber(m, "distance_m", &out->distance_m, IsNonNegative, "a sigma >= 0 [m]");
   ReadNumber(m, "point_m", &out->point_m, IsNonNegative, "a sigma >= 0 [m]");
   ReadNumber(m, "pixel_px", &out->pixel_px, IsNonNegative, "a sigma >= 0 [px]");
@@ -420,12 +464,11 @@ void EmitInts(YAML::Emitter& e, const std::vector<int>& x) {
   e << YAML::EndSeq;
 }
 
-void EmitPose(YAML::Emitter& e, const Rigid3& pose) {
-  const Eigen::Vector3d euler = EulerFromRotation(pose.rotation);
-  e << YAML::Key << "euler" << YAML::Value;
-  EmitNumbers(e, euler.data(), 3);
+void EmitPose(YAML::Emitter& e, const PoseBlock& pose) {
+  e << YAML::Key << "q" << YAML::Value;
+  EmitNumbers(e, pose.q.data(), 4);
   e << YAML::Key << "t" << YAML::Value;
-  EmitNumbers(e, pose.translation.data(), 3);
+  EmitNumbers(e, pose.t.data(), 3);
 }
 
 void EmitCameraFields(YAML::Emitter& e, const CameraTool& cam) {
@@ -443,7 +486,7 @@ void EmitTruth(YAML::Emitter& e, const InstrumentModel& truth) {
   e << YAML::BeginMap;
   e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(truth.kinematics);
   e << YAML::Key << "base" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  EmitPose(e, truth.base.ToRigid());
+  EmitPose(e, truth.base);
   e << YAML::EndMap;
   if (truth.kinematics == Kinematics::kDh) {
     e << YAML::Key << "links" << YAML::Value << YAML::BeginSeq;
@@ -451,12 +494,12 @@ void EmitTruth(YAML::Emitter& e, const InstrumentModel& truth) {
     e << YAML::EndSeq;
   }
   e << YAML::Key << "edm" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  EmitPose(e, truth.edm.ToRigid());
+  EmitPose(e, truth.edm);
   e << YAML::EndMap;
   e << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
   for (const CameraTool& cam : truth.cams) {
     e << YAML::Flow << YAML::BeginMap;
-    EmitPose(e, cam.flange_from_cam.ToRigid());
+    EmitPose(e, cam.flange_from_cam);
     EmitCameraFields(e, cam);
     e << YAML::EndMap;
   }
@@ -481,7 +524,7 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
     EmitTruth(e, sim.truth);
   }
   e << YAML::Key << "noise" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  e << YAML::Key << "angle_arcsec" << YAML::Value << Num(sim.noise.angle_rad / kRadPerArcsec);
+  e << YAML::Key << "angle_arcsec" << YAML::Value << ExactScaled(sim.noise.angle_rad, kRadPerArcsec);
   e << YAML::Key << "distance_m" << YAML::Value << Num(sim.noise.distance_m);
   e << YAML::Key << "point_m" << YAML::Value << Num(sim.noise.point_m);
   e << YAML::Key << "pixel_px" << YAML::Value << Num(sim.noise.pixel_px);
@@ -519,7 +562,7 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
     e << YAML::Key << "cols" << YAML::Value << b.cols;
     e << YAML::Key << "tag_size" << YAML::Value << Num(b.tag_size);
     e << YAML::Key << "spacing" << YAML::Value << Num(b.spacing);
-    EmitPose(e, b.ref_from_board);
+    EmitPose(e, PoseBlock::FromRigid(b.ref_from_board));
     e << YAML::EndMap;
   }
   e << YAML::EndSeq;
@@ -626,8 +669,8 @@ std::string DumpConfig(const RunConfig& c) {
   e << YAML::Key << "max_iterations" << YAML::Value << f.max_iterations;
   e << YAML::Key << "translation_bound_m" << YAML::Value << Num(f.translation_bound_m);
   e << YAML::Key << "critical_region" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  e << YAML::Key << "min_zenith_deg" << YAML::Value << Num(f.min_zenith_rad / kRadPerDeg);
-  e << YAML::Key << "max_zenith_deg" << YAML::Value << Num(f.max_zenith_rad / kRadPerDeg);
+  e << YAML::Key << "min_zenith_deg" << YAML::Value << ExactScaled(f.min_zenith_rad, kRadPerDeg);
+  e << YAML::Key << "max_zenith_deg" << YAML::Value << ExactScaled(f.max_zenith_rad, kRadPerDeg);
   e << YAML::EndMap;
   e << YAML::Key << "threads" << YAML::Value << f.num_threads;
   e << YAML::Key << "covariance" << YAML::Value << f.compute_covariance;

@@ -1,0 +1,373 @@
+#include "libcalib/io/config.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "tests/io/io_test_util.h"
+
+namespace rtscalib {
+namespace {
+
+using testing_io::CatchInputError;
+using testing_io::TempDir;
+using ::testing::HasSubstr;
+
+constexpr double kRadPerArcsec = M_PI / (180.0 * 3600.0);
+
+// A config with one simulate section, so that it is complete without data.
+constexpr const char* kSimulateOnly = "simulate: {seed: 3}\n";
+
+// Writes `text` as run.yaml and returns the error that loading it must give.
+InputError ConfigError(const TempDir& dir, const std::string& text) {
+  const std::string path = dir.Write("run.yaml", text);
+  return CatchInputError([&] { LoadConfig(path); });
+}
+
+// The first ```yaml block after `heading` in docs/config.md.
+std::string DocsExample(const std::string& heading) {
+  std::ifstream in(std::string(RTSCALIB_SOURCE_DIR) + "/docs/config.md");
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  const size_t at = text.find(heading);
+  EXPECT_NE(at, std::string::npos) << heading;
+  const size_t begin = text.find("```yaml\n", at) + 8;
+  return text.substr(begin, text.find("```", begin) - begin);
+}
+
+TEST(Config, SpecMinimalExampleResolvesPathsAgainstTheConfigFolder) {
+  TempDir dir;
+  dir.Write("cfg/records.csv", "x\n");
+  dir.Write("cfg/pixels.csv", "x\n");
+  const std::string path = dir.Write("cfg/run.yaml", DocsExample("## Minimal example"));
+  const RunConfig c = LoadConfig(path);
+  EXPECT_EQ(c.config_path, dir.Path("cfg/run.yaml"));
+  EXPECT_EQ(c.config_dir, dir.Path("cfg"));
+  EXPECT_EQ(c.records_path, dir.Path("cfg/records.csv"));
+  EXPECT_EQ(c.pixels_path, dir.Path("cfg/pixels.csv"));
+  EXPECT_EQ(c.output_dir, dir.Path("cfg/out"));
+  EXPECT_EQ(c.model.kinematics, Kinematics::kDh);
+  EXPECT_EQ(c.model.effects.Names(),
+            (std::vector<std::string>{"hz_eccentricity", "radial_distortion"}));
+  EXPECT_EQ(c.model.edm_cyclic_unit_length, 1.5);
+  EXPECT_FALSE(c.simulate.has_value());
+  EXPECT_TRUE(c.render_yaml.empty());
+  EXPECT_TRUE(c.notes.empty());
+  // Untouched sections keep the structs' defaults.
+  EXPECT_EQ(c.fit.max_iterations, FitOptions().max_iterations);
+  EXPECT_EQ(c.model.faces, FaceMode::kJoint);
+  EXPECT_EQ(c.model.intrinsics, IntrinsicsMode::kAuto);
+  EXPECT_TRUE(c.diagnose.enabled);
+}
+
+TEST(Config, DocsFullExampleLoadsWithEveryKey) {
+  TempDir dir;
+  dir.Write("records.csv", "x\n");
+  dir.Write("pixels.csv", "x\n");
+  const RunConfig c = LoadConfig(dir.Write("run.yaml", DocsExample("## Full example")));
+  ASSERT_EQ(c.model.cameras.size(), 2u);
+  EXPECT_EQ(c.model.cameras[1].intrinsics[0], 2000);
+  EXPECT_EQ(c.model.cameras[1].distortion[0], -0.05);
+  EXPECT_EQ(c.model.cameras[1].distortion[13], 0.0);
+  EXPECT_EQ(c.fit.loss, RobustLoss::kHuber);
+  EXPECT_DOUBLE_EQ(c.fit.max_zenith_rad, 135 * M_PI / 180);
+  EXPECT_FALSE(c.fit.fit_intrinsics);  // auto: the pipeline decides
+  ASSERT_TRUE(c.simulate.has_value());
+  EXPECT_FALSE(c.truth_from_paper);
+  const SimulationOptions& sim = *c.simulate;
+  EXPECT_EQ(sim.seed, 1u);
+  EXPECT_DOUBLE_EQ(sim.noise.angle_rad, 1 * kRadPerArcsec);
+  EXPECT_EQ(sim.plan.grid_phi_steps, 24);
+  EXPECT_EQ(sim.plan.faces, (std::vector<int>{1, 2}));
+  ASSERT_EQ(sim.targets.boards.size(), 1u);
+  EXPECT_EQ(sim.targets.boards[0].ref_from_board.translation, Eigen::Vector3d(-0.19, 2.0, -0.14));
+  const InstrumentModel& truth = sim.truth;
+  EXPECT_EQ(truth.NumZooms(), 2);
+  EXPECT_EQ(truth.cams[0].intrinsics[2], 321.5);
+  EXPECT_EQ(truth.cams[0].distortion[0], -0.1);
+  EXPECT_TRUE(truth.effects.Has(Effect::kRadialDistortion));   // from the coefficients
+  EXPECT_FALSE(truth.effects.Has(Effect::kThinPrism));
+  EXPECT_EQ(truth.links[0].p[kDhAlpha], 1.5708);
+  const auto hz = truth.EffectValue(Effect::kHzEccentricity);
+  EXPECT_NEAR(std::hypot(hz[0], hz[1]), 5 * kRadPerArcsec, 1e-18);
+  EXPECT_NEAR(std::atan2(hz[1], hz[0]), 30 * M_PI / 180, 1e-12);
+  EXPECT_NEAR(truth.EffectValue(Effect::kEdmScale)[0], 3e-6, 1e-20);
+  EXPECT_NEAR(truth.base.Euler()[1], 0.0002, 1e-12);
+  EXPECT_THAT(c.render_yaml, HasSubstr("width: 640"));
+  // Data files win over the simulate section, and the log says so.
+  ASSERT_EQ(c.notes.size(), 1u);
+  EXPECT_THAT(c.notes[0], HasSubstr("simulate section is not used"));
+}
+
+TEST(Config, UnknownKeyNamesPathFileAndLine) {
+  TempDir dir;
+  const InputError e = ConfigError(dir, std::string(kSimulateOnly) +
+                                            "model:\n"
+                                            "  kinematics: dh\n"
+                                            "  efects: [hz_eccentricity]\n");
+  EXPECT_EQ(e.key, "model.efects");
+  EXPECT_EQ(e.file, dir.Path("run.yaml"));
+  EXPECT_EQ(e.line, 4);
+  EXPECT_EQ(e.position, 3);
+  EXPECT_THAT(e.what(), HasSubstr(dir.Path("run.yaml") + ":4:3: key 'model.efects'"));
+  EXPECT_THAT(e.what(), HasSubstr("did you mean 'effects'?"));
+}
+
+TEST(Config, UnknownKeysEverywhereAreAllReported) {
+  TempDir dir;
+  const InputError e = ConfigError(dir,
+                                   "simulate:\n"
+                                   "  targets:\n"
+                                   "    - {t: [0, 2, 0], colour: red}\n"
+                                   "  plan: {zoom: [0]}\n"
+                                   "outptu: results\n");
+  EXPECT_EQ(e.key, "simulate.targets[0].colour");
+  EXPECT_EQ(e.line, 3);
+  EXPECT_THAT(e.what(), HasSubstr("key 'simulate.plan.zoom'"));
+  EXPECT_THAT(e.what(), HasSubstr(":5:1: key 'outptu'"));
+  EXPECT_THAT(e.what(), HasSubstr("did you mean 'output'?"));
+}
+
+TEST(Config, RenderSectionIsKeptRawAndNotChecked) {
+  TempDir dir;
+  const RunConfig c = LoadConfig(
+      dir.Write("run.yaml", std::string(kSimulateOnly) + "render: {anything: [1, 2], deep: {x: 1}}\n"));
+  EXPECT_THAT(c.render_yaml, HasSubstr("anything"));
+  EXPECT_THAT(c.render_yaml, HasSubstr("deep"));
+}
+
+TEST(Config, UnknownEffectListsValidNames) {
+  TempDir dir;
+  const InputError e = ConfigError(
+      dir, std::string(kSimulateOnly) + "model:\n  effects: [hz_eccentricity, hz_excentricity]\n");
+  EXPECT_EQ(e.key, "model.effects[1]");
+  EXPECT_EQ(e.line, 3);
+  EXPECT_EQ(e.got, "hz_excentricity");
+  for (const EffectInfo& info : EffectCatalogue()) EXPECT_THAT(e.expected, HasSubstr(info.name));
+  EXPECT_THAT(e.expected, HasSubstr("did you mean 'hz_eccentricity'?"));
+}
+
+TEST(Config, EffectsAlreadyInDhAreRejected) {
+  TempDir dir;
+  const InputError e = ConfigError(dir, std::string(kSimulateOnly) +
+                                            "model: {kinematics: dh, effects: [collimation]}\n");
+  EXPECT_EQ(e.key, "model.effects[0]");
+  EXPECT_THAT(e.expected, HasSubstr("spherical"));
+  // ... but fine in the spherical kinematics.
+  const RunConfig c = LoadConfig(dir.Write(
+      "ok.yaml", std::string(kSimulateOnly) + "model: {kinematics: spherical, effects: [collimation]}\n"));
+  EXPECT_TRUE(c.model.effects.Has(Effect::kCollimation));
+}
+
+TEST(Config, DuplicateEffect) {
+  TempDir dir;
+  const InputError e =
+      ConfigError(dir, std::string(kSimulateOnly) + "model: {effects: [edm_scale, edm_scale]}\n");
+  EXPECT_EQ(e.key, "model.effects[1]");
+}
+
+TEST(Config, WrongTypesNameKeyLineExpectedAndGot) {
+  TempDir dir;
+  const InputError e =
+      ConfigError(dir, std::string(kSimulateOnly) + "fit:\n  max_iterations: lots\n");
+  EXPECT_EQ(e.key, "fit.max_iterations");
+  EXPECT_EQ(e.line, 3);
+  EXPECT_THAT(e.what(), HasSubstr("expected an integer, got 'lots'"));
+
+  const InputError kin =
+      ConfigError(dir, std::string(kSimulateOnly) + "model: {kinematics: denavit}\n");
+  EXPECT_EQ(kin.key, "model.kinematics");
+  EXPECT_EQ(kin.expected, "one of dh, spherical");
+
+  const InputError list = ConfigError(dir, std::string(kSimulateOnly) + "model: {effects: edm_scale}\n");
+  EXPECT_EQ(list.key, "model.effects");
+  EXPECT_EQ(list.expected, "a list");
+}
+
+TEST(Config, NegativeSigma) {
+  TempDir dir;
+  const InputError e = ConfigError(dir, std::string(kSimulateOnly) +
+                                            "fit:\n  sigmas: {edm_m: 1e-5, cam_m: -1e-5}\n");
+  EXPECT_EQ(e.key, "fit.sigmas.cam_m");
+  EXPECT_EQ(e.got, "-1e-5");
+  EXPECT_THAT(e.expected, HasSubstr("> 0"));
+  const InputError noise =
+      ConfigError(dir, "simulate: {noise: {pixel_px: -0.1}}\n");
+  EXPECT_EQ(noise.key, "simulate.noise.pixel_px");
+}
+
+TEST(Config, ZenithLimitsMustBeInOrder) {
+  TempDir dir;
+  const InputError e = ConfigError(
+      dir, std::string(kSimulateOnly) +
+               "fit:\n  critical_region: {min_zenith_deg: 100, max_zenith_deg: 90}\n");
+  EXPECT_EQ(e.key, "fit.critical_region.max_zenith_deg");
+  EXPECT_EQ(e.line, 3);
+  const InputError range = ConfigError(
+      dir, std::string(kSimulateOnly) + "fit:\n  critical_region: {min_zenith_deg: -5}\n");
+  EXPECT_EQ(range.key, "fit.critical_region.min_zenith_deg");
+}
+
+TEST(Config, DistortionAtMost14) {
+  TempDir dir;
+  const InputError e = ConfigError(
+      dir, std::string(kSimulateOnly) +
+               "model:\n  cameras:\n"
+               "    - {width: 640, height: 480, fx: 1, fy: 1, cx: 0, cy: 0,"
+               " distortion: [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]}\n");
+  EXPECT_EQ(e.key, "model.cameras[0].distortion");
+  EXPECT_EQ(e.line, 4);
+  EXPECT_THAT(e.expected, HasSubstr("at most 14"));
+}
+
+TEST(Config, CameraSizeMustBePositive) {
+  TempDir dir;
+  const InputError e = ConfigError(
+      dir, std::string(kSimulateOnly) +
+               "model:\n  cameras:\n    - {width: 640, height: 480, fx: 1, fy: 1, cx: 0, cy: 0}\n"
+               "    - {width: 0, height: 480, fx: 1, fy: 1, cx: 0, cy: 0}\n");
+  EXPECT_EQ(e.key, "model.cameras[1].width");
+  EXPECT_EQ(e.line, 5);
+  const InputError height = ConfigError(
+      dir, "simulate:\n  truth:\n    cameras: [{height: -480}]\n");
+  EXPECT_EQ(height.key, "simulate.truth.cameras[0].height");
+  const InputError missing = ConfigError(
+      dir, std::string(kSimulateOnly) + "model:\n  cameras: [{width: 640, height: 480, fx: 1}]\n");
+  EXPECT_EQ(missing.key, "model.cameras[0].fy");
+}
+
+TEST(Config, DataFilesMustExist) {
+  TempDir dir;
+  const InputError e = ConfigError(dir, "data: {records: nothere.csv}\n");
+  EXPECT_EQ(e.key, "data.records");
+  EXPECT_EQ(e.got, "nothere.csv");
+  EXPECT_THAT(e.expected, HasSubstr("relative paths start at the config's folder"));
+}
+
+TEST(Config, NeedsDataOrSimulation) {
+  TempDir dir;
+  const InputError e = ConfigError(dir, "model: {kinematics: dh}\n");
+  EXPECT_EQ(e.key, "data");
+  EXPECT_EQ(e.file, dir.Path("run.yaml"));
+}
+
+TEST(Config, SimulateWithoutTruthAsksForPaperTruth) {
+  TempDir dir;
+  const RunConfig c = LoadConfig(dir.Write(
+      "run.yaml", "simulate: {plan: {zooms: [0, 2]}, noise: {angle_arcsec: 2}}\noutput: /tmp/x\n"));
+  ASSERT_TRUE(c.simulate.has_value());
+  EXPECT_TRUE(c.truth_from_paper);
+  EXPECT_EQ(PlanNumZooms(c.simulate->plan), 3);
+  EXPECT_EQ(c.output_dir, "/tmp/x");
+}
+
+TEST(Config, TruthCamerasMustCoverThePlanZooms) {
+  TempDir dir;
+  const InputError e = ConfigError(
+      dir, "simulate:\n  plan: {zooms: [0, 1]}\n  truth: {cameras: [{fx: 900}]}\n");
+  EXPECT_EQ(e.key, "simulate.plan.zooms");
+  EXPECT_EQ(e.line, 2);
+}
+
+TEST(Config, TruthEffectsInReportUnits) {
+  TempDir dir;
+  const RunConfig c = LoadConfig(dir.Write(
+      "run.yaml",
+      "simulate:\n  truth:\n    kinematics: spherical\n"
+      "    effects: {collimation: 10, edm_offset: [-1.5], axis_wobble: [3, 90]}\n"));
+  const InstrumentModel& truth = c.simulate->truth;
+  EXPECT_EQ(truth.kinematics, Kinematics::kSpherical);
+  EXPECT_NEAR(truth.EffectValue(Effect::kCollimation)[0], 10 * kRadPerArcsec, 1e-18);
+  EXPECT_NEAR(truth.EffectValue(Effect::kEdmOffset)[0], -1.5e-3, 1e-18);
+  EXPECT_NEAR(truth.EffectValue(Effect::kAxisWobble)[1], 3 * kRadPerArcsec, 1e-18);
+  EXPECT_EQ(truth.effects.List().size(), 3u);
+
+  const InputError count = ConfigError(
+      dir, "simulate:\n  truth:\n    effects: {hz_eccentricity: [5]}\n");
+  EXPECT_EQ(count.key, "simulate.truth.effects.hz_eccentricity");
+  EXPECT_THAT(count.expected, HasSubstr("e (arcsec), phi_e (deg)"));
+  const InputError name = ConfigError(dir, "simulate:\n  truth:\n    effects: {hz_ecc: [5, 1]}\n");
+  EXPECT_EQ(name.key, "simulate.truth.effects.hz_ecc");
+  EXPECT_EQ(name.got, "hz_ecc");
+  EXPECT_EQ(name.line, 3);
+  const InputError distortion =
+      ConfigError(dir, "simulate:\n  truth:\n    effects: {radial_distortion: [1]}\n");
+  EXPECT_THAT(distortion.expected, HasSubstr("cameras[zoom].distortion"));
+  const InputError links =
+      ConfigError(dir, "simulate:\n  truth: {kinematics: spherical, links: [[0, 0, 0, 0]]}\n");
+  EXPECT_EQ(links.key, "simulate.truth.links");
+}
+
+TEST(Config, IntrinsicsFitSetsFitOption) {
+  TempDir dir;
+  const RunConfig c =
+      LoadConfig(dir.Write("run.yaml", std::string(kSimulateOnly) + "model: {intrinsics: fit}\n"));
+  EXPECT_TRUE(c.fit.fit_intrinsics);
+}
+
+TEST(Config, BadPlanValues) {
+  TempDir dir;
+  EXPECT_EQ(ConfigError(dir, "simulate: {plan: {faces: [1, 3]}}\n").key, "simulate.plan.faces[1]");
+  EXPECT_EQ(ConfigError(dir, "simulate: {plan: {zooms: []}}\n").key, "simulate.plan.zooms");
+  EXPECT_EQ(ConfigError(dir, "simulate: {plan: {edm_distances: [1, 0]}}\n").key,
+            "simulate.plan.edm_distances[1]");
+  EXPECT_EQ(ConfigError(dir, "simulate: {plan: {grid: {phi_steps: 4}}}\n").key,
+            "simulate.plan.grid.theta_steps");
+  EXPECT_EQ(ConfigError(dir, "simulate: {targets: [{rows: 2}]}\n").key, "simulate.targets[0].t");
+  EXPECT_EQ(ConfigError(dir, "simulate: {shots: {fill: 1.5}}\n").key, "simulate.shots.fill");
+  EXPECT_EQ(ConfigError(dir, "simulate: {seed: -1}\n").key, "simulate.seed");
+  EXPECT_EQ(ConfigError(dir, std::string(kSimulateOnly) + "diagnose: {significance: 1}\n").key,
+            "diagnose.significance");
+}
+
+// The dump is a config that loads to the same run, and dumping that again
+// gives the same text (paths are absolute, numbers exact).
+TEST(Config, DumpLoadsBackToTheSameConfig) {
+  TempDir dir;
+  dir.Write("records.csv", "x\n");
+  dir.Write("pixels.csv", "x\n");
+  const RunConfig a = LoadConfig(dir.Write("run.yaml", DocsExample("## Full example")));
+  const std::string dump_a = DumpConfig(a);
+  const RunConfig b = LoadConfig(dir.Write("elsewhere/dump.yaml", dump_a));
+  const std::string dump_b = DumpConfig(b);
+  EXPECT_EQ(b.records_path, a.records_path);
+  EXPECT_EQ(b.pixels_path, a.pixels_path);
+  EXPECT_EQ(b.output_dir, a.output_dir);
+  EXPECT_EQ(b.model.effects, a.model.effects);
+  EXPECT_EQ(b.model.cameras.size(), a.model.cameras.size());
+  EXPECT_EQ(b.model.cameras[1].distortion, a.model.cameras[1].distortion);
+  EXPECT_EQ(b.fit.sigma_edm_m, a.fit.sigma_edm_m);
+  EXPECT_EQ(b.fit.loss, a.fit.loss);
+  EXPECT_EQ(b.fit.min_zenith_rad, a.fit.min_zenith_rad);
+  EXPECT_EQ(b.simulate->noise.angle_rad, a.simulate->noise.angle_rad);
+  EXPECT_EQ(b.simulate->plan.grid_edm_distances, a.simulate->plan.grid_edm_distances);
+  EXPECT_EQ(b.simulate->truth.effects, a.simulate->truth.effects);
+  EXPECT_EQ(b.simulate->truth.base.q, a.simulate->truth.base.q);
+  EXPECT_EQ(b.simulate->truth.cams[0].flange_from_cam.q, a.simulate->truth.cams[0].flange_from_cam.q);
+  EXPECT_EQ(b.simulate->truth.links[0].p, a.simulate->truth.links[0].p);
+  // Polar effects go through amplitude/phase in report units and back;
+  // 1e-15 relative is that conversion's rounding.
+  const auto cyclic_a = a.simulate->truth.EffectValue(Effect::kEdmCyclic);
+  const auto cyclic_b = b.simulate->truth.EffectValue(Effect::kEdmCyclic);
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(cyclic_b[i], cyclic_a[i], 1e-15 * std::abs(cyclic_a[i]));
+  EXPECT_EQ(b.render_yaml, a.render_yaml);
+  EXPECT_EQ(b.diagnose.significance, a.diagnose.significance);
+  EXPECT_EQ(b.truth_from_paper, a.truth_from_paper);
+  EXPECT_EQ(b.simulate->targets.boards[0].ref_from_board.translation,
+            a.simulate->targets.boards[0].ref_from_board.translation);
+  EXPECT_EQ(dump_b, dump_a);
+}
+
+TEST(Config, TruthPoseAsQuaternion) {
+  TempDir dir;
+  const RunConfig c = LoadConfig(dir.Write(
+      "run.yaml", "simulate:\n  truth: {base: {q: [0, 0, 0.6, 0.8], t: [1, 2, 3]}}\n"));
+  EXPECT_EQ(c.simulate->truth.base.q, (std::array<double, 4>{0, 0, 0.6, 0.8}));
+  EXPECT_EQ(ConfigError(dir, "simulate:\n  truth: {base: {q: [0, 0, 0.6, 0.9]}}\n").key,
+            "simulate.truth.base.q");
+  EXPECT_EQ(ConfigError(dir, "simulate:\n  truth: {base: {q: [0, 0, 0, 1], euler: [0, 0, 0]}}\n").key,
+            "simulate.truth.base.q");
+}
+
+}  // namespace
+}  // namespace rtscalib
