@@ -457,7 +457,9 @@ void EmitNumbers(YAML::Emitter& e, const double* x, size_t n) {
   for (size_t i = 0; i < n; ++i) e << Num(x[i]);
   e << YAML::EndSeq;
 }
-void EmitNumbers(YAML::Emitter& e, const std::vector<double>& x) { EmitNumbers(e, x.data(), x.size()); }
+void EmitNumbers(YAML::Emitter& e, const std::vector<double>& x) {
+  EmitNumbers(e, x.data(), x.size());
+}
 void EmitInts(YAML::Emitter& e, const std::vector<int>& x) {
   e << YAML::Flow << YAML::BeginSeq;
   for (int v : x) e << v;
@@ -524,7 +526,8 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
     EmitTruth(e, sim.truth);
   }
   e << YAML::Key << "noise" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  e << YAML::Key << "angle_arcsec" << YAML::Value << ExactScaled(sim.noise.angle_rad, kRadPerArcsec);
+  e << YAML::Key << "angle_arcsec" << YAML::Value
+    << ExactScaled(sim.noise.angle_rad, kRadPerArcsec);
   e << YAML::Key << "distance_m" << YAML::Value << Num(sim.noise.distance_m);
   e << YAML::Key << "point_m" << YAML::Value << Num(sim.noise.point_m);
   e << YAML::Key << "pixel_px" << YAML::Value << Num(sim.noise.pixel_px);
@@ -620,7 +623,8 @@ RunConfig LoadConfig(const std::string& path) {
                           "neither");
   }
   if (have_data && simulate) {
-    config.notes.push_back(path + ": the simulate section is not used because data files are given");
+    config.notes.push_back(path +
+                           ": the simulate section is not used because data files are given");
   }
   return config;
 }

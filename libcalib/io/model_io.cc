@@ -120,7 +120,9 @@ void ReadNumbersInto(const YamlNode& n, double* out, int size, bool allow_nan = 
   if (static_cast<int>(items.size()) != size) {
     n.Fail("a list of " + std::to_string(size) + " numbers");
   }
-  for (int i = 0; i < size; ++i) out[i] = allow_nan ? items[i].AsDoubleOrNan() : items[i].AsDouble();
+  for (int i = 0; i < size; ++i) {
+    out[i] = allow_nan ? items[i].AsDoubleOrNan() : items[i].AsDouble();
+  }
 }
 
 void ReadNamedInto(const YamlNode& m, const char* const* names, double* out, int size,
@@ -222,7 +224,9 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
     e << YAML::Key << "links" << YAML::Value << YAML::BeginSeq;
     for (int i = 0; i < 2; ++i) {
       e << YAML::Flow << YAML::BeginMap;
-      for (int k = 0; k < 4; ++k) e << YAML::Key << kDhNames[k] << YAML::Value << Num(model.links[i].p[k]);
+      for (int k = 0; k < 4; ++k) {
+        e << YAML::Key << kDhNames[k] << YAML::Value << Num(model.links[i].p[k]);
+      }
       if (s.valid) {
         e << YAML::Key << "sigma" << YAML::Value;
         EmitNamed(e, kDhNames, s.links[i].data(), 4);
@@ -279,7 +283,9 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
     if (items.size() != 2) links.Fail("2 DH links");
     for (int i = 0; i < 2; ++i) {
       ReadNamedInto(items[i], kDhNames, model.links[i].p.data(), 4);
-      if (with_sigma) ReadNamedInto(items[i].Require("sigma"), kDhNames, s.links[i].data(), 4, true);
+      if (with_sigma) {
+        ReadNamedInto(items[i].Require("sigma"), kDhNames, s.links[i].data(), 4, true);
+      }
     }
   }
   for (const YamlNode& item : root.Require("effects").Items()) ReadEffect(item, with_sigma, &model);
@@ -288,7 +294,9 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
   for (const YamlNode& item : cameras.Items()) {
     const int zoom = model.NumZooms();
     const YamlNode zoom_node = item.Require("zoom");
-    if (zoom_node.AsInt() != zoom) zoom_node.Fail("zoom " + std::to_string(zoom) + " (cameras are listed in zoom order)");
+    if (zoom_node.AsInt() != zoom) {
+      zoom_node.Fail("zoom " + std::to_string(zoom) + " (cameras are listed in zoom order)");
+    }
     CameraTool cam;
     for (auto [key, value] : {std::pair<const char*, int*>{"width", &cam.width},
                               std::pair<const char*, int*>{"height", &cam.height}}) {

@@ -131,7 +131,8 @@ TEST(Config, UnknownKeysEverywhereAreAllReported) {
 TEST(Config, RenderSectionIsKeptRawAndNotChecked) {
   TempDir dir;
   const RunConfig c = LoadConfig(
-      dir.Write("run.yaml", std::string(kSimulateOnly) + "render: {anything: [1, 2], deep: {x: 1}}\n"));
+      dir.Write("run.yaml",
+                std::string(kSimulateOnly) + "render: {anything: [1, 2], deep: {x: 1}}\n"));
   EXPECT_THAT(c.render_yaml, HasSubstr("anything"));
   EXPECT_THAT(c.render_yaml, HasSubstr("deep"));
 }
@@ -155,7 +156,8 @@ TEST(Config, EffectsAlreadyInDhAreRejected) {
   EXPECT_THAT(e.expected, HasSubstr("spherical"));
   // ... but fine in the spherical kinematics.
   const RunConfig c = LoadConfig(dir.Write(
-      "ok.yaml", std::string(kSimulateOnly) + "model: {kinematics: spherical, effects: [collimation]}\n"));
+      "ok.yaml",
+      std::string(kSimulateOnly) + "model: {kinematics: spherical, effects: [collimation]}\n"));
   EXPECT_TRUE(c.model.effects.Has(Effect::kCollimation));
 }
 
@@ -179,7 +181,8 @@ TEST(Config, WrongTypesNameKeyLineExpectedAndGot) {
   EXPECT_EQ(kin.key, "model.kinematics");
   EXPECT_EQ(kin.expected, "one of dh, spherical");
 
-  const InputError list = ConfigError(dir, std::string(kSimulateOnly) + "model: {effects: edm_scale}\n");
+  const InputError list =
+      ConfigError(dir, std::string(kSimulateOnly) + "model: {effects: edm_scale}\n");
   EXPECT_EQ(list.key, "model.effects");
   EXPECT_EQ(list.expected, "a list");
 }
@@ -343,7 +346,8 @@ TEST(Config, DumpLoadsBackToTheSameConfig) {
   EXPECT_EQ(b.simulate->plan.grid_edm_distances, a.simulate->plan.grid_edm_distances);
   EXPECT_EQ(b.simulate->truth.effects, a.simulate->truth.effects);
   EXPECT_EQ(b.simulate->truth.base.q, a.simulate->truth.base.q);
-  EXPECT_EQ(b.simulate->truth.cams[0].flange_from_cam.q, a.simulate->truth.cams[0].flange_from_cam.q);
+  EXPECT_EQ(b.simulate->truth.cams[0].flange_from_cam.q,
+            a.simulate->truth.cams[0].flange_from_cam.q);
   EXPECT_EQ(b.simulate->truth.links[0].p, a.simulate->truth.links[0].p);
   // Polar effects go through amplitude/phase in report units and back;
   // 1e-15 relative is that conversion's rounding.
@@ -365,7 +369,8 @@ TEST(Config, TruthPoseAsQuaternion) {
   EXPECT_EQ(c.simulate->truth.base.q, (std::array<double, 4>{0, 0, 0.6, 0.8}));
   EXPECT_EQ(ConfigError(dir, "simulate:\n  truth: {base: {q: [0, 0, 0.6, 0.9]}}\n").key,
             "simulate.truth.base.q");
-  EXPECT_EQ(ConfigError(dir, "simulate:\n  truth: {base: {q: [0, 0, 0, 1], euler: [0, 0, 0]}}\n").key,
+  EXPECT_EQ(
+      ConfigError(dir, "simulate:\n  truth: {base: {q: [0, 0, 0, 1], euler: [0, 0, 0]}}\n").key,
             "simulate.truth.base.q");
 }
 

@@ -62,7 +62,8 @@ TEST(YamlReader, TypeErrorsNameFileKeyLineAndValue) {
       "run.yaml");
   const YamlNode fit = doc.Root().Require("fit");
   const InputError e1 = CatchInputError([&] { fit.Require("max_iterations").AsInt(); });
-  EXPECT_STREQ(e1.what(), "run.yaml:2:19: key 'fit.max_iterations': expected an integer, got 'many'");
+  EXPECT_STREQ(e1.what(),
+               "run.yaml:2:19: key 'fit.max_iterations': expected an integer, got 'many'");
   EXPECT_EQ(e1.key, "fit.max_iterations");
   EXPECT_EQ(e1.line, 2);
   EXPECT_EQ(e1.position, 19);
@@ -151,7 +152,8 @@ TEST(YamlReader, DuplicateKeysAreErrors) {
 }
 
 TEST(YamlReader, ConsumedSubtreeIsNotChecked) {
-  const YamlDocument doc = YamlDocument::Parse("render: {width: 640, anything: [1, 2]}\n", "t.yaml");
+  const YamlDocument doc =
+      YamlDocument::Parse("render: {width: 640, anything: [1, 2]}\n", "t.yaml");
   const YamlNode render = doc.Root().Require("render");
   render.ConsumeAll();
   doc.CheckAllKeysUsed();
@@ -178,7 +180,8 @@ TEST(YamlReader, EmptySectionsReadAsEmpty) {
 }
 
 TEST(YamlReader, SyntaxErrorsAndBadRoot) {
-  const InputError syntax = CatchInputError([] { YamlDocument::Parse("a: [1, 2\nb: 3\n", "s.yaml"); });
+  const InputError syntax =
+      CatchInputError([] { YamlDocument::Parse("a: [1, 2\nb: 3\n", "s.yaml"); });
   EXPECT_EQ(syntax.file, "s.yaml");
   EXPECT_GT(syntax.line, 0);
   EXPECT_THAT(syntax.what(), HasSubstr("YAML syntax"));

@@ -1,0 +1,289 @@
+#include "libcalib/io/model_io.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+#include "libcalib/model/kinematics.h"
+#include "tests/io/io_test_util.h"
+
+namespace rtscalib {
+namespace {
+
+using testing_io::CatchInputError;
+using testing_io::TempDir;
+using ::testing::HasSubstr;
+
+// A non-trivial model: the ideal instrument of kinematics `k`, every block
+// perturbed, all effects that `k` can hold switched on, distortion in two
+// groups and (optionally) uncertainties everywhere.
+InstrumentModel RandomModel(Kinematics k, int zooms, bool with_sigmas, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unif(-1, 1);
+  auto small_rotation = [&](double size) {
+    return Rigid3::FromEuler(Eigen::Vector3d(unif(rng), unif(rng), unif(rng)) * size,
+                             Eigen::Vector3d(unif(rng), unif(rng), unif(rng)) * 1e-3);
+  };
+  CameraTool cam;
+  cam.width = 640;
+  cam.height = 480;
+  cam.intrinsics = {1000.0 / 3.0 * 3.1, 1005.0 / 7.0 * 7.0, 320.3, 239.7};
+  InstrumentModel m = IdealModel(k, zooms, cam);
+  m.base = PoseBlock::FromRigid(m.base.ToRigid() * small_rotation(1e-3));
+  m.edm = PoseBlock::FromRigid(m.edm.ToRigid() * small_rotation(1e-3));
+  for (CameraTool& c : m.cams) {
+    c.flange_from_cam = PoseBlock::FromRigid(c.flange_from_cam.ToRigid() * small_rotation(1e-2));
+    for (double& x : c.intrinsics) x += unif(rng);
+    c.distortion[camera::kK1] = 0.05 * unif(rng);
+    c.distortion[camera::kK2] = 0.01 * unif(rng);
+    c.distortion[camera::kP1] = 1e-3 * unif(rng);
+    c.distortion[camera::kP2] = 1e-3 * unif(rng);
+    c.distortion[camera::kK3] = 1e-3 * unif(rng);
+  }
+  if (k == Kinematics::kDh) {
+    for (DhLink& link : m.links) {
+      for (double& p : link.p) p += 1e-4 * unif(rng);
+    }
+  }
+  for (const EffectInfo& info : EffectCatalogue()) {
+    if (k == Kinematics::kDh && info.redundant_in_dh) continue;
+    if (info.effect == Effect::kRationalDistortion || info.effect == Effect::kThinPrism ||
+        info.effect == Effect::kSensorTilt) {
+      continue;
+    }
+    m.effects.Add(info.effect);
+    if (IsKinematic(info.effect)) {
+      m.EffectValue(info.effect) = {1e-5 * unif(rng), 1e-5 * unif(rng)};
+      if (info.num_params == 1) m.EffectValue(info.effect)[1] = 0;
+    }
+  }
+  m.edm_cyclic_unit_length = 1.5 / 7.0;
+  if (with_sigmas) {
+    ModelSigmas& s = m.sigmas;
+    s.valid = true;
+    auto pose_sigma = [&] {
+      PoseSigma p;
+      for (int i = 0; i < 3; ++i) {
+        p.rotation[i] = std::abs(unif(rng)) * 1e-6;
+        p.euler[i] = std::abs(unif(rng)) * 1e-6;
+        p.t[i] = std::abs(unif(rng)) * 1e-6;
+      }
+      return p;
+    };
+    s.base = pose_sigma();
+    s.edm = pose_sigma();
+    for (auto& link : s.links) {
+      for (double& x : link) x = std::abs(unif(rng)) * 1e-6;
+    }
+    for (int z = 0; z < zooms; ++z) {
+      s.cam_tools.push_back(pose_sigma());
+      s.intrinsics.push_back({0.1, 0.2, 0.3, 0.4});
+      s.distortion.emplace_back();
+      for (double& x : s.distortion.back()) x = std::abs(unif(rng)) * 1e-4;
+    }
+    // Uncertainty that could not be computed is NaN and must survive.
+    s.distortion.back()[camera::kTauY] = std::nan("");
+    for (Effect e : m.effects.List()) {
+      if (!IsKinematic(e)) continue;
+      const double a = 1e-12 * (1.5 + unif(rng)), b = 1e-12 * (1.5 + unif(rng));
+      const double c = 1e-13 * unif(rng);  // |c| < sqrt(a b): a valid covariance
+      s.effect_cov[static_cast<int>(e)] =
+          Info(e).num_params == 1 ? std::array<double, 4>{a, 0, 0, 0}
+                                  : std::array<double, 4>{a, c, c, b};
+    }
+  }
+  return m;
+}
+
+// Bitwise equality that also holds for NaN.
+void ExpectSameBits(double a, double b, const std::string& what) {
+  EXPECT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << what << ": " << a << " vs " << b;
+}
+
+template <size_t N>
+void ExpectSameBits(const std::array<double, N>& a, const std::array<double, N>& b,
+                    const std::string& what) {
+  for (size_t i = 0; i < N; ++i) ExpectSameBits(a[i], b[i], what + "[" + std::to_string(i) + "]");
+}
+
+void ExpectSameSigma(const PoseSigma& a, const PoseSigma& b, const std::string& what) {
+  ExpectSameBits(a.rotation, b.rotation, what + ".rotation");
+  ExpectSameBits(a.euler, b.euler, what + ".euler");
+  ExpectSameBits(a.t, b.t, what + ".t");
+}
+
+// Every parameter block and uncertainty comes back bit for bit, and so do
+// the predictions of every tool (the contract of model.yaml, SPEC 5).
+void ExpectRoundTrip(const InstrumentModel& m) {
+  TempDir dir;
+  const std::string path = dir.Path("model.yaml");
+  WriteModelYaml(path, m, {{"program", "rtscalib test"}, {"note", "a: b, c"}});
+  ModelMetadata metadata;
+  const InstrumentModel r = ReadModelYaml(path, &metadata);
+
+  EXPECT_EQ(metadata, (ModelMetadata{{"program", "rtscalib test"}, {"note", "a: b, c"}}));
+  EXPECT_EQ(r.kinematics, m.kinematics);
+  EXPECT_EQ(r.effects, m.effects);
+  EXPECT_EQ(r.edm_cyclic_unit_length, m.edm_cyclic_unit_length);
+  EXPECT_EQ(r.base.q, m.base.q);
+  EXPECT_EQ(r.base.t, m.base.t);
+  EXPECT_EQ(r.edm.q, m.edm.q);
+  EXPECT_EQ(r.edm.t, m.edm.t);
+  if (m.kinematics == Kinematics::kDh) {
+    for (int i = 0; i < 2; ++i) EXPECT_EQ(r.links[i].p, m.links[i].p);
+  }
+  ASSERT_EQ(r.NumZooms(), m.NumZooms());
+  for (int z = 0; z < m.NumZooms(); ++z) {
+    EXPECT_EQ(r.cams[z].width, m.cams[z].width);
+    EXPECT_EQ(r.cams[z].height, m.cams[z].height);
+    EXPECT_EQ(r.cams[z].flange_from_cam.q, m.cams[z].flange_from_cam.q);
+    EXPECT_EQ(r.cams[z].flange_from_cam.t, m.cams[z].flange_from_cam.t);
+    EXPECT_EQ(r.cams[z].intrinsics, m.cams[z].intrinsics);
+    EXPECT_EQ(r.cams[z].distortion, m.cams[z].distortion);
+  }
+  for (Effect e : m.effects.List()) {
+    if (IsKinematic(e)) {
+      EXPECT_EQ(r.EffectValue(e), m.EffectValue(e)) << Info(e).name;
+    }
+  }
+
+  EXPECT_EQ(r.sigmas.valid, m.sigmas.valid);
+  if (m.sigmas.valid) {
+    ExpectSameSigma(r.sigmas.base, m.sigmas.base, "base");
+    ExpectSameSigma(r.sigmas.edm, m.sigmas.edm, "edm");
+    if (m.kinematics == Kinematics::kDh) {
+      for (int i = 0; i < 2; ++i) ExpectSameBits(r.sigmas.links[i], m.sigmas.links[i], "links");
+    }
+    ASSERT_EQ(r.sigmas.cam_tools.size(), m.sigmas.cam_tools.size());
+    for (int z = 0; z < m.NumZooms(); ++z) {
+      ExpectSameSigma(r.sigmas.cam_tools[z], m.sigmas.cam_tools[z], "cam_tools");
+      ExpectSameBits(r.sigmas.intrinsics[z], m.sigmas.intrinsics[z], "intrinsics");
+      ExpectSameBits(r.sigmas.distortion[z], m.sigmas.distortion[z], "distortion");
+    }
+    for (Effect e : m.effects.List()) {
+      if (!IsKinematic(e)) continue;
+      ExpectSameBits(r.sigmas.effect_cov[static_cast<int>(e)],
+                     m.sigmas.effect_cov[static_cast<int>(e)], Info(e).name);
+    }
+  }
+
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> phi(0, 2 * M_PI), theta(0.1, 2 * M_PI - 0.1),
+      d(0.5, 50), u(50, 590), v(50, 430);
+  for (int i = 0; i < 200; ++i) {
+    const double p = phi(rng), t = theta(rng), dist = d(rng);
+    EXPECT_EQ(PredictEdm(r, p, t, dist), PredictEdm(m, p, t, dist));
+    for (int z = 0; z < m.NumZooms(); ++z) {
+      const double pu = u(rng), pv = v(rng);
+      EXPECT_EQ(PredictCam(r, z, p, t, pu, pv, dist), PredictCam(m, z, p, t, pu, pv, dist));
+      const Eigen::Vector3d x = PredictCam(m, z, p, t, pu, pv, dist);
+      Eigen::Vector2d pixel_m, pixel_r;
+      ASSERT_TRUE(PredictPixel(m, z, p, t, x, &pixel_m));
+      ASSERT_TRUE(PredictPixel(r, z, p, t, x, &pixel_r));
+      EXPECT_EQ(pixel_r, pixel_m);
+    }
+  }
+}
+
+TEST(ModelIo, DhRoundTripPredictsBitExactly) {
+  ExpectRoundTrip(RandomModel(Kinematics::kDh, 3, /*with_sigmas=*/true, 1));
+}
+
+TEST(ModelIo, SphericalRoundTripPredictsBitExactly) {
+  ExpectRoundTrip(RandomModel(Kinematics::kSpherical, 2, /*with_sigmas=*/true, 2));
+}
+
+TEST(ModelIo, RoundTripWithoutUncertainties) {
+  ExpectRoundTrip(RandomModel(Kinematics::kDh, 1, /*with_sigmas=*/false, 3));
+  ExpectRoundTrip(IdealModel(Kinematics::kSpherical, 1, CameraTool{}));
+}
+
+TEST(ModelIo, FileStatesReportUnitsAndEuler) {
+  TempDir dir;
+  InstrumentModel m = RandomModel(Kinematics::kDh, 1, true, 4);
+  m.EffectValue(Effect::kEdmScale)[0] = 2.5e-6;
+  WriteModelYaml(dir.Path("model.yaml"), m);
+  const YAML::Node n = YAML::LoadFile(dir.Path("model.yaml"));
+  EXPECT_EQ(n["format"].as<std::string>(), "rtscalib-model");
+  EXPECT_EQ(n["kinematics"].as<std::string>(), "dh");
+  EXPECT_EQ(n["base"]["euler"].size(), 3u);
+  bool found = false;
+  for (const YAML::Node& e : n["effects"]) {
+    if (e["name"].as<std::string>() != "edm_scale") continue;
+    found = true;
+    EXPECT_NEAR(e["report"]["m"]["value"].as<double>(), 2.5, 1e-12);
+    EXPECT_EQ(e["report"]["m"]["unit"].as<std::string>(), "ppm");
+    EXPECT_TRUE(e["report"]["m"]["sigma"].IsDefined());
+  }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(n["cameras"][0]["distortion"]["tauy"].as<double>(), 0.0);
+  EXPECT_TRUE(n["cameras"][0]["distortion_sigma"].IsDefined());
+}
+
+// Writes a model, lets `edit` change its YAML, and returns the read error.
+template <typename Edit>
+InputError EditedModelError(const TempDir& dir, Edit edit) {
+  const std::string path = dir.Path("model.yaml");
+  WriteModelYaml(path, RandomModel(Kinematics::kDh, 2, true, 6));
+  YAML::Node n = YAML::LoadFile(path);
+  edit(n);
+  std::ofstream(path) << YAML::Dump(n);
+  return CatchInputError([&] { ReadModelYaml(path); });
+}
+
+TEST(ModelIo, UnknownKeyIsAnError) {
+  TempDir dir;
+  const InputError e = EditedModelError(dir, [](YAML::Node& n) { n["cameras"][1]["fov"] = 40; });
+  EXPECT_EQ(e.key, "cameras[1].fov");
+  EXPECT_EQ(e.file, dir.Path("model.yaml"));
+  EXPECT_GT(e.line, 0);
+}
+
+TEST(ModelIo, EditedEulerMustAgreeWithQuaternion) {
+  TempDir dir;
+  const InputError e = EditedModelError(
+      dir, [](YAML::Node& n) { n["base"]["euler"] = YAML::Load("[0.1, 0, 0]"); });
+  EXPECT_EQ(e.key, "base.euler");
+  EXPECT_THAT(e.expected, HasSubstr("predictions use q"));
+}
+
+TEST(ModelIo, QuaternionMustBeUnit) {
+  TempDir dir;
+  const InputError e = EditedModelError(dir, [](YAML::Node& n) { n["edm"]["q"][0] = 0.9; });
+  EXPECT_EQ(e.key, "edm.q");
+}
+
+TEST(ModelIo, EditedReportValueMustAgreeWithSi) {
+  TempDir dir;
+  const InputError e = EditedModelError(dir, [](YAML::Node& n) {
+    for (YAML::Node effect : n["effects"]) {
+      if (effect["name"].as<std::string>() == "hz_scale") effect["report"]["s"]["value"] = 99;
+    }
+  });
+  EXPECT_THAT(e.key, HasSubstr("].report"));
+  EXPECT_THAT(e.expected, HasSubstr("predictions use si"));
+}
+
+TEST(ModelIo, StructuralErrors) {
+  TempDir dir;
+  EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n["format"] = "other"; }).key, "format");
+  EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n["cameras"][1]["zoom"] = 5; }).key,
+            "cameras[1].zoom");
+  EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n.remove("edm"); }).key, "edm");
+  EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n["effects"][0]["name"] = "wobble"; }).key,
+            "effects[0].name");
+  EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n["cameras"][0]["width"] = 0; }).key,
+            "cameras[0].width");
+  EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n["links"][0]["alpha"] = "x"; }).key,
+            "links[0].alpha");
+  // Sigmas present although the file says there are none.
+  EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n["uncertainties"] = false; }).key,
+            "base.sigma");
+}
+
+}  // namespace
+}  // namespace rtscalib
