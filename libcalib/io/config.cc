@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <set>
 
 #include "libcalib/io/errors.h"
 #include "libcalib/io/number_text.h"
