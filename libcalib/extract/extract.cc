@@ -22,7 +22,8 @@ std::string NoSweepMessage(int joint, const SweepSearch& search, const ExtractOp
     << " usable rows (face 1, zenith in [" << Num(o.min_zenith_rad * 180 / M_PI, 4) << ", "
     << Num(o.max_zenith_rad * 180 / M_PI, 4) << "] deg) of one tool, distance and pixel with "
     << (joint == 1 ? "the same theta and different phi" : "the same phi and different theta")
-    << " (Klug Sec. 3.1.2: " << (joint == 1 ? "theta = pi/2, phi over [0, 2 pi)" : "phi = 0, theta over [0, pi]")
+    << " (Klug Sec. 3.1.2: "
+    << (joint == 1 ? "theta = pi/2, phi over [0, 2 pi)" : "phi = 0, theta over [0, pi]")
     << "). " << search.usable.size() << " rows were usable; " << search.excluded.face2
     << " face-2 rows and " << search.excluded.critical_zenith
     << " rows in the critical zenith regions were excluded.";

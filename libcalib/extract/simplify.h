@@ -63,6 +63,8 @@ struct TrigForm {
   bool operator==(const TrigForm& o) const { return coeff == o.coeff; }
 };
 
+// `rotation` must return a Matrix3d (a lambda returning an Eigen product
+// expression such as `Rz(p) * Rx(t)` would dangle: declare `-> Eigen::Matrix3d`).
 TrigForm FitTrigForm(const std::function<Eigen::Matrix3d(double phi, double theta)>& rotation);
 
 struct EulerForm {

@@ -155,7 +155,8 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
       const Eigen::Vector3d x2 = x1 + (records[t.row[1]].x - x1).normalized();
       const Eigen::Vector3d x3 = x1 + (records[t.row[2]].x - x1).normalized();
       a.insert(a.end(), {ct, ct + Eigen::Vector3d::UnitX(), ct + Eigen::Vector3d::UnitY()});
-      b.insert(b.end(), {ToFlange(model, r0, x1), ToFlange(model, r0, x2), ToFlange(model, r0, x3)});
+      b.insert(b.end(),
+               {ToFlange(model, r0, x1), ToFlange(model, r0, x2), ToFlange(model, r0, x3)});
     }
   }
   const KabschResult k = Kabsch(a, b);
@@ -166,7 +167,8 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
   note << "camera tool zoom " << zoom << ": " << out.poses << " poses, principal point ("
        << Num(c.x()) << ", " << Num(c.y()) << ") "
        << (principal_point.detected ? "detected as the most shared pixel" : "from the intrinsics")
-       << ", " << (options.exact_camera_rays ? "exact back-projected rays" : "paper's unit axes (Eq. 69/70)")
+       << (options.exact_camera_rays ? ", exact back-projected rays"
+                                     : ", paper's unit axes (Eq. 69/70)")
        << ", alignment RMS " << Num(k.rms) << " m";
   if (out.intrinsics_estimated) {
     note << "; no intrinsics given: fx = " << Num(out.camera.intrinsics[0])

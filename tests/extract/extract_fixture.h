@@ -88,8 +88,8 @@ inline InstrumentModel RandomTruth(std::mt19937& rng, double offset_m, double an
   auto ang = [&] { return angle_rad * u(rng); };
   InstrumentModel m = IdealModel(Kinematics::kDh, num_zooms, CameraTool{});
   const Eigen::Vector3d small_base(ang(), ang(), M_PI * u(rng));
-  m.base = PoseBlock::FromRigid(
-      {Rx(M_PI) * RotationFromEuler<double>(small_base), 2.0 * Eigen::Vector3d(u(rng), u(rng), u(rng))});
+  const Eigen::Vector3d base_t = 2.0 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+  m.base = PoseBlock::FromRigid({Rx(M_PI) * RotationFromEuler<double>(small_base), base_t});
   m.links[0].p = {off(), -M_PI / 2 + ang(), M_PI / 2 + ang(), off()};
   m.links[1].p = {off(), ang(), ang(), off()};
   auto tool = [&] {

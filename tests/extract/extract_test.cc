@@ -68,7 +68,8 @@ TEST(ExtractDhModel, DistortedCameraWithGivenIntrinsicsIsExact) {
   std::mt19937 rng(23);
   InstrumentModel truth = RandomTruth(rng, 1e-4, 1e-3);
   truth.cams[0].intrinsics = {1210.0, 1190.0, 655.3, 470.8};
-  truth.cams[0].distortion = {-0.12, 0.03, 2e-4, -1e-4, 0.0, 0, 0, 0, 1e-4, 0, -1e-4, 0, 1e-3, -2e-3};
+  // k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4 taux tauy
+  truth.cams[0].distortion = {-0.12, 0.03, 2e-4, -1e-4, 0, 0, 0, 0, 1e-4, 0, -1e-4, 0, 1e-3, -2e-3};
   const ExtractionResult r = ExtractDhModel(PaperPlanRecords(truth), truth.cams);
   const auto e = MaxHeldOutError(truth, r.model, kHeldOutDistance);
   EXPECT_LT(e.edm, kExactM);
@@ -328,7 +329,9 @@ TEST(ExtractDhModel, LinearTrajectoryIsPrismaticAndRejected) {
   plan.sweep1_theta = 1.5;
   auto records = PaperPlanRecords(ideal, plan);
   for (Record& r : records) {
-    if (r.set == "sweep2") r.x = Eigen::Vector3d(0.1, 0.2, 0.3) + r.theta * r.d * Eigen::Vector3d(0, 0.3, 0.4);
+    if (r.set == "sweep2") {
+      r.x = Eigen::Vector3d(0.1, 0.2, 0.3) + r.theta * r.d * Eigen::Vector3d(0, 0.3, 0.4);
+    }
   }
   try {
     ExtractDhModel(records, {});
@@ -345,7 +348,9 @@ TEST(ExtractDhModel, MissingSweepIsAClearError) {
   std::vector<Record> records;
   std::uniform_real_distribution<double> a(0.3, 2.0);
   PaperPlan plan;
-  for (int i = 0; i < 40; ++i) testing::AddPose(truth, plan, 3 * a(rng), a(rng), "random", &records);
+  for (int i = 0; i < 40; ++i) {
+    testing::AddPose(truth, plan, 3 * a(rng), a(rng), "random", &records);
+  }
   try {
     ExtractDhModel(records, truth.cams);
     FAIL() << "expected ExtractionError";
@@ -359,9 +364,9 @@ TEST(ExtractDhModel, MissingCameraTripletIsAClearError) {
   std::mt19937 rng(32);
   const InstrumentModel truth = RandomTruth(rng, 1e-4, 1e-3);
   auto records = PaperPlanRecords(truth);
-  records.erase(std::remove_if(records.begin(), records.end(),
-                               [](const Record& r) { return r.tool == Tool::kCam && r.v != 480.0; }),
-                records.end());
+  // Keep only the camera rows in the principal point's row: no +1 px in v.
+  auto no_v_step = [](const Record& r) { return r.tool == Tool::kCam && r.v != 480.0; };
+  records.erase(std::remove_if(records.begin(), records.end(), no_v_step), records.end());
   try {
     ExtractDhModel(records, truth.cams);
     FAIL() << "expected ExtractionError";

@@ -93,7 +93,9 @@ TEST(FitCircle, NoisyCircleWithinStatisticalBounds) {
 
 TEST(FitCircle, CollinearPointsAreInvalid) {
   std::vector<Eigen::Vector3d> pts;
-  for (int i = 0; i < 10; ++i) pts.push_back(Eigen::Vector3d(1, 2, 3) + i * Eigen::Vector3d(1, 1, 0));
+  for (int i = 0; i < 10; ++i) {
+    pts.push_back(Eigen::Vector3d(1, 2, 3) + i * Eigen::Vector3d(1, 1, 0));
+  }
   const CircleFit fit = FitCircle(pts);
   EXPECT_FALSE(fit.valid);
   EXPECT_TRUE(std::isinf(fit.rms));
