@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace rtscalib {
@@ -15,14 +16,17 @@ TEST(ClosestPointsOfLines, SkewedLinesMeetTheCommonNormal) {
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-1, 1);
   for (int trial = 0; trial < 50; ++trial) {
-    const Line3 l0{{u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}};
+    // Directions of length 0.5 .. 1.5 at 30 .. 150 deg to each other, so
+    // that a c - b^2 = O(1) (well-conditioned Eq. 37).
+    const Eigen::Vector3d dir0 = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    const Line3 l0{{u(rng), u(rng), u(rng)}, dir0 * (1.0 + 0.5 * u(rng))};
     // Build line 1 from a known common normal of length `dist`.
     const Eigen::Vector3d d0 = l0.direction;
     const Eigen::Vector3d normal = d0.unitOrthogonal();
     const double dist = 0.5 + 0.4 * u(rng);
     const double s_true = u(rng) * 3, t_true = u(rng) * 3;
     // Direction of line 1: perpendicular to the common normal, not parallel to d0.
-    const double angle = 1.0 + u(rng);
+    const double angle = M_PI / 2 + M_PI / 3 * u(rng);
     const Eigen::Vector3d d1 = (std::cos(angle) * d0.normalized() +
                                 std::sin(angle) * normal.cross(d0).normalized()) *
                                (1.0 + u(rng) * 0.5);
