@@ -72,18 +72,39 @@ std::vector<PixelResidual> PixelResiduals(const InstrumentModel& model,
 
 namespace {
 
-bool AtPrincipalPoint(const InstrumentModel& model, const Record& r) {
-  if (r.zoom >= model.NumZooms()) return false;
-  const auto& k = model.cams[r.zoom].intrinsics;
-  return std::abs(r.u - k[2]) < 1e-6 && std::abs(r.v - k[3]) < 1e-6;
-}
+// Method A's camera points: per zoom, the recorded pixel nearest to the
+// model's principal point (within 2 px). A fitted principal point moves by a
+// fraction of a pixel, so exact equality with the recorded one cannot be asked.
+class PrincipalPixels {
+ public:
+  PrincipalPixels(const InstrumentModel& model, const std::vector<Record>& records) {
+    for (const Record& r : records) {
+      if (r.tool != Tool::kCam || r.zoom >= model.NumZooms()) continue;
+      const auto& k = model.cams[r.zoom].intrinsics;
+      const double dist = std::hypot(r.u - k[2], r.v - k[3]);
+      auto it = best_.find(r.zoom);
+      if (dist < 2.0 && (it == best_.end() || dist < it->second.first)) {
+        best_[r.zoom] = {dist, {r.u, r.v}};
+      }
+    }
+  }
+  bool Contains(const Record& r) const {
+    auto it = best_.find(r.zoom);
+    return r.tool == Tool::kCam && it != best_.end() && r.u == it->second.second.first &&
+           r.v == it->second.second.second;
+  }
+
+ private:
+  std::map<int, std::pair<double, std::pair<double, double>>> best_;
+};
 
 // Method B's EDM points off the ray (Eq. 79/80): per pose, the measured EDM
 // frame from two EDM distances and the measured camera x direction.
 void AddEdmOffAxis(const InstrumentModel& model, const std::vector<Record>& records,
-                   std::vector<double>* edm) {
+                   const PrincipalPixels& principal, std::vector<double>* edm) {
   using Key = std::tuple<int, double, double>;
   struct PoseRows {
+    std::vector<const Record*> edm, cam;
     const Record* d1 = nullptr;
     const Record* d2 = nullptr;
     const Record* c0 = nullptr;
@@ -92,17 +113,20 @@ void AddEdmOffAxis(const InstrumentModel& model, const std::vector<Record>& reco
   std::map<Key, PoseRows> poses;
   for (const Record& r : records) {
     PoseRows& p = poses[{r.face, r.phi, r.theta}];
-    if (r.tool == Tool::kEdm) {
-      if (!p.d1 || r.d < p.d1->d) {
-        if (p.d1 && (!p.d2 || p.d1->d > p.d2->d)) p.d2 = p.d1;
-        p.d1 = &r;
-      } else if (r.d > p.d1->d && (!p.d2 || r.d > p.d2->d)) {
-        p.d2 = &r;
-      }
-    } else if (r.zoom == 0 && r.d == 1.0) {
-      if (AtPrincipalPoint(model, r)) p.c0 = &r;
-      const auto& k = model.cams.empty() ? std::array<double, 4>{} : model.cams[0].intrinsics;
-      if (!model.cams.empty() && r.u > k[2] + 0.5 && std::abs(r.v - k[3]) < 1e-6) p.cu = &r;
+    if (r.tool == Tool::kEdm) p.edm.push_back(&r);
+    if (r.tool == Tool::kCam && r.zoom == 0) p.cam.push_back(&r);
+  }
+  for (auto& [key, p] : poses) {
+    for (const Record* r : p.edm) {
+      if (!p.d1 || r->d < p.d1->d) p.d1 = r;
+      if (!p.d2 || r->d > p.d2->d) p.d2 = r;
+    }
+    if (p.d1 == p.d2) p.d1 = p.d2 = nullptr;
+    for (const Record* r : p.cam) {
+      if (principal.Contains(*r) && (!p.c0 || r->d < p.c0->d)) p.c0 = r;
+    }
+    for (const Record* r : p.cam) {
+      if (p.c0 && r->d == p.c0->d && std::abs(r->u - p.c0->u - 1.0) < 0.5 && r->v == p.c0->v) p.cu = r;
     }
   }
   for (const auto& [key, p] : poses) {
@@ -127,17 +151,18 @@ void AddEdmOffAxis(const InstrumentModel& model, const std::vector<Record>& reco
 ModelErrors EvaluateRecords(const InstrumentModel& model, const std::vector<Record>& records,
                             ErrorMethod method) {
   const std::vector<RecordResidual> res = RecordResiduals(model, records);
+  const PrincipalPixels principal(model, records);
   std::vector<double> edm, cam;
   for (const RecordResidual& r : res) {
     if (!r.valid) continue;
     const Record& rec = records[r.index];
     if (rec.tool == Tool::kEdm) {
       edm.push_back(r.distance);
-    } else if (method == ErrorMethod::kB || AtPrincipalPoint(model, rec)) {
+    } else if (method == ErrorMethod::kB || principal.Contains(rec)) {
       cam.push_back(r.distance);
     }
   }
-  if (method == ErrorMethod::kB) AddEdmOffAxis(model, records, &edm);
+  if (method == ErrorMethod::kB) AddEdmOffAxis(model, records, principal, &edm);
   ModelErrors out;
   out.edm = StatsOf(edm);
   out.cam = StatsOf(cam);

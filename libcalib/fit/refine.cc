@@ -122,7 +122,8 @@ class Parameterization {
     return it != decisions_.end() && it->second.kind == Kind::kConstant;
   }
 
-  void Apply(ceres::Problem* problem) const {
+  // `with_bounds`: set Klug Eq. 98's translation windows as hard bounds.
+  void Apply(ceres::Problem* problem, bool with_bounds) const {
     for (const auto& [cp, d] : decisions_) {
       double* p = const_cast<double*>(cp);
       if (!problem->HasParameterBlock(p)) continue;
@@ -145,13 +146,29 @@ class Parameterization {
       // Klug Eq. 98: |t| <= t_max, applied as a window around the start value
       // (the extraction is good to a fraction of it), so that a station far
       // from the origin stays admissible.
-      if (d.bound_centre && options_.translation_bound_m > 0) {
+      if (with_bounds && d.bound_centre && options_.translation_bound_m > 0) {
         for (int i = 0; i < d.size; ++i) {
           problem->SetParameterLowerBound(p, i, d.bound_centre[i] - options_.translation_bound_m);
           problem->SetParameterUpperBound(p, i, d.bound_centre[i] + options_.translation_bound_m);
         }
       }
     }
+  }
+
+  // Names of translations that left their Eq. 98 window (empty if none).
+  std::vector<std::string> OutsideBounds() const {
+    std::vector<std::string> out;
+    if (options_.translation_bound_m <= 0) return out;
+    for (const auto& [p, d] : decisions_) {
+      if (!d.bound_centre) continue;
+      for (int i = 0; i < d.size; ++i) {
+        if (std::abs(p[i] - d.bound_centre[i]) > options_.translation_bound_m) {
+          out.push_back(d.name);
+          break;
+        }
+      }
+    }
+    return out;
   }
 
   // Named free blocks present in the problem (for covariance and reports).
@@ -400,6 +417,11 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   std::unique_ptr<ceres::Problem> problem;
   const InstrumentModel start = m;
   const Parameterization param(&m, start, options, &summary);
+  // Klug Eq. 98's translation bounds: Ceres's projected steps stall on this
+  // problem even when no bound is active, so the bounds are imposed as hard
+  // constraints only when an unconstrained solution leaves its window (then
+  // the refinement is repeated from the start with the bounds on).
+  bool with_bounds = false;
   for (int round = 0; round < rounds; ++round) {
     // Each round warm-starts from the previous one; bounds stay around `start`.
     ceres::Problem::Options popt;
@@ -441,7 +463,7 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
           MakeCost(f, 2 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
       refs.push_back({problem->AddResidualBlock(cost, loss(), blocks), Group::kPixel, g.indices});
     }
-    param.Apply(problem.get());
+    param.Apply(problem.get(), with_bounds);
 
     ceres::Solver::Options sopt;
     sopt.linear_solver_type = ceres::DENSE_QR;
@@ -455,6 +477,22 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
     sopt.minimizer_progress_to_stdout = options.verbose;
     ceres::Solve(sopt, problem.get(), &solver_summary);
     if (round == 0) summary.initial_cost = solver_summary.initial_cost;
+    if (!with_bounds) {
+      const std::vector<std::string> outside = param.OutsideBounds();
+      if (!outside.empty()) {
+        std::string names;
+        for (const std::string& n : outside) names += (names.empty() ? "" : ", ") + n;
+        summary.message += " Eq. 98 bounds (" + std::to_string(options.translation_bound_m) +
+                           " m around the start) imposed: " + names + " left its window;";
+        with_bounds = true;
+        m = start;
+        sigma[0] = options.sigma_edm_m;
+        sigma[1] = options.sigma_cam_m;
+        sigma[2] = options.sigma_pixel_px;
+        round = -1;  // start over, bounded
+        continue;
+      }
+    }
 
     if (!options.reestimate_sigmas) break;
     // Variance-component estimate per group: s0^2 = sum r^2 / redundancy,

@@ -27,7 +27,12 @@ struct FitOptions {
   RobustLoss loss = RobustLoss::kNone;
   double loss_scale = 3.0;        // in sigmas
   int max_iterations = 200;
-  double translation_bound_m = 0.01;  // Klug Eq. 98 t_min/t_max for links and tools
+  // Klug Eq. 98's |t| <= t_max, here a window of +- this around the start
+  // (extraction) value of every translation block. Klug used 1e-2 m around
+  // zero; with noisy records the extracted camera translation is itself only
+  // good to about (1 m ray) x (rotation error of the 1-px triplet, ~1e-2 rad),
+  // so the default window is 0.1 m. 0 disables the bounds.
+  double translation_bound_m = 0.1;
   bool fit_intrinsics = false;
   // Zenith limits outside of which rows are excluded (critical regions, SPEC 1).
   double min_zenith_rad = 10.0 * M_PI / 180.0;
