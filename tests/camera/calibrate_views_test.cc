@@ -301,8 +301,9 @@ TEST(CalibrateViews, RecoversFromASingleBoard) {
 }
 
 // Gaussian pixel noise: the RMS estimates the noise (sqrt(2) sigma for two
-// coordinates, less the fitted degrees of freedom) and intrinsics stay within
-// a few standard errors (about 0.1 px here for sigma = 0.3 px).
+// coordinates, times sqrt(1 - unknowns / equations) ~ 0.985 here) and the
+// intrinsics stay within 1 px (seen: ~0.4 px; with every shot's translation
+// free, focal length trades off against depth at this 65 degree field of view).
 TEST(CalibrateViews, NoisyPixels) {
   Truth truth;
   truth.distortion[kK1] = -0.12;
@@ -314,6 +315,11 @@ TEST(CalibrateViews, NoisyPixels) {
   EXPECT_TRUE(cal.converged);
   EXPECT_NEAR(cal.rms_px, std::sqrt(2.0) * sigma, 0.05);
   for (int i = 0; i < kNumIntrinsics; ++i) EXPECT_NEAR(cal.intrinsics[i], truth.intrinsics[i], 1.0) << i;
+  std::printf("[ figures  ] noise 0.3 px: fx fy cx cy errors %.3f %.3f %.3f %.3f px, k1 k2 errors "
+              "%.2g %.2g\n",
+              cal.intrinsics[0] - truth.intrinsics[0], cal.intrinsics[1] - truth.intrinsics[1],
+              cal.intrinsics[2] - truth.intrinsics[2], cal.intrinsics[3] - truth.intrinsics[3],
+              cal.distortion[kK1] - truth.distortion[kK1], cal.distortion[kK2] - truth.distortion[kK2]);
 }
 
 // ---------------------------------------------------------------------------
