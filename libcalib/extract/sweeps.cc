@@ -153,7 +153,9 @@ std::vector<std::optional<PrincipalPoint>> FindPrincipalPoints(
         auto it = count.find({k.first + du, k.second + dv});
         return it == count.end() ? 0 : it->second;
       };
-      return std::make_pair(count.at(k), std::min(at(step, 0), at(0, step)));
+      // Triplet centres first (rows at +1 px in u and v exist), then the count.
+      const int triplets = std::min(at(step, 0), at(0, step));
+      return std::make_tuple(triplets > 0, count.at(k), triplets);
     };
     auto best = count.begin()->first;
     for (const auto& [k, n] : count) {

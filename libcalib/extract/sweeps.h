@@ -69,9 +69,11 @@ struct PrincipalPoint {
 };
 
 // One entry per zoom level 0 .. max(cameras.size(), largest camera-row zoom + 1) - 1:
-// (cx, cy) of cameras[z] when given; otherwise the pixel shared by the most
-// usable camera rows of that zoom (ties: the pixel whose +1 px neighbours in u
-// and in v occur most often, i.e. the centre of the paper's pixel triplet);
+// (cx, cy) of cameras[z] when given; otherwise detected from the usable
+// camera rows of that zoom: the pixel shared by the most rows among the
+// pixels whose +1 px neighbours in u and in v also occur (centres of the
+// paper's pixel triplet, Eq. 67; rows elsewhere in the image, e.g. a grid, are
+// not candidates), or the most shared pixel when no triplet exists;
 // std::nullopt when the zoom has neither intrinsics nor camera rows.
 std::vector<std::optional<PrincipalPoint>> FindPrincipalPoints(
     const std::vector<Record>& records, const std::vector<CameraTool>& cameras,

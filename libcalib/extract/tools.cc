@@ -166,7 +166,8 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
   std::ostringstream note;
   note << "camera tool zoom " << zoom << ": " << out.poses << " poses, principal point ("
        << Num(c.x()) << ", " << Num(c.y()) << ") "
-       << (principal_point.detected ? "detected as the most shared pixel" : "from the intrinsics")
+       << (principal_point.detected ? "detected (most shared triplet centre)"
+                                    : "from the intrinsics")
        << (options.exact_camera_rays ? ", exact back-projected rays"
                                      : ", paper's unit axes (Eq. 69/70)")
        << ", alignment RMS " << Num(k.rms) << " m";
