@@ -471,9 +471,13 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
     sopt.num_threads = options.num_threads;
     // Tight enough that exact data are fitted to round-off (the 1e-9 m
     // held-out test), loose enough not to spin on round-off noise.
-    sopt.function_tolerance = 1e-12;
+    sopt.function_tolerance = 1e-10;
     sopt.gradient_tolerance = 1e-14;
-    sopt.parameter_tolerance = 1e-12;
+    sopt.parameter_tolerance = 1e-10;
+    // The start (extraction) is close: begin near Gauss-Newton instead of
+    // growing the trust region from Ceres's default 1e4 over many iterations
+    // along the weakly determined directions (camera roll from 1-px rows).
+    sopt.initial_trust_region_radius = 1e10;
     sopt.minimizer_progress_to_stdout = options.verbose;
     ceres::Solve(sopt, problem.get(), &solver_summary);
     if (round == 0) summary.initial_cost = solver_summary.initial_cost;
