@@ -30,6 +30,25 @@ TEST(FindPrincipalPoints, FromIntrinsicsOrDetected) {
   EXPECT_TRUE(FindPrincipalPoints({}, {}, ExtractOptions()).empty());
 }
 
+// Rows elsewhere in the image (a grid pixel at more poses than the triplet)
+// do not fool the detection: triplet centres come first.
+TEST(FindPrincipalPoints, TripletCentreBeatsMoreFrequentGridPixels) {
+  auto records = PaperPlanRecords(kIdeal);
+  for (int i = 0; i < 200; ++i) {
+    Record r;
+    r.tool = Tool::kCam;
+    r.phi = 0.01 * i;
+    r.theta = 1.0;
+    r.u = 128.0;
+    r.v = 96.0;
+    r.x = PredictCam(kIdeal, 0, r.phi, r.theta, r.u, r.v, 1.0);
+    records.push_back(r);
+  }
+  const auto pp = FindPrincipalPoints(records, {}, ExtractOptions());
+  ASSERT_EQ(pp.size(), 1u);
+  EXPECT_EQ(pp[0]->pixel, Eigen::Vector2d(640, 480));
+}
+
 TEST(FindSweeps, FindsBothJointsAndCountsExclusions) {
   const auto records = PaperPlanRecords(kIdeal);
   const auto pp = FindPrincipalPoints(records, kIdeal.cams, ExtractOptions());
