@@ -16,6 +16,10 @@
 //   y'' = y' radial + p1 (r2 + 2y'^2) + 2 p2 x'y' + s3 r2 + s4 r2^2
 //   [xt yt zt] = Tilt(taux, tauy) [x'' y'' 1]     (cv::computeTiltProjectionMatrix)
 //   u = fx xt/zt + cx,  v = fy yt/zt + cy
+// This is the camera inside Klug et al. Eq. 12 (F_CAM, back-projection) and
+// Eq. 62 (projection); units: pixels, metres, radians (taux, tauy).
+// Valid region: projection for Z > 0; back-projection inside the trusted
+// region of MaxTrustedRadius below (docs/camera.md has figures and examples).
 #pragma once
 
 #include <cmath>
@@ -112,9 +116,10 @@ double MaxTrustedDistortedRadius(const double* dist);
 //   - reproduces the distorted point to 1e-12 (normalised units, ~1e-9 px),
 //   - lies inside the trusted region: r < MaxTrustedRadius(dist), and
 //   - has a positive Jacobian determinant of the full distortion map (so the
-//     tangential, thin-prism terms have not folded the image either).
-// Works with ceres::Jet: derivatives are those of the converged solution
-// (implicit function theorem), because Newton's update propagates them too.
+//     tangential and thin-prism terms have not folded the image either).
+// Works with ceres::Jet: a final full Newton step at the converged point makes
+// the derivatives exactly those of the implicit function theorem,
+// -J^-1 d(distortion)/d(params), whatever path the iteration took.
 template <typename T>
 bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
                     int max_iterations = 20);
