@@ -14,7 +14,7 @@
 #include "libcalib/model/kinematics.h"
 #include "libcalib/model/observations.h"
 
-namespace rtscalib::testing {
+namespace rtscalib::fixture {
 
 // Klug Sec. 4 plan: sweep1 theta = pi/2, phi = 2 pi k / n (k < n); sweep2
 // phi = phi2, theta = pi k / (n - 1) (k <= n - 1); at each pose EDM at every
@@ -142,4 +142,4 @@ inline HeldOutError MaxHeldOutError(const InstrumentModel& truth, const Instrume
   return e;
 }
 
-}  // namespace rtscalib::testing
+}  // namespace rtscalib::fixture

@@ -45,6 +45,7 @@ TEST(Simplify, Tables1And2SnapToEq90) {
   for (int zoom : {-1, 0}) {  // EDM and camera tool (identical in Table 2)
     const SimplifiedModel s = Simplify(Tables1And2(), zoom);
     EXPECT_TRUE(s.rotation.exact);
+    // Least squares on exact quarter-turn data: coefficients off by round-off.
     EXPECT_LT(s.rotation.max_rounding, 1e-9);
     EXPECT_EQ(s.rotation.ToString(), kEq90);
     ASSERT_TRUE(s.euler.has_value());
@@ -76,8 +77,8 @@ TEST(Simplify, SnappedParametersAreEq85To88) {
 
 // End to end: extract the PLT 300 of Tables 6/7, simplify, get Eq. 90.
 TEST(Simplify, ExtractedPlt300SimplifiesToEq90) {
-  const InstrumentModel truth = testing::Plt300Truth();
-  const ExtractionResult r = ExtractDhModel(testing::PaperPlanRecords(truth), truth.cams);
+  const InstrumentModel truth = fixture::Plt300Truth();
+  const ExtractionResult r = ExtractDhModel(fixture::PaperPlanRecords(truth), truth.cams);
   for (int zoom : {-1, 0}) {
     const SimplifiedModel s = Simplify(r.model, zoom);
     EXPECT_EQ(s.rotation.ToString(), kEq90) << zoom;

@@ -7,8 +7,8 @@
 namespace rtscalib {
 namespace {
 
-using testing::PaperPlan;
-using testing::PaperPlanRecords;
+using fixture::PaperPlan;
+using fixture::PaperPlanRecords;
 
 const InstrumentModel kIdeal = IdealModel(Kinematics::kDh, 2, CameraTool{});
 

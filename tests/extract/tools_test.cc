@@ -36,8 +36,8 @@ TEST(BaseFromFirstFrame, IsTheFrameItself) {
 // EDM up to its roll about the ray, which is a convention).
 TEST(ExtractTools, RecoverTheTruthToolsGivenTheChain) {
   std::mt19937 rng(3);
-  const InstrumentModel truth = testing::RandomTruth(rng, 1e-3, 1e-2);
-  const auto records = testing::PaperPlanRecords(truth);
+  const InstrumentModel truth = fixture::RandomTruth(rng, 1e-3, 1e-2);
+  const auto records = fixture::PaperPlanRecords(truth);
   const auto rows = AllRows(records);
   const PrincipalPoint pp{{640, 480}, false};
   InstrumentModel chain = truth;
@@ -68,9 +68,9 @@ TEST(ExtractTools, RecoverTheTruthToolsGivenTheChain) {
 // No camera: the EDM x axis comes from the flange x axis.
 TEST(ExtractTools, EdmWithoutCameraUsesTheFlangeX) {
   const InstrumentModel ideal = IdealModel(Kinematics::kDh, 0, CameraTool{});
-  testing::PaperPlan plan;
+  fixture::PaperPlan plan;
   plan.cam = false;
-  const auto records = testing::PaperPlanRecords(ideal, plan);
+  const auto records = fixture::PaperPlanRecords(ideal, plan);
   const auto edm = ExtractEdmTool(records, AllRows(records), ideal, -1, ExtractOptions());
   ASSERT_TRUE(edm.has_value());
   EXPECT_NE(edm->x_reference.find("flange x (no camera)"), std::string::npos);
