@@ -119,7 +119,12 @@ ExtractionResult ExtractDhModel(const std::vector<Record>& records,
   for (int z = 0; z < num_zooms; ++z) {
     const CameraTool* given = z < static_cast<int>(cameras.size()) ? &cameras[z] : nullptr;
     if (given) m.cams[z] = *given;
-    if (!out.principal_points[z]) continue;
+    if (!out.principal_points[z]) {
+      notes.push_back("zoom " + std::to_string(z) +
+                      ": no camera given and no usable camera rows; its camera is left at the "
+                      "defaults");
+      continue;
+    }
     const auto cam = ExtractCameraTool(records, search.usable, m, z, *out.principal_points[z],
                                        given, options);
     if (!cam) {

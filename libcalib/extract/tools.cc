@@ -98,13 +98,17 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
       }
     }
   }
-  if (triplets.empty()) {
+  // Without any triplet, known intrinsics still give exact camera-frame
+  // points for every row (header).
+  const bool all_rows = triplets.empty() && given && options.exact_camera_rays;
+  if (triplets.empty() && !all_rows) {
     std::ostringstream s;
     s << "cannot extract the camera tool of zoom " << zoom << ": " << rows.size()
       << " usable camera rows, but no pose has rows at the principal point (" << Num(c.x())
       << ", " << Num(c.y()) << ")" << (principal_point.detected ? " (detected)" : "")
       << " and at +1 px in u and in v with the same ray length (Klug Sec. 3.1.10, Eq. 67). "
-         "Record F_CAM at these three pixels at each pose, or give the camera's intrinsics.";
+         "Record F_CAM at these three pixels at each pose, or give the camera's intrinsics "
+         "(then every camera row is used, with exact_camera_rays).";
     throw ExtractionError(s.str());
   }
 
@@ -132,22 +136,27 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
   }
 
   std::vector<Eigen::Vector3d> a, b;
+  // Exact correspondence of one row: d * ray(u, v) in the camera frame.
+  auto add_exact = [&](const Record& r) {
+    const double pixel[2] = {r.u, r.v};
+    double ray[3];
+    if (!camera::PixelToRay(out.camera.intrinsics.data(), out.camera.distortion.data(), pixel,
+                            ray)) {
+      throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
+                            ": pixel (" + Num(r.u) + ", " + Num(r.v) + ") of line " +
+                            std::to_string(r.line) +
+                            " cannot be undistorted with the given distortion");
+    }
+    a.push_back(r.d * Eigen::Vector3d(ray[0], ray[1], ray[2]));
+    b.push_back(ToFlange(model, r, r.x));
+  };
+  if (all_rows) {
+    for (int i : rows) add_exact(records[i]);
+  }
   for (const Triplet& t : triplets) {
     const Record& r0 = records[t.row[0]];
     if (options.exact_camera_rays) {
-      for (int k = 0; k < 3; ++k) {
-        const Record& r = records[t.row[k]];
-        const double pixel[2] = {r.u, r.v};
-        double ray[3];
-        if (!camera::PixelToRay(out.camera.intrinsics.data(), out.camera.distortion.data(), pixel,
-                                ray)) {
-          throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
-                                ": pixel (" + Num(r.u) + ", " + Num(r.v) +
-                                ") cannot be undistorted with the given distortion");
-        }
-        a.push_back(t.d * Eigen::Vector3d(ray[0], ray[1], ray[2]));
-        b.push_back(ToFlange(model, r, r.x));
-      }
+      for (int k = 0; k < 3; ++k) add_exact(records[t.row[k]]);
     } else {
       // Eq. 69/70: unit axes from the principal-point row.
       const Eigen::Vector3d ct(0, 0, t.d);
@@ -159,12 +168,28 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
                {ToFlange(model, r0, x1), ToFlange(model, r0, x2), ToFlange(model, r0, x3)});
     }
   }
+  if (a.size() < 3) {
+    throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
+                          ": only " + std::to_string(a.size()) +
+                          " usable camera rows (need 3 at different pixels or ray lengths)");
+  }
   const KabschResult k = Kabsch(a, b);
+  if (k.rank < 2) {
+    throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
+                          ": its " + std::to_string(rows.size()) +
+                          " usable camera rows lie on one line in the camera frame (one "
+                          "pixel direction only); record the principal point and +1 px in u "
+                          "and in v (Klug Eq. 67)");
+  }
   out.camera.flange_from_cam = PoseBlock::FromRigid(k.b_from_a);
-  out.poses = static_cast<int>(triplets.size());
+  out.poses = all_rows ? static_cast<int>(
+                             GroupByPose(records, rows, options.angle_tolerance_rad).size())
+                       : static_cast<int>(triplets.size());
   out.rms = k.rms;
   std::ostringstream note;
-  note << "camera tool zoom " << zoom << ": " << out.poses << " poses, principal point ("
+  note << "camera tool zoom " << zoom << ": " << out.poses << " poses"
+       << (all_rows ? " (no pixel triplet: every camera row, exact rays)" : "")
+       << ", principal point ("
        << Num(c.x()) << ", " << Num(c.y()) << ") "
        << (principal_point.detected ? "detected (most shared triplet centre)"
                                     : "from the intrinsics")

@@ -21,6 +21,9 @@
 //                          ends at d [1/f, 0, 1] (Eq. 72/73 drop the length
 //                          correction sqrt(1 + 1/f^2)); the normalised axis is
 //                          then tilted towards -z by ~1/(2 f) rad.
+// When no pose has the triplet but the intrinsics are given (and exact rays
+// are on), every usable camera row of the zoom is a correspondence
+// d * ray(u, v) <-> x~: exact too, and it needs no particular pixels.
 // Without given intrinsics, fx and fy are estimated from the chord between
 // the rays through c and c + [1, 0] (c + [0, 1]):
 //   f = 1 / tan(2 asin(|x_2 - x_1| / (2 d))),
@@ -68,7 +71,8 @@ struct CameraToolEstimate {
 // `given` is the configured camera of this zoom (nullptr: none; then the
 // intrinsics are estimated as above and the distortion is zero).
 // Returns std::nullopt when the zoom has no usable camera rows at all; throws
-// ExtractionError when it has rows but no complete triplet.
+// ExtractionError when its rows cannot give the tool (no complete triplet and
+// no intrinsics, or rows along a single camera-frame line).
 std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& records,
                                                     const std::vector<int>& usable,
                                                     const InstrumentModel& model, int zoom,

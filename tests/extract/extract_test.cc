@@ -397,13 +397,46 @@ TEST(ExtractDhModel, MissingCameraTripletIsAClearError) {
   // Keep only the camera rows in the principal point's row: no +1 px in v.
   auto no_v_step = [](const Record& r) { return r.tool == Tool::kCam && r.v != 480.0; };
   records.erase(std::remove_if(records.begin(), records.end(), no_v_step), records.end());
-  try {
-    ExtractDhModel(records, truth.cams);
-    FAIL() << "expected ExtractionError";
-  } catch (const ExtractionError& e) {
-    EXPECT_THAT(std::string(e.what()), HasSubstr("camera tool of zoom 0"));
-    EXPECT_THAT(std::string(e.what()), HasSubstr("+1 px in u and in v"));
+  // With intrinsics every row is used, but these lie on one camera-frame line.
+  for (const std::vector<CameraTool>& cams : {truth.cams, std::vector<CameraTool>{}}) {
+    try {
+      ExtractDhModel(records, cams);
+      FAIL() << "expected ExtractionError";
+    } catch (const ExtractionError& e) {
+      EXPECT_THAT(std::string(e.what()), HasSubstr("camera tool of zoom 0"));
+      EXPECT_THAT(std::string(e.what()), HasSubstr("+1 px in u and in v"));
+    }
   }
+}
+
+// Camera rows spread over the image but no pixel triplet: with the
+// intrinsics known, every row is an exact correspondence.
+TEST(ExtractDhModel, CameraRowsWithoutTripletsUseEveryRowGivenIntrinsics) {
+  std::mt19937 rng(34);
+  InstrumentModel truth = RandomTruth(rng, 1e-4, 1e-3);
+  truth.cams[0].distortion[camera::kK1] = -0.1;
+  PaperPlan plan;
+  plan.cam = false;
+  auto records = PaperPlanRecords(truth, plan);
+  std::uniform_real_distribution<double> px(50.0, 1200.0), py(50.0, 900.0), d(1.0, 3.0);
+  const size_t n = records.size();
+  for (size_t i = 0; i < n; ++i) {
+    if (records[i].d != 1.0) continue;
+    for (int k = 0; k < 2; ++k) {
+      Record r = records[i];
+      r.tool = Tool::kCam;
+      r.u = px(rng);
+      r.v = py(rng);
+      r.d = d(rng);
+      r.x = PredictCam(truth, 0, r.phi, r.theta, r.u, r.v, r.d);
+      records.push_back(r);
+    }
+  }
+  const ExtractionResult r = ExtractDhModel(records, truth.cams);
+  EXPECT_EQ(r.camera_poses[0], 24);
+  const auto e = MaxHeldOutError(truth, r.model, kHeldOutDistance);
+  EXPECT_LT(e.edm, kExactM);
+  EXPECT_LT(e.cam, kExactM);
 }
 
 TEST(ExtractDhModel, BadOptionsAreRejected) {
