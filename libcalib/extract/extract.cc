@@ -84,10 +84,9 @@ ExtractionResult ExtractDhModel(const std::vector<Record>& records,
                             options.axis_tolerances, &cp23);
   out.joints[0].constellation = cp12.constellation;
   out.joints[0].next_axis_distance = cp12.distance;
-  out.joints[0].next_axis_angle = std::asin(std::min(1.0, cp12.sin_angle));
-  if (out.joints[0].axis.dot(out.joints[1].axis) < 0) {
-    out.joints[0].next_axis_angle = M_PI - out.joints[0].next_axis_angle;
-  }
+  const Eigen::Vector3d& z1 = out.frames[0].z;
+  const Eigen::Vector3d& z2 = out.frames[1].z;
+  out.joints[0].next_axis_angle = std::atan2(z1.cross(z2).norm(), z1.dot(z2));
   out.joints[1].constellation = cp23.constellation;
   notes.push_back(std::string("axes 1 and 2: ") + LineConstellationName(cp12.constellation) +
                   ", closest distance " + Num(cp12.distance, 3) + " m, angle " +

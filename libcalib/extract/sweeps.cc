@@ -243,14 +243,14 @@ SweepSearch FindSweeps(const std::vector<Record>& records,
     }
   }
 
-  // Choice (header): lexicographic preference, then a quality score.
+  // Choice (see the header).
   auto rank = [&](const Sweep& s) {
     const std::string& hint = s.joint == 1 ? options.joint1_set_hint : options.joint2_set_hint;
     const bool at_principal_point = s.pixel_offset.norm() <= options.pixel_tolerance_px;
     double quality = std::sqrt(static_cast<double>(s.NumPoints()));
     if (s.joint == 1) quality *= std::abs(std::sin(s.constant_control));
     const double span = s.Control(records, s.NumPoints() - 1) - s.Control(records, 0);
-    // Larger is better in every component but the first four.
+    // Compared lexicographically, smaller preferred (quality and span negated).
     return std::make_tuple(s.tool == Tool::kEdm ? 0 : 1, at_principal_point ? 0 : 1, s.zoom,
                            std::llround(s.d / options.distance_tolerance_m),
                            !hint.empty() && s.set == hint ? 0 : 1, -quality, -span);
