@@ -1,5 +1,6 @@
 #include "libcalib/sim/simulator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -183,6 +184,45 @@ void AimAt(const Eigen::Vector3d& origin, const Eigen::Vector3d& target, double*
   *theta = std::acos(std::clamp(v.z() / v.norm(), -1.0, 1.0));
 }
 
+// How a board looks from the station at one zoom: angular half extents of
+// the board, of one tag and of the field of view [rad].
+struct BoardView {
+  int board = 0;
+  double board_u = 0, board_v = 0, tag = 0;
+  double fov_u = 0, fov_v = 0;
+  // Tags across the image width: a board "fills the image" usefully when
+  // whole tags fit (>= ~2.5 across, else most shots show < 8 corners) and the
+  // board is not a speck (it spans >= 1/4 of the view).
+  double TagsAcross() const { return fov_u / tag; }
+  double Fill() const { return std::max(board_u / fov_u, board_v / fov_v); }
+  bool Usable() const { return TagsAcross() >= 2.5 && Fill() >= 0.25; }
+};
+
+BoardView ViewOfBoard(const TagBoard& b, int index, const Eigen::Vector3d& origin,
+                      const CameraTool& cam) {
+  BoardView v;
+  v.board = index;
+  const double dist = (b.CentreInRef() - origin).norm();
+  v.board_u = std::atan2(0.5 * (b.cols * b.tag_size + (b.cols - 1) * b.spacing), dist);
+  v.board_v = std::atan2(0.5 * (b.rows * b.tag_size + (b.rows - 1) * b.spacing), dist);
+  v.tag = std::atan2(0.5 * b.tag_size, dist);
+  v.fov_u = std::atan2(0.5 * cam.width, cam.intrinsics[0]);
+  v.fov_v = std::atan2(0.5 * cam.height, cam.intrinsics[1]);
+  return v;
+}
+
+// Shot planning (docs/refinement.md): for every zoom level the boards whose
+// tags fit the view several times and that span a good part of it are used
+// (the best one alone when none qualifies, so every zoom gets shots). Each
+// board gets `shots_per_board` pointings per face on a stratified pattern:
+//   board larger than `fill` of the view: the aim wanders over the board, so
+//     every image is full of tags;
+//   board smaller: the board wanders over the image, so the shots together
+//     cover the whole image (corners and edges too, where distortion shows).
+// Offsets are stratified over a ceil(sqrt(n)) x ceil(sqrt(n)) grid, with a
+// uniform jitter of `pointing_jitter` cells, so that a few shots already span
+// the image. Face-2 shots use the face-2 readings of their own face-1
+// pointings (the same pattern, fresh jitter).
 void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedData* data) {
   const InstrumentModel& truth = o.truth;
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -192,27 +232,42 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
   int shot_index = 0;
   for (int zoom : o.plan.zooms) {
     const CameraTool& cam = truth.cams.at(zoom);
-    const double fov_u = std::atan2(0.5 * cam.width, cam.intrinsics[0]);
-    const double fov_v = std::atan2(0.5 * cam.height, cam.intrinsics[1]);
-    for (int face : o.plan.faces) {
+    std::vector<BoardView> views;
+    for (size_t b = 0; b < o.targets.boards.size(); ++b) {
+      const BoardView v = ViewOfBoard(o.targets.boards[b], static_cast<int>(b), origin, cam);
+      if (v.Usable()) views.push_back(v);
+    }
+    if (views.empty()) {
+      // None fits well: the board closest to filling the view with whole tags.
+      double best = -1e300;
       for (size_t b = 0; b < o.targets.boards.size(); ++b) {
-        const TagBoard& board = o.targets.boards[b];
-        const Eigen::Vector3d centre = board.CentreInRef();
-        const double dist = (centre - origin).norm();
-        const double half_w = 0.5 * (board.cols * board.tag_size + (board.cols - 1) * board.spacing);
-        const double half_h = 0.5 * (board.rows * board.tag_size + (board.rows - 1) * board.spacing);
-        // Angular half extents of the board and of the field of view.
-        const double board_u = std::atan2(half_w, dist), board_v = std::atan2(half_h, dist);
-        // Aim offsets: when the board is larger than the view, wander over the
-        // board so each image is full of tags; when smaller, move the board
-        // around the image so the shots span the image.
-        const double span_u = std::abs(board_u - fov_u * o.shots.fill) + o.shots.pointing_jitter * fov_u * 0.2;
-        const double span_v = std::abs(board_v - fov_v * o.shots.fill) + o.shots.pointing_jitter * fov_v * 0.2;
+        const BoardView v = ViewOfBoard(o.targets.boards[b], static_cast<int>(b), origin, cam);
+        const double score = -std::abs(std::log(std::max(v.TagsAcross(), 1e-9) / 4.0)) -
+                             std::abs(std::log(std::max(v.Fill(), 1e-9)));
+        if (score > best) {
+          best = score;
+          views.assign(1, v);
+        }
+      }
+    }
+    const int n = o.shots.shots_per_board;
+    const int cells = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+    for (int face : o.plan.faces) {
+      for (const BoardView& view : views) {
         double phi0, theta0;
-        AimAt(origin, centre, &phi0, &theta0);
-        for (int s = 0; s < o.shots.shots_per_board; ++s) {
-          double phi = phi0 + uniform(rng) * span_u / std::max(std::sin(theta0), 0.2);
-          double theta = theta0 + uniform(rng) * span_v;
+        AimAt(origin, o.targets.boards[view.board].CentreInRef(), &phi0, &theta0);
+        // Half range of the aim offsets (angles off the board centre).
+        const double range_u = std::abs(view.board_u - o.shots.fill * view.fov_u);
+        const double range_v = std::abs(view.board_v - o.shots.fill * view.fov_v);
+        for (int s = 0; s < n; ++s) {
+          // Cell centre in [-1, 1], jittered within its cell.
+          const int iu = s % cells, iv = (s / cells) % cells;
+          const double cu = cells == 1 ? 0.0 : -1.0 + 2.0 * (iu + 0.5) / cells;
+          const double cv = cells == 1 ? 0.0 : -1.0 + 2.0 * (iv + 0.5) / cells;
+          const double ju = cu + o.shots.pointing_jitter * uniform(rng) / cells;
+          const double jv = cv + o.shots.pointing_jitter * uniform(rng) / cells;
+          double phi = phi0 + ju * range_u / std::max(std::sin(theta0), 0.2);
+          double theta = theta0 + jv * range_v;
           if (face == 2) OtherFace(phi, theta, &phi, &theta);
           const std::string shot = "z" + std::to_string(zoom) + "f" + std::to_string(face) + "s" +
                                    std::to_string(shot_index++);

@@ -51,12 +51,16 @@ struct AcquisitionPlan {
   std::string Check() const;
 };
 
-// Shots of known targets: for every zoom and face, the instrument aims at
-// each board from several directions so that the board fills the image.
+// Shots of known targets (simulator.cc, SimulatePixels): for every zoom and
+// face the instrument aims at the boards that suit that zoom (whole tags fit
+// the view >= 2.5 times across and the board spans >= 1/4 of it; the best
+// board when none does) from a stratified pattern of directions, so that the
+// images are full of tags and together cover the whole image. Shots showing
+// fewer than 8 corners are not taken.
 struct ShotPlan {
-  int shots_per_board = 4;       // per zoom and face
-  double fill = 0.7;             // fraction of the image the board should span
-  double pointing_jitter = 0.3;  // fraction of the field of view to vary aim by
+  int shots_per_board = 4;       // per usable board, zoom and face
+  double fill = 0.7;             // fraction of the view (half extent) the pattern is sized by
+  double pointing_jitter = 0.3;  // jitter of each aim within its pattern cell (fraction of a cell)
 };
 
 struct SimulationOptions {

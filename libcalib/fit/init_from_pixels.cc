@@ -1,0 +1,302 @@
+#include "libcalib/fit/init_from_pixels.h"
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "libcalib/eval/error_measures.h"
+#include "libcalib/model/kinematics.h"
+
+namespace rtscalib {
+namespace {
+
+// Nearest rotation (Frobenius) to a 3x3 matrix: the chordal mean of the
+// rotations that were summed into it.
+Eigen::Matrix3d ProjectToRotation(const Eigen::Matrix3d& m) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  return svd.matrixU() * d * svd.matrixV().transpose();
+}
+
+Eigen::Vector3d LogRotation(const Eigen::Matrix3d& r) {
+  const Eigen::AngleAxisd aa(r);
+  return aa.angle() * aa.axis();
+}
+
+Eigen::Matrix3d IdealLineOfSight(double phi, double theta) { return Rz(-phi) * Rx(-theta); }
+
+// One shot's pose from OpenCV and its readings.
+struct PosedShot {
+  int zoom;
+  double phi, theta;
+  Rigid3 ref_from_cam;
+};
+
+CameraTool SizeFor(const InitFromPixelsOptions& o, int zoom,
+                   const std::vector<PixelObservation>& pixels, std::vector<std::string>* notes) {
+  if (zoom < static_cast<int>(o.cameras.size())) return o.cameras[zoom];
+  CameraTool cam;
+  double umax = 0, vmax = 0;
+  for (const PixelObservation& p : pixels) {
+    umax = std::max(umax, p.uv.x());
+    vmax = std::max(vmax, p.uv.y());
+  }
+  // Observed corners come within a few pixels of the border; round up to even.
+  cam.width = 2 * static_cast<int>(std::ceil((umax + 1.0) / 2.0));
+  cam.height = 2 * static_cast<int>(std::ceil((vmax + 1.0) / 2.0));
+  notes->push_back("zoom " + std::to_string(zoom) + ": no model.cameras entry; image size " +
+                   std::to_string(cam.width) + " x " + std::to_string(cam.height) +
+                   " px taken from the extent of its pixels");
+  return cam;
+}
+
+std::map<int, std::vector<PixelObservation>> ByZoom(const std::vector<PixelObservation>& pixels,
+                                                    const InitFromPixelsOptions& o, int* excluded) {
+  std::map<int, std::vector<PixelObservation>> out;
+  for (const PixelObservation& p : pixels) {
+    if (InCriticalRegion(p.theta, o.min_zenith_rad, o.max_zenith_rad)) {
+      ++*excluded;
+      continue;
+    }
+    out[p.zoom].push_back(p);
+  }
+  return out;
+}
+
+camera::CalibrateViewsOptions ViewsOptions(const InitFromPixelsOptions& o) {
+  camera::CalibrateViewsOptions v;
+  v.distortion = o.distortion;
+  return v;
+}
+
+std::string Describe(const camera::ViewsCalibration& v) {
+  std::ostringstream s;
+  s << "zoom " << v.zoom << ": OpenCV start from " << v.shots.size() << " shots, "
+    << v.num_points << " points, rms " << v.rms_px << " px, fx " << v.intrinsics[0] << " fy "
+    << v.intrinsics[1] << " cx " << v.intrinsics[2] << " cy " << v.intrinsics[3];
+  if (!v.excluded.empty()) s << ", " << v.excluded.size() << " shot(s) excluded";
+  if (!v.init_note.empty()) s << " (" << v.init_note << ")";
+  return s.str();
+}
+
+}  // namespace
+
+std::string InitFromPixelsOptions::Check() const {
+  if (!(min_zenith_rad < max_zenith_rad)) return "min_zenith_rad must be < max_zenith_rad";
+  for (size_t z = 0; z < cameras.size(); ++z) {
+    if (cameras[z].width <= 0 || cameras[z].height <= 0) {
+      return "cameras[" + std::to_string(z) + "] needs a positive image size";
+    }
+  }
+  return "";
+}
+
+camera::DistortionGroups DistortionGroupsOf(const EffectSet& effects) {
+  camera::DistortionGroups g;
+  g.radial = effects.Has(Effect::kRadialDistortion);
+  g.tangential = effects.Has(Effect::kTangentialDistortion);
+  g.rational = effects.Has(Effect::kRationalDistortion);
+  g.thin_prism = effects.Has(Effect::kThinPrism);
+  g.sensor_tilt = effects.Has(Effect::kSensorTilt);
+  return g;
+}
+
+InstrumentModel DhFromSpherical(const InstrumentModel& s) {
+  if (s.kinematics != Kinematics::kSpherical) {
+    throw std::invalid_argument("DhFromSpherical: the model is not spherical");
+  }
+  for (Effect e : s.effects.List()) {
+    if (IsKinematic(e)) {
+      throw std::invalid_argument(std::string("DhFromSpherical: effect ") + Info(e).name +
+                                  " has no exact dh equivalent here; convert without effects");
+    }
+  }
+  // IdealModel(kDh) holds exactly the base Rx(pi), the links and M_T of the
+  // ideal instrument; prepend the spherical base and append the tools.
+  InstrumentModel d = IdealModel(Kinematics::kDh, s.NumZooms(), CameraTool{});
+  const Rigid3 ideal_base = d.base.ToRigid();
+  const Rigid3 m_t = d.edm.ToRigid();
+  d.effects = s.effects;
+  d.edm_cyclic_unit_length = s.edm_cyclic_unit_length;
+  d.base = PoseBlock::FromRigid(s.base.ToRigid() * ideal_base);
+  d.edm = PoseBlock::FromRigid(m_t * s.edm.ToRigid());
+  d.cams = s.cams;
+  for (CameraTool& c : d.cams) c.flange_from_cam = PoseBlock::FromRigid(m_t * c.flange_from_cam.ToRigid());
+  return d;
+}
+
+InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
+                                    const InitFromPixelsOptions& options) {
+  const std::string msg = options.Check();
+  if (!msg.empty()) throw std::invalid_argument("InitFromPixels: " + msg);
+  InitFromPixelsResult result;
+  int excluded = 0;
+  const std::map<int, std::vector<PixelObservation>> zooms = ByZoom(pixels, options, &excluded);
+  if (excluded > 0) {
+    result.notes.push_back(std::to_string(excluded) +
+                           " pixel observation(s) in the critical region not used for the start");
+  }
+  if (zooms.empty()) throw std::invalid_argument("InitFromPixels: no pixel observations to start from");
+  const int num_zooms = zooms.rbegin()->first + 1;
+
+  // 1. Per zoom: intrinsics, distortion and shot poses from OpenCV.
+  InstrumentModel& m = result.model;
+  m.kinematics = Kinematics::kSpherical;
+  m.cams.resize(num_zooms);
+  result.views.resize(num_zooms);
+  for (auto& v : result.views) v.zoom = -1;
+  std::vector<PosedShot> shots;
+  for (const auto& [zoom, obs] : zooms) {
+    CameraTool cam = SizeFor(options, zoom, obs, &result.notes);
+    camera::ViewsCalibration v = camera::CalibrateViews(obs, cam.width, cam.height, ViewsOptions(options));
+    result.notes.push_back(Describe(v));
+    cam.intrinsics = v.intrinsics;
+    cam.distortion = v.distortion;
+    m.cams[zoom] = cam;
+    for (const camera::ShotPose& s : v.shots) shots.push_back({zoom, s.phi, s.theta, s.ref_from_cam});
+    result.views[zoom] = std::move(v);
+  }
+  for (int z = 0; z < num_zooms; ++z) {
+    if (result.views[z].zoom < 0) {
+      result.notes.push_back("zoom " + std::to_string(z) +
+                             " has no pixels: its camera is a copy of the nearest zoom's start");
+    }
+  }
+
+  // 2a. Camera tool rotations, per zoom: Park-Martin hand-eye on shot pairs.
+  std::vector<Eigen::Matrix3d> cam_rotation(num_zooms, Eigen::Matrix3d::Identity());
+  for (const auto& [zoom, obs] : zooms) {
+    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();  // sum beta alpha^T
+    int pairs = 0;
+    for (size_t i = 0; i < shots.size(); ++i) {
+      if (shots[i].zoom != zoom) continue;
+      for (size_t j = i + 1; j < shots.size(); ++j) {
+        if (shots[j].zoom != zoom) continue;
+        const Eigen::Matrix3d a_ij = IdealLineOfSight(shots[i].phi, shots[i].theta).transpose() *
+                                     IdealLineOfSight(shots[j].phi, shots[j].theta);
+        const Eigen::Matrix3d b_ij =
+            shots[i].ref_from_cam.rotation.transpose() * shots[j].ref_from_cam.rotation;
+        const Eigen::Vector3d alpha = LogRotation(a_ij), beta = LogRotation(b_ij);
+        // Pairs near a half turn (face 1 vs face 2) have an ill-defined log.
+        if (alpha.norm() > 2.5 || alpha.norm() < 1e-6) continue;
+        h += beta * alpha.transpose();
+        ++pairs;
+      }
+    }
+    // beta = C^T alpha: C^T = argmax tr(C^T^T h)... Procrustes on sum beta alpha^T.
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Vector3d sv = svd.singularValues();
+    if (pairs < 2 || !(sv[1] > 1e-6 * sv[0])) {
+      result.notes.push_back("zoom " + std::to_string(zoom) +
+                             ": the shots turn about one axis only; camera tool rotation taken "
+                             "from the mean with an ideal base");
+      Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+      for (const PosedShot& s : shots) {
+        if (s.zoom == zoom) {
+          sum += IdealLineOfSight(s.phi, s.theta).transpose() * s.ref_from_cam.rotation;
+        }
+      }
+      cam_rotation[zoom] = ProjectToRotation(sum);
+      continue;
+    }
+    const Eigen::Matrix3d ct = ProjectToRotation(h);  // C^T maps alpha to beta
+    cam_rotation[zoom] = ct.transpose();
+  }
+
+  // 2b. Base rotation: chordal mean over every shot.
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (const PosedShot& s : shots) {
+    sum += s.ref_from_cam.rotation * cam_rotation[s.zoom].transpose() *
+           IdealLineOfSight(s.phi, s.theta).transpose();
+  }
+  const Eigen::Matrix3d base_rotation = ProjectToRotation(sum);
+
+  // 2c. Translations: t_i = t_B + R_B A_i t_Cz, linear in (t_B, t_C0, t_C1, ...).
+  const int n_unknown = 3 + 3 * num_zooms;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(3 * shots.size(), n_unknown);
+  Eigen::VectorXd b(3 * shots.size());
+  for (size_t i = 0; i < shots.size(); ++i) {
+    const PosedShot& s = shots[i];
+    a.block<3, 3>(3 * i, 0).setIdentity();
+    a.block<3, 3>(3 * i, 3 + 3 * s.zoom) = base_rotation * IdealLineOfSight(s.phi, s.theta);
+    b.segment<3>(3 * i) = s.ref_from_cam.translation;
+  }
+  // Columns of zooms without shots are zero: the minimum-norm solution sets them to 0.
+  const Eigen::VectorXd x = a.completeOrthogonalDecomposition().solve(b);
+
+  m.base = PoseBlock::FromRigid(Rigid3{base_rotation, x.head<3>()});
+  m.edm = PoseBlock();
+  for (int z = 0; z < num_zooms; ++z) {
+    m.cams[z].flange_from_cam =
+        PoseBlock::FromRigid(Rigid3{cam_rotation[z], x.segment<3>(3 + 3 * z)});
+  }
+  // Zooms without pixels: a copy of the nearest zoom with pixels.
+  for (int z = 0; z < num_zooms; ++z) {
+    if (result.views[z].zoom >= 0) continue;
+    int best = -1;
+    for (const auto& [zoom, obs] : zooms) {
+      if (best < 0 || std::abs(zoom - z) < std::abs(best - z)) best = zoom;
+    }
+    m.cams[z] = m.cams[best];
+  }
+
+  // How well the chain explains the OpenCV poses.
+  double sum_rot = 0, sum_pos = 0;
+  for (const PosedShot& s : shots) {
+    const Rigid3 pred = RefFromCam(m, s.zoom, s.phi, s.theta);
+    sum_rot += LogRotation(pred.rotation.transpose() * s.ref_from_cam.rotation).squaredNorm();
+    sum_pos += (pred.translation - s.ref_from_cam.translation).squaredNorm();
+  }
+  result.chain_rms_rad = std::sqrt(sum_rot / std::max<size_t>(shots.size(), 1));
+  result.chain_rms_m = std::sqrt(sum_pos / std::max<size_t>(shots.size(), 1));
+  {
+    std::ostringstream s;
+    s << "spherical chain fitted to " << shots.size() << " OpenCV shot poses: rms "
+      << result.chain_rms_rad << " rad, " << result.chain_rms_m << " m";
+    result.notes.push_back(s.str());
+  }
+
+  // 3. The requested kinematics.
+  if (options.kinematics == Kinematics::kDh) m = DhFromSpherical(m);
+  return result;
+}
+
+std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation>& pixels,
+                                              int zoom, const InitFromPixelsOptions& options,
+                                              InstrumentModel* model) {
+  std::vector<std::string> notes;
+  int excluded = 0;
+  const std::map<int, std::vector<PixelObservation>> zooms = ByZoom(pixels, options, &excluded);
+  auto it = zooms.find(zoom);
+  if (it == zooms.end()) {
+    throw std::invalid_argument("InitCameraFromPixels: zoom " + std::to_string(zoom) +
+                                " has no pixel observations outside the critical region");
+  }
+  CameraTool cam = SizeFor(options, zoom, it->second, &notes);
+  const camera::ViewsCalibration v =
+      camera::CalibrateViews(it->second, cam.width, cam.height, ViewsOptions(options));
+  notes.push_back(Describe(v));
+  cam.intrinsics = v.intrinsics;
+  cam.distortion = v.distortion;
+  Eigen::Matrix3d rot_sum = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d t_sum = Eigen::Vector3d::Zero();
+  for (const camera::ShotPose& s : v.shots) {
+    const Rigid3 flange_from_cam = RefFromFlange(*model, s.phi, s.theta).Inverse() * s.ref_from_cam;
+    rot_sum += flange_from_cam.rotation;
+    t_sum += flange_from_cam.translation;
+  }
+  cam.flange_from_cam = PoseBlock::FromRigid(
+      Rigid3{ProjectToRotation(rot_sum), t_sum / static_cast<double>(v.shots.size())});
+  if (zoom >= model->NumZooms()) model->cams.resize(zoom + 1, cam);
+  model->cams[zoom] = cam;
+  notes.push_back("zoom " + std::to_string(zoom) +
+                  ": camera tool started from its pixels (no camera rows for it)");
+  return notes;
+}
+
+}  // namespace rtscalib
