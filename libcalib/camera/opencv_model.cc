@@ -119,7 +119,64 @@ double FirstPositiveRoot(const Poly& p) {
   return roots.empty() ? std::numeric_limits<double>::infinity() : roots.front();
 }
 
+// MaxTrustedRadius for the last coefficients seen by this thread: a fit
+// evaluates many residuals with the same distortion block.
+double CachedMaxTrustedRadius(const double* dist) {
+  thread_local double key[6] = {0, 0, 0, 0, 0, 0};
+  thread_local double value = -1;  // -1: not computed yet
+  const double k[6] = {dist[kK1], dist[kK2], dist[kK3], dist[kK4], dist[kK5], dist[kK6]};
+  bool same = value >= 0;
+  for (int i = 0; i < 6 && same; ++i) same = k[i] == key[i];
+  if (!same) {
+    for (int i = 0; i < 6; ++i) key[i] = k[i];
+    value = MaxTrustedRadius(dist);
+  }
+  return value;
+}
+
+double L1(const double v[2]) { return std::abs(v[0]) + std::abs(v[1]); }
+
 }  // namespace
+
+namespace internal {
+
+// Newton's method from the distorted point, halving a step that does not
+// reduce |f|_1 (at most 30 times), so that an overshoot cannot jump onto
+// another branch of a folded map.
+bool SolveDistortion(const double* dist, double xd, double yd, double* x_out, double* y_out,
+                     int max_iterations) {
+  const double r_max = CachedMaxTrustedRadius(dist);
+  double x = xd, y = yd;
+  double f[2], J[4];
+  DistortionResidual(dist, x, y, xd, yd, f, J);
+  for (int it = 0; it < max_iterations; ++it) {
+    const double jdet = J[0] * J[3] - J[1] * J[2];
+    if (!(jdet > 0)) return false;  // folded (or degenerate) map at the iterate
+    const double dx = (f[0] * J[3] - J[1] * f[1]) / jdet;
+    const double dy = (J[0] * f[1] - f[0] * J[2]) / jdet;
+    double scale = 1.0;
+    double x_new = x - dx, y_new = y - dy;
+    double f_new[2], J_new[4];
+    DistortionResidual(dist, x_new, y_new, xd, yd, f_new, J_new);
+    for (int halvings = 0; halvings < 30 && !(L1(f_new) <= L1(f)); ++halvings) {
+      scale *= 0.5;
+      x_new = x - scale * dx;
+      y_new = y - scale * dy;
+      DistortionResidual(dist, x_new, y_new, xd, yd, f_new, J_new);
+    }
+    x = x_new;
+    y = y_new;
+    std::copy(f_new, f_new + 2, f);
+    std::copy(J_new, J_new + 4, J);
+    // Relative step test: at convergence the step is rounding noise of x.
+    if (std::abs(dx) + std::abs(dy) <= 1e-15 * (1.0 + std::abs(x) + std::abs(y))) break;
+  }
+  *x_out = x;
+  *y_out = y;
+  return L1(f) < 1e-12 && x * x + y * y < r_max * r_max && J[0] * J[3] - J[1] * J[2] > 0.0;
+}
+
+}  // namespace internal
 
 double MaxTrustedRadius(const double* dist) {
   const RadialPolys polys = MakeRadialPolys(dist);

@@ -117,9 +117,9 @@ double MaxTrustedDistortedRadius(const double* dist);
 //   - lies inside the trusted region: r < MaxTrustedRadius(dist), and
 //   - has a positive Jacobian determinant of the full distortion map (so the
 //     tangential and thin-prism terms have not folded the image either).
-// Works with ceres::Jet: a final full Newton step at the converged point makes
-// the derivatives exactly those of the implicit function theorem,
-// -J^-1 d(distortion)/d(params), whatever path the iteration took.
+// Works with ceres::Jet: the iteration runs in double, then one full Newton
+// step in T at the converged point gives exactly the implicit-function
+// derivatives -J^-1 d(distortion)/d(params).
 template <typename T>
 bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
                     int max_iterations = 20);
@@ -140,27 +140,12 @@ bool PixelToRay(const T* intrinsics, const T* dist, const T* pixel, T* ray) {
 // ---------------------------------------------------------------------------
 namespace internal {
 
-// Value of a double or of a (possibly nested) ceres::Jet; the Jet overload is
-// only instantiated when the caller has included Ceres.
+// Value of a double or of a ceres::Jet; the Jet overload is only instantiated
+// when the caller has included Ceres.
 inline double ScalarPart(double v) { return v; }
 template <typename S, int N>
 double ScalarPart(const ceres::Jet<S, N>& v) {
   return ScalarPart(v.a);
-}
-
-// MaxTrustedRadius for the last coefficients seen by this thread: a fit
-// evaluates many residuals with the same distortion block.
-inline double CachedMaxTrustedRadius(const double* dist) {
-  thread_local double key[6] = {0, 0, 0, 0, 0, 0};
-  thread_local double value = -1;  // -1: not computed yet
-  const double k[6] = {dist[kK1], dist[kK2], dist[kK3], dist[kK4], dist[kK5], dist[kK6]};
-  bool same = value >= 0;
-  for (int i = 0; i < 6 && same; ++i) same = k[i] == key[i];
-  if (!same) {
-    for (int i = 0; i < 6; ++i) key[i] = k[i];
-    value = MaxTrustedRadius(dist);
-  }
-  return value;
 }
 
 // Distortion residual f = distort(x, y) - (xd, yd) and its Jacobian
@@ -193,13 +178,11 @@ void DistortionResidual(const T* dist, const T& x, const T& y, const T& xd, cons
          T(2) * ds_y * y;
 }
 
-}  // namespace internal
-
+// Undoes the intrinsics and the tilt: pixel -> (x'', y''). False if the tilt
+// makes the pixel's line of sight parallel to the sensor.
 template <typename T>
-bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
-                    int max_iterations) {
+bool UndoIntrinsicsAndTilt(const T* intrinsics, const T* dist, const T* pixel, T* xd, T* yd) {
   using std::abs;
-  // Undo intrinsics and tilt: (xt/zt, yt/zt) -> (x'', y'').
   const T a = (pixel[0] - intrinsics[2]) / intrinsics[0];
   const T b = (pixel[1] - intrinsics[3]) / intrinsics[1];
   T m[9];
@@ -209,63 +192,41 @@ bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T
   const T a10 = m[3] - b * m[6], a11 = m[4] - b * m[7], r1 = b * m[8] - m[5];
   const T det = a00 * a11 - a01 * a10;
   if (!(abs(det) > T(0))) return false;
-  const T xd = (r0 * a11 - a01 * r1) / det;
-  const T yd = (a00 * r1 - r0 * a10) / det;
+  *xd = (r0 * a11 - a01 * r1) / det;
+  *yd = (a00 * r1 - r0 * a10) / det;
+  return true;
+}
 
+// The double-precision Newton solve of distort(x, y) = (xd, yd) with the
+// acceptance tests of UndistortPixel (opencv_model.cc).
+bool SolveDistortion(const double* dist, double xd, double yd, double* x, double* y,
+                     int max_iterations);
+
+}  // namespace internal
+
+template <typename T>
+bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
+                    int max_iterations) {
+  T xd, yd;
+  if (!internal::UndoIntrinsicsAndTilt(intrinsics, dist, pixel, &xd, &yd)) return false;
   double dist_values[kNumDistortion];
   for (int i = 0; i < kNumDistortion; ++i) dist_values[i] = internal::ScalarPart(dist[i]);
-  const double r_max = internal::CachedMaxTrustedRadius(dist_values);
-
-  // Newton on f(x, y) = distort(x, y) - (xd, yd) from the distorted point,
-  // halving a step that does not reduce |f|_1 (bounded), so that an
-  // overshoot cannot jump onto another branch of a folded map.
-  T x = xd, y = yd;
+  double x0, y0;
+  if (!internal::SolveDistortion(dist_values, internal::ScalarPart(xd), internal::ScalarPart(yd),
+                                 &x0, &y0, max_iterations)) {
+    return false;
+  }
+  // One full Newton step in T from the converged point: the value moves by
+  // rounding only, and for a ceres::Jet the derivative part becomes
+  // -J^-1 d f / d(params), exactly the implicit-function derivative (the
+  // iteration itself runs in double, which is what makes Jets cheap here).
+  const T x(x0), y(y0);
   T f[2], J[4];
   internal::DistortionResidual(dist, x, y, xd, yd, f, J);
-  for (int it = 0; it < max_iterations; ++it) {
-    const T jdet = J[0] * J[3] - J[1] * J[2];
-    if (!(jdet > T(0))) return false;  // folded (or degenerate) map at the iterate
-    const T dx = (f[0] * J[3] - J[1] * f[1]) / jdet;
-    const T dy = (J[0] * f[1] - f[0] * J[2]) / jdet;
-    const double f_norm = internal::ScalarPart(abs(f[0]) + abs(f[1]));
-    T scale(1.0);
-    T x_new = x - dx, y_new = y - dy;
-    T f_new[2], J_new[4];
-    internal::DistortionResidual(dist, x_new, y_new, xd, yd, f_new, J_new);
-    for (int halvings = 0;
-         halvings < 30 && !(internal::ScalarPart(abs(f_new[0]) + abs(f_new[1])) <= f_norm);
-         ++halvings) {
-      scale = scale * T(0.5);
-      x_new = x - scale * dx;
-      y_new = y - scale * dy;
-      internal::DistortionResidual(dist, x_new, y_new, xd, yd, f_new, J_new);
-    }
-    x = x_new;
-    y = y_new;
-    for (int i = 0; i < 2; ++i) f[i] = f_new[i];
-    for (int i = 0; i < 4; ++i) J[i] = J_new[i];
-    // Relative step test: at convergence the step is rounding noise of x.
-    if (internal::ScalarPart(abs(dx) + abs(dy)) <=
-        1e-15 * (1.0 + internal::ScalarPart(abs(x) + abs(y)))) {
-      break;
-    }
-  }
-  // One full Newton step at the converged point: its derivative part is
-  // -J^-1 df/dparams whatever the iterate's derivative part was (backtracking
-  // may have scaled earlier updates), i.e. exactly the implicit-function
-  // derivative. For doubles it is a no-op up to rounding.
-  {
-    const T jdet = J[0] * J[3] - J[1] * J[2];
-    if (!(jdet > T(0))) return false;
-    x = x - (f[0] * J[3] - J[1] * f[1]) / jdet;
-    y = y - (J[0] * f[1] - f[0] * J[2]) / jdet;
-    internal::DistortionResidual(dist, x, y, xd, yd, f, J);
-  }
-  *xn = x;
-  *yn = y;
-  const double r2 = internal::ScalarPart(x * x + y * y);
-  return internal::ScalarPart(abs(f[0]) + abs(f[1])) < 1e-12 && r2 < r_max * r_max &&
-         internal::ScalarPart(J[0] * J[3] - J[1] * J[2]) > 0.0;
+  const T jdet = J[0] * J[3] - J[1] * J[2];
+  *xn = x - (f[0] * J[3] - J[1] * f[1]) / jdet;
+  *yn = y - (J[0] * f[1] - f[0] * J[2]) / jdet;
+  return true;
 }
 
 }  // namespace rtscalib::camera
