@@ -1,0 +1,198 @@
+#include "libcalib/diagnose/diagnose.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace rtscalib::diagnose {
+namespace {
+
+// Below this fraction of its norm outside the model's span, a column is
+// absorbed by the model (RankingOptions::redundant_fraction).
+constexpr double kRedundantFraction = 1e-3;
+
+std::string Fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), f, v);
+  return buf;
+}
+
+std::string Rms(const GroupRms& g) {
+  std::vector<std::string> parts;
+  if (g.edm_n > 0) parts.push_back("EDM points " + Fmt("%.3g", g.edm_m * 1e3) + " mm");
+  if (g.cam_n > 0) parts.push_back("camera points " + Fmt("%.3g", g.cam_m * 1e3) + " mm");
+  if (g.pixels_n > 0) parts.push_back("image points " + Fmt("%.3g", g.pixels_px) + " px");
+  std::string out;
+  for (size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
+  return out + " rms";
+}
+
+std::string Headline(double v, const std::string& unit) {
+  return unit == "m" ? Fmt("%.3g", v * 1e3) + " mm" : Fmt("%.3g", v) + " px";
+}
+
+std::string ValueText(const RankedEffect& r) {
+  const EffectInfo& info = Info(r.effect);
+  if (!IsKinematic(r.effect)) return "";
+  std::string out;
+  for (int k = 0; k < r.value.num; ++k) {
+    out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " + Fmt("%.3g", r.value.value[k]) + " +- " +
+           Fmt("%.2g", r.value.sigma[k]) + " " + info.report_units[k];
+  }
+  return out;
+}
+
+std::vector<std::string> Verdict(const Diagnosis& d) {
+  std::vector<std::string> v;
+  v.push_back("The model (" + d.model_description + ") fits " + Rms(d.current) + " over " +
+              std::to_string(d.current.edm_n + d.current.cam_n) + " records and " +
+              std::to_string(d.current.pixels_n) + " image points outside the critical regions.");
+  std::vector<const RankedEffect*> significant;
+  for (const RankedEffect& r : d.ranking.entries) {
+    if (r.significant) significant.push_back(&r);
+  }
+  if (significant.empty()) {
+    v.push_back("No catalogue effect is missing: none of the " + std::to_string(d.ranking.tested) +
+                " effects tested is significant at the " + Fmt("%g", 100 * d.ranking.level * d.ranking.tested) +
+                "% level.");
+  } else {
+    const RankedEffect& r = *significant.front();
+    std::string s = "Add " + r.name + " next: the error falls from " + Headline(r.rms_before, r.rms_unit) +
+                    " to " + Headline(r.rms_after, r.rms_unit) + " (delta BIC " + Fmt("%.0f", r.delta_bic) + ")";
+    const std::string value = ValueText(r);
+    if (!value.empty()) s += "; " + value;
+    s += ". Config: " + r.config_line;
+    if (!r.identifiable) s += " (note: " + r.note + ")";
+    v.push_back(s);
+    if (significant.size() > 1) {
+      std::string also = "Also significant:";
+      for (size_t i = 1; i < significant.size(); ++i) {
+        also += (i > 1 ? "," : "") + std::string(" ") + significant[i]->name;
+      }
+      v.push_back(also + " (add one at a time, best first; `rtscalib diagnose --auto` does it).");
+    }
+  }
+  for (const Harmonic& h : d.harmonics.unexplained) {
+    v.push_back("Structure outside the catalogue: " + h.description + ".");
+  }
+  if (d.outliers.flagged > 0) {
+    v.push_back(std::to_string(d.outliers.flagged) + " of " + std::to_string(d.outliers.tested) +
+                " observations fail the w-test (w > " + Fmt("%.2f", d.outliers.critical_w) +
+                "); the worst is " + d.outliers.worst.front().where + " (w = " +
+                Fmt("%.1f", d.outliers.worst.front().w) + ").");
+  }
+  return v;
+}
+
+}  // namespace
+
+std::string Settings::Check() const {
+  if (!(significance > 0 && significance < 1)) return "diagnose.significance must be in (0, 1)";
+  if (refine_top < 0) return "diagnose: refine_top must be >= 0";
+  if (max_harmonic < 1 || max_harmonic > 12) return "diagnose: max_harmonic must be in 1..12";
+  if (max_unexplained < 0) return "diagnose: max_unexplained must be >= 0";
+  return "";
+}
+
+FitContext ContextOf(const FitOptions& used, const FitSummary& summary) {
+  FitContext c;
+  c.options = used;
+  c.sigma[0] = summary.sigma_edm_m > 0 ? summary.sigma_edm_m : used.sigma_edm_m;
+  c.sigma[1] = summary.sigma_cam_m > 0 ? summary.sigma_cam_m : used.sigma_cam_m;
+  c.sigma[2] = summary.sigma_pixel_px > 0 ? summary.sigma_pixel_px : used.sigma_pixel_px;
+  return c;
+}
+
+const RankedEffect* Diagnosis::Next() const {
+  for (const RankedEffect& r : ranking.entries) {
+    if (r.significant && !r.redundant) return &r;
+  }
+  return nullptr;
+}
+
+double Bic(const GroupRms& rms, const double sigma[3], int num_rows, int num_parameters) {
+  const double n = std::max(num_rows, 1);
+  const double rss = std::max(rms.WhitenedRss(sigma), 1e-300);
+  return n * std::log(rss / n) + num_parameters * std::log(n);
+}
+
+Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
+                   const Settings& settings) {
+  const std::string msg = settings.Check();
+  if (!msg.empty()) throw std::invalid_argument(msg);
+  const auto t0 = std::chrono::steady_clock::now();
+  Diagnosis d;
+  d.kinematics = model.kinematics;
+  d.effects = model.effects.Names();
+  d.model_description = std::string(KinematicsName(model.kinematics)) + ", effects: [";
+  for (size_t i = 0; i < d.effects.size(); ++i) d.model_description += (i ? ", " : "") + d.effects[i];
+  d.model_description += "]";
+  for (int g = 0; g < 3; ++g) d.sigma[g] = fit.sigma[g];
+  d.coverage = MeasureCoverage(obs, model, fit.options);
+
+  std::vector<Effect> candidates, contained;
+  for (const EffectInfo& info : EffectCatalogue()) {
+    if (model.effects.Has(info.effect)) continue;
+    if (model.kinematics == Kinematics::kDh && info.redundant_in_dh) {
+      contained.push_back(info.effect);
+    } else {
+      candidates.push_back(info.effect);
+    }
+  }
+  LinearizeOptions lo;
+  lo.fit = fit.options;
+  for (int g = 0; g < 3; ++g) lo.sigma[g] = fit.sigma[g];
+  lo.candidates = candidates;
+  if (settings.harmonics) lo.probes = DefaultProbes(d.coverage.faces, d.coverage.has_edm, settings.max_harmonic);
+  const Linearization lin = Linearize(obs, model, lo);
+  const Reduced red = Reduce(lin);
+  d.num_rows = lin.NumRows();
+  d.num_parameters = red.base.rank();
+  d.excluded_critical = lin.excluded_critical;
+
+  std::vector<const ColumnBlock*> catalogue;
+  for (const ColumnBlock& b : lin.blocks) {
+    if (!b.is_effect) continue;
+    double kept = 0;
+    for (int j = b.first; j < b.first + b.size; ++j) kept = std::max(kept, red.kept_fraction[j]);
+    if (kept >= kRedundantFraction) catalogue.push_back(&b);
+  }
+  Projector nuisance(lin.NumRows());
+  if (settings.harmonics) {
+    d.harmonics = AnalyseHarmonics(lin, red, catalogue, settings.significance, settings.max_unexplained);
+    for (const Harmonic& h : d.harmonics.unexplained) {
+      if (const ColumnBlock* b = lin.Find(h.block)) nuisance.Add(red.extra.middleCols(b->first, b->size));
+    }
+  }
+  if (model.kinematics == Kinematics::kDh && !contained.empty()) {
+    d.equivalents = EquivalentSurveyingTerms(model, fit.options);
+  }
+
+  RankingInput in;
+  in.obs = &obs;
+  in.model = &model;
+  in.fit = fit.options;
+  in.lin = &lin;
+  in.red = &red;
+  in.nuisance = &nuisance;
+  in.coverage = &d.coverage;
+  in.equivalents = &d.equivalents;
+  in.contained = contained;
+  RankingOptions ro;
+  ro.significance = settings.significance;
+  ro.redundant_fraction = kRedundantFraction;
+  ro.refine_top = settings.refine_top;
+  d.ranking = RankEffects(in, ro);
+  d.current = d.ranking.current;
+
+  d.residuals = ObservationResiduals(obs, model, fit.options);
+  if (settings.outliers) {
+    d.outliers = TestOutliers(obs, lin, red, d.residuals, settings.significance, settings.outliers_listed);
+  }
+  d.verdict = Verdict(d);
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return d;
+}
+
+}  // namespace rtscalib::diagnose

@@ -1,0 +1,71 @@
+// Diagnosis of a fitted model: where it fails, which catalogue effect is
+// missing, what structure lies outside the catalogue, which observations are
+// outliers. docs/diagnostics.md explains every number.
+//
+//   Linearize (one Jacobian at the fitted model)  ->  Reduce (project out the fit)
+//     -> AnalyseHarmonics (structure outside the catalogue; the nuisance for the ranking)
+//     -> RankEffects (every effect not in the model; best ones confirmed by Refine)
+//     -> TestOutliers (w-test per observation)
+//     -> verdict (the sentences a report opens with)
+// Nothing here writes files; app/ turns a Diagnosis into report.json and report.html.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "libcalib/diagnose/coverage.h"
+#include "libcalib/diagnose/equivalents.h"
+#include "libcalib/diagnose/harmonics.h"
+#include "libcalib/diagnose/outliers.h"
+#include "libcalib/diagnose/ranking.h"
+#include "libcalib/diagnose/residuals.h"
+
+namespace rtscalib::diagnose {
+
+struct Settings {
+  double significance = 0.01;  // family-wise level of each of: ranking, harmonics, outliers
+  int refine_top = 2;          // best significant effects confirmed by a refinement
+  bool harmonics = true;
+  int max_harmonic = 4;
+  int max_unexplained = 6;
+  bool outliers = true;
+  int outliers_listed = 12;
+  std::string Check() const;
+};
+
+// What the fit used and found: the options (fit_intrinsics as decided) and
+// the a-posteriori sigmas that whiten the residuals.
+struct FitContext {
+  FitOptions options;
+  double sigma[3] = {1e-5, 1e-5, 0.5};  // edm [m], cam [m], pixel [px]
+};
+FitContext ContextOf(const FitOptions& used, const FitSummary& summary);
+
+struct Diagnosis {
+  std::string model_description;  // "dh, effects: [hz_eccentricity]"
+  std::vector<std::string> effects;
+  Kinematics kinematics = Kinematics::kDh;
+  GroupRms current;
+  Ranking ranking;
+  HarmonicAnalysis harmonics;
+  OutlierReport outliers;
+  Coverage coverage;
+  EquivalentTerms equivalents;
+  std::vector<ObservationResidual> residuals;  // every observation (for maps and histograms)
+  double sigma[3] = {0, 0, 0};                 // whitening sigmas (fitted noise per group)
+  int num_rows = 0, num_parameters = 0;
+  int excluded_critical = 0;
+  std::vector<std::string> verdict;            // most important first
+  double seconds = 0;
+
+  // The first significant effect, if any (what to add next).
+  const RankedEffect* Next() const;
+};
+
+Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
+                   const Settings& settings);
+
+// BIC of a model on its data with fixed whitening sigmas: n log(RSS/n) + k log n.
+double Bic(const GroupRms& rms, const double sigma[3], int num_rows, int num_parameters);
+
+}  // namespace rtscalib::diagnose

@@ -1,0 +1,66 @@
+// Structure outside the catalogue: harmonics of reading errors.
+//
+// A probe (linearization.h) is the error of one reading as a harmonic of one
+// variable on one face:
+//   phi* = phi + A sin(k phi - p)        "k times per turn in phi"   (horizontal encoder, k >= 2 not in the catalogue)
+//   theta* = theta + A sin(k theta - p)  "k times per turn in theta" (vertical encoder)
+//   theta* = theta + A sin(k phi - p)    zenith error periodic in phi (axis tilt; k = 1 is the base tilt)
+//   d* = d + A sin(2 pi k d / U - p)     distance error periodic in d (k = 1 is edm_cyclic)
+// for k = 1..4 and each face with data. Residuals projected onto a probe's
+// columns are the residuals' harmonic content in that reading, measured in
+// the reading's own units (arcsec, mm), with whatever the fitted model can
+// absorb already taken out.
+//
+// Analysis:
+//  1. before the catalogue: each probe tested against the fitted model alone;
+//  2. unexplained: forward selection of probes on top of ALL catalogue effects
+//     that the data can see (each step adds the most significant probe, until
+//     none is significant or `max_terms`): what remains significant is
+//     structure that no catalogue effect can produce, reported with its joint
+//     amplitude and phase and never under an effect's name;
+//  3. a probe significant in (1) but not in (2) is explained by the catalogue;
+//     `explained_by` names the single effect that removes most of it.
+// Tests are the robust Wald tests of statistics.h at level significance /
+// (number of probes) (Bonferroni).
+#pragma once
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "libcalib/diagnose/linearization.h"
+
+namespace rtscalib::diagnose {
+
+struct Harmonic {
+  Probe probe;
+  double amplitude = 0;        // arcsec (phi, theta readings) or mm (distance)
+  double amplitude_sigma = 0;
+  double phase_deg = 0;        // error = amplitude * sin(k x - phase), in [0, 360)
+  std::string unit;
+  double wald = 0, p_value = 1;
+  bool significant = false;
+  std::string explained_by;    // catalogue effect that removes it; "" if none does
+  std::string description;     // "twice per turn in phi: phi reading error 3.1 arcsec (face 1)"
+  std::string block;           // the probe's column block name
+};
+
+struct HarmonicAnalysis {
+  std::vector<Harmonic> before_catalogue;  // significant against the fitted model alone
+  std::vector<Harmonic> unexplained;       // significant on top of the whole catalogue
+  double level = 0;                        // per-test level
+  int tests = 0;
+};
+
+// Probes for the faces present: the four families above, k = 1..max_harmonic.
+std::vector<Probe> DefaultProbes(const std::set<int>& faces, bool has_edm, int max_harmonic = 4);
+
+// `catalogue` = column blocks of the candidate effects the data can see.
+HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
+                                  const std::vector<const ColumnBlock*>& catalogue,
+                                  double significance, int max_terms = 6);
+
+// "twice per turn in phi", "harmonic 2 of the EDM unit length (period 0.75 m)".
+std::string HarmonicName(const Probe& p, double unit_length_m);
+
+}  // namespace rtscalib::diagnose

@@ -1,0 +1,325 @@
+#include "libcalib/diagnose/ranking.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "libcalib/eval/error_measures.h"
+
+namespace rtscalib::diagnose {
+namespace {
+
+void Finish(GroupRms* g) {
+  g->edm_m = g->edm_n > 0 ? std::sqrt(g->edm_ss / g->edm_n) : 0.0;
+  g->cam_m = g->cam_n > 0 ? std::sqrt(g->cam_ss / g->cam_n) : 0.0;
+  g->records_m = g->edm_n + g->cam_n > 0 ? std::sqrt((g->edm_ss + g->cam_ss) / (g->edm_n + g->cam_n)) : 0.0;
+  g->pixels_px = g->pixels_n > 0 ? std::sqrt(g->pixels_ss / g->pixels_n) : 0.0;
+}
+
+const char* const kDistortionNames[camera::kNumDistortion] = {
+    "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "taux", "tauy"};
+
+std::array<double, 4> Cov2(const Eigen::MatrixXd& c) {
+  std::array<double, 4> out{};
+  if (c.rows() >= 1) out[0] = c(0, 0);
+  if (c.rows() >= 2) out = {c(0, 0), c(0, 1), c(1, 0), c(1, 1)};
+  return out;
+}
+
+}  // namespace
+
+double GroupRms::WhitenedRss(const double sigma[3]) const {
+  return edm_ss / (sigma[0] * sigma[0]) + cam_ss / (sigma[1] * sigma[1]) + pixels_ss / (sigma[2] * sigma[2]);
+}
+
+GroupRms RmsOfWhitened(const Linearization& lin, const Eigen::VectorXd& r) {
+  GroupRms g;
+  for (int i = 0; i < lin.NumRows(); ++i) {
+    const int k = static_cast<int>(lin.rows[i].group);
+    const double v = r[i] * lin.sigma[k];
+    (k == 0 ? g.edm_ss : k == 1 ? g.cam_ss : g.pixels_ss) += v * v;
+  }
+  g.edm_n = lin.num_observations[0];
+  g.cam_n = lin.num_observations[1];
+  g.pixels_n = lin.num_observations[2];
+  Finish(&g);
+  return g;
+}
+
+GroupRms RmsOfModel(const Observations& obs, const InstrumentModel& model, const FitOptions& fit) {
+  GroupRms g;
+  for (const RecordResidual& r : RecordResiduals(model, obs.records)) {
+    const Record& rec = obs.records[r.index];
+    if (!r.valid || InCriticalRegion(rec.theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
+    if (rec.tool == Tool::kEdm) {
+      g.edm_ss += r.distance * r.distance;
+      ++g.edm_n;
+    } else {
+      g.cam_ss += r.distance * r.distance;
+      ++g.cam_n;
+    }
+  }
+  for (const PixelResidual& p : PixelResiduals(model, obs.pixels)) {
+    if (!p.valid || InCriticalRegion(obs.pixels[p.index].theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
+    g.pixels_ss += p.delta.squaredNorm();
+    ++g.pixels_n;
+  }
+  Finish(&g);
+  return g;
+}
+
+std::string ConfigLine(const InstrumentModel& model, Effect e) {
+  std::vector<std::string> names = model.effects.Names();
+  names.push_back(Info(e).name);
+  std::string line = "model.effects: [";
+  for (size_t i = 0; i < names.size(); ++i) line += (i ? ", " : "") + names[i];
+  return line + "]";
+}
+
+Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
+  const Linearization& lin = *in.lin;
+  const Reduced& red = *in.red;
+  const Projector& nu = *in.nuisance;
+  const int n = lin.NumRows();
+  const double log_n = std::log(std::max(n, 2));
+  Ranking out;
+  out.num_rows = n;
+  out.current = RmsOfWhitened(lin, lin.r);
+
+  std::vector<const ColumnBlock*> effects;
+  int num_effect_cols = 0;
+  for (const ColumnBlock& b : lin.blocks) {
+    if (!b.is_effect) continue;
+    effects.push_back(&b);
+    num_effect_cols = std::max(num_effect_cols, b.first + b.size);
+  }
+  auto observable = [&](const ColumnBlock& b) {
+    for (int j = b.first; j < b.first + b.size; ++j) {
+      if (red.column_norm[j] > 0) return true;
+    }
+    return false;
+  };
+  auto kept = [&](const ColumnBlock& b) {
+    double k = 0;
+    for (int j = b.first; j < b.first + b.size; ++j) k = std::max(k, red.kept_fraction[j]);
+    return k;
+  };
+  for (const ColumnBlock* b : effects) {
+    if (observable(*b) && kept(*b) >= o.redundant_fraction) ++out.tested;
+  }
+  out.level = o.significance / std::max(out.tested, 1);
+
+  // Normal matrices of [model parameters, candidate columns] for correlations.
+  const Eigen::MatrixXd jx = lin.extra.leftCols(num_effect_cols);
+  const Eigen::MatrixXd nbb = lin.base.transpose() * lin.base;
+  const Eigen::MatrixXd nbx = lin.base.transpose() * jx;
+  const Eigen::MatrixXd nxx = jx.transpose() * jx;
+  const int pb = static_cast<int>(nbb.rows());
+
+  // Which model parameters absorb a redundant effect: the largest terms of
+  // its columns' least-squares expansion in the model's columns.
+  const Eigen::MatrixXd nbb_inv = PseudoInverseSpd(nbb, 1e-14);
+  auto AbsorbedBy = [&](const ColumnBlock& b) {
+    const Eigen::MatrixXd coef = nbb_inv * nbx.middleCols(b.first, b.size);
+    std::vector<std::pair<double, int>> share;
+    for (int j = 0; j < pb; ++j) {
+      double s2 = 0;
+      for (int k = 0; k < b.size; ++k) {
+        const double norm = red.column_norm[b.first + k];
+        if (norm > 0) s2 = std::max(s2, std::abs(coef(j, k)) * std::sqrt(nbb(j, j)) / norm);
+      }
+      share.push_back({s2, j});
+    }
+    std::sort(share.rbegin(), share.rend());
+    std::string names;
+    for (size_t i = 0; i < share.size() && i < 3 && share[i].first > 0.1; ++i) {
+      names += (i ? ", " : "") + lin.base_names[share[i].second];
+    }
+    return names.empty() ? std::string("several parameters") : names;
+  };
+
+  const Eigen::VectorXd y = nu.Apply(red.r);
+  const int dof = red.base.rank() + nu.rank();
+  for (const ColumnBlock* b : effects) {
+    RankedEffect r;
+    r.effect = b->effect;
+    r.name = b->name;
+    r.num_params = b->size;
+    r.before = out.current;
+    r.after = out.current;
+    r.after_source = "linearised";
+    r.config_line = ConfigLine(*in.model, b->effect);
+    r.needs = WhatWouldHelp(b->effect, *in.coverage, *in.model);
+    r.observable = observable(*b);
+    r.redundant = r.observable && kept(*b) < o.redundant_fraction;
+    if (!r.observable || r.redundant) {
+      r.identifiable = false;
+      r.delta_bic = r.num_params * log_n;
+      r.note = !r.observable ? "the data do not see this effect at all"
+                             : "the model's parameters absorb this effect (to first order): " +
+                                   AbsorbedBy(*b) + "; it cannot be told apart from them with these data";
+      out.entries.push_back(r);
+      continue;
+    }
+    const Eigen::MatrixXd t_e = red.extra.middleCols(b->first, b->size);
+    const ColumnTest t = TestColumns(y, nu.Apply(t_e), red.cluster, lin.num_clusters, dof);
+    r.num_params = t.rank;
+    r.delta_rss = t.delta_rss;
+    r.delta_bic = t.rss_before > 0 ? n * std::log(std::max(t.rss_after, 1e-300) / t.rss_before) + t.rank * log_n
+                                   : t.rank * log_n;
+    r.wald = t.wald;
+    r.p_value = t.p_value;
+    const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.base.rank());
+    r.after = RmsOfWhitened(lin, red.r - plain.fitted);
+
+    // r regressed on its own derivative gives minus the Gauss-Newton step.
+    if (IsKinematic(b->effect)) {
+      for (int k = 0; k < b->size && k < 2; ++k) r.si[k] = -t.beta[k];
+      r.si_cov = Cov2(t.cov);
+      r.value = ToReportUnits(b->effect, r.si, r.si_cov);
+    } else {
+      for (int k = 0; k < b->size; ++k) {
+        const auto [zoom, index] = b->distortion[k];
+        r.distortion.push_back({zoom, kDistortionNames[index], index,
+                                in.model->cams[zoom].distortion[index] - t.beta[k],
+                                std::sqrt(std::max(t.cov(k, k), 0.0))});
+      }
+    }
+
+    // Correlations with the model's parameters when e is added.
+    {
+      const int k = b->size;
+      Eigen::MatrixXd aug(pb + k, pb + k);
+      aug.topLeftCorner(pb, pb) = nbb;
+      aug.topRightCorner(pb, k) = nbx.middleCols(b->first, k);
+      aug.bottomLeftCorner(k, pb) = nbx.middleCols(b->first, k).transpose();
+      aug.bottomRightCorner(k, k) = nxx.block(b->first, b->first, k, k);
+      const Eigen::MatrixXd c = PseudoInverseSpd(aug, 1e-14);
+      for (int i = pb; i < pb + k; ++i) {
+        for (int j = 0; j < pb; ++j) {
+          const double d = std::sqrt(c(i, i) * c(j, j));
+          if (!(d > 0)) continue;
+          const double rho = c(i, j) / d;
+          if (std::abs(rho) > std::abs(r.rho)) {
+            r.rho = rho;
+            r.correlated_with = lin.base_names[j];
+          }
+        }
+      }
+    }
+    r.identifiable = std::abs(r.rho) <= o.identifiable_rho;
+    r.significant = t.rank > 0 && t.p_value < out.level && r.delta_bic < 0;
+    if (!r.identifiable) {
+      char buf[160];
+      std::snprintf(buf, sizeof(buf), "strongly correlated with %s (rho %+.3f)", r.correlated_with.c_str(), r.rho);
+      r.note = buf;
+    }
+    out.entries.push_back(r);
+  }
+
+  // Terms the kinematics contain (dh): redundant, with their value read off the model.
+  for (Effect e : in.contained) {
+    RankedEffect r;
+    r.effect = e;
+    r.name = Info(e).name;
+    r.num_params = Info(e).num_params;
+    r.before = r.after = out.current;
+    r.after_source = "model";
+    r.redundant = true;
+    r.identifiable = false;
+    r.delta_bic = r.num_params * log_n;
+    r.config_line = ConfigLine(*in.model, e);
+    r.note = "contained in the dh model (links and tools); not fitted twice";
+    r.needs = {"model.kinematics: spherical, to estimate it as a term of its own"};
+    if (in.equivalents && in.equivalents->valid) {
+      r.has_equivalent = true;
+      r.si = in.equivalents->value[static_cast<int>(e)];
+      r.equivalent = ToReportUnits(e, r.si, {0, 0, 0, 0});
+    }
+    out.entries.push_back(r);
+  }
+
+  std::stable_sort(out.entries.begin(), out.entries.end(), [](const RankedEffect& a, const RankedEffect& b) {
+    if (a.significant != b.significant) return a.significant;
+    return a.delta_bic < b.delta_bic;
+  });
+
+  // Aliases among the best significant effects.
+  auto block_of = [&](Effect e) -> const ColumnBlock* {
+    for (const ColumnBlock* b : effects) {
+      if (b->effect == e) return b;
+    }
+    return nullptr;
+  };
+  for (size_t i = 0; i < out.entries.size() && i < 3; ++i) {
+    RankedEffect& r = out.entries[i];
+    if (!r.significant) break;
+    const ColumnBlock* be = block_of(r.effect);
+    for (const RankedEffect& o : out.entries) {
+      if (!o.significant || o.effect == r.effect) continue;
+      const ColumnBlock* bo = block_of(o.effect);
+      Projector p = nu;
+      p.Add(red.extra.middleCols(bo->first, bo->size));
+      const ColumnTest t = TestColumns(p.Apply(red.r), p.Apply(red.extra.middleCols(be->first, be->size)),
+                                       red.cluster, lin.num_clusters, red.base.rank() + p.rank());
+      if (!(t.rank > 0 && t.p_value < out.level)) r.aliases.push_back(o.name);
+    }
+  }
+
+  // Confirm the best significant effects with a refinement (warm start).
+  int refined = 0;
+  for (RankedEffect& r : out.entries) {
+    if (refined >= o.refine_top || !r.significant) break;
+    ++refined;
+    InstrumentModel m = *in.model;
+    m.effects.Add(r.effect);
+    m.sigmas = {};
+    if (IsKinematic(r.effect)) {
+      m.EffectValue(r.effect) = r.si;
+    } else {
+      for (const DistortionValue& d : r.distortion) m.cams[d.zoom].distortion[d.index] = d.value;
+    }
+    FitOptions fo = in.fit;
+    fo.reestimate_sigmas = false;  // the same weights as the linearisation
+    fo.sigma_edm_m = lin.sigma[0];
+    fo.sigma_cam_m = lin.sigma[1];
+    fo.sigma_pixel_px = lin.sigma[2];
+    fo.compute_covariance = true;
+    fo.max_iterations = std::min(fo.max_iterations, 50);
+    fo.verbose = false;
+    try {
+      Refine(*in.obs, fo, &m);
+    } catch (const std::exception&) {
+      continue;
+    }
+    const GroupRms after = RmsOfModel(*in.obs, m, in.fit);
+    if (!(after.WhitenedRss(lin.sigma) <= r.after.WhitenedRss(lin.sigma) * 1.05)) continue;
+    r.after = after;
+    r.after_source = "refined";
+    if (IsKinematic(r.effect)) {
+      r.si = m.EffectValue(r.effect);
+      if (m.sigmas.valid) {
+        const auto& c = m.sigmas.effect_cov[static_cast<int>(r.effect)];
+        // Keep the larger (more honest) of the refinement's and the robust covariance.
+        if (c[0] + c[3] > r.si_cov[0] + r.si_cov[3]) r.si_cov = c;
+      }
+      r.value = ToReportUnits(r.effect, r.si, r.si_cov);
+    } else {
+      for (DistortionValue& d : r.distortion) {
+        d.value = m.cams[d.zoom].distortion[d.index];
+        if (m.sigmas.valid && d.zoom < static_cast<int>(m.sigmas.distortion.size())) {
+          d.sigma = std::max(d.sigma, m.sigmas.distortion[d.zoom][d.index]);
+        }
+      }
+    }
+  }
+  for (RankedEffect& r : out.entries) {
+    r.rms_before = r.before.Main();
+    r.rms_after = r.after.Main();
+    r.rms_unit = r.before.MainUnit();
+  }
+  return out;
+}
+
+}  // namespace rtscalib::diagnose

@@ -1,0 +1,121 @@
+// Which catalogue effect is missing: every effect not in the model, added to
+// it one at a time, scored and sorted best first (SPEC 6 diagnosis.ranking).
+//
+// For effect e with columns T_e (linearization.h) and the fitted model's own
+// parameters projected out (Reduced):
+//   estimate      b_e, cov_e          TestColumns (statistics.h), conditional on the
+//                                     unexplained harmonics (harmonics.h) so that an
+//                                     effect is not credited with structure that is not its own
+//   delta_bic     n log(RSS_after / RSS_before) + k log n     whitened residuals, n rows,
+//                                     k = rank of T_e (negative = better)
+//   significant   p(Wald) < significance / (number of effects tested), delta_bic < 0,
+//                 and the effect is identifiable
+//   rms after     from a refinement with the effect added (Refine, warm start at the
+//                 linear estimate, the fit's weights held) for the best `refine_top`
+//                 significant effects; from the linear prediction for the others
+//   redundant     the model's parameters absorb T_e entirely (|P T_e| < redundant_fraction |T_e|),
+//                 or SPEC 4 says the kinematics contain it (dh: collimation, tilting_axis,
+//                 vertical_index, edm_offset); then `equivalent` holds the value read off
+//                 the model (equivalents.h)
+//   identifiable  observable, not redundant, and |rho| <= identifiable_rho with every
+//                 parameter of the model (covariance of the model with e added)
+//   aliases       other significant effects that make e insignificant when added
+//                 first (and vice versa): the data cannot tell them apart
+// Effect values are reported in report units (ToReportUnits); distortion groups
+// per zoom and coefficient.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "libcalib/diagnose/coverage.h"
+#include "libcalib/diagnose/equivalents.h"
+#include "libcalib/diagnose/linearization.h"
+
+namespace rtscalib::diagnose {
+
+// RMS per observation group over the rows the fit uses (outside the critical
+// regions): records as point distances [m], pixels as sqrt(mean(du^2 + dv^2)) [px].
+struct GroupRms {
+  double edm_m = 0, cam_m = 0, records_m = 0, pixels_px = 0;
+  int edm_n = 0, cam_n = 0, pixels_n = 0;
+  double edm_ss = 0, cam_ss = 0, pixels_ss = 0;  // sums of squares [m^2], [px^2]
+  // The headline figure: every record point [m] when there are records, else pixels [px].
+  double Main() const { return edm_n + cam_n > 0 ? records_m : pixels_px; }
+  const char* MainUnit() const { return edm_n + cam_n > 0 ? "m" : "px"; }
+  // Whitened residual sum of squares with sigmas per group.
+  double WhitenedRss(const double sigma[3]) const;
+};
+
+GroupRms RmsOfWhitened(const Linearization& lin, const Eigen::VectorXd& r);
+GroupRms RmsOfModel(const Observations& obs, const InstrumentModel& model, const FitOptions& fit);
+
+struct RankingOptions {
+  double significance = 0.01;        // family-wise level over the effects tested
+  double identifiable_rho = 0.95;
+  double redundant_fraction = 1e-3;
+  int refine_top = 2;
+};
+
+struct DistortionValue {
+  int zoom = 0;
+  std::string coefficient;  // k1, p2, ...
+  int index = 0;            // into the 14 OpenCV coefficients
+  double value = 0, sigma = 0;
+};
+
+struct RankedEffect {
+  Effect effect = Effect::kCollimation;
+  std::string name;
+  int num_params = 0;               // rank of its columns in these data
+  GroupRms before, after;
+  double rms_before = 0, rms_after = 0;
+  std::string rms_unit;
+  double delta_rss = 0, delta_bic = 0, wald = 0, p_value = 1;
+  bool observable = true, redundant = false, identifiable = true, significant = false;
+  std::string correlated_with;      // the model parameter with the largest |rho|
+  double rho = 0;
+  std::array<double, 2> si{};       // estimate in SI (kinematic effects)
+  std::array<double, 4> si_cov{};
+  EffectReportValue value;          // in report units
+  std::vector<DistortionValue> distortion;
+  bool has_equivalent = false;      // redundant: value read off the model
+  EffectReportValue equivalent;
+  std::vector<std::string> needs;   // what data would make it identifiable / better determined
+  // Other significant effects that explain the same structure in these data
+  // (each one, added, leaves the other insignificant): first-order aliases
+  // such as radial/rational distortion.
+  std::vector<std::string> aliases;
+  std::string config_line;
+  std::string after_source;         // "refined" or "linearised"
+  std::string note;
+};
+
+struct Ranking {
+  std::vector<RankedEffect> entries;  // best first
+  double level = 0;                   // per-effect test level
+  int tested = 0;
+  int num_rows = 0;
+  GroupRms current;
+};
+
+struct RankingInput {
+  const Observations* obs = nullptr;
+  const InstrumentModel* model = nullptr;
+  FitOptions fit;                          // as the fit used them
+  const Linearization* lin = nullptr;
+  const Reduced* red = nullptr;
+  const Projector* nuisance = nullptr;     // unexplained harmonics, in the reduced space
+  const Coverage* coverage = nullptr;
+  const EquivalentTerms* equivalents = nullptr;  // dh only
+  std::vector<Effect> contained;           // catalogue effects the kinematics already contain
+};
+
+Ranking RankEffects(const RankingInput& in, const RankingOptions& options);
+
+// "model.effects: [hz_eccentricity, edm_scale]": the model's effects plus `e`.
+std::string ConfigLine(const InstrumentModel& model, Effect e);
+
+}  // namespace rtscalib::diagnose

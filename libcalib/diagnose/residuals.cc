@@ -1,0 +1,115 @@
+#include "libcalib/diagnose/residuals.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "libcalib/camera/opencv_model.h"
+#include "libcalib/eval/error_measures.h"
+#include "libcalib/model/kinematics.h"
+
+namespace rtscalib::diagnose {
+namespace {
+
+// Horizontal-direction and zenith components of a small change `delta` of a
+// direction `dir` (unit), both in radians of arc on the unit sphere.
+void AngularComponents(const Eigen::Vector3d& dir, const Eigen::Vector3d& delta, double* dhz,
+                       double* dz) {
+  const double hz = std::atan2(dir.x(), dir.y());
+  const double z = std::acos(std::clamp(dir.z(), -1.0, 1.0));
+  const double sz = std::max(std::sin(z), 1e-9);
+  *dhz = delta.dot(Eigen::Vector3d(std::cos(hz), -std::sin(hz), 0.0)) / sz;
+  *dz = delta.dot(Eigen::Vector3d(std::sin(hz) * std::cos(z), std::cos(hz) * std::cos(z), -std::sin(z)));
+}
+
+}  // namespace
+
+std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
+                                                      const InstrumentModel& model,
+                                                      const FitOptions& fit) {
+  std::vector<ObservationResidual> out;
+  out.reserve(obs.records.size() + obs.pixels.size());
+  for (size_t i = 0; i < obs.records.size(); ++i) {
+    const Record& r = obs.records[i];
+    ObservationResidual o;
+    o.group = r.tool == Tool::kEdm ? ObsGroup::kEdm : ObsGroup::kCam;
+    o.index = static_cast<int>(i);
+    o.face = r.face;
+    o.zoom = r.tool == Tool::kEdm ? 0 : r.zoom;
+    o.phi = r.phi;
+    o.theta = r.theta;
+    o.d = r.d;
+    o.u = r.u;
+    o.v = r.v;
+    o.critical = InCriticalRegion(r.theta, fit.min_zenith_rad, fit.max_zenith_rad);
+    try {
+      Eigen::Vector3d calc, origin;
+      if (r.tool == Tool::kEdm) {
+        calc = PredictEdm(model, r.phi, r.theta, r.d);
+        origin = RefFromEdm(model, r.phi, r.theta).translation;
+      } else {
+        calc = PredictCam(model, r.zoom, r.phi, r.theta, r.u, r.v, r.d);
+        origin = RefFromCam(model, r.zoom, r.phi, r.theta).translation;
+      }
+      const Eigen::Vector3d ray = calc - origin;
+      const double len = ray.norm();
+      if (len > 0) {
+        const Eigen::Vector3d dir = ray / len;
+        o.delta = r.x - calc;
+        o.along = o.delta.dot(dir);
+        AngularComponents(dir, o.delta / len, &o.hz, &o.zenith);
+        o.size = o.delta.norm();
+        o.valid = true;
+      }
+    } catch (const std::exception&) {
+      o.valid = false;
+    }
+    out.push_back(o);
+  }
+  for (size_t i = 0; i < obs.pixels.size(); ++i) {
+    const PixelObservation& p = obs.pixels[i];
+    ObservationResidual o;
+    o.group = ObsGroup::kPixel;
+    o.index = static_cast<int>(i);
+    o.face = p.face;
+    o.zoom = p.zoom;
+    o.phi = p.phi;
+    o.theta = p.theta;
+    o.u = p.uv.x();
+    o.v = p.uv.y();
+    o.critical = InCriticalRegion(p.theta, fit.min_zenith_rad, fit.max_zenith_rad);
+    Eigen::Vector2d pred;
+    if (p.zoom >= 0 && p.zoom < model.NumZooms() && PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &pred)) {
+      const CameraTool& cam = model.cams[p.zoom];
+      double ray_obs[3], ray_pred[3];
+      if (camera::PixelToRay(cam.intrinsics.data(), cam.distortion.data(), p.uv.data(), ray_obs) &&
+          camera::PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pred.data(), ray_pred)) {
+        const Eigen::Matrix3d rot = RefFromCam(model, p.zoom, p.phi, p.theta).rotation;
+        const Eigen::Vector3d a = rot * Eigen::Vector3d(ray_obs).normalized();
+        const Eigen::Vector3d b = rot * Eigen::Vector3d(ray_pred).normalized();
+        AngularComponents(b, a - b, &o.hz, &o.zenith);
+        o.delta = Eigen::Vector3d(p.uv.x() - pred.x(), p.uv.y() - pred.y(), 0.0);
+        o.size = o.delta.norm();
+        o.valid = true;
+      }
+    }
+    out.push_back(o);
+  }
+  return out;
+}
+
+std::string Where(const Observations& obs, ObsGroup group, int index) {
+  char buf[256];
+  if (group == ObsGroup::kPixel) {
+    const PixelObservation& p = obs.pixels[index];
+    std::snprintf(buf, sizeof(buf), "shot %s, target %d corner %d", p.shot.c_str(), p.target, p.corner);
+    if (p.line > 0) return obs.pixels_source + ":" + std::to_string(p.line) + " (" + buf + ")";
+    return obs.pixels_source + ", row " + std::to_string(index + 1) + " (" + buf + ")";
+  }
+  const Record& r = obs.records[index];
+  std::snprintf(buf, sizeof(buf), "%s, face %d, phi %.2f deg, theta %.2f deg, d %.3g m",
+                r.tool == Tool::kEdm ? "edm" : "cam", r.face, r.phi * 180 / M_PI, r.theta * 180 / M_PI, r.d);
+  if (r.line > 0) return obs.records_source + ":" + std::to_string(r.line) + " (" + buf + ")";
+  return obs.records_source + ", row " + std::to_string(index + 1) + " (" + buf + ")";
+}
+
+}  // namespace rtscalib::diagnose

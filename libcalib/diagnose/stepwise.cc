@@ -1,0 +1,49 @@
+#include "libcalib/diagnose/stepwise.h"
+
+namespace rtscalib::diagnose {
+
+StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& model,
+                               const FitSummary& fit, const FitOptions& fit_options,
+                               const Settings& settings, int max_steps) {
+  StepwiseResult out;
+  out.model = model;
+  out.fit = fit;
+  const FitContext first = ContextOf(fit_options, fit);
+  std::string added;
+  for (int step = 0;; ++step) {
+    out.diagnosis = Diagnose(obs, out.model, ContextOf(fit_options, out.fit), settings);
+    LadderStep rung;
+    rung.added = added;
+    rung.model_description = out.diagnosis.model_description;
+    rung.effects = out.diagnosis.effects;
+    rung.rms = out.diagnosis.current;
+    rung.num_parameters = out.diagnosis.num_parameters;
+    rung.bic = Bic(rung.rms, first.sigma, out.diagnosis.num_rows, rung.num_parameters);
+    rung.fit = out.fit;
+    out.ladder.push_back(rung);
+
+    const RankedEffect* next = out.diagnosis.Next();
+    if (!next) {
+      out.stop_reason = "no catalogue effect is significant";
+      break;
+    }
+    if (step >= max_steps) {
+      out.stop_reason = "stopped after " + std::to_string(max_steps) + " added effects";
+      break;
+    }
+    InstrumentModel m = out.model;
+    m.effects.Add(next->effect);
+    m.sigmas = {};
+    if (IsKinematic(next->effect)) {
+      m.EffectValue(next->effect) = next->si;
+    } else {
+      for (const DistortionValue& d : next->distortion) m.cams[d.zoom].distortion[d.index] = d.value;
+    }
+    added = next->name;
+    out.fit = Refine(obs, fit_options, &m);
+    out.model = m;
+  }
+  return out;
+}
+
+}  // namespace rtscalib::diagnose

@@ -1,0 +1,40 @@
+// Forward stepwise model building (`rtscalib diagnose --auto`): diagnose, add
+// the best significant effect, refine (warm start from the current model, the
+// new effect at its linear estimate), repeat until no effect is significant
+// or `max_steps` effects have been added. The ladder records every rung: the
+// model, its error per observation group, the effect added and the BIC with
+// the whitening of the first rung (so BICs of different rungs compare).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "libcalib/diagnose/diagnose.h"
+
+namespace rtscalib::diagnose {
+
+struct LadderStep {
+  std::string added;                 // "" on the first rung
+  std::string model_description;
+  std::vector<std::string> effects;
+  GroupRms rms;
+  double bic = 0;
+  int num_parameters = 0;
+  FitSummary fit;
+};
+
+struct StepwiseResult {
+  std::vector<LadderStep> ladder;
+  InstrumentModel model;  // the last rung's model
+  FitSummary fit;
+  Diagnosis diagnosis;    // of the last rung
+  std::string stop_reason;
+};
+
+// `model` and `fit` are a fitted model and its summary; `fit_options` what the
+// fit used. Throws what Refine throws.
+StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& model,
+                               const FitSummary& fit, const FitOptions& fit_options,
+                               const Settings& settings, int max_steps = 8);
+
+}  // namespace rtscalib::diagnose
