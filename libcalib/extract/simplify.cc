@@ -23,18 +23,36 @@ std::array<double, kNumTrigTerms> Terms(double phi, double theta) {
   return {1.0, cp, sp, ct, st, cp * ct, cp * st, sp * ct, sp * st};
 }
 
-// Snaps one pose block: Euler angles to quarter turns, translation to 0.
+// Snaps one pose block: its rotation to the nearest quarter-turn rotation (a
+// signed permutation matrix, whose Euler angles are multiples of pi/2),
+// translation to 0. Snapping each Euler angle on its own, as Sec. 4.1 reads,
+// is the same away from gimbal lock, but the PLT 300's tools sit at
+// b = 1.5646, where a and g are nearly the same rotation and rounding them
+// separately can turn the tool by a tenth of a radian.
 PoseBlock SnapPose(const PoseBlock& pose, const std::string& name,
                    std::vector<std::string>* notes) {
+  const Eigen::Matrix3d r = pose.ToRigid().rotation;
+  Eigen::Matrix3d snapped = Eigen::Matrix3d::Zero();
+  std::array<bool, 3> used_row{false, false, false};
+  for (int c = 0; c < 3; ++c) {
+    int best = -1;
+    for (int row = 0; row < 3; ++row) {
+      if (!used_row[row] && (best < 0 || std::abs(r(row, c)) > std::abs(r(best, c)))) best = row;
+    }
+    used_row[best] = true;
+    snapped(best, c) = r(best, c) < 0 ? -1.0 : 1.0;
+  }
+  if (snapped.determinant() < 0) snapped.col(2) *= -1.0;  // keep a rotation
   const Eigen::Vector3d e = pose.Euler();
-  const Eigen::Vector3d s(SnapToQuarterTurn(e[0]), SnapToQuarterTurn(e[1]),
-                          SnapToQuarterTurn(e[2]));
+  Eigen::Vector3d s = EulerFromRotation(snapped);
+  for (int i = 0; i < 3; ++i) s[i] = SnapToQuarterTurn(s[i]);
   if (notes) {
     const Eigen::Vector3d t(pose.t[0], pose.t[1], pose.t[2]);
+    const double turned = Eigen::AngleAxisd(snapped.transpose() * r).angle();
     notes->push_back(name + ": euler [a, b, g] (" + Num(e[0]) + ", " + Num(e[1]) + ", " +
                      Num(e[2]) + ") -> (" + Num(s[0]) + ", " + Num(s[1]) + ", " + Num(s[2]) +
-                     ") rad, largest change " + Num((e - s).cwiseAbs().maxCoeff()) +
-                     " rad; |t| " + Num(t.norm()) + " m -> 0");
+                     ") rad, rotation changed by " + Num(turned) + " rad; |t| " + Num(t.norm()) +
+                     " m -> 0");
   }
   return PoseBlock::FromRigid(Rigid3::FromEuler(s, Eigen::Vector3d::Zero()));
 }

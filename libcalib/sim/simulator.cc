@@ -97,8 +97,12 @@ InstrumentModel PaperTruth(int num_zooms) {
     CameraTool cam;
     // Each zoom level: its own small tool change and a longer focal length
     // (the PLT 300 has 7 calibrated zoom positions; values are illustrative).
+    // Camera alpha from Table 2 (-1.5020): Table 7's -1.4632 with b = 1.5646
+    // (near gimbal lock, where only g - a matters) would turn the optical axis
+    // 2.2 deg off the EDM ray, which no coaxial RTS camera is; Table 2's value
+    // keeps it within 1e-3 rad, as Klug's Table 4 (camera, method A) shows.
     cam.flange_from_cam = PoseBlock::FromRigid(Rigid3::FromEuler(
-        {-1.4632 + 1.5e-4 * z, 1.5646 - 0.8e-4 * z, 3.2103 + 1.2e-4 * z},
+        {-1.5020 + 1.5e-4 * z, 1.5646 - 0.8e-4 * z, 3.2103 + 1.2e-4 * z},
         {-0.1451e-3 + 2e-5 * z, -2.152e-9 + 1e-5 * z, 0.1505e-3 - 1.5e-5 * z}));
     cam.width = 1280;
     cam.height = 960;
@@ -304,6 +308,40 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
 }
 
 }  // namespace
+
+TagBoard FacingBoard(const Eigen::Vector3d& station, int first_id, int rows, int cols, double tag,
+                     double distance, double phi, double height, double tilt) {
+  TagBoard b;
+  b.first_id = first_id;
+  b.rows = rows;
+  b.cols = cols;
+  b.tag_size = tag;
+  b.spacing = 0.25 * tag;
+  // Board frame (targets.h): x right, y down, z away from the viewer.
+  const Eigen::Matrix3d r = Rz(-phi) * Rx(-M_PI / 2) * Ry(tilt);
+  const Eigen::Vector3d centre =
+      station + Eigen::Vector3d(distance * std::sin(phi), distance * std::cos(phi), height);
+  const double w = cols * tag + (cols - 1) * b.spacing, h = rows * tag + (rows - 1) * b.spacing;
+  b.ref_from_board = Rigid3{r, centre - r * Eigen::Vector3d(w / 2, h / 2, 0)};
+  return b;
+}
+
+TargetScene ZoomScene(const InstrumentModel& truth, int rows, int cols, double distance) {
+  TargetScene scene;
+  const Eigen::Vector3d station = RefFromFlange(truth, 0.0, M_PI / 2).translation;
+  for (int z = 0; z < truth.NumZooms(); ++z) {
+    const CameraTool& cam = truth.cams[z];
+    // Half the view's half width at the board, shared by `cols` tags and
+    // their gaps (1.25 tag each).
+    const double half_view = distance * 0.5 * cam.width / cam.intrinsics[0];
+    const double tag = half_view / (cols * 1.25);
+    const double phi = 0.3 + 0.8 * z;
+    scene.boards.push_back(FacingBoard(station, 1000 * z, rows, cols, tag, distance, phi, -0.2, 0.5));
+    scene.boards.push_back(FacingBoard(station, 1000 * z + 500, rows, cols, 1.3 * tag,
+                                       1.3 * distance, phi - 0.8, 0.3, -0.6));
+  }
+  return scene;
+}
 
 SimulatedData Simulate(const SimulationOptions& o) {
   const std::string msg = o.Check();
