@@ -11,8 +11,12 @@ struct RunArgs {
   std::string output;        // overrides the config's output folder
   std::string write_config;  // write the effective config here and continue
   bool quiet = false;
+  bool diagnose = false;       // `rtscalib diagnose`: diagnosis on, print it instead of the tables
+  bool diagnose_auto = false;  // --auto: forward stepwise (diagnose.auto)
 };
 int RunCalibration(const RunArgs& args);
+// `rtscalib diagnose --config X [--auto]` (app/diagnose_command.cc).
+int RunDiagnose(RunArgs args);
 
 struct PredictArgs {
   std::string model;

@@ -23,9 +23,18 @@ int main(int argc, char** argv) {
   pred->add_option("--out", predict.out, "output CSV")->required();
   pred->add_flag("--force", predict.force, "replace --out if it exists");
 
+  rtscalib::app::RunArgs diag;
+  CLI::App* dg = app.add_subcommand(
+      "diagnose", "run the pipeline and rank the catalogue effects the model lacks, best first");
+  dg->add_option("--config", diag.config, "the run's config")->required();
+  dg->add_option("--output", diag.output, "output folder (overrides the config's `output`)");
+  dg->add_flag("--auto", diag.diagnose_auto, "add significant effects one at a time and refit (the ladder)");
+  dg->add_flag("--quiet", diag.quiet, "no progress lines on stderr");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (pred->parsed()) return rtscalib::app::RunPredict(predict);
+    if (dg->parsed()) return rtscalib::app::RunDiagnose(diag);
     if (run.config.empty()) {
       std::cerr << app.help();
       return 2;

@@ -6,6 +6,8 @@
 #include <stdexcept>
 
 #include "libcalib/extract/simplify.h"
+#include "libcalib/fit/init_from_pixels.h"
+#include "libcalib/fit/two_face.h"
 #include "libcalib/fit/start_models.h"
 #include "libcalib/io/records.h"
 #include "libcalib/model/kinematics.h"
@@ -57,41 +59,30 @@ Observations Subset(const Observations& obs, const std::vector<Record>& records,
   return out;
 }
 
-// Horizontal direction and zenith angle of a model's EDM ray at a reading.
-void RayAngles(const InstrumentModel& m, double phi, double theta, double* hz, double* z) {
-  const Eigen::Vector3d dir = RefFromEdm(m, phi, theta).rotation.col(2);
-  *hz = std::atan2(dir.x(), dir.y());
-  *z = std::acos(std::clamp(dir.z(), -1.0, 1.0));
+// The classical two-face check (libcalib/fit/two_face.h) along the EDM ray,
+// or along the first zoom's optical axis when there are no EDM records.
+void TwoFaceCheck(const Observations& obs, FaceComparison* f) {
+  const bool edm = std::any_of(obs.records.begin(), obs.records.end(),
+                               [](const Record& r) { return r.tool == Tool::kEdm; });
+  const std::set<int> zooms = ZoomsInData(obs);
+  const int zoom = edm || zooms.empty() ? -1 : *zooms.begin();
+  const TwoFaceDifferences d = rtscalib::TwoFaceCheck(f->face1, f->face2, zoom);
+  f->collimation = d.collimation;
+  f->tilting_axis = d.tilting_axis;
+  f->vertical_index = d.vertical_index;
+  f->valid = true;
+  if (!edm) f->note = "read along zoom " + std::to_string(zoom) + "'s optical axis (no EDM records)";
 }
 
-// The classical two-face check (SPEC 4 signatures): over a grid of face-1
-// pointings, hz1 - hz2 = 2c/sin z + 2i cot z and z1 - z2 = 2 v0.
-void TwoFaceCheck(FaceComparison* f) {
-  Eigen::MatrixXd a(0, 2);
-  std::vector<double> b, dz;
-  for (int i = 0; i < 12; ++i) {
-    for (int j = 0; j < 7; ++j) {
-      const double phi = 2 * M_PI * i / 12;
-      const double theta = (50.0 + 80.0 * j / 6) * M_PI / 180;
-      double phi2, theta2, hz1, z1, hz2, z2;
-      OtherFace(phi, theta, &phi2, &theta2);
-      RayAngles(f->face1, phi, theta, &hz1, &z1);
-      RayAngles(f->face2, phi2, theta2, &hz2, &z2);
-      a.conservativeResize(a.rows() + 1, 2);
-      a(a.rows() - 1, 0) = 2.0 / std::sin(z1);
-      a(a.rows() - 1, 1) = 2.0 * std::cos(z1) / std::sin(z1);
-      b.push_back(WrapAngle(hz1 - hz2));
-      dz.push_back(z1 - z2);
-    }
-  }
-  const Eigen::Vector2d ci =
-      a.colPivHouseholderQr().solve(Eigen::Map<Eigen::VectorXd>(b.data(), b.size()));
-  f->collimation = ci[0];
-  f->tilting_axis = ci[1];
-  double s = 0;
-  for (double x : dz) s += x;
-  f->vertical_index = s / dz.size() / 2.0;
-  f->valid = true;
+// Options of the start from pixels alone (and of a zoom's camera from pixels).
+InitFromPixelsOptions PixelStartOptions(const RunConfig& config) {
+  InitFromPixelsOptions io;
+  io.kinematics = config.model.kinematics;
+  io.distortion = DistortionGroupsOf(config.model.effects);
+  io.cameras = config.model.cameras;
+  io.min_zenith_rad = config.fit.min_zenith_rad;
+  io.max_zenith_rad = config.fit.max_zenith_rad;
+  return io;
 }
 
 }  // namespace
@@ -189,14 +180,31 @@ PipelineResult RunPipeline(const RunConfig& config, Progress* progress) {
     result.closed_form = "M_B,T(phi, theta) rotation (Eq. 90 form):\n" + simple.rotation.ToString();
     if (simple.euler) result.closed_form += "\n= " + simple.euler->ToString() + "   (Eq. 91 form)";
     for (const std::string& n : simple.notes) result.notes.push_back("simplification: " + n);
-  } else {
-    throw std::invalid_argument(
-        "no records: this version initialises the instrument from records.csv (the camera "
-        "issue adds initialisation from pixels alone)");
   }
 
-  // The starting model: the extraction, in the configured kinematics.
-  InstrumentModel start = result.extraction->model;
+  // The starting model: the extraction, or the pixels alone (OpenCV per zoom,
+  // then the chain; libcalib/fit/init_from_pixels.h), in the configured kinematics.
+  InstrumentModel start;
+  if (result.extraction) {
+    start = result.extraction->model;
+    // Zooms with pixels but no camera rows: their camera from the pixels.
+    std::set<int> pixel_zooms;
+    for (const PixelObservation& p : obs.pixels) pixel_zooms.insert(p.zoom);
+    for (int z : pixel_zooms) {
+      const auto& poses = result.extraction->camera_poses;
+      if (z < start.NumZooms() && z < static_cast<int>(poses.size()) && poses[z] > 0) continue;
+      progress->Step("zoom " + std::to_string(z) + ": camera from its pixels");
+      for (const std::string& n : InitCameraFromPixels(obs.pixels, z, PixelStartOptions(config), &start)) {
+        result.notes.push_back("pixel start: " + n);
+      }
+    }
+    if (config.model.kinematics == Kinematics::kSpherical) start = SphericalFromDh(start);
+  } else {
+    progress->Step("starting from the pixels alone (OpenCV per zoom, then the chain)");
+    const InitFromPixelsResult init = InitFromPixels(obs.pixels, PixelStartOptions(config));
+    for (const std::string& n : init.notes) result.notes.push_back("pixel start: " + n);
+    start = init.model;
+  }
   for (int z : ZoomsInData(obs)) {
     if (z >= start.NumZooms()) {
       throw std::invalid_argument("zoom " + std::to_string(z) +
@@ -204,7 +212,6 @@ PipelineResult RunPipeline(const RunConfig& config, Progress* progress) {
                                   "it; add model.cameras or camera sweep rows for that zoom");
     }
   }
-  if (config.model.kinematics == Kinematics::kSpherical) start = SphericalFromDh(start);
   start.edm_cyclic_unit_length = config.model.edm_cyclic_unit_length;
   EnableEffects(config.model.effects, &start);
   for (Effect e : config.model.effects.List()) {
@@ -217,7 +224,7 @@ PipelineResult RunPipeline(const RunConfig& config, Progress* progress) {
 
   // 3. Error measures of the extracted and simplified models (Table 4).
   const std::vector<Record> reduced = ReducedRecords(obs.records, result.extraction);
-  {
+  if (result.extraction) {
     Table4 t;
     t.dh_a = EvaluateRecords(result.extraction->model, reduced, ErrorMethod::kA);
     t.dh_b = EvaluateRecords(result.extraction->model, reduced, ErrorMethod::kB);
@@ -251,6 +258,7 @@ PipelineResult RunPipeline(const RunConfig& config, Progress* progress) {
   result.model = has_more ? result.reduced_model : start;
   result.model.sigmas = {};
   result.fit = Refine(obs, fo, &result.model);
+  result.fit_options = fo;
   if (!has_more) {
     result.reduced_model = result.model;
     result.reduced_fit = result.fit;
@@ -273,12 +281,12 @@ PipelineResult RunPipeline(const RunConfig& config, Progress* progress) {
     fc.face1 = result.model;
     fc.face2 = result.model;
     const Observations o1 = Subset(obs, obs.records, 1), o2 = Subset(obs, obs.records, 2);
-    if (o1.records.empty() || o2.records.empty()) {
-      fc.note = "faces: separate needs records in both faces";
+    if ((o1.records.empty() && o1.pixels.empty()) || (o2.records.empty() && o2.pixels.empty())) {
+      fc.note = "faces: separate needs observations in both faces";
     } else {
       fc.fit1 = Refine(o1, fo, &fc.face1);
       fc.fit2 = Refine(o2, fo, &fc.face2);
-      TwoFaceCheck(&fc);
+      TwoFaceCheck(obs, &fc);
     }
     result.faces = fc;
   }

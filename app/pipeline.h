@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "app/progress.h"
+#include "libcalib/diagnose/diagnose.h"
+#include "libcalib/diagnose/stepwise.h"
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/extract/extract.h"
 #include "libcalib/fit/refine.h"
@@ -67,6 +69,12 @@ struct PipelineResult {
   std::optional<FaceComparison> faces;
   std::vector<std::string> notes;
   bool intrinsics_fitted = false;
+  FitOptions fit_options;                // what the full-set refinement used
+  // Diagnosis of `model` (app/diagnosis_report.h); with diagnose.auto the
+  // stepwise ladder whose last rung is `model`.
+  std::optional<diagnose::Diagnosis> diagnosis;
+  std::vector<diagnose::LadderStep> ladder;
+  std::string ladder_stop;
 };
 
 // Loads or simulates the observations of a config (the data section, or the

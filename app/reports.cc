@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "app/diagnosis_report.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib::app {
@@ -186,6 +187,7 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
   }
   j["final"] = {{"records", {{"edm", StatsJson(r.final_errors.edm)}, {"cam", StatsJson(r.final_errors.cam)}}},
                 {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
+  j["diagnosis"] = DiagnosisJson(r);
   j["notes"] = r.notes;
   j["history"] = HistoryJson(out);
   return j;

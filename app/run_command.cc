@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "app/commands.h"
+#include "app/diagnosis_report.h"
 #include "app/output_folder.h"
 #include "app/pipeline.h"
 #include "app/progress.h"
@@ -37,7 +38,10 @@ int RunCalibration(const RunArgs& args) {
   progress.Note("output: " + out.root() + " (this run: history/" + out.run().name + ")");
   WriteText(out.RunFile("config.yaml"), DumpConfig(config));
 
-  const PipelineResult result = RunPipeline(config, &progress);
+  if (args.diagnose) config.diagnose.enabled = true;
+  if (args.diagnose_auto) config.diagnose.auto_add = true;
+  PipelineResult result = RunPipeline(config, &progress);
+  RunDiagnosis(config, &result, &progress);
 
   progress.Step("writing the model and the reports");
   if (result.simulated) {
@@ -53,11 +57,11 @@ int RunCalibration(const RunArgs& args) {
   WriteModelYaml(out.RunFile("model.yaml"), result.model, meta);
   const nlohmann::json report = ReportJson(config, result, out);
   WriteText(out.RunFile("report.json"), report.dump(2));
-  const std::string text = ReportText(config, result);
+  const std::string text = ReportText(config, result) + "\n" + DiagnosisText(result);
   WriteText(out.RunFile("report.txt"), text);
   out.Publish({"model.yaml", "report.json", "report.txt", "report.html", "figures"});
   progress.Done();
-  std::cout << text;
+  std::cout << (args.diagnose ? DiagnosisText(result) : text);
   std::cout << "\nwritten: " << out.root() << "/{model.yaml, report.json, report.txt}\n";
   return 0;
 }

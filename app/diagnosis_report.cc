@@ -1,0 +1,217 @@
+#include "app/diagnosis_report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <sstream>
+
+#include "libcalib/diagnose/stepwise.h"
+
+namespace rtscalib::app {
+namespace {
+
+using nlohmann::json;
+
+std::string Fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), f, v);
+  return buf;
+}
+
+json GroupJson(const diagnose::GroupRms& g) {
+  json j = json::object();
+  if (g.edm_n > 0) j["edm"] = {{"rms_m", g.edm_m}, {"n", g.edm_n}};
+  if (g.cam_n > 0) j["cam"] = {{"rms_m", g.cam_m}, {"n", g.cam_n}};
+  if (g.edm_n + g.cam_n > 0) j["records"] = {{"rms_m", g.records_m}, {"n", g.edm_n + g.cam_n}};
+  if (g.pixels_n > 0) j["pixels"] = {{"rms_px", g.pixels_px}, {"n", g.pixels_n}};
+  return j;
+}
+
+json ValueJson(Effect e, const EffectReportValue& v) {
+  const EffectInfo& info = Info(e);
+  json j = json::object();
+  for (int k = 0; k < v.num; ++k) {
+    j[info.param_names[k]] = {{"value", v.value[k]}, {"sigma", v.sigma[k]}, {"unit", info.report_units[k]}};
+  }
+  return j;
+}
+
+json RankedJson(const diagnose::RankedEffect& r) {
+  json j = {{"effect", r.name},
+            {"rms_before", r.rms_before},
+            {"rms_after", r.rms_after},
+            {"rms_unit", r.rms_unit},
+            {"delta_bic", r.delta_bic},
+            {"significant", r.significant},
+            {"identifiable", r.identifiable},
+            {"redundant", r.redundant},
+            {"observable", r.observable},
+            {"config_line", r.config_line},
+            {"p_value", r.p_value},
+            {"wald", r.wald},
+            {"num_params", r.num_params},
+            {"groups", {{"before", GroupJson(r.before)}, {"after", GroupJson(r.after)}}},
+            {"after_from", r.after_source},
+            {"needs", r.needs},
+            {"aliases", r.aliases},
+            {"note", r.note}};
+  if (IsKinematic(r.effect) && !r.redundant && r.observable) j["value"] = ValueJson(r.effect, r.value);
+  if (!r.distortion.empty()) {
+    json d = json::array();
+    for (const diagnose::DistortionValue& v : r.distortion) {
+      d.push_back({{"zoom", v.zoom}, {"coefficient", v.coefficient}, {"value", v.value}, {"sigma", v.sigma}});
+    }
+    j["value"] = d;
+  }
+  if (r.has_equivalent) j["equivalent"] = ValueJson(r.effect, r.equivalent);
+  if (!r.correlated_with.empty()) j["correlated_with"] = {{"parameter", r.correlated_with}, {"rho", r.rho}};
+  return j;
+}
+
+json HarmonicJson(const diagnose::Harmonic& h) {
+  return {{"variable", diagnose::ReadingName(h.probe.variable)},
+          {"harmonic", h.probe.harmonic},
+          {"amplitude", h.amplitude},
+          {"phase", h.phase_deg},
+          {"significant", h.significant},
+          {"reading", diagnose::ReadingName(h.probe.reading)},
+          {"face", h.probe.face},
+          {"unit", h.unit},
+          {"phase_unit", "deg"},
+          {"amplitude_sigma", h.amplitude_sigma},
+          {"p_value", h.p_value},
+          {"explained_by", h.explained_by.empty() ? json() : json(h.explained_by)},
+          {"description", h.description}};
+}
+
+json LadderJson(const std::vector<diagnose::LadderStep>& ladder) {
+  json out = json::array();
+  for (const diagnose::LadderStep& s : ladder) {
+    out.push_back({{"added", s.added.empty() ? json() : json(s.added)},
+                   {"model", s.model_description},
+                   {"effects", s.effects},
+                   {"errors", GroupJson(s.rms)},
+                   {"bic", s.bic},
+                   {"parameters", s.num_parameters}});
+  }
+  return out;
+}
+
+}  // namespace
+
+void RunDiagnosis(const RunConfig& config, PipelineResult* r, Progress* progress) {
+  if (!config.diagnose.enabled) return;
+  diagnose::Settings s;
+  s.significance = config.diagnose.significance;
+  if (config.diagnose.auto_add) {
+    progress->Step("forward stepwise: adding significant effects one at a time");
+    diagnose::StepwiseResult sw = diagnose::ForwardStepwise(r->obs, r->model, r->fit, r->fit_options, s);
+    for (size_t i = 1; i < sw.ladder.size(); ++i) {
+      progress->Note("added " + sw.ladder[i].added + ": " + sw.ladder[i].model_description);
+    }
+    progress->Note("stopped: " + sw.stop_reason);
+    r->ladder = sw.ladder;
+    r->ladder_stop = sw.stop_reason;
+    r->model = sw.model;
+    r->fit = sw.fit;
+    r->final_errors = ComputeFinalErrors(r->model, r->obs);
+    r->diagnosis = std::move(sw.diagnosis);
+  } else {
+    progress->Step("diagnosing the model (ranking the missing effects)");
+    r->diagnosis = diagnose::Diagnose(r->obs, r->model, diagnose::ContextOf(r->fit_options, r->fit), s);
+  }
+  for (const std::string& v : r->diagnosis->verdict) progress->Note(v);
+}
+
+json DiagnosisJson(const PipelineResult& r) {
+  if (!r.diagnosis) return json();
+  const diagnose::Diagnosis& d = *r.diagnosis;
+  json ranking = json::array();
+  for (const diagnose::RankedEffect& e : d.ranking.entries) ranking.push_back(RankedJson(e));
+  json unexplained = json::array();
+  for (const diagnose::Harmonic& h : d.harmonics.unexplained) unexplained.push_back(HarmonicJson(h));
+  json harmonics = json::array();
+  for (const diagnose::Harmonic& h : d.harmonics.before_catalogue) harmonics.push_back(HarmonicJson(h));
+  json worst = json::array();
+  for (const diagnose::OutlierEntry& o : d.outliers.worst) {
+    worst.push_back({{"where", o.where},
+                     {"group", diagnose::GroupName(o.group)},
+                     {"index", o.index},
+                     {"w", o.w},
+                     {"p_value", o.p_value},
+                     {"flagged", o.flagged},
+                     {"size", o.size},
+                     {"unit", o.group == diagnose::ObsGroup::kPixel ? "px" : "m"}});
+  }
+  const diagnose::RankedEffect* next = d.Next();
+  json j = {{"model", d.model_description},
+            {"verdict", d.verdict},
+            {"next", next ? json(next->name) : json()},
+            {"ranking", ranking},
+            {"unexplained", unexplained},
+            {"harmonics", harmonics},
+            {"outliers",
+             {{"critical_w", d.outliers.critical_w},
+              {"tested", d.outliers.tested},
+              {"flagged", d.outliers.flagged},
+              {"worst", worst}}},
+            {"current", GroupJson(d.current)},
+            {"sigmas", {{"edm_m", d.sigma[0]}, {"cam_m", d.sigma[1]}, {"pixel_px", d.sigma[2]}}},
+            {"test_level", {{"ranking", d.ranking.level}, {"harmonics", d.harmonics.level}}},
+            {"effects_tested", d.ranking.tested},
+            {"residual_rows", d.num_rows},
+            {"parameters", d.num_parameters},
+            {"seconds", d.seconds}};
+  if (d.equivalents.valid) j["equivalents_fit_rms_m"] = d.equivalents.fit_rms_m;
+  if (!r.ladder.empty()) {
+    j["ladder"] = LadderJson(r.ladder);
+    j["ladder_stop"] = r.ladder_stop;
+  }
+  return j;
+}
+
+std::string DiagnosisText(const PipelineResult& r) {
+  if (!r.diagnosis) return "";
+  const diagnose::Diagnosis& d = *r.diagnosis;
+  std::ostringstream o;
+  o << "Diagnosis\n=========\n";
+  for (const std::string& v : d.verdict) o << "  " << v << "\n";
+  if (!r.ladder.empty()) {
+    o << "\nLadder (forward stepwise, " << r.ladder_stop << ")\n";
+    o << "  step  added                   EDM rms [mm]  cam rms [mm]  pixels [px]   BIC\n";
+    for (size_t i = 0; i < r.ladder.size(); ++i) {
+      const diagnose::LadderStep& s = r.ladder[i];
+      o << "  " << std::setw(4) << i << "  " << std::left << std::setw(22) << (s.added.empty() ? "(start)" : s.added)
+        << std::right << "  " << std::setw(12) << (s.rms.edm_n ? Fmt("%.4f", s.rms.edm_m * 1e3) : "-") << "  "
+        << std::setw(12) << (s.rms.cam_n ? Fmt("%.4f", s.rms.cam_m * 1e3) : "-") << "  " << std::setw(11)
+        << (s.rms.pixels_n ? Fmt("%.3f", s.rms.pixels_px) : "-") << "  " << Fmt("%.1f", s.bic) << "\n";
+    }
+  }
+  o << "\nRanking of the effects not in the model (best first; rms over the fitted rows)\n";
+  o << "  effect                  rms before -> after          delta BIC   p        signif  identif\n";
+  for (const diagnose::RankedEffect& e : d.ranking.entries) {
+    const double scale = e.rms_unit == "m" ? 1e3 : 1.0;
+    const char* unit = e.rms_unit == "m" ? "mm" : "px";
+    o << "  " << std::left << std::setw(22) << e.name << std::right << "  " << std::setw(9)
+      << Fmt("%.4g", e.rms_before * scale) << " -> " << std::setw(9) << Fmt("%.4g", e.rms_after * scale) << " "
+      << unit << "  " << std::setw(10) << Fmt("%.1f", e.delta_bic) << "  " << std::setw(7)
+      << Fmt("%.1e", e.p_value) << "  " << (e.significant ? "yes" : "no ") << "     "
+      << (e.redundant ? "redundant" : e.identifiable ? "yes" : "no") << "\n";
+  }
+  if (!d.harmonics.unexplained.empty()) {
+    o << "\nStructure outside the catalogue (unexplained)\n";
+    for (const diagnose::Harmonic& h : d.harmonics.unexplained) o << "  " << h.description << "\n";
+  }
+  if (d.outliers.tested > 0) {
+    o << "\nOutliers (w-test, critical w = " << Fmt("%.2f", d.outliers.critical_w) << ", " << d.outliers.flagged
+      << " of " << d.outliers.tested << " flagged); worst observations:\n";
+    for (size_t i = 0; i < d.outliers.worst.size() && i < 5; ++i) {
+      const diagnose::OutlierEntry& e = d.outliers.worst[i];
+      o << "  w = " << Fmt("%5.2f", e.w) << (e.flagged ? " FLAGGED " : "         ") << e.where << "\n";
+    }
+  }
+  o << "(diagnosis took " << Fmt("%.2f", d.seconds) << " s)\n";
+  return o.str();
+}
+
+}  // namespace rtscalib::app
