@@ -15,8 +15,10 @@
 #pragma once
 
 #include <ceres/dynamic_autodiff_cost_function.h>
+#include <ceres/jet.h>
 
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #include "libcalib/model/instrument.h"
@@ -94,7 +96,69 @@ struct RecordGroupResidual {
   }
 };
 
+namespace internal {
+
+// Is T a ceres::Jet (the autodiff pass) or a plain double?
+template <typename T>
+struct IsJet : std::false_type {};
+template <typename S, int N>
+struct IsJet<ceres::Jet<S, N>> : std::true_type {
+  static constexpr int kSize = N;
+};
+
+// The projection's own variables: camera point (3), intrinsics (4),
+// distortion (14). Its derivatives are taken with these 21-wide jets and
+// chained onto the caller's wide jets (ShotResidual below).
+constexpr int kLocalVars = 3 + camera::kNumIntrinsics + camera::kNumDistortion;
+using LocalJet = ceres::Jet<double, kLocalVars>;
+
+// camera::ProjectToPixel with the tilt matrix `m` computed once per shot
+// (it depends on the distortion block only): the same formula, line for line
+// (opencv_model.h). tests/fit/cost_functions_test.cc checks both agree.
+template <typename T>
+bool ProjectWithTilt(const T* intrinsics, const T* dist, const T* m, const T* point, T* pixel) {
+  if (!(point[2] > T(0))) return false;
+  const T x = point[0] / point[2];
+  const T y = point[1] / point[2];
+  T xd, yd;
+  camera::DistortNormalized(dist, x, y, &xd, &yd);
+  const T xt = m[0] * xd + m[1] * yd + m[2];
+  const T yt = m[3] * xd + m[4] * yd + m[5];
+  const T zt = m[6] * xd + m[7] * yd + m[8];
+  pixel[0] = intrinsics[0] * xt / zt + intrinsics[2];
+  pixel[1] = intrinsics[1] * yt / zt + intrinsics[3];
+  return true;
+}
+
+// Where a parameter jet's derivative lives: DynamicAutoDiffCostFunction seeds
+// each parameter with a unit vector (or zero when its block is constant or
+// not in this pass). `slot` = index of the 1, -1 for zero, -2 for anything
+// else (then the full product is taken).
+template <int N>
+int SeedSlot(const ceres::Jet<double, N>& j) {
+  int slot = -1;
+  for (int k = 0; k < N; ++k) {
+    if (j.v[k] == 0.0) continue;
+    if (j.v[k] != 1.0 || slot != -1) return -2;
+    slot = k;
+  }
+  return slot;
+}
+
+}  // namespace internal
+
 // Image observations of one shot (one pointing, one zoom).
+//
+// Speed (docs/refinement.md): the chain ref_from_cam is evaluated once per
+// shot in the caller's jets (width ~40). Per point, only x_cam = cam_from_ref
+// * X is formed in those wide jets; the projection (distortion, tilt,
+// intrinsics) runs in 21-wide local jets over (x_cam, intrinsics,
+// distortion), and its 2 x 21 Jacobian is chained onto the wide jets:
+//   d pixel = J_pixel_wrt_xcam d x_cam + J_pixel_wrt_intrinsics d intrinsics
+//             + J_pixel_wrt_distortion d distortion.
+// Intrinsics and distortion are seeded unit vectors, so their part is a
+// scatter into one slot each. This halves the cost of a Jacobian evaluation
+// against projecting in the wide jets; the values are identical.
 struct ShotResidual {
   struct Point {
     Eigen::Vector3d X;
@@ -111,16 +175,63 @@ struct ShotResidual {
     const RigidT<T> ref_from_cam =
         RefFromFlange(view, T(phi), T(theta)) * PoseFromBlocks(p[layout.tool_q], p[layout.tool_t]);
     const Mat3<T> cam_from_ref_R = ref_from_cam.R.transpose();
-    for (size_t k = 0; k < points.size(); ++k) {
-      const Vec3<T> x_cam = cam_from_ref_R * (points[k].X.cast<T>() - ref_from_cam.t);
-      T pixel[2];
-      if (!camera::ProjectToPixel(p[layout.intrinsics], p[layout.distortion], x_cam.data(), pixel)) {
-        return false;  // behind the camera: the solver must reject the step
+    const T* intrinsics = p[layout.intrinsics];
+    const T* dist = p[layout.distortion];
+    if constexpr (!internal::IsJet<T>::value) {
+      T m[9];
+      camera::TiltMatrix(dist[camera::kTauX], dist[camera::kTauY], m);
+      for (size_t k = 0; k < points.size(); ++k) {
+        const Vec3<T> x_cam = cam_from_ref_R * (points[k].X.cast<T>() - ref_from_cam.t);
+        T pixel[2];
+        if (!internal::ProjectWithTilt(intrinsics, dist, m, x_cam.data(), pixel)) {
+          return false;  // behind the camera: the solver must reject the step
+        }
+        r[2 * k + 0] = (pixel[0] - T(points[k].uv[0])) * T(inv_sigma);
+        r[2 * k + 1] = (pixel[1] - T(points[k].uv[1])) * T(inv_sigma);
       }
-      r[2 * k + 0] = (pixel[0] - T(points[k].uv[0])) * T(inv_sigma);
-      r[2 * k + 1] = (pixel[1] - T(points[k].uv[1])) * T(inv_sigma);
+      return true;
+    } else {
+      using internal::LocalJet;
+      constexpr int kN = internal::IsJet<T>::kSize;
+      // Local jets of intrinsics and distortion, and where their wide
+      // derivatives live.
+      LocalJet li[camera::kNumIntrinsics], ld[camera::kNumDistortion];
+      int slot[camera::kNumIntrinsics + camera::kNumDistortion];
+      for (int i = 0; i < camera::kNumIntrinsics; ++i) {
+        li[i] = LocalJet(intrinsics[i].a, 3 + i);
+        slot[i] = internal::SeedSlot<kN>(intrinsics[i]);
+      }
+      for (int i = 0; i < camera::kNumDistortion; ++i) {
+        ld[i] = LocalJet(dist[i].a, 3 + camera::kNumIntrinsics + i);
+        slot[camera::kNumIntrinsics + i] = internal::SeedSlot<kN>(dist[i]);
+      }
+      LocalJet m[9];
+      camera::TiltMatrix(ld[camera::kTauX], ld[camera::kTauY], m);
+      for (size_t k = 0; k < points.size(); ++k) {
+        const Vec3<T> x_cam = cam_from_ref_R * (points[k].X.cast<T>() - ref_from_cam.t);
+        const LocalJet lx[3] = {LocalJet(x_cam[0].a, 0), LocalJet(x_cam[1].a, 1),
+                                LocalJet(x_cam[2].a, 2)};
+        LocalJet pixel[2];
+        if (!internal::ProjectWithTilt(li, ld, m, lx, pixel)) return false;
+        for (int c = 0; c < 2; ++c) {
+          T out;
+          out.a = pixel[c].a;
+          out.v = pixel[c].v[0] * x_cam[0].v + pixel[c].v[1] * x_cam[1].v +
+                  pixel[c].v[2] * x_cam[2].v;
+          for (int i = 0; i < camera::kNumIntrinsics + camera::kNumDistortion; ++i) {
+            const double d = pixel[c].v[3 + i];
+            if (slot[i] >= 0) {
+              out.v[slot[i]] += d;
+            } else if (slot[i] == -2) {
+              out.v += d * (i < camera::kNumIntrinsics ? intrinsics[i].v
+                                                       : dist[i - camera::kNumIntrinsics].v);
+            }
+          }
+          r[2 * k + c] = (out - T(points[k].uv[c])) * T(inv_sigma);
+        }
+      }
+      return true;
     }
-    return true;
   }
 };
 

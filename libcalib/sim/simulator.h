@@ -86,6 +86,20 @@ InstrumentModel PaperTruth(int num_zooms);
 
 SimulatedData Simulate(const SimulationOptions& options);
 
+// A board of rows x cols tags (edge `tag` [m], spacing tag/4) whose printed
+// side faces the point `station`: centre `distance` metres away from it in
+// direction `phi` (SPEC 1: clockwise from +y) and `height` metres above it,
+// turned by `tilt` [rad] about the board's own vertical axis.
+TagBoard FacingBoard(const Eigen::Vector3d& station, int first_id, int rows, int cols, double tag,
+                     double distance, double phi, double height, double tilt);
+
+// A scene that suits every zoom level of `truth` (the camera images differ
+// by focal length): per zoom two boards of rows x cols tags, at `distance`
+// and 1.3 `distance` from the station in two directions, tilted by +-0.5 rad
+// so that planes are not parallel, each spanning about half the view of its
+// zoom. Tag ids: 1000 z + 0.., 1000 z + 500.. (so at most 500 tags a board).
+TargetScene ZoomScene(const InstrumentModel& truth, int rows, int cols, double distance);
+
 // Records of the plan for a given model without noise (used for held-out
 // checks and by `Simulate`).
 std::vector<Record> PlanRecords(const AcquisitionPlan& plan, const InstrumentModel& model);

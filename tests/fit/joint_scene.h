@@ -13,44 +13,6 @@
 
 namespace rtscalib::testing_scene {
 
-// A board of rows x cols tags whose printed side faces the station: centre
-// `distance` metres away in direction `phi` (SPEC 1: clockwise from +y) at
-// height `z`, turned by `tilt` about its own vertical axis.
-inline TagBoard FacingBoard(int first_id, int rows, int cols, double tag, double distance,
-                            double phi, double z, double tilt) {
-  TagBoard b;
-  b.first_id = first_id;
-  b.rows = rows;
-  b.cols = cols;
-  b.tag_size = tag;
-  b.spacing = 0.25 * tag;
-  // Board frame: x right, y down, z away from the viewer (targets.h).
-  const Eigen::Matrix3d r = Rz(-phi) * Rx(-M_PI / 2) * Ry(tilt);
-  const Eigen::Vector3d centre(distance * std::sin(phi), distance * std::cos(phi), z);
-  const double w = cols * tag + (cols - 1) * b.spacing, h = rows * tag + (rows - 1) * b.spacing;
-  b.ref_from_board = Rigid3{r, centre - r * Eigen::Vector3d(w / 2, h / 2, 0)};
-  return b;
-}
-
-// Boards for zooms with focal lengths `f0` .. `f0 * 2^(n-1)` px on a
-// 640 x 480 image: per zoom one board that fills about half the view with
-// 6 x 8 tags, at two directions and tilts, so that OpenCV's per-zoom
-// calibration sees non-parallel planes.
-inline TargetScene SceneFor(int num_zooms, double f0) {
-  TargetScene scene;
-  for (int z = 0; z < num_zooms; ++z) {
-    const double f = f0 * std::pow(2.0, z);
-    const double distance = 3.0;
-    const double half_view = distance * 320.0 / f;  // metres at the board
-    // 8 columns of tags with spacing 0.25 tag span ~ the view's half width.
-    const double tag = half_view / (8 * 1.25);
-    scene.boards.push_back(FacingBoard(100 * z, 6, 8, tag, distance, 0.3 + 0.8 * z, -0.2, 0.5));
-    scene.boards.push_back(
-        FacingBoard(100 * z + 50, 6, 8, tag, distance * 1.3, -0.5 + 0.8 * z, 0.3, -0.6));
-  }
-  return scene;
-}
-
 // A dh truth near Klug's PLT 300 (PaperTruth) with `num_zooms` 640 x 480
 // cameras, f = f0 * 2^z, principal points off centre by a few pixels.
 inline InstrumentModel DhTruth(int num_zooms, double f0 = 800.0) {
@@ -107,7 +69,7 @@ inline SimulationOptions PixelsOnly(const InstrumentModel& truth, int shots_per_
   SimulationOptions o;
   o.seed = seed;
   o.truth = truth;
-  o.targets = SceneFor(truth.NumZooms(), truth.cams[0].intrinsics[0]);
+  o.targets = ZoomScene(truth, 6, 8, 3.0);
   o.shots.shots_per_board = shots_per_board;
   o.plan.faces = {1, 2};
   o.plan.zooms.clear();
