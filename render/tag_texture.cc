@@ -70,6 +70,17 @@ Eigen::Vector2d TagTexture::TexelFromBoard(double x, double y) const {
   return {Interpolate(x_board, x_texel, x), Interpolate(y_board, y_texel, y)};
 }
 
+BoardRect PrintedArea(const TagBoard& board, double margin) {
+  const TagFamilyInfo info = GetTagFamilyInfo(board.family);
+  const double bit = board.tag_size / info.width_at_border;
+  const double m = margin < 0 ? bit : margin;
+  const double off = info.border_offset() * bit;
+  const double pitch = board.tag_size + board.spacing;
+  const double code = info.total_width * bit;
+  return {-off - m, (board.cols - 1) * pitch + code - off + m, -off - m,
+          (board.rows - 1) * pitch + code - off + m};
+}
+
 TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& options) {
   if (const std::string msg = options.Check(); !msg.empty()) {
     throw std::invalid_argument("TagTextureOptions: " + msg);

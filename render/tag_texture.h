@@ -67,6 +67,13 @@ struct TagTexture {
   Eigen::Vector2d TexelFromBoard(double x, double y) const;
 };
 
+// The board rectangle MakeTagTexture prints (code images plus margin), in the
+// board frame [m]; `margin` < 0 means one code bit, as in TagTextureOptions.
+struct BoardRect {
+  double x_min = 0, x_max = 0, y_min = 0, y_max = 0;
+};
+BoardRect PrintedArea(const TagBoard& board, double margin = -1);
+
 // Builds the texture of `board`. Throws std::invalid_argument when the board
 // cannot be printed: unknown family, id beyond the family, spacing too small
 // for the code images' extra bits (spacing >= 2 border_offset bits), or no

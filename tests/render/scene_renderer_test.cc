@@ -1,0 +1,226 @@
+// The renderer's geometry and image model (rendering only; detection is in
+// detector_test.cc).
+#include "render/scene_renderer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include <opencv2/imgproc.hpp>
+
+#include "libcalib/camera/opencv_model.h"
+#include "tests/render/render_fixture.h"
+
+namespace rtscalib::render {
+namespace {
+
+using testing::EnsureDisplay;
+using testing::FrontBoard;
+using testing::SceneOf;
+using testing::TestCamera;
+
+Eigen::Vector2d Project(const CameraTool& cam, const Rigid3& ref_from_cam, const Eigen::Vector3d& x_ref) {
+  const Eigen::Vector3d p = ref_from_cam.Inverse() * x_ref;
+  double px[2];
+  EXPECT_TRUE(camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), p.data(), px));
+  return {px[0], px[1]};
+}
+
+TEST(OpenGlProjectionTest, PutsPointsAtOpenCvPixels) {
+  // NDC -> GL window -> OpenCV pixel, for the matrix the renderer uses.
+  const double fx = 1234.5, fy = 1230.25, cx = 611.3, cy = 397.8;
+  const int w = 1280, h = 800;
+  const Eigen::Matrix4d p = OpenGlProjection(fx, fy, cx, cy, w, h, 0.1, 100.0);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> xy(-1.0, 1.0), depth(0.2, 90.0);
+  for (int i = 0; i < 100; ++i) {
+    const Eigen::Vector3d cam(xy(rng), xy(rng), depth(rng));  // OpenCV camera frame
+    const Eigen::Vector4d view(cam.x(), -cam.y(), -cam.z(), 1.0);
+    const Eigen::Vector4d clip = p * view;
+    const Eigen::Vector3d ndc = clip.head<3>() / clip.w();
+    // GL: window x = (ndc + 1) w / 2 with pixel centres at i + 1/2, rows from
+    // the bottom; OpenCV: centres at integers, rows from the top.
+    const double u = (ndc.x() + 1) * w / 2 - 0.5;
+    const double v = h - (ndc.y() + 1) * h / 2 - 0.5;
+    EXPECT_NEAR(u, fx * cam.x() / cam.z() + cx, 1e-9);
+    EXPECT_NEAR(v, fy * cam.y() / cam.z() + cy, 1e-9);
+    EXPECT_GT(ndc.z(), -1 - 1e-12);
+    EXPECT_LT(ndc.z(), 1 + 1e-12);
+  }
+  // Depth range maps to [-1, 1].
+  const Eigen::Vector4d near_pt = p * Eigen::Vector4d(0, 0, -0.1, 1);
+  const Eigen::Vector4d far_pt = p * Eigen::Vector4d(0, 0, -100.0, 1);
+  EXPECT_NEAR(near_pt.z() / near_pt.w(), -1.0, 1e-12);
+  EXPECT_NEAR(far_pt.z() / far_pt.w(), 1.0, 1e-12);
+}
+
+// The left edge of tag 0 measured in the image by the area of its strips
+// (sum over whole pixels of a row = exact area for an area-sampled image)
+// against the exact projection. Flat lighting: ink and paper levels are known.
+double LeftEdgeError(const cv::Mat& img, const CameraTool& cam, const TagBoard& board,
+                     const RenderOptions& options) {
+  const auto corners = board.CornersInBoard(0);
+  const Eigen::Vector2d bottom = Project(cam, Rigid3(), board.ref_from_board * corners[0]);
+  const Eigen::Vector2d top = Project(cam, Rigid3(), board.ref_from_board * corners[3]);
+  double sum_err = 0;
+  int n = 0;
+  for (int v = static_cast<int>(top.y()) + 6; v < bottom.y() - 6; ++v) {
+    const double t = (v - top.y()) / (bottom.y() - top.y());
+    const double exact = top.x() + t * (bottom.x() - top.x());
+    const int i0 = static_cast<int>(std::floor(exact)) - 2, i1 = i0 + 5;  // 2-3 px either side
+    double area = 0;  // of the ink part of the strip, in pixels
+    for (int u = i0; u <= i1; ++u) area += (options.paper - img.at<float>(v, u)) / (options.paper - options.ink);
+    const double measured = i1 + 0.5 - area;
+    sum_err += measured - exact;
+    ++n;
+  }
+  EXPECT_GT(n, 20);
+  return sum_err / n;
+}
+
+TEST(SceneRendererTest, EdgesLieWhereOpenCvProjectsThem) {
+  EnsureDisplay();
+  TagBoard board = FrontBoard();
+  // Off the pixel grid and turned by 1.5 degrees, so that the edge's phase in
+  // the pixel grid sweeps along it: a perfectly vertical edge would repeat one
+  // phase's 8-bit rounding in every row (a bias of up to ~0.01 px).
+  board.ref_from_board.translation += Eigen::Vector3d(0.00123, 0.00077, 0.0);
+  board.ref_from_board.rotation = Rz(0.026);
+  const CameraTool cam = TestCamera(false);
+  for (int supersample : {1, 2, 3}) {
+    RenderOptions options;
+    options.supersample = supersample;
+    SceneRenderer renderer(SceneOf(board), options);
+    const cv::Mat img = renderer.RenderPinhole(Rigid3(), cam);
+    // Texture filtering is symmetric about the edge: the area is exact up to
+    // the 8-bit rounding of the read-back, averaged along the edge.
+    const double err = LeftEdgeError(img, cam, board, options);
+    std::printf("supersample %d: mean edge error %.4f px\n", supersample, err);
+    EXPECT_NEAR(err, 0.0, 0.005) << "supersample " << supersample;
+  }
+}
+
+TEST(SceneRendererTest, RenderWithoutDistortionIsThePinholeImage) {
+  EnsureDisplay();
+  const TagBoard board = FrontBoard();
+  SceneRenderer renderer(SceneOf(board));
+  const CameraTool cam = TestCamera(false);
+  const cv::Mat pinhole = renderer.RenderPinhole(Rigid3(), cam);
+  const cv::Mat img = renderer.Render(Rigid3(), cam);
+  cv::Mat rounded;
+  pinhole.convertTo(rounded, CV_8UC1);
+  EXPECT_EQ(cv::norm(rounded, img, cv::NORM_INF), 0.0);
+}
+
+TEST(SceneRendererTest, DistortionMovesThePictureLikeProjectToPixel) {
+  EnsureDisplay();
+  TagBoard board = FrontBoard(1, 1, 2.0);
+  // One tag far off-axis, where k1 moves it by pixels.
+  board.ref_from_board.translation = Eigen::Vector3d(0.7, 0.5, 2.0);
+  CameraTool cam = TestCamera(true);
+  SceneRenderer renderer(SceneOf(board));
+  const cv::Mat img = renderer.Render(Rigid3(), cam);
+  // The tag's ink centroid (the black border ring and data bits) against the
+  // centroid of the same tag rendered ideally and moved by the distortion of
+  // its centre: within 0.3 px, where no distortion would be ~10 px off.
+  CameraTool pinhole_cam = cam;
+  pinhole_cam.distortion = {};
+  const cv::Mat ideal = renderer.Render(Rigid3(), pinhole_cam);
+  auto ink_centroid = [](const cv::Mat& m) {
+    // Ink is 20, background 90, paper 235: weight only what is near ink.
+    cv::Mat ink;
+    cv::Mat(60 - m).convertTo(ink, CV_32F);  // saturates at 0 for brighter pixels
+    const cv::Moments mo = cv::moments(ink);
+    return Eigen::Vector2d(mo.m10 / mo.m00, mo.m01 / mo.m00);
+  };
+  const Eigen::Vector2d c_ideal = ink_centroid(ideal), c_dist = ink_centroid(img);
+  // Where the distortion takes the ideal centroid's ray.
+  const Eigen::Vector3d ray((c_ideal.x() - cam.intrinsics[2]) / cam.intrinsics[0],
+                            (c_ideal.y() - cam.intrinsics[3]) / cam.intrinsics[1], 1.0);
+  double px[2];
+  camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), ray.data(), px);
+  EXPECT_GT((c_dist - c_ideal).norm(), 5.0);
+  EXPECT_NEAR(c_dist.x(), px[0], 0.3);
+  EXPECT_NEAR(c_dist.y(), px[1], 0.3);
+}
+
+TEST(SceneRendererTest, NoiseIsSeededAndSized) {
+  EnsureDisplay();
+  RenderOptions options;
+  options.noise_sigma = 3.0;
+  SceneRenderer renderer(SceneOf(FrontBoard()), options);
+  const CameraTool cam = TestCamera(false);
+  const cv::Mat a = renderer.Render(Rigid3(), cam, 7);
+  const cv::Mat b = renderer.Render(Rigid3(), cam, 7);
+  const cv::Mat c = renderer.Render(Rigid3(), cam, 8);
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(a, c, cv::NORM_INF), 0.0);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(a(cv::Rect(0, 0, 200, 200)), mean, stddev);  // background only
+  EXPECT_NEAR(mean[0], options.background, 0.5);
+  EXPECT_NEAR(stddev[0], 3.0, 0.3);  // 40000 samples; rounding adds 1/12 in variance
+}
+
+TEST(SceneRendererTest, ExposureAndBlur) {
+  EnsureDisplay();
+  RenderOptions options;
+  options.exposure = 0.5;
+  options.blur_sigma = 1.5;
+  SceneRenderer renderer(SceneOf(FrontBoard()), options);
+  const cv::Mat img = renderer.Render(Rigid3(), TestCamera(false));
+  EXPECT_NEAR(img.at<uint8_t>(10, 10), 0.5 * options.background, 1.0);
+  double lo, hi;
+  cv::minMaxLoc(img, &lo, &hi);
+  EXPECT_LE(hi, 0.5 * options.paper + 1);
+}
+
+TEST(SceneRendererTest, TheBackOfABoardIsBlank) {
+  EnsureDisplay();
+  const TagBoard board = FrontBoard();
+  SceneRenderer renderer(SceneOf(board));
+  const CameraTool cam = TestCamera(false);
+  // From 4 m, behind the board, looking back at it.
+  const Rigid3 behind = testing::AimAt(Eigen::Vector3d(0, 0, 4), board.CentreInRef(), cam.intrinsics[2],
+                                       cam.intrinsics[3], 0.0, cam);
+  const cv::Mat img = renderer.Render(behind, cam);
+  double lo, hi;
+  cv::minMaxLoc(img, &lo, &hi);
+  EXPECT_GT(lo, renderer.options().ink + 30);  // no ink anywhere
+  EXPECT_NE(img.at<uint8_t>(480, 640), static_cast<uint8_t>(renderer.options().background));
+}
+
+TEST(SceneRendererTest, NearerBoardsHideFartherOnes) {
+  EnsureDisplay();
+  TargetScene scene = SceneOf(FrontBoard(3, 4, 3.0));
+  TagBoard front = FrontBoard(1, 1, 1.5);
+  front.first_id = 20;
+  scene.boards.push_back(front);
+  SceneRenderer renderer(scene);
+  const CameraTool cam = TestCamera(false);
+  const cv::Mat img = renderer.Render(Rigid3(), cam);
+  // At the optical axis the single near tag's black border/centre region
+  // (a 0.08 m tag at 1.5 m: 53 px wide) covers the far board's centre.
+  const TargetScene near_only = SceneOf(front);
+  SceneRenderer near_renderer(near_only);
+  const cv::Mat near_img = near_renderer.Render(Rigid3(), cam);
+  EXPECT_EQ(cv::norm(img(cv::Rect(610, 450, 60, 60)), near_img(cv::Rect(610, 450, 60, 60)), cv::NORM_INF), 0.0);
+}
+
+TEST(SceneRendererTest, OptionsAreChecked) {
+  RenderOptions o;
+  EXPECT_EQ(o.Check(), "");
+  o.supersample = 0;
+  EXPECT_NE(o.Check(), "");
+  o = RenderOptions();
+  o.ink = 200;
+  o.paper = 100;
+  EXPECT_NE(o.Check(), "");
+  o = RenderOptions();
+  o.exposure = 0;
+  EXPECT_NE(o.Check(), "");
+  EXPECT_THROW(SceneRenderer(TargetScene(), o), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rtscalib::render
