@@ -65,12 +65,16 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
     s += ". Config: " + r.config_line;
     if (!r.identifiable) s += " (note: " + r.note + ")";
     v.push_back(s);
-    if (significant.size() > 1) {
-      std::string also = "Also significant:";
-      for (size_t i = 1; i < significant.size(); ++i) {
-        also += (i > 1 ? "," : "") + std::string(" ") + significant[i]->name;
+    if (!d.ranking.also_after_best.empty()) {
+      std::string also = "Still significant once " + r.name + " is in:";
+      for (size_t i = 0; i < d.ranking.also_after_best.size(); ++i) {
+        also += (i ? ", " : " ") + d.ranking.also_after_best[i];
       }
-      v.push_back(also + " (add one at a time, best first; `rtscalib diagnose --auto` does it).");
+      v.push_back(also + " (add one at a time; `rtscalib diagnose --auto` does it).");
+    } else if (significant.size() > 1) {
+      std::string also;
+      for (size_t i = 1; i < significant.size(); ++i) also += (i > 1 ? ", " : "") + significant[i]->name;
+      v.push_back("Also significant alone, but not once " + r.name + " is in: " + also + ".");
     }
   }
   for (const Harmonic& h : d.harmonics.unexplained) {
@@ -109,12 +113,6 @@ const RankedEffect* Diagnosis::Next() const {
     if (r.significant && !r.redundant) return &r;
   }
   return nullptr;
-}
-
-double Bic(const GroupRms& rms, const double sigma[3], int num_rows, int num_parameters) {
-  const double n = std::max(num_rows, 1);
-  const double rss = std::max(rms.WhitenedRss(sigma), 1e-300);
-  return n * std::log(rss / n) + num_parameters * std::log(n);
 }
 
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,

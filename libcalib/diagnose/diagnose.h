@@ -65,7 +65,5 @@ struct Diagnosis {
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
                    const Settings& settings);
 
-// BIC of a model on its data with fixed whitening sigmas: n log(RSS/n) + k log n.
-double Bic(const GroupRms& rms, const double sigma[3], int num_rows, int num_parameters);
 
 }  // namespace rtscalib::diagnose

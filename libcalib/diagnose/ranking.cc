@@ -27,10 +27,42 @@ std::array<double, 4> Cov2(const Eigen::MatrixXd& c) {
   return out;
 }
 
+// sum_g n_g log(RSS_g(after) / RSS_g(before)) over the observation groups:
+// -2 x the change of the Gaussian log-likelihood with one free variance per
+// group (so a group whose noise estimate the missing effect inflated is not
+// down-weighted in the comparison).
+double GroupLogRatio(const Linearization& lin, const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+  double b[3] = {0, 0, 0}, a[3] = {0, 0, 0};
+  int rows[3] = {0, 0, 0};
+  for (int i = 0; i < lin.NumRows(); ++i) {
+    const int g = static_cast<int>(lin.rows[i].group);
+    b[g] += before[i] * before[i];
+    a[g] += after[i] * after[i];
+    ++rows[g];
+  }
+  double sum = 0;
+  for (int g = 0; g < 3; ++g) {
+    if (rows[g] > 0 && b[g] > 0) sum += rows[g] * std::log(std::max(a[g], 1e-300) / b[g]);
+  }
+  return sum;
+}
+
 }  // namespace
 
 double GroupRms::WhitenedRss(const double sigma[3]) const {
   return edm_ss / (sigma[0] * sigma[0]) + cam_ss / (sigma[1] * sigma[1]) + pixels_ss / (sigma[2] * sigma[2]);
+}
+
+double GroupRms::Bic(int num_parameters) const {
+  const double rows[3] = {3.0 * edm_n, 3.0 * cam_n, 2.0 * pixels_n};
+  const double ss[3] = {edm_ss, cam_ss, pixels_ss};
+  double n = 0, bic = 0;
+  for (int g = 0; g < 3; ++g) {
+    if (rows[g] == 0) continue;
+    n += rows[g];
+    bic += rows[g] * std::log(std::max(ss[g], 1e-300) / rows[g]);
+  }
+  return n > 0 ? bic + num_parameters * std::log(n) : 0.0;
 }
 
 GroupRms RmsOfWhitened(const Linearization& lin, const Eigen::VectorXd& r) {
@@ -166,8 +198,7 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
     const ColumnTest t = TestColumns(y, nu.Apply(t_e), red.cluster, lin.num_clusters, dof);
     r.num_params = t.rank;
     r.delta_rss = t.delta_rss;
-    r.delta_bic = t.rss_before > 0 ? n * std::log(std::max(t.rss_after, 1e-300) / t.rss_before) + t.rank * log_n
-                                   : t.rank * log_n;
+    r.delta_bic = GroupLogRatio(lin, y, y - t.fitted) + t.rank * log_n;
     r.wald = t.wald;
     r.p_value = t.p_value;
     const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.base.rank());
@@ -264,6 +295,22 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
       const ColumnTest t = TestColumns(p.Apply(red.r), p.Apply(red.extra.middleCols(be->first, be->size)),
                                        red.cluster, lin.num_clusters, red.base.rank() + p.rank());
       if (!(t.rank > 0 && t.p_value < out.level)) r.aliases.push_back(o.name);
+    }
+  }
+
+  // What stays significant once the best effect is in.
+  if (!out.entries.empty() && out.entries.front().significant) {
+    const ColumnBlock* best = block_of(out.entries.front().effect);
+    Projector p = nu;
+    p.Add(red.extra.middleCols(best->first, best->size));
+    const Eigen::VectorXd yb = p.Apply(red.r);
+    for (size_t i = 1; i < out.entries.size(); ++i) {
+      const RankedEffect& o = out.entries[i];
+      if (!o.significant) continue;
+      const ColumnBlock* bo = block_of(o.effect);
+      const ColumnTest t = TestColumns(yb, p.Apply(red.extra.middleCols(bo->first, bo->size)), red.cluster,
+                                       lin.num_clusters, red.base.rank() + p.rank());
+      if (t.rank > 0 && t.p_value < out.level) out.also_after_best.push_back(o.name);
     }
   }
 

@@ -6,10 +6,12 @@
 //   estimate      b_e, cov_e          TestColumns (statistics.h), conditional on the
 //                                     unexplained harmonics (harmonics.h) so that an
 //                                     effect is not credited with structure that is not its own
-//   delta_bic     n log(RSS_after / RSS_before) + k log n     whitened residuals, n rows,
-//                                     k = rank of T_e (negative = better)
-//   significant   p(Wald) < significance / (number of effects tested), delta_bic < 0,
-//                 and the effect is identifiable
+//   delta_bic     sum_g n_g log(RSS_g,after / RSS_g,before) + k log n
+//                 g = observation group (edm, cam, pixels) with its own variance, n_g its
+//                 residual rows, n = sum n_g, k = rank of T_e; negative = better. With one
+//                 free variance per group this is the BIC of the Gaussian likelihood, so a
+//                 group whose fitted sigma the missing effect inflated still counts fully.
+//   significant   p(Wald) < significance / (number of effects tested) and delta_bic < 0
 //   rms after     from a refinement with the effect added (Refine, warm start at the
 //                 linear estimate, the fit's weights held) for the best `refine_top`
 //                 significant effects; from the linear prediction for the others
@@ -47,6 +49,9 @@ struct GroupRms {
   const char* MainUnit() const { return edm_n + cam_n > 0 ? "m" : "px"; }
   // Whitened residual sum of squares with sigmas per group.
   double WhitenedRss(const double sigma[3]) const;
+  // BIC with one free variance per group: sum_g n_g log(RSS_g / n_g) + k log n,
+  // n_g = residual rows of group g (3 per record, 2 per image point).
+  double Bic(int num_parameters) const;
 };
 
 GroupRms RmsOfWhitened(const Linearization& lin, const Eigen::VectorXd& r);
@@ -97,6 +102,9 @@ struct Ranking {
   std::vector<RankedEffect> entries;  // best first
   double level = 0;                   // per-effect test level
   int tested = 0;
+  // Significant effects that stay significant once the best one is added
+  // (what the next rungs of the ladder will likely add).
+  std::vector<std::string> also_after_best;
   int num_rows = 0;
   GroupRms current;
 };

@@ -8,7 +8,6 @@ StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& m
   StepwiseResult out;
   out.model = model;
   out.fit = fit;
-  const FitContext first = ContextOf(fit_options, fit);
   std::string added;
   for (int step = 0;; ++step) {
     out.diagnosis = Diagnose(obs, out.model, ContextOf(fit_options, out.fit), settings);
@@ -18,7 +17,7 @@ StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& m
     rung.effects = out.diagnosis.effects;
     rung.rms = out.diagnosis.current;
     rung.num_parameters = out.diagnosis.num_parameters;
-    rung.bic = Bic(rung.rms, first.sigma, out.diagnosis.num_rows, rung.num_parameters);
+    rung.bic = rung.rms.Bic(rung.num_parameters);
     rung.fit = out.fit;
     out.ladder.push_back(rung);
 

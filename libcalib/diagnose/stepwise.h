@@ -2,8 +2,8 @@
 // the best significant effect, refine (warm start from the current model, the
 // new effect at its linear estimate), repeat until no effect is significant
 // or `max_steps` effects have been added. The ladder records every rung: the
-// model, its error per observation group, the effect added and the BIC with
-// the whitening of the first rung (so BICs of different rungs compare).
+// model, its error per observation group, the effect added and its BIC with
+// one free variance per group (GroupRms::Bic), so rungs compare.
 #pragma once
 
 #include <string>
