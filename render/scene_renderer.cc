@@ -202,6 +202,9 @@ void SceneRenderer::Impl::Build() {
   window->SetOffScreenRendering(1);
   window->SetMultiSamples(0);
   window->SetAlphaBitPlanes(0);
+  // Read-back is from the render framebuffer (front = 0): no copy to the
+  // display framebuffer at the end of every frame.
+  window->SwapBuffersOff();
   window->SetSize(64, 64);
   renderer = Ptr<vtkRenderer>::New();
   const double bg = options.background / 255.0;

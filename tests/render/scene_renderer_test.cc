@@ -175,6 +175,26 @@ TEST(SceneRendererTest, ExposureAndBlur) {
   EXPECT_LE(hi, 0.5 * options.paper + 1);
 }
 
+TEST(SceneRendererTest, LightingShadesObliqueBoards) {
+  EnsureDisplay();
+  TagBoard board = FrontBoard();
+  // Turned by 60 degrees about its vertical centre line.
+  const Eigen::Vector3d centre = board.CentreInRef();
+  board.ref_from_board.rotation = Ry(M_PI / 3);
+  board.ref_from_board.translation = centre - board.ref_from_board.rotation * Eigen::Vector3d(0.19, 0.14, 0);
+  RenderOptions options;
+  options.lighting = true;
+  SceneRenderer lit(SceneOf(board), options);
+  double lo, hi;
+  cv::minMaxLoc(lit.Render(Rigid3(), TestCamera(false)), &lo, &hi);
+  // Headlight: ambient 0.3 + diffuse 0.7 cos(60 deg) of the paper.
+  EXPECT_NEAR(hi, 0.65 * options.paper, 0.03 * options.paper);
+  options.lighting = false;
+  SceneRenderer flat(SceneOf(board), options);
+  cv::minMaxLoc(flat.Render(Rigid3(), TestCamera(false)), &lo, &hi);
+  EXPECT_EQ(hi, options.paper);
+}
+
 TEST(SceneRendererTest, TheBackOfABoardIsBlank) {
   EnsureDisplay();
   const TagBoard board = FrontBoard();

@@ -1,0 +1,101 @@
+// Rendering and detection throughput at 1280 x 960 (docs/rendering.md lists
+// the measured figures). Runs headless: an Xvfb is started when DISPLAY is
+// unset.
+//
+//   build/bench/render_benchmark --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <Eigen/Geometry>
+#include <memory>
+
+#include "render/detector.h"
+#include "render/headless.h"
+#include "render/scene_renderer.h"
+
+namespace rtscalib::render {
+namespace {
+
+HeadlessDisplay& Display() {
+  static HeadlessDisplay display;
+  return display;
+}
+
+// A 5 x 7 board of 8 cm tag36h11 2 m in front of a 1280 x 960 camera with the
+// distortion of the accuracy tests, seen slightly from the side.
+struct Fixture {
+  TargetScene scene;
+  CameraTool cam;
+  Rigid3 pose;
+
+  Fixture() {
+    TagBoard b;
+    b.rows = 5;
+    b.cols = 7;
+    const double w = b.cols * b.tag_size + (b.cols - 1) * b.spacing;
+    const double h = b.rows * b.tag_size + (b.rows - 1) * b.spacing;
+    b.ref_from_board.translation = Eigen::Vector3d(-w / 2, -h / 2, 2.0);
+    scene.boards.push_back(b);
+    cam.intrinsics = {1000.0, 1000.0, 640.3, 479.6};
+    cam.distortion[camera::kK1] = -0.1;
+    cam.distortion[camera::kK2] = 0.05;
+    cam.distortion[camera::kP1] = 1e-4;
+    pose.rotation = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    pose.translation = Eigen::Vector3d(0.2, 0.0, 0.0);
+  }
+};
+
+void BM_Render(benchmark::State& state) {
+  Display();
+  Fixture f;
+  RenderOptions options;
+  options.supersample = static_cast<int>(state.range(0));
+  options.noise_sigma = state.range(1) != 0 ? 2.0 : 0.0;
+  SceneRenderer renderer(f.scene, options);
+  renderer.Render(f.pose, f.cam);  // distortion map and texture upload, once
+  std::uint64_t seed = 0;
+  for (auto _ : state) {
+    Rigid3 pose = f.pose;
+    pose.translation.x() += 1e-4 * (seed % 16);  // a new pose every time
+    benchmark::DoNotOptimize(renderer.Render(pose, f.cam, ++seed).data);
+  }
+  state.counters["images/s"] = benchmark::Counter(static_cast<double>(state.iterations()),
+                                                  benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Render)
+    ->ArgNames({"supersample", "noise"})
+    ->Args({1, 0})
+    ->Args({2, 0})
+    ->Args({2, 1})
+    ->Args({3, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()  // llvmpipe and OpenCV threads included
+    ->UseRealTime();
+
+void BM_Detect(benchmark::State& state) {
+  Display();
+  Fixture f;
+  SceneRenderer renderer(f.scene);
+  const cv::Mat img = renderer.Render(f.pose, f.cam);
+  DetectorOptions options;
+  options.threads = static_cast<int>(state.range(0));
+  options.refine_corners = state.range(1) != 0;
+  TagDetector detector(options);
+  size_t found = 0;
+  for (auto _ : state) found = detector.Detect(img).size();
+  state.counters["tags"] = static_cast<double>(found);
+  state.counters["images/s"] = benchmark::Counter(static_cast<double>(state.iterations()),
+                                                  benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Detect)
+    ->ArgNames({"threads", "refine"})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Args({2, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()  // llvmpipe and OpenCV threads included
+    ->UseRealTime();
+
+}  // namespace
+}  // namespace rtscalib::render
+
+BENCHMARK_MAIN();
