@@ -6,11 +6,14 @@
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Geometry>
+#include <cstdlib>
+#include <filesystem>
 #include <memory>
 
 #include "render/detector.h"
 #include "render/headless.h"
 #include "render/scene_renderer.h"
+#include "render/shots.h"
 
 namespace rtscalib::render {
 namespace {
@@ -93,6 +96,42 @@ BENCHMARK(BM_Detect)
     ->Args({2, 1})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()  // llvmpipe and OpenCV threads included
+    ->UseRealTime();
+
+// The whole shot pipeline: render, encode and write 16 PNGs, in `jobs`
+// worker processes (fork; each worker sets up its own renderer per call).
+void BM_RenderShots(benchmark::State& state) {
+  Display();
+  Fixture f;
+  std::vector<Shot> shots;
+  for (int i = 0; i < 16; ++i) {
+    Shot s;
+    s.id = "b" + std::to_string(i);
+    s.cam = f.cam;
+    s.ref_from_cam = f.pose;
+    s.ref_from_cam.translation.x() += 0.002 * i;
+    shots.push_back(s);
+  }
+  char dir[] = "/tmp/rtscalib-bench-XXXXXX";
+  if (::mkdtemp(dir) == nullptr) {
+    state.SkipWithError("mkdtemp failed");
+    return;
+  }
+  RenderShotsOptions options;
+  options.out_dir = dir;
+  options.jobs = static_cast<int>(state.range(0));
+  options.progress = false;
+  for (auto _ : state) RenderShots(f.scene, shots, options);
+  std::filesystem::remove_all(dir);
+  state.counters["images/s"] = benchmark::Counter(static_cast<double>(state.iterations() * shots.size()),
+                                                  benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_RenderShots)
+    ->ArgNames({"jobs"})
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
     ->UseRealTime();
 
 }  // namespace

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <list>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -77,19 +78,65 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor
 
   const double fx = cam.intrinsics[0], fy = cam.intrinsics[1];
   const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
+  // Ideal pixel of output pixel (u, v); NaN where back-projection fails.
+  auto ideal = [&](double u, double v) {
+    const double pixel[2] = {u, v};
+    double xn, yn;
+    if (camera::UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
+        std::isfinite(xn) && std::isfinite(yn)) {
+      return cv::Vec2d(fx * xn + cx, fy * yn + cy);
+    }
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return cv::Vec2d(nan, nan);
+  };
+  // Exact back-projection of every pixel costs ~0.5 s at 1280 x 960. The map is
+  // smooth, so it is solved on a grid of kStep pixels and interpolated
+  // bilinearly; every cell is checked at its centre and solved pixel by pixel
+  // when interpolation is off by more than kTolerance there (strong or
+  // failing distortion near the rim).
+  constexpr int kStep = 4;
+  constexpr double kTolerance = 1e-3;  // px, far below the corner accuracy
+  const int gw = (cam.width - 1 + kStep - 1) / kStep + 1, gh = (cam.height - 1 + kStep - 1) / kStep + 1;
+  auto node_u = [&](int i) { return std::min(i * kStep, cam.width - 1); };
+  auto node_v = [&](int j) { return std::min(j * kStep, cam.height - 1); };
   cv::Mat ideal_u(cam.height, cam.width, CV_64FC1), ideal_v(cam.height, cam.width, CV_64FC1);
-  cv::parallel_for_(cv::Range(0, cam.height), [&](const cv::Range& rows) {
-    for (int v = rows.start; v < rows.end; ++v) {
+  if (gw < 2 || gh < 2) {  // a single row or column of pixels: no cells
+    for (int v = 0; v < cam.height; ++v) {
       for (int u = 0; u < cam.width; ++u) {
-        const double pixel[2] = {double(u), double(v)};
-        double xn, yn;
-        if (camera::UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
-            std::isfinite(xn) && std::isfinite(yn)) {
-          ideal_u.at<double>(v, u) = fx * xn + cx;
-          ideal_v.at<double>(v, u) = fy * yn + cy;
-        } else {
-          ideal_u.at<double>(v, u) = std::numeric_limits<double>::quiet_NaN();
-          ideal_v.at<double>(v, u) = std::numeric_limits<double>::quiet_NaN();
+        const cv::Vec2d p = ideal(u, v);
+        ideal_u.at<double>(v, u) = p[0];
+        ideal_v.at<double>(v, u) = p[1];
+      }
+    }
+  }
+  cv::Mat grid(gh, gw, CV_64FC2);
+  cv::parallel_for_(cv::Range(0, gh), [&](const cv::Range& rows) {
+    for (int j = rows.start; j < rows.end; ++j) {
+      for (int i = 0; i < gw; ++i) grid.at<cv::Vec2d>(j, i) = ideal(node_u(i), node_v(j));
+    }
+  });
+  cv::parallel_for_(cv::Range(0, gh - 1), [&](const cv::Range& rows) {
+    for (int j = rows.start; j < rows.end; ++j) {
+      const int v0 = node_v(j), v1 = node_v(j + 1);
+      for (int i = 0; i + 1 < gw; ++i) {
+        const int u0 = node_u(i), u1 = node_u(i + 1);
+        const cv::Vec2d a = grid.at<cv::Vec2d>(j, i), b = grid.at<cv::Vec2d>(j, i + 1);
+        const cv::Vec2d d = grid.at<cv::Vec2d>(j + 1, i), e = grid.at<cv::Vec2d>(j + 1, i + 1);
+        auto interp = [&](double u, double v) {
+          const double s = (u - u0) / (u1 - u0), t = (v - v0) / (v1 - v0);
+          return (1 - t) * ((1 - s) * a + s * b) + t * ((1 - s) * d + s * e);
+        };
+        const double um = 0.5 * (u0 + u1), vm = 0.5 * (v0 + v1);
+        const cv::Vec2d exact = ideal(um, vm);
+        const bool smooth = cv::norm(interp(um, vm) - exact) <= kTolerance;  // false for NaNs
+        // Each cell fills its pixels [u0, u1) x [v0, v1), the last ones up to the edge.
+        const int u_end = i + 2 == gw ? u1 + 1 : u1, v_end = j + 2 == gh ? v1 + 1 : v1;
+        for (int v = v0; v < v_end; ++v) {
+          for (int u = u0; u < u_end; ++u) {
+            const cv::Vec2d p = smooth ? interp(u, v) : ideal(u, v);
+            ideal_u.at<double>(v, u) = p[0];
+            ideal_v.at<double>(v, u) = p[1];
+          }
         }
       }
     }
@@ -187,7 +234,10 @@ struct SceneRenderer::Impl {
   Ptr<vtkRenderer> renderer;
   std::vector<BoardActors> boards;
   Ptr<vtkUnsignedCharArray> pixels;
-  DistortionMap map;
+  // Maps of the cameras seen last (one per zoom level, typically), most
+  // recent first: a shot list alternating between zooms must not rebuild them.
+  std::list<DistortionMap> maps;
+  static constexpr size_t kMaxMaps = 8;
   cv::Mat canvas;     // CV_32FC1 ideal image after downsampling
   cv::Mat distorted;  // CV_32FC1
 
@@ -424,13 +474,18 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
                               std::uint64_t image_seed) {
   Impl& im = *impl_;
   const RenderOptions& o = im.options;
-  if (!im.map.Matches(cam) || im.map.width == 0) {
-    im.map = BuildDistortionMap(cam, o.max_canvas_factor);
+  auto it = std::find_if(im.maps.begin(), im.maps.end(), [&](const DistortionMap& m) { return m.Matches(cam); });
+  if (it == im.maps.end()) {
+    im.maps.push_front(BuildDistortionMap(cam, o.max_canvas_factor));
+    if (im.maps.size() > Impl::kMaxMaps) im.maps.pop_back();
+  } else if (it != im.maps.begin()) {
+    im.maps.splice(im.maps.begin(), im.maps, it);
   }
-  im.RenderCanvas(ref_from_cam, cam, im.map.canvas, &im.canvas);
+  const DistortionMap& map = im.maps.front();
+  im.RenderCanvas(ref_from_cam, cam, map.canvas, &im.canvas);
   cv::Mat* img = &im.canvas;
-  if (!im.map.identity) {
-    cv::remap(im.canvas, im.distorted, im.map.map_x, im.map.map_y, cv::INTER_LINEAR,
+  if (!map.identity) {
+    cv::remap(im.canvas, im.distorted, map.map_x, map.map_y, cv::INTER_LINEAR,
               cv::BORDER_CONSTANT, cv::Scalar(o.background));
     img = &im.distorted;
   }
