@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -113,12 +114,25 @@ void RenderInWorkers(const TargetScene& scene, const std::vector<Shot>& shots,
     std::string buffer;
   };
   std::vector<Worker> workers(jobs);
+  // Stops the workers already started when starting the next one fails.
+  auto abandon = [&](int started, const std::string& what) {
+    for (int j = 0; j < started; ++j) {
+      ::kill(workers[j].pid, SIGTERM);
+      ::waitpid(workers[j].pid, nullptr, 0);
+      ::close(workers[j].fd);
+    }
+    throw std::runtime_error("RenderShots: " + what + " failed: " + std::strerror(errno));
+  };
   std::fflush(nullptr);  // or buffered output would be written once per process
   for (int k = 0; k < jobs; ++k) {
     int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("RenderShots: pipe() failed");
+    if (::pipe(fds) != 0) abandon(k, "pipe()");
     const pid_t pid = ::fork();
-    if (pid < 0) throw std::runtime_error("RenderShots: fork() failed");
+    if (pid < 0) {
+      ::close(fds[0]);
+      ::close(fds[1]);
+      abandon(k, "fork()");
+    }
     if (pid == 0) {
       ::close(fds[0]);
       for (int j = 0; j < k; ++j) ::close(workers[j].fd);
