@@ -7,6 +7,7 @@
 #include "app/output_folder.h"
 #include "app/pipeline.h"
 #include "app/progress.h"
+#include "app/report_html.h"
 #include "app/reports.h"
 #include "libcalib/io/config.h"
 #include "libcalib/io/model_io.h"
@@ -57,12 +58,13 @@ int RunCalibration(const RunArgs& args) {
   WriteModelYaml(out.RunFile("model.yaml"), result.model, meta);
   const nlohmann::json report = ReportJson(config, result, out);
   WriteText(out.RunFile("report.json"), report.dump(2));
+  WriteReportHtml(config, result, report, out);
   const std::string text = ReportText(config, result) + "\n" + DiagnosisText(result);
   WriteText(out.RunFile("report.txt"), text);
   out.Publish({"model.yaml", "report.json", "report.txt", "report.html", "figures"});
   progress.Done();
   std::cout << (args.diagnose ? DiagnosisText(result) : text);
-  std::cout << "\nwritten: " << out.root() << "/{model.yaml, report.json, report.txt}\n";
+  std::cout << "\nwritten: " << out.root() << "/{model.yaml, report.json, report.txt, report.html, figures/}\n";
   return 0;
 }
 

@@ -10,6 +10,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   xvfb xauth libgl1-mesa-dri libglx-mesa0 mesa-utils
+  # headless browser: scripts/render-report.sh checks report.html in it
+  chromium
 )
 
 missing=()

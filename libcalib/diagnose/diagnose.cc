@@ -28,8 +28,15 @@ std::string Rms(const GroupRms& g) {
   return out + " rms";
 }
 
-std::string Headline(double v, const std::string& unit) {
-  return unit == "m" ? Fmt("%.3g", v * 1e3) + " mm" : Fmt("%.3g", v) + " px";
+// "EDM points 0.323 -> 0.0908 mm, camera points 0.0326 -> 0.0221 mm rms"
+std::string Change(const GroupRms& a, const GroupRms& b) {
+  std::vector<std::string> parts;
+  if (a.edm_n > 0) parts.push_back("EDM points " + Fmt("%.3g", a.edm_m * 1e3) + " -> " + Fmt("%.3g", b.edm_m * 1e3) + " mm");
+  if (a.cam_n > 0) parts.push_back("camera points " + Fmt("%.3g", a.cam_m * 1e3) + " -> " + Fmt("%.3g", b.cam_m * 1e3) + " mm");
+  if (a.pixels_n > 0) parts.push_back("image points " + Fmt("%.3g", a.pixels_px) + " -> " + Fmt("%.3g", b.pixels_px) + " px");
+  std::string out;
+  for (size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
+  return out + " rms";
 }
 
 std::string ValueText(const RankedEffect& r) {
@@ -58,8 +65,8 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
                 "% level.");
   } else {
     const RankedEffect& r = *significant.front();
-    std::string s = "Add " + r.name + " next: the error falls from " + Headline(r.rms_before, r.rms_unit) +
-                    " to " + Headline(r.rms_after, r.rms_unit) + " (delta BIC " + Fmt("%.0f", r.delta_bic) + ")";
+    std::string s = "Add " + r.name + " next: " + Change(r.before, r.after) + " (delta BIC " +
+                    Fmt("%.0f", r.delta_bic) + ")";
     const std::string value = ValueText(r);
     if (!value.empty()) s += "; " + value;
     s += ". Config: " + r.config_line;
