@@ -5,6 +5,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "libcalib/extract/intrinsics_from_rays.h"
 #include "libcalib/extract/simplify.h"
 #include "libcalib/fit/init_from_pixels.h"
 #include "libcalib/fit/two_face.h"
@@ -87,7 +88,8 @@ InitFromPixelsOptions PixelStartOptions(const RunConfig& config) {
 
 }  // namespace
 
-Observations LoadObservations(const RunConfig& config, PipelineResult* result, Progress* progress) {
+Observations LoadObservations(const RunConfig& config, const std::string& work_dir,
+                              PipelineResult* result, Progress* progress) {
   Observations obs;
   if (!config.records_path.empty() || !config.pixels_path.empty()) {
     progress->Step("reading observations");
@@ -119,6 +121,12 @@ Observations LoadObservations(const RunConfig& config, PipelineResult* result, P
   result->truth = sim.truth;
   progress->Note(std::to_string(data.obs.records.size()) + " records, " +
                  std::to_string(data.obs.pixels.size()) + " pixel observations");
+  const RenderSettings render = ParseRenderSettings(config);
+  if (render.enabled && !sim.targets.boards.empty()) {
+    result->render = RenderAndDetect(render, sim.truth, sim.targets, work_dir + "/images",
+                                     &data.obs, progress);
+    if (!result->render.note.empty()) result->notes.push_back(result->render.note);
+  }
   return std::move(data.obs);
 }
 
@@ -160,9 +168,9 @@ FinalErrors ComputeFinalErrors(const InstrumentModel& model, const Observations&
   return f;
 }
 
-PipelineResult RunPipeline(const RunConfig& config, Progress* progress) {
+PipelineResult RunPipeline(const RunConfig& config, const std::string& work_dir, Progress* progress) {
   PipelineResult result;
-  result.obs = LoadObservations(config, &result, progress);
+  result.obs = LoadObservations(config, work_dir, &result, progress);
   const Observations& obs = result.obs;
 
   // 1. Extraction (Klug Sec. 3).
@@ -171,7 +179,30 @@ PipelineResult RunPipeline(const RunConfig& config, Progress* progress) {
     ExtractOptions eo;
     eo.min_zenith_rad = config.fit.min_zenith_rad;
     eo.max_zenith_rad = config.fit.max_zenith_rad;
-    result.extraction = ExtractDhModel(obs.records, config.model.cameras, eo);
+    try {
+      result.extraction = ExtractDhModel(obs.records, config.model.cameras, eo);
+    } catch (const ExtractionError& first) {
+      // Without Klug's pixel triplets (Eq. 67) and configured intrinsics the
+      // camera tools cannot be extracted as the paper does; intrinsics from
+      // the view rays (DLT) let the extraction use every camera row instead.
+      std::vector<CameraTool> cameras = config.model.cameras;
+      const std::set<int> zooms = ZoomsInData(obs);
+      bool estimated = false;
+      for (int z : zooms) {
+        if (z < static_cast<int>(cameras.size())) continue;
+        const auto est = EstimateIntrinsicsFromRays(obs.records, z);
+        if (!est) throw;
+        cameras.resize(z + 1, est->camera);
+        cameras[z] = est->camera;
+        result.notes.push_back("extraction: " + est->note);
+        progress->Note(est->note);
+        estimated = true;
+      }
+      if (!estimated) throw;
+      result.notes.push_back(std::string("extraction: first attempt failed (") + first.what() +
+                             "); retried with intrinsics from the view rays");
+      result.extraction = ExtractDhModel(obs.records, cameras, eo);
+    }
     for (const std::string& n : result.extraction->notes) result.notes.push_back("extraction: " + n);
     // 2. Simplification (Sec. 4.1).
     progress->Step("simplifying (Klug Sec. 4.1)");

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "app/progress.h"
+#include "app/render_stage.h"
 #include "libcalib/diagnose/diagnose.h"
 #include "libcalib/diagnose/stepwise.h"
 #include "libcalib/eval/error_measures.h"
@@ -75,13 +76,16 @@ struct PipelineResult {
   std::optional<diagnose::Diagnosis> diagnosis;
   std::vector<diagnose::LadderStep> ladder;
   std::string ladder_stop;
+  RenderStageResult render;              // synthetic shots, when the config renders
 };
 
 // Loads or simulates the observations of a config (the data section, or the
 // simulate section when there are no data files).
-Observations LoadObservations(const RunConfig& config, PipelineResult* result, Progress* progress);
+// `work_dir` receives what acquisition produces (rendered images).
+Observations LoadObservations(const RunConfig& config, const std::string& work_dir,
+                              PipelineResult* result, Progress* progress);
 
-PipelineResult RunPipeline(const RunConfig& config, Progress* progress);
+PipelineResult RunPipeline(const RunConfig& config, const std::string& work_dir, Progress* progress);
 
 // Rows of the "reduced" set: set labels starting with "sweep" when the file
 // has labels, otherwise the rows of the extraction's sweeps poses.

@@ -188,6 +188,18 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
   j["final"] = {{"records", {{"edm", StatsJson(r.final_errors.edm)}, {"cam", StatsJson(r.final_errors.cam)}}},
                 {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
   j["diagnosis"] = DiagnosisJson(r);
+  if (r.render.ran) {
+    j["rendering"] = {{"shots", r.render.shots},
+                      {"tags_expected", r.render.expected_tags},
+                      {"tags_found", r.render.found_tags},
+                      {"skipped_border", r.render.skipped_border},
+                      {"skipped_grazing", r.render.skipped_grazing},
+                      {"skipped_small", r.render.skipped_small},
+                      {"detection_rms_px", r.render.detection_rms_px},
+                      {"render_seconds", r.render.render_seconds},
+                      {"detect_seconds", r.render.detect_seconds},
+                      {"images", r.render.image_dir}};
+  }
   j["notes"] = r.notes;
   j["history"] = HistoryJson(out);
   return j;
@@ -296,6 +308,12 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
       << Fmt("%.2f", r.faces->vertical_index * kArcsec) << "\"\n\n";
   }
   const FinalErrors& f = r.final_errors;
+  if (r.render.ran) {
+    o << "Synthetic shots: " << r.render.shots << " rendered, " << r.render.found_tags << " of "
+      << r.render.expected_tags << " visible tags detected (skipped: " << r.render.skipped_border
+      << " at the border, " << r.render.skipped_grazing << " grazing, " << r.render.skipped_small
+      << " too small); detected vs exact corners RMS " << Fmt("%.3f", r.render.detection_rms_px) << " px\n\n";
+  }
   o << "Final (all observations): EDM " << stats(f.edm) << " m (n=" << f.edm.n << "), camera "
     << stats(f.cam) << " m (n=" << f.cam.n << ")";
   if (f.pixels.n > 0) o << ", pixels rms " << Fmt("%.3f", f.pixels.rms_px) << " px (n=" << f.pixels.n << ")";

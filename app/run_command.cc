@@ -41,7 +41,7 @@ int RunCalibration(const RunArgs& args) {
 
   if (args.diagnose) config.diagnose.enabled = true;
   if (args.diagnose_auto) config.diagnose.auto_add = true;
-  PipelineResult result = RunPipeline(config, &progress);
+  PipelineResult result = RunPipeline(config, out.run_dir(), &progress);
   RunDiagnosis(config, &result, &progress);
 
   progress.Step("writing the model and the reports");
