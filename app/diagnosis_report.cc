@@ -112,6 +112,12 @@ void RunDiagnosis(const RunConfig& config, PipelineResult* r, Progress* progress
     progress->Note("stopped: " + sw.stop_reason);
     r->ladder = sw.ladder;
     r->ladder_stop = sw.stop_reason;
+    if (sw.ladder.size() > 1) {
+      r->notes.push_back("diagnose.auto: the stepwise search extended the model to " +
+                         sw.ladder.back().model_description +
+                         "; model.yaml, the final errors and the diagnosis are of that model, Tables 5-7 of the "
+                         "configured one");
+    }
     r->model = sw.model;
     r->fit = sw.fit;
     r->final_errors = ComputeFinalErrors(r->model, r->obs);

@@ -46,7 +46,8 @@ h3 { font-size: 16px; margin-top: 22px; }
 .verdict.ok { background: #f3faf3; border-left-color: #2c9c2c; }
 .verdict .lead { font-size: 17px; font-weight: 600; }
 code { background: #eef1f4; padding: 1px 5px; border-radius: 3px; font-size: 13px; }
-table { border-collapse: collapse; font-size: 13px; margin: 8px 0 4px 0; }
+table { border-collapse: collapse; font-size: 13px; margin: 8px 0 4px 0; max-width: 100%; }
+td code { word-break: break-all; }
 th, td { border: 1px solid #d6d6d6; padding: 4px 8px; text-align: left; vertical-align: top; }
 th { background: #f2f2f2; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
@@ -119,7 +120,8 @@ std::string RankingTable(const diagnose::Diagnosis& d) {
       << "</span></td><td class=num>" << Fmt("%.4g", r.rms_before * (mm ? 1e3 : 1)) << " &rarr; "
       << Fmt("%.4g", r.rms_after * (mm ? 1e3 : 1)) << (mm ? " mm" : " px")
       << "<br><span class=small>" << Esc(r.after_source) << "</span></td><td class=num>" << Fmt("%.1f", r.delta_bic)
-      << "</td><td class=num>" << Fmt("%.2g", r.p_value) << "</td><td>" << (r.significant ? "<b>yes</b>" : "no")
+      << "</td><td class=num>" << (r.p_value > 0 ? Fmt("%.2g", r.p_value) : std::string("&lt;1e-300"))
+      << "</td><td>" << (r.significant ? "<b>yes</b>" : "no")
       << "</td><td>" << (r.redundant ? "redundant" : !r.observable ? "not seen" : r.identifiable ? "yes" : "no")
       << "</td><td class=est>" << ValueCell(r) << "</td><td class=notes>";
     std::vector<std::string> notes;

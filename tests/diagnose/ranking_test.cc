@@ -109,6 +109,30 @@ INSTANTIATE_TEST_SUITE_P(
                       HiddenEffect{Effect::kSensorTilt, {}, {{camera::kTauX, 1e-3}, {camera::kTauY, -1e-3}}, false}),
     [](const auto& info) { return std::string(Info(info.param.effect).name); });
 
+// The linearised estimate (no confirming refinement) is the hidden value:
+// within 3 of its sigmas plus 2% (the linearisation's own error).
+TEST(Ranking, LinearEstimateIsTheHiddenValue) {
+  for (const HiddenEffect& h : {HiddenEffect{Effect::kHzEccentricity, {5.0, 40.0}, {}},
+                                HiddenEffect{Effect::kEdmScale, {20.0, 0}, {}},
+                                HiddenEffect{Effect::kVScale, {30.0, 0}, {}}}) {
+    const Fitted f = SimulateHidden(h, 13);
+    Settings s;
+    s.refine_top = 0;
+    s.harmonics = false;
+    s.outliers = false;
+    const Diagnosis d = DiagnoseFitted(f, s);
+    const RankedEffect& top = d.ranking.entries.front();
+    ASSERT_EQ(top.effect, h.effect);
+    EXPECT_EQ(top.after_source, "linearised");
+    const auto truth = f.truth.EffectValue(h.effect);
+    for (int k = 0; k < Info(h.effect).num_params; ++k) {
+      const double sigma = std::sqrt(top.si_cov[3 * k]);
+      EXPECT_NEAR(top.si[k], truth[k], 3 * sigma + 0.02 * std::hypot(truth[0], truth[1]))
+          << top.name << " parameter " << k;
+    }
+  }
+}
+
 // With the intrinsics fitted, a small sensor tilt is a camera rotation plus a
 // principal point shift: reported as absorbed (redundant), never significant.
 TEST(Ranking, SensorTiltWithFittedIntrinsicsIsAbsorbed) {
