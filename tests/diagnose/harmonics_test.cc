@@ -60,6 +60,47 @@ TEST(Harmonics, TwicePerTurnEncoderErrorIsUnexplainedAndNotMislabelled) {
   EXPECT_EQ(next, nullptr) << (next ? next->name : "");
 }
 
+// An EDM cyclic error at half the unit length (harmonic 2 of U; edm_cyclic is
+// harmonic 1) is unexplained structure in distance, not edm_cyclic.
+TEST(Harmonics, HalfPeriodCyclicErrorIsUnexplained) {
+  const InstrumentModel truth = PaperTruth(1);  // U = 1.5 m
+  SimulationOptions o;
+  o.seed = 71;
+  o.truth = truth;
+  o.plan = SmallPlan();
+  o.plan.grid_edm_distances = {1.0, 1.2, 1.45, 1.7, 2.0, 2.3, 2.6, 3.1, 5.0, 12.0};
+  SimulatedData data = Simulate(o);
+  const NoiseOptions noise = PaperNoise();
+  std::mt19937_64 rng(72);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const double amplitude = 0.1e-3, phase = 60.0 * M_PI / 180;  // 0.1 mm
+  for (Record& r : data.obs.records) {
+    const double phi = r.phi + noise.angle_rad * n(rng), theta = r.theta + noise.angle_rad * n(rng);
+    if (r.tool == Tool::kEdm) {
+      const double err = amplitude * std::sin(2 * 2 * M_PI * r.d / truth.edm_cyclic_unit_length - phase);
+      r.x = PredictEdm(truth, phi, theta, r.d + err + noise.distance_m * n(rng));
+    } else {
+      r.x = PredictCam(truth, r.zoom, phi, theta, r.u, r.v, r.d);
+    }
+    r.x += noise.point_m * Eigen::Vector3d(n(rng), n(rng), n(rng));
+  }
+  const Fitted f = FitBaseline(data, truth, 73);
+  const Diagnosis d = DiagnoseFitted(f);
+  std::string found;
+  bool distance2 = false;
+  for (const Harmonic& h : d.harmonics.unexplained) {
+    found += "  " + h.description + "\n";
+    if (h.probe.reading == Reading::kDistance && h.probe.harmonic == 2) {
+      distance2 = true;
+      EXPECT_NEAR(h.amplitude, 0.1, 0.03) << h.description;
+      EXPECT_NEAR(h.phase_deg, 60.0, 25.0) << h.description;
+    }
+  }
+  EXPECT_TRUE(distance2) << found;
+  const RankedEffect* next = d.Next();
+  EXPECT_EQ(next, nullptr) << (next ? next->name : "");
+}
+
 // A catalogue effect shows up as a harmonic before the catalogue is applied
 // and is explained by its own name afterwards.
 TEST(Harmonics, EccentricityIsExplainedByTheCatalogue) {
