@@ -101,6 +101,18 @@ json LadderJson(const std::vector<diagnose::LadderStep>& ladder) {
 
 void RunDiagnosis(const RunConfig& config, PipelineResult* r, Progress* progress) {
   if (!config.diagnose.enabled) return;
+  // The calibration stands without its diagnosis: a failure here becomes a
+  // note in the reports, not a failed run.
+  try {
+    RunDiagnosisOrThrow(config, r, progress);
+  } catch (const std::exception& e) {
+    r->diagnosis.reset();
+    r->notes.push_back(std::string("diagnosis failed: ") + e.what());
+    progress->Note(r->notes.back());
+  }
+}
+
+void RunDiagnosisOrThrow(const RunConfig& config, PipelineResult* r, Progress* progress) {
   diagnose::Settings s;
   s.significance = config.diagnose.significance;
   if (config.diagnose.auto_add) {

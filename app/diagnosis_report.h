@@ -18,8 +18,11 @@ namespace rtscalib::app {
 
 // Fills result->diagnosis (and, with config.diagnose.auto_add, result->ladder
 // and the stepwise model, fit and final errors). No-op when
-// config.diagnose.enabled is false.
+// config.diagnose.enabled is false. A diagnosis that fails (e.g. nothing
+// outside the critical regions) leaves a note instead of failing the run;
+// RunDiagnosisOrThrow lets the exception through.
 void RunDiagnosis(const RunConfig& config, PipelineResult* result, Progress* progress);
+void RunDiagnosisOrThrow(const RunConfig& config, PipelineResult* result, Progress* progress);
 
 nlohmann::json DiagnosisJson(const PipelineResult& result);
 std::string DiagnosisText(const PipelineResult& result);
