@@ -1,4 +1,5 @@
 #include "libcalib/diagnose/harmonics.h"
+#include "libcalib/diagnose/ranking.h"
 
 #include <algorithm>
 #include <cmath>
@@ -37,7 +38,8 @@ Harmonic MakeHarmonic(const ColumnBlock& block, const ColumnTest& t, double leve
   }
   h.wald = t.wald;
   h.p_value = t.p_value;
-  h.significant = t.rank > 0 && t.p_value < level;
+  const double floor = h.unit == "mm" ? kDistanceFloorMm : kAngleFloorArcsec;
+  h.significant = t.rank > 0 && t.p_value < level && h.amplitude > floor;
   char buf[160];
   const char* what = block.probe.reading == Reading::kPhi     ? "phi (horizontal angle) error"
                      : block.probe.reading == Reading::kTheta ? "theta (vertical angle) error"
@@ -143,7 +145,9 @@ HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
     const ColumnTest t = TestColumns(others.Apply(y), others.Apply(t_cat[s]), red.cluster, g,
                                      dof_base + cat.rank() + others.rank());
     Harmonic h = MakeHarmonic(*probes[s], t, out.level, lin.edm_cyclic_unit_length);
-    out.unexplained.push_back(h);
+    // Below the resolution floor a statistically significant term is
+    // round-off of exact data, not structure.
+    if (h.significant) out.unexplained.push_back(h);
   }
 
   // 3. What the catalogue explains.

@@ -240,7 +240,12 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
       }
     }
     r.identifiable = std::abs(r.rho) <= o.identifiable_rho;
-    r.significant = t.rank > 0 && t.p_value < out.level && r.delta_bic < 0;
+    // Statistical significance alone is not enough on exact data, where the
+    // fitted noise is round-off and a 1e-11 arcsec term is "significant":
+    // the effect must also lower the rms by more than the numerical floor.
+    const double floor = r.before.MainUnit() == std::string("px") ? kPixelFloor : kPointFloorM;
+    r.significant = t.rank > 0 && t.p_value < out.level && r.delta_bic < 0 &&
+                    r.before.Main() - r.after.Main() > floor;
     if (!r.identifiable) {
       char buf[160];
       std::snprintf(buf, sizeof(buf), "strongly correlated with %s (rho %+.3f)", r.correlated_with.c_str(), r.rho);

@@ -12,6 +12,8 @@
 //                 free variance per group this is the BIC of the Gaussian likelihood, so a
 //                 group whose fitted sigma the missing effect inflated still counts fully.
 //   significant   p(Wald) < significance / (number of effects tested) and delta_bic < 0
+//                 and the rms falls by more than the numerical floor (kPointFloorM,
+//                 kPixelFloor): exact data must not make round-off significant
 //   rms after     from a refinement with the effect added (Refine, warm start at the
 //                 linear estimate, the fit's weights held) for the best `refine_top`
 //                 significant effects; from the linear prediction for the others
@@ -37,6 +39,15 @@
 #include "libcalib/diagnose/linearization.h"
 
 namespace rtscalib::diagnose {
+
+// Below these an improvement is round-off, not physics: 1 nm is 1e-9 of a
+// metre-scale coordinate (double precision leaves ~1e-15); 1e-6 px likewise.
+constexpr double kPointFloorM = 1e-9;
+constexpr double kPixelFloor = 1e-6;
+// Harmonic amplitudes below these are never reported as structure: no
+// instrument resolves them (1e-3 arcsec, 1e-3 mm).
+constexpr double kAngleFloorArcsec = 1e-3;
+constexpr double kDistanceFloorMm = 1e-3;
 
 // RMS per observation group over the rows the fit uses (outside the critical
 // regions): records as point distances [m], pixels as sqrt(mean(du^2 + dv^2)) [px].
