@@ -48,6 +48,9 @@ struct BlockInfo {
 // manifolds and bounds (STYLE: ParameterizeCameras). Decided from the model
 // and the options alone, before any residual exists, so that the cost
 // functions can size their jets to the free parameters.
+// NOTE: libcalib/diagnose/linearization.cc (FreeBlocks) mirrors these
+// decisions, adding the candidate effects' columns; change both together
+// (a shared header is the planned clean-up, see the diagnostics issue note).
 class Parameterization {
  public:
   enum class Kind { kConstant, kFree, kQuaternion, kNoRoll, kSubset };
