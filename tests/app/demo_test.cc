@@ -5,6 +5,9 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <string>
+
+#include <unistd.h>
 
 #include "app/diagnosis_report.h"
 #include "app/pipeline.h"
@@ -28,11 +31,19 @@ class Zoom3Demo : public ::testing::Test {
     config_->simulate->plan.zooms = {0, 2};
     config_->simulate->plan.grid_phi_steps = 8;
     config_->simulate->plan.grid_theta_steps = 4;
-    work_ = std::filesystem::temp_directory_path() / "rtscalib_demo_test";
+    // One folder per process: ctest runs each test of this suite in its own
+    // process, in parallel.
+    work_ = std::filesystem::temp_directory_path() /
+            ("rtscalib_demo_test_" + std::to_string(::getpid()));
     std::filesystem::remove_all(work_);
     std::filesystem::create_directories(work_);
     Progress progress(true);
-    result_ = new PipelineResult(RunPipeline(*config_, work_.string(), &progress));
+    try {
+      result_ = new PipelineResult(RunPipeline(*config_, work_.string(), &progress));
+    } catch (const std::exception& e) {
+      error_ = e.what();
+      return;
+    }
     RunDiagnosis(*config_, result_, &progress);
     // What the user does next: add the named effect with one config line.
     with_effect_ = new InstrumentModel(result_->model);
@@ -41,7 +52,10 @@ class Zoom3Demo : public ::testing::Test {
     Refine(result_->obs, result_->fit_options, with_effect_);
   }
   void SetUp() override {
-    if (result_ == nullptr) GTEST_SKIP() << "built without the renderer";
+#ifndef RTSCALIB_WITH_RENDER
+    GTEST_SKIP() << "built without the renderer";
+#endif
+    ASSERT_NE(result_, nullptr) << "the demo pipeline failed: " << error_;
   }
   static void TearDownTestSuite() {
     delete with_effect_;
@@ -52,9 +66,11 @@ class Zoom3Demo : public ::testing::Test {
   static RunConfig* config_;
   static PipelineResult* result_;
   static InstrumentModel* with_effect_;
+  static std::string error_;
   static std::filesystem::path work_;
 };
 InstrumentModel* Zoom3Demo::with_effect_ = nullptr;
+std::string Zoom3Demo::error_;
 RunConfig* Zoom3Demo::config_ = nullptr;
 PipelineResult* Zoom3Demo::result_ = nullptr;
 std::filesystem::path Zoom3Demo::work_;
