@@ -277,9 +277,15 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
                                    std::to_string(shot_index++);
           std::vector<PixelObservation> rows;
           std::vector<Eigen::Vector2d> exact;
+          const Rigid3 ref_from_cam = RefFromCam(truth, zoom, phi, theta);
+          const double trusted_radius = camera::MaxTrustedRadius(cam.distortion.data());
           for (const TargetCorner& c : corners) {
             Eigen::Vector2d uv;
             if (!PredictPixel(truth, zoom, phi, theta, c.X, &uv)) continue;
+            // A corner beyond the lens's trusted radius folds back into the
+            // image under strong barrel distortion; a real lens never shows it.
+            const Eigen::Vector3d x_cam = ref_from_cam.Inverse() * c.X;
+            if (std::hypot(x_cam.x(), x_cam.y()) > trusted_radius * x_cam.z()) continue;
             const double margin = 2.0;
             if (uv.x() < margin || uv.y() < margin || uv.x() > cam.width - 1 - margin ||
                 uv.y() > cam.height - 1 - margin) {
