@@ -380,4 +380,31 @@ SimulatedData Simulate(const SimulationOptions& o) {
   return data;
 }
 
+InstrumentModel PerturbedStart(const InstrumentModel& truth, std::uint64_t seed, double scale) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  InstrumentModel m = truth;
+  auto move_pose = [&](PoseBlock* p) {
+    Rigid3 r = p->ToRigid();
+    r.rotation = r.rotation *
+                 RotationFromEuler<double>({scale * n(rng), scale * n(rng), scale * n(rng)});
+    r.translation += scale * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    *p = PoseBlock::FromRigid(r);
+  };
+  move_pose(&m.base);
+  if (m.kinematics == Kinematics::kDh) {
+    move_pose(&m.edm);
+    m.links[0].p[kDhAlpha] += scale * n(rng);
+    m.links[0].p[kDhA] += scale * n(rng);
+  } else {
+    // Spherical: the EDM rotation and t_z are part of the definition (held).
+    m.edm.t[0] += scale * n(rng);
+    m.edm.t[1] += scale * n(rng);
+  }
+  for (CameraTool& c : m.cams) move_pose(&c.flange_from_cam);
+  for (auto& e : m.effect_values) e = {0.0, 0.0};
+  m.sigmas = {};
+  return m;
+}
+
 }  // namespace rtscalib

@@ -86,6 +86,14 @@ InstrumentModel PaperTruth(int num_zooms);
 
 SimulatedData Simulate(const SimulationOptions& options);
 
+// A starting model for tests and benchmarks of the refinement alone: the
+// truth moved by about `scale` (metres and radians) in every parameter a fit
+// frees - base, EDM (dh: pose; spherical: t_x, t_y), link 1's alpha and a,
+// camera tools - with the effect values zeroed (the enabled set is kept).
+// What a good extraction gives; end-to-end tests start from the extraction.
+InstrumentModel PerturbedStart(const InstrumentModel& truth, std::uint64_t seed,
+                               double scale = 1e-3);
+
 // A board of rows x cols tags (edge `tag` [m], spacing tag/4) whose printed
 // side faces the point `station`: centre `distance` metres away from it in
 // direction `phi` (SPEC 1: clockwise from +y) and `height` metres above it,

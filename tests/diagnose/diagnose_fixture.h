@@ -49,31 +49,9 @@ inline InstrumentModel SphericalTruth() {
 // parameter, effects removed (what a good extraction gives): the baseline
 // fit starts here.
 inline InstrumentModel Perturbed(const InstrumentModel& truth, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> n(0.0, 1.0);
-  InstrumentModel m = truth;
-  auto move_pose = [&](PoseBlock* p) {
-    Rigid3 r = p->ToRigid();
-    r.rotation = r.rotation * RotationFromEuler<double>({1e-3 * n(rng), 1e-3 * n(rng), 1e-3 * n(rng)});
-    r.translation += 1e-3 * Eigen::Vector3d(n(rng), n(rng), n(rng));
-    *p = PoseBlock::FromRigid(r);
-  };
-  move_pose(&m.base);
-  if (m.kinematics == Kinematics::kDh) {
-    move_pose(&m.edm);
-    m.links[0].p[kDhAlpha] += 1e-3 * n(rng);
-    m.links[0].p[kDhA] += 1e-3 * n(rng);
-  } else {
-    m.edm.t[0] += 1e-3 * n(rng);
-    m.edm.t[1] += 1e-3 * n(rng);
-  }
-  for (CameraTool& c : m.cams) {
-    move_pose(&c.flange_from_cam);
-    c.distortion.fill(0.0);
-  }
+  InstrumentModel m = PerturbedStart(truth, seed);
+  for (CameraTool& c : m.cams) c.distortion.fill(0.0);
   m.effects = EffectSet();
-  for (auto& e : m.effect_values) e = {0.0, 0.0};
-  m.sigmas = {};
   return m;
 }
 

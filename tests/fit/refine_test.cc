@@ -11,32 +11,10 @@
 namespace rtscalib {
 namespace {
 
-// A start model: the truth moved by about a millimetre and a milliradian in
-// every free parameter (what a good extraction gives), so that this test is
-// about the refinement alone. End-to-end tests start from the extraction.
+// Starts from PerturbedStart (libcalib/sim): this test is about the
+// refinement alone. End-to-end tests start from the extraction.
 InstrumentModel Perturbed(const InstrumentModel& truth, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> n(0.0, 1.0);
-  InstrumentModel m = truth;
-  auto move_pose = [&](PoseBlock* p) {
-    Rigid3 r = p->ToRigid();
-    r.rotation = r.rotation * RotationFromEuler<double>({1e-3 * n(rng), 1e-3 * n(rng), 1e-3 * n(rng)});
-    r.translation += 1e-3 * Eigen::Vector3d(n(rng), n(rng), n(rng));
-    *p = PoseBlock::FromRigid(r);
-  };
-  move_pose(&m.base);
-  if (m.kinematics == Kinematics::kDh) {
-    move_pose(&m.edm);
-  } else {
-    // Spherical: the EDM rotation and t_z are part of the definition (held).
-    m.edm.t[0] += 1e-3 * n(rng);
-    m.edm.t[1] += 1e-3 * n(rng);
-  }
-  for (CameraTool& c : m.cams) move_pose(&c.flange_from_cam);
-  m.links[0].p[kDhAlpha] += 1e-3 * n(rng);
-  m.links[0].p[kDhA] += 1e-3 * n(rng);
-  for (auto& e : m.effect_values) e = {0.0, 0.0};
-  return m;
+  return PerturbedStart(truth, seed);
 }
 
 AcquisitionPlan PaperPlanWithGrid() {
