@@ -51,7 +51,7 @@ struct ColumnTarget {
 };
 
 struct BlockDecision {
-  enum Kind { kConstant, kFree, kQuaternion, kNoRoll, kSubset } kind = kFree;
+  BlockKind kind = BlockKind::kFree;
   int size = 0;
   std::vector<int> frozen;
   std::vector<ColumnTarget> tangent;  // one per tangent column
@@ -71,26 +71,26 @@ class FreeBlocks {
       for (const std::string& n : names) t.push_back({-1, 0, prefix + n});
       return t;
     };
-    auto pose = [&](PoseBlock* p, const std::string& name, BlockDecision::Kind rot) {
-      if (rot == BlockDecision::kQuaternion) {
+    auto pose = [&](PoseBlock* p, const std::string& name, BlockKind rot) {
+      if (rot == BlockKind::kQuaternion) {
         Set(p->q.data(), {rot, 4, {}, base_cols(name + ".rotation[", {"x]", "y]", "z]"})});
-      } else if (rot == BlockDecision::kNoRoll) {
+      } else if (rot == BlockKind::kNoRoll) {
         Set(p->q.data(), {rot, 4, {}, base_cols(name + ".rotation[", {"x]", "y]"})});
       } else {
-        Set(p->q.data(), {BlockDecision::kConstant, 4, {}, {}});
+        Set(p->q.data(), {BlockKind::kConstant, 4, {}, {}});
       }
     };
-    pose(&m.base, "base", BlockDecision::kQuaternion);
-    Set(m.base.t.data(), {BlockDecision::kFree, 3, {}, base_cols("base.t[", {"x]", "y]", "z]"})});
+    pose(&m.base, "base", BlockKind::kQuaternion);
+    Set(m.base.t.data(), {BlockKind::kFree, 3, {}, base_cols("base.t[", {"x]", "y]", "z]"})});
     if (dh) {
       Set(m.links[0].p.data(),
-          {BlockDecision::kSubset, 4, {kDhD, kDhGamma}, base_cols("link1.", {"alpha", "a"})});
-      Set(m.links[1].p.data(), {BlockDecision::kConstant, 4, {}, {}});
-      pose(&m.edm, "edm", BlockDecision::kNoRoll);
-      Set(m.edm.t.data(), {BlockDecision::kFree, 3, {}, base_cols("edm.t[", {"x]", "y]", "z]"})});
+          {BlockKind::kSubset, 4, {kDhD, kDhGamma}, base_cols("link1.", {"alpha", "a"})});
+      Set(m.links[1].p.data(), {BlockKind::kConstant, 4, {}, {}});
+      pose(&m.edm, "edm", BlockKind::kNoRoll);
+      Set(m.edm.t.data(), {BlockKind::kFree, 3, {}, base_cols("edm.t[", {"x]", "y]", "z]"})});
     } else {
-      pose(&m.edm, "edm", BlockDecision::kConstant);
-      Set(m.edm.t.data(), {BlockDecision::kSubset, 3, {2}, base_cols("edm.t[", {"x]", "y]"})});
+      pose(&m.edm, "edm", BlockKind::kConstant);
+      Set(m.edm.t.data(), {BlockKind::kSubset, 3, {2}, base_cols("edm.t[", {"x]", "y]"})});
     }
 
     // Candidate blocks first (their column layout), then the cameras.
@@ -115,7 +115,7 @@ class FreeBlocks {
           b.param_names.push_back(b.name + "[" + std::to_string(k) + "]");
           t.push_back({static_cast<int>(blocks->size()), k, b.param_names.back()});
         }
-        Set(m.EffectValue(e).data(), {BlockDecision::kFree, b.size, {}, t});
+        Set(m.EffectValue(e).data(), {BlockKind::kFree, b.size, {}, t});
       } else {
         for (int z : zooms_with_data) {
           for (int i : Info(e).distortion_indices) {
@@ -132,16 +132,16 @@ class FreeBlocks {
     for (int z : zooms_with_data) {
       CameraTool& cam = m.cams[z];
       const std::string zs = "cam[" + std::to_string(z) + "]";
-      pose(&cam.flange_from_cam, zs, BlockDecision::kQuaternion);
+      pose(&cam.flange_from_cam, zs, BlockKind::kQuaternion);
       Set(cam.flange_from_cam.t.data(),
-          {BlockDecision::kFree, 3, {}, base_cols(zs + ".t[", {"x]", "y]", "z]"})});
+          {BlockKind::kFree, 3, {}, base_cols(zs + ".t[", {"x]", "y]", "z]"})});
       if (o.fit_intrinsics) {
         Set(cam.intrinsics.data(),
-            {BlockDecision::kFree, 4, {}, base_cols(zs + ".", {"fx", "fy", "cx", "cy"})});
+            {BlockKind::kFree, 4, {}, base_cols(zs + ".", {"fx", "fy", "cx", "cy"})});
       } else {
-        Set(cam.intrinsics.data(), {BlockDecision::kConstant, 4, {}, {}});
+        Set(cam.intrinsics.data(), {BlockKind::kConstant, 4, {}, {}});
       }
-      BlockDecision dist{BlockDecision::kSubset, camera::kNumDistortion, {}, {}};
+      BlockDecision dist{BlockKind::kSubset, camera::kNumDistortion, {}, {}};
       for (int i = 0; i < camera::kNumDistortion; ++i) {
         const std::string name = zs + "." + kDistortionNames[i];
         if (enabled_index[i]) {
@@ -165,7 +165,7 @@ class FreeBlocks {
       for (int k = 0; k < Info(e).num_params; ++k) {
         t.push_back({-1, 0, std::string(Info(e).name) + "[" + std::to_string(k) + "]"});
       }
-      Set(m.EffectValue(e).data(), {BlockDecision::kFree, Info(e).num_params, {}, t});
+      Set(m.EffectValue(e).data(), {BlockKind::kFree, Info(e).num_params, {}, t});
     }
     num_extra_ = next_col;
   }
@@ -174,7 +174,7 @@ class FreeBlocks {
     int n = 0;
     for (size_t i = 0; i < layout.blocks.size(); ++i) {
       auto it = decisions_.find(layout.blocks[i]);
-      if (it == decisions_.end() || it->second.kind != BlockDecision::kConstant) n += layout.sizes[i];
+      if (it == decisions_.end() || it->second.kind != BlockKind::kConstant) n += layout.sizes[i];
     }
     return n;
   }
@@ -186,22 +186,8 @@ class FreeBlocks {
     for (const auto& [cp, d] : order_) {
       double* p = const_cast<double*>(cp);
       if (!problem->HasParameterBlock(p)) continue;
-      switch (d->kind) {
-        case BlockDecision::kConstant:
-          problem->SetParameterBlockConstant(p);
-          continue;
-        case BlockDecision::kQuaternion:
-          problem->SetManifold(p, new ceres::EigenQuaternionManifold);
-          break;
-        case BlockDecision::kNoRoll:
-          problem->SetManifold(p, new QuaternionNoRollManifold);
-          break;
-        case BlockDecision::kSubset:
-          problem->SetManifold(p, new ceres::SubsetManifold(d->size, d->frozen));
-          break;
-        case BlockDecision::kFree:
-          break;
-      }
+      ParameterizeBlock(problem, p, d->kind, d->size, d->frozen);
+      if (d->kind == BlockKind::kConstant) continue;
       out.push_back({p, d});
     }
     return out;
@@ -214,8 +200,8 @@ class FreeBlocks {
       "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "taux", "tauy"};
 
   void Set(const double* p, BlockDecision d) {
-    if (d.kind == BlockDecision::kSubset && static_cast<int>(d.frozen.size()) == d.size) {
-      d.kind = BlockDecision::kConstant;
+    if (d.kind == BlockKind::kSubset && static_cast<int>(d.frozen.size()) == d.size) {
+      d.kind = BlockKind::kConstant;
       d.tangent.clear();
     }
     auto [it, inserted] = decisions_.insert({p, std::move(d)});

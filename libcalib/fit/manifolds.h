@@ -11,7 +11,10 @@
 #include <ceres/manifold.h>
 #include <ceres/rotation.h>
 
+#include <ceres/problem.h>
+
 #include <cmath>
+#include <vector>
 
 namespace rtscalib {
 
@@ -70,5 +73,31 @@ struct QuaternionNoRollPlus {
 };
 
 using QuaternionNoRollManifold = ceres::AutoDiffManifold<QuaternionNoRollPlus, 4, 2>;
+
+// How a parameter block enters a problem: held, free, or free on a manifold.
+enum class BlockKind { kConstant, kFree, kQuaternion, kNoRoll, kSubset };
+
+// The one place that turns a block's kind into Ceres calls (used by the
+// refinement and by the diagnosis's linearisation). `frozen` lists the held
+// indices of a kSubset block of `size` parameters.
+inline void ParameterizeBlock(ceres::Problem* problem, double* p, BlockKind kind, int size,
+                              const std::vector<int>& frozen) {
+  switch (kind) {
+    case BlockKind::kConstant:
+      problem->SetParameterBlockConstant(p);
+      break;
+    case BlockKind::kQuaternion:
+      problem->SetManifold(p, new ceres::EigenQuaternionManifold);
+      break;
+    case BlockKind::kNoRoll:
+      problem->SetManifold(p, new QuaternionNoRollManifold);
+      break;
+    case BlockKind::kSubset:
+      problem->SetManifold(p, new ceres::SubsetManifold(size, frozen));
+      break;
+    case BlockKind::kFree:
+      break;
+  }
+}
 
 }  // namespace rtscalib

@@ -53,7 +53,7 @@ struct BlockInfo {
 // (a shared header is the planned clean-up, see the diagnostics issue note).
 class Parameterization {
  public:
-  enum class Kind { kConstant, kFree, kQuaternion, kNoRoll, kSubset };
+  using Kind = BlockKind;
   struct Decision {
     Kind kind = Kind::kFree;
     std::string name;
@@ -136,22 +136,7 @@ class Parameterization {
     for (const auto& [cp, d] : decisions_) {
       double* p = const_cast<double*>(cp);
       if (!problem->HasParameterBlock(p)) continue;
-      switch (d.kind) {
-        case Kind::kConstant:
-          problem->SetParameterBlockConstant(p);
-          break;
-        case Kind::kQuaternion:
-          problem->SetManifold(p, new ceres::EigenQuaternionManifold);
-          break;
-        case Kind::kNoRoll:
-          problem->SetManifold(p, new QuaternionNoRollManifold);
-          break;
-        case Kind::kSubset:
-          problem->SetManifold(p, new ceres::SubsetManifold(d.size, d.frozen));
-          break;
-        case Kind::kFree:
-          break;
-      }
+      ParameterizeBlock(problem, p, d.kind, d.size, d.frozen);
       // Klug Eq. 98: |t| <= t_max, applied as a window around the start value
       // (the extraction is good to a fraction of it), so that a station far
       // from the origin stays admissible.
