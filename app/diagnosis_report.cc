@@ -31,7 +31,8 @@ json ValueJson(Effect e, const EffectReportValue& v) {
   const EffectInfo& info = Info(e);
   json j = json::object();
   for (int k = 0; k < v.num; ++k) {
-    j[info.param_names[k]] = {{"value", v.value[k]}, {"sigma", v.sigma[k]}, {"unit", info.report_units[k]}};
+    j[info.param_names[k]] = {
+        {"value", v.value[k]}, {"sigma", v.sigma[k]}, {"unit", info.report_units[k]}};
   }
   return j;
 }
@@ -55,16 +56,21 @@ json RankedJson(const diagnose::RankedEffect& r) {
             {"needs", r.needs},
             {"aliases", r.aliases},
             {"note", r.note}};
-  if (IsKinematic(r.effect) && !r.redundant && r.observable) j["value"] = ValueJson(r.effect, r.value);
+  if (IsKinematic(r.effect) && !r.redundant && r.observable)
+    j["value"] = ValueJson(r.effect, r.value);
   if (!r.distortion.empty()) {
     json d = json::array();
     for (const diagnose::DistortionValue& v : r.distortion) {
-      d.push_back({{"zoom", v.zoom}, {"coefficient", v.coefficient}, {"value", v.value}, {"sigma", v.sigma}});
+      d.push_back({{"zoom", v.zoom},
+                   {"coefficient", v.coefficient},
+                   {"value", v.value},
+                   {"sigma", v.sigma}});
     }
     j["value"] = d;
   }
   if (r.has_equivalent) j["equivalent"] = ValueJson(r.effect, r.equivalent);
-  if (!r.correlated_with.empty()) j["correlated_with"] = {{"parameter", r.correlated_with}, {"rho", r.rho}};
+  if (!r.correlated_with.empty())
+    j["correlated_with"] = {{"parameter", r.correlated_with}, {"rho", r.rho}};
   return j;
 }
 
@@ -117,7 +123,8 @@ void RunDiagnosisOrThrow(const RunConfig& config, PipelineResult* r, Progress* p
   s.significance = config.diagnose.significance;
   if (config.diagnose.auto_add) {
     progress->Step("forward stepwise: adding significant effects one at a time");
-    diagnose::StepwiseResult sw = diagnose::ForwardStepwise(r->obs, r->model, r->fit, r->fit_options, s);
+    diagnose::StepwiseResult sw =
+        diagnose::ForwardStepwise(r->obs, r->model, r->fit, r->fit_options, s);
     for (size_t i = 1; i < sw.ladder.size(); ++i) {
       progress->Note("added " + sw.ladder[i].added + ": " + sw.ladder[i].model_description);
     }
@@ -125,10 +132,11 @@ void RunDiagnosisOrThrow(const RunConfig& config, PipelineResult* r, Progress* p
     r->ladder = sw.ladder;
     r->ladder_stop = sw.stop_reason;
     if (sw.ladder.size() > 1) {
-      r->notes.push_back("diagnose.auto: the stepwise search extended the model to " +
-                         sw.ladder.back().model_description +
-                         "; model.yaml, the final errors and the diagnosis are of that model, Tables 5-7 of the "
-                         "configured one");
+      r->notes.push_back(
+          "diagnose.auto: the stepwise search extended the model to " +
+          sw.ladder.back().model_description +
+          "; model.yaml, the final errors and the diagnosis are of that model, Tables 5-7 of the "
+          "configured one");
     }
     r->model = sw.model;
     r->fit = sw.fit;
@@ -136,7 +144,8 @@ void RunDiagnosisOrThrow(const RunConfig& config, PipelineResult* r, Progress* p
     r->diagnosis = std::move(sw.diagnosis);
   } else {
     progress->Step("diagnosing the model (ranking the missing effects)");
-    r->diagnosis = diagnose::Diagnose(r->obs, r->model, diagnose::ContextOf(r->fit_options, r->fit), s);
+    r->diagnosis =
+        diagnose::Diagnose(r->obs, r->model, diagnose::ContextOf(r->fit_options, r->fit), s);
   }
   for (const std::string& v : r->diagnosis->verdict) progress->Note(v);
 }
@@ -147,9 +156,11 @@ json DiagnosisJson(const PipelineResult& r) {
   json ranking = json::array();
   for (const diagnose::RankedEffect& e : d.ranking.entries) ranking.push_back(RankedJson(e));
   json unexplained = json::array();
-  for (const diagnose::Harmonic& h : d.harmonics.unexplained) unexplained.push_back(HarmonicJson(h));
+  for (const diagnose::Harmonic& h : d.harmonics.unexplained)
+    unexplained.push_back(HarmonicJson(h));
   json harmonics = json::array();
-  for (const diagnose::Harmonic& h : d.harmonics.before_catalogue) harmonics.push_back(HarmonicJson(h));
+  for (const diagnose::Harmonic& h : d.harmonics.before_catalogue)
+    harmonics.push_back(HarmonicJson(h));
   json worst = json::array();
   for (const diagnose::OutlierEntry& o : d.outliers.worst) {
     worst.push_back({{"where", o.where},
@@ -199,33 +210,41 @@ std::string DiagnosisText(const PipelineResult& r) {
     o << "  step  added                   EDM rms [mm]  cam rms [mm]  pixels [px]   BIC\n";
     for (size_t i = 0; i < r.ladder.size(); ++i) {
       const diagnose::LadderStep& s = r.ladder[i];
-      o << "  " << std::setw(4) << i << "  " << std::left << std::setw(22) << (s.added.empty() ? "(start)" : s.added)
-        << std::right << "  " << std::setw(12) << (s.rms.edm_n ? Fmt("%.4f", s.rms.edm_m * 1e3) : "-") << "  "
-        << std::setw(12) << (s.rms.cam_n ? Fmt("%.4f", s.rms.cam_m * 1e3) : "-") << "  " << std::setw(11)
-        << (s.rms.pixels_n ? Fmt("%.3f", s.rms.pixels_px) : "-") << "  " << Fmt("%.1f", s.bic) << "\n";
+      o << "  " << std::setw(4) << i << "  " << std::left << std::setw(22)
+        << (s.added.empty() ? "(start)" : s.added) << std::right << "  " << std::setw(12)
+        << (s.rms.edm_n ? Fmt("%.4f", s.rms.edm_m * 1e3) : "-") << "  " << std::setw(12)
+        << (s.rms.cam_n ? Fmt("%.4f", s.rms.cam_m * 1e3) : "-") << "  " << std::setw(11)
+        << (s.rms.pixels_n ? Fmt("%.3f", s.rms.pixels_px) : "-") << "  " << Fmt("%.1f", s.bic)
+        << "\n";
     }
   }
   o << "\nRanking of the effects not in the model (best first; rms over the fitted rows)\n";
-  o << "  effect                  rms before -> after          delta BIC   p        signif  identif\n";
+  o << "  effect                  rms before -> after          delta BIC   p        signif  "
+       "identif\n";
   for (const diagnose::RankedEffect& e : d.ranking.entries) {
     const double scale = e.rms_unit == "m" ? 1e3 : 1.0;
     const char* unit = e.rms_unit == "m" ? "mm" : "px";
     o << "  " << std::left << std::setw(22) << e.name << std::right << "  " << std::setw(9)
-      << Fmt("%.4g", e.rms_before * scale) << " -> " << std::setw(9) << Fmt("%.4g", e.rms_after * scale) << " "
-      << unit << "  " << std::setw(10) << Fmt("%.1f", e.delta_bic) << "  " << std::setw(7)
-      << Fmt("%.1e", e.p_value) << "  " << (e.significant ? "yes" : "no ") << "     "
-      << (e.redundant ? "redundant" : e.identifiable ? "yes" : "no") << "\n";
+      << Fmt("%.4g", e.rms_before * scale) << " -> " << std::setw(9)
+      << Fmt("%.4g", e.rms_after * scale) << " " << unit << "  " << std::setw(10)
+      << Fmt("%.1f", e.delta_bic) << "  " << std::setw(7) << Fmt("%.1e", e.p_value) << "  "
+      << (e.significant ? "yes" : "no ") << "     "
+      << (e.redundant      ? "redundant"
+          : e.identifiable ? "yes"
+                           : "no")
+      << "\n";
   }
   if (!d.harmonics.unexplained.empty()) {
     o << "\nStructure outside the catalogue (unexplained)\n";
     for (const diagnose::Harmonic& h : d.harmonics.unexplained) o << "  " << h.description << "\n";
   }
   if (d.outliers.tested > 0) {
-    o << "\nOutliers (w-test, critical w = " << Fmt("%.2f", d.outliers.critical_w) << ", " << d.outliers.flagged
-      << " of " << d.outliers.tested << " flagged); worst observations:\n";
+    o << "\nOutliers (w-test, critical w = " << Fmt("%.2f", d.outliers.critical_w) << ", "
+      << d.outliers.flagged << " of " << d.outliers.tested << " flagged); worst observations:\n";
     for (size_t i = 0; i < d.outliers.worst.size() && i < 5; ++i) {
       const diagnose::OutlierEntry& e = d.outliers.worst[i];
-      o << "  w = " << Fmt("%5.2f", e.w) << (e.flagged ? " FLAGGED " : "         ") << e.where << "\n";
+      o << "  w = " << Fmt("%5.2f", e.w) << (e.flagged ? " FLAGGED " : "         ") << e.where
+        << "\n";
     }
   }
   o << "(diagnosis took " << Fmt("%.2f", d.seconds) << " s)\n";

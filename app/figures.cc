@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <set>
-#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <set>
+#include <sstream>
 #include <tuple>
 
 #include "libcalib/eval/error_measures.h"
@@ -16,8 +16,8 @@
 namespace rtscalib::app {
 namespace {
 
-using diagnose::ObsGroup;
 using diagnose::ObservationResidual;
+using diagnose::ObsGroup;
 using nlohmann::json;
 
 const cv::Scalar kInk(40, 40, 40);
@@ -25,8 +25,8 @@ const cv::Scalar kGrid(225, 225, 225);
 const cv::Scalar kWhite(255, 255, 255);
 const cv::Scalar kHatch(190, 190, 190);
 // Series colours (BGR): blue, orange, green, red.
-const cv::Scalar kSeries[4] = {cv::Scalar(180, 119, 31), cv::Scalar(14, 127, 255), cv::Scalar(44, 160, 44),
-                               cv::Scalar(40, 39, 214)};
+const cv::Scalar kSeries[4] = {cv::Scalar(180, 119, 31), cv::Scalar(14, 127, 255),
+                               cv::Scalar(44, 160, 44), cv::Scalar(40, 39, 214)};
 constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 
 std::string Fmt(const char* f, double v) {
@@ -56,7 +56,8 @@ void PutVertical(cv::Mat& img, const std::string& s, cv::Point p, double scale =
   const cv::Rect roi(p.x - turned.cols / 2, p.y - turned.rows / 2, turned.cols, turned.rows);
   const cv::Rect inside = roi & cv::Rect(0, 0, img.cols, img.rows);
   if (inside.area() == 0) return;
-  turned(cv::Rect(inside.x - roi.x, inside.y - roi.y, inside.width, inside.height)).copyTo(img(inside));
+  turned(cv::Rect(inside.x - roi.x, inside.y - roi.y, inside.width, inside.height))
+      .copyTo(img(inside));
 }
 
 // 1, 2, 5 x 10^k steps covering [lo, hi] with about n ticks.
@@ -72,7 +73,8 @@ std::vector<double> NiceTicks(double lo, double hi, int n) {
     }
   }
   std::vector<double> t;
-  for (double x = std::ceil(lo / step - 1e-9) * step; x <= hi + 1e-9 * step; x += step) t.push_back(std::abs(x) < 1e-12 * step ? 0.0 : x);
+  for (double x = std::ceil(lo / step - 1e-9) * step; x <= hi + 1e-9 * step; x += step)
+    t.push_back(std::abs(x) < 1e-12 * step ? 0.0 : x);
   return t;
 }
 
@@ -100,19 +102,22 @@ struct Panel {
   bool log_y = false;
   cv::Point Map(double x, double y) const {
     const double tx = (x - x0) / (x1 - x0);
-    double ty = log_y ? (std::log(y) - std::log(y0)) / (std::log(y1) - std::log(y0)) : (y - y0) / (y1 - y0);
+    double ty =
+        log_y ? (std::log(y) - std::log(y0)) / (std::log(y1) - std::log(y0)) : (y - y0) / (y1 - y0);
     if (!y_down) ty = 1.0 - ty;
-    return cv::Point(static_cast<int>(std::lround(r.x + tx * r.width)), static_cast<int>(std::lround(r.y + ty * r.height)));
+    return cv::Point(static_cast<int>(std::lround(r.x + tx * r.width)),
+                     static_cast<int>(std::lround(r.y + ty * r.height)));
   }
 };
 
-void Axes(cv::Mat& img, const Panel& p, const std::vector<double>& xt, const std::vector<double>& yt,
-          const std::string& xlabel, const std::string& ylabel, const char* xfmt = "%g", const char* yfmt = "%g",
-          bool grid = true) {
+void Axes(cv::Mat& img, const Panel& p, const std::vector<double>& xt,
+          const std::vector<double>& yt, const std::string& xlabel, const std::string& ylabel,
+          const char* xfmt = "%g", const char* yfmt = "%g", bool grid = true) {
   for (double x : xt) {
     const cv::Point a = p.Map(x, p.y0);
     if (grid) cv::line(img, cv::Point(a.x, p.r.y), cv::Point(a.x, p.r.y + p.r.height), kGrid, 1);
-    cv::line(img, cv::Point(a.x, p.r.y + p.r.height), cv::Point(a.x, p.r.y + p.r.height + 5), kInk, 1);
+    cv::line(img, cv::Point(a.x, p.r.y + p.r.height), cv::Point(a.x, p.r.y + p.r.height + 5), kInk,
+             1);
     Put(img, Fmt(xfmt, x), cv::Point(a.x, p.r.y + p.r.height + 8), 0.42, 1, 2);
   }
   for (double y : yt) {
@@ -123,7 +128,8 @@ void Axes(cv::Mat& img, const Panel& p, const std::vector<double>& xt, const std
   }
   cv::rectangle(img, p.r, kInk, 1);
   Put(img, xlabel, cv::Point(p.r.x + p.r.width / 2, p.r.y + p.r.height + 30), 0.48, 1, 2);
-  if (!ylabel.empty()) PutVertical(img, ylabel, cv::Point(p.r.x - 52, p.r.y + p.r.height / 2), 0.48);
+  if (!ylabel.empty())
+    PutVertical(img, ylabel, cv::Point(p.r.x - 52, p.r.y + p.r.height / 2), 0.48);
 }
 
 cv::Mat ViridisLut() {
@@ -140,7 +146,8 @@ cv::Scalar ColourOf(const cv::Mat& lut, double t) {
   return cv::Scalar(c[0], c[1], c[2]);
 }
 
-void ColourBar(cv::Mat& img, const cv::Mat& lut, cv::Rect r, double vmax, const std::string& label) {
+void ColourBar(cv::Mat& img, const cv::Mat& lut, cv::Rect r, double vmax,
+               const std::string& label) {
   for (int y = 0; y < r.height; ++y) {
     const double t = 1.0 - static_cast<double>(y) / std::max(r.height - 1, 1);
     cv::line(img, cv::Point(r.x, r.y + y), cv::Point(r.x + r.width, r.y + y), ColourOf(lut, t), 1);
@@ -174,13 +181,14 @@ struct MapSource {
   int zoom = 0;
 };
 
-Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& res, const std::set<int>& faces,
-                const FitOptions& fit, const std::string& model) {
+Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& res,
+                const std::set<int>& faces, const FitOptions& fit, const std::string& model) {
   // rms of |residual| per pointing and face.
   std::map<std::tuple<int, double, double>, std::pair<double, int>> cells;
   std::set<double> phis, thetas;
   for (const ObservationResidual& o : res) {
-    if (!o.valid || o.group != src.group || (src.group != ObsGroup::kEdm && o.zoom != src.zoom)) continue;
+    if (!o.valid || o.group != src.group || (src.group != ObsGroup::kEdm && o.zoom != src.zoom))
+      continue;
     auto& c = cells[{o.face, o.phi, o.theta}];
     c.first += o.size * o.size;
     ++c.second;
@@ -194,8 +202,11 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& re
   const int panel_w = 430, panel_h = 300, left = 80, top = 84, gap = 90;
   const int n = static_cast<int>(faces.size());
   cv::Mat img(top + panel_h + 70, left + n * panel_w + (n - 1) * gap + 140, CV_8UC3, kWhite);
-  Put(img, src.title + ": rms error per pointing [" + src.unit + "]", cv::Point(left, 26), 0.6, 0, 0, kInk, 1);
-  Put(img, "model " + model + "; hatched: critical regions (not fitted); same colour scale for both faces",
+  Put(img, src.title + ": rms error per pointing [" + src.unit + "]", cv::Point(left, 26), 0.6, 0,
+      0, kInk, 1);
+  Put(img,
+      "model " + model +
+          "; hatched: critical regions (not fitted); same colour scale for both faces",
       cv::Point(left, 48), 0.42);
   const cv::Mat lut = ViridisLut();
   const int cell_w = std::clamp(panel_w / std::max<int>(phis.size(), 8), 6, 28);
@@ -227,7 +238,8 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& re
       band(360 - zmin, 360);
       band(180, 360 - zmax);
     }
-    Axes(img, p, NiceTicks(0, 360, 8), face == 1 ? NiceTicks(0, 180, 6) : std::vector<double>{180, 210, 240, 270, 300, 330, 360},
+    Axes(img, p, NiceTicks(0, 360, 8),
+         face == 1 ? NiceTicks(0, 180, 6) : std::vector<double>{180, 210, 240, 270, 300, 330, 360},
          "phi [deg]", "theta [deg] (zenith at the top)", "%g", "%g", false);
     for (const auto& [k, c] : cells) {
       if (std::get<0>(k) != face) continue;
@@ -238,16 +250,20 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& re
       if (v > vmax) cv::rectangle(img, box, cv::Scalar(0, 0, 200), 1);
     }
     cv::rectangle(img, p.r, kInk, 1);
-    Put(img, "face " + std::to_string(face), cv::Point(p.r.x + p.r.width / 2, p.r.y - 6), 0.5, 1, 0);
+    Put(img, "face " + std::to_string(face), cv::Point(p.r.x + p.r.width / 2, p.r.y - 6), 0.5, 1,
+        0);
     ++i;
   }
-  ColourBar(img, lut, cv::Rect(img.cols - 120, top, 18, panel_h), vmax, "rms error [" + src.unit + "]");
+  ColourBar(img, lut, cv::Rect(img.cols - 120, top, 18, panel_h), vmax,
+            "rms error [" + src.unit + "]");
   Figure f;
   f.name = "error_map_" + src.key + ".png";
   f.section = "maps";
   f.title = src.title;
-  f.caption = "Root mean square of the observed-minus-model point error at each pointing (" + src.unit +
-              "), for every observation including the critical regions. Cells outlined in red exceed the scale.";
+  f.caption = "Root mean square of the observed-minus-model point error at each pointing (" +
+              src.unit +
+              "), for every observation including the critical regions. Cells outlined in red "
+              "exceed the scale.";
   f.image = img;
   return f;
 }
@@ -270,7 +286,8 @@ Figure ImageArrows(int zoom, const PipelineResult& r) {
     raw.push_back({p.uv.x(), p.uv.y(), p.uv.x() - pred.x(), p.uv.y() - pred.y(), 1});
   }
   for (const Record& rec : r.obs.records) {
-    if (rec.tool != Tool::kCam || rec.zoom != zoom || InCriticalRegion(rec.theta, zmin, zmax)) continue;
+    if (rec.tool != Tool::kCam || rec.zoom != zoom || InCriticalRegion(rec.theta, zmin, zmax))
+      continue;
     Eigen::Vector2d pred;
     if (!PredictPixel(r.model, zoom, rec.phi, rec.theta, rec.x, &pred)) continue;
     raw.push_back({rec.u, rec.v, rec.u - pred.x(), rec.v - pred.y(), 1});
@@ -296,12 +313,17 @@ Figure ImageArrows(int zoom, const PipelineResult& r) {
   }
   const int left = 70, top = 64;
   const double fit_scale = std::min(640.0 / cam.width, 480.0 / cam.height);
-  const int w = static_cast<int>(cam.width * fit_scale), h = static_cast<int>(cam.height * fit_scale);
+  const int w = static_cast<int>(cam.width * fit_scale),
+            h = static_cast<int>(cam.height * fit_scale);
   cv::Mat img(top + h + 90, left + w + 40, CV_8UC3, kWhite);
-  Put(img, "Image residuals, zoom " + std::to_string(zoom) + ": observed - predicted pixel, mean per cell",
+  Put(img,
+      "Image residuals, zoom " + std::to_string(zoom) +
+          ": observed - predicted pixel, mean per cell",
       cv::Point(left, 26), 0.6);
-  Put(img, std::to_string(raw.size()) + " observations outside the critical regions (image points and camera records), " +
-               std::to_string(arrows.size()) + " cells",
+  Put(img,
+      std::to_string(raw.size()) +
+          " observations outside the critical regions (image points and camera records), " +
+          std::to_string(arrows.size()) + " cells",
       cv::Point(left, 48), 0.42);
   Panel p;
   p.r = cv::Rect(left, top, w, h);
@@ -313,24 +335,29 @@ Figure ImageArrows(int zoom, const PipelineResult& r) {
   Axes(img, p, NiceTicks(0, cam.width, 6), NiceTicks(0, cam.height, 5), "u [px]", "v [px]");
   const double p95 = Percentile(lengths, 0.95);
   const double bar = NiceNumber(std::max(p95, 1e-6));
-  const double px_per_unit = 0.08 * w / bar;  // a bar-sized residual is drawn 8% of the image width long
+  const double px_per_unit =
+      0.08 * w / bar;  // a bar-sized residual is drawn 8% of the image width long
   for (const Arrow& a : arrows) {
     const cv::Point from = p.Map(a.u, a.v);
-    const cv::Point to(static_cast<int>(from.x + a.du * px_per_unit), static_cast<int>(from.y + a.dv * px_per_unit));
+    const cv::Point to(static_cast<int>(from.x + a.du * px_per_unit),
+                       static_cast<int>(from.y + a.dv * px_per_unit));
     cv::circle(img, from, 2, kSeries[0], cv::FILLED, cv::LINE_AA);
     if (from != to) cv::arrowedLine(img, from, to, kSeries[3], 2, cv::LINE_AA, 0, 0.25);
   }
   // Scale bar below the image.
-  const cv::Point a(left, top + h + 62), b(left + static_cast<int>(bar * px_per_unit), top + h + 62);
+  const cv::Point a(left, top + h + 62),
+      b(left + static_cast<int>(bar * px_per_unit), top + h + 62);
   cv::arrowedLine(img, a, b, kSeries[3], 2, cv::LINE_AA, 0, 0.25);
   Put(img, Fmt("%g px", bar), cv::Point(b.x + 10, b.y), 0.48, 0, 1);
   Figure f;
   f.name = "image_residuals_zoom" + std::to_string(zoom) + ".png";
   f.section = "image";
   f.title = "Image residuals, zoom " + std::to_string(zoom);
-  f.caption = "Observed minus predicted pixel of every image point and camera record of this zoom, averaged per "
-              "image cell; the scale bar gives the arrow length of " + Fmt("%g", bar) +
-              " px. A radial or swirling pattern is a missing distortion term.";
+  f.caption =
+      "Observed minus predicted pixel of every image point and camera record of this zoom, "
+      "averaged per "
+      "image cell; the scale bar gives the arrow length of " +
+      Fmt("%g", bar) + " px. A radial or swirling pattern is a missing distortion term.";
   f.image = img;
   return f;
 }
@@ -367,16 +394,19 @@ void HistogramPanel(cv::Mat& img, cv::Rect area, const Series& s) {
   p.x1 = range;
   p.y0 = 0;
   p.y1 = peak;
-  Axes(img, p, NiceTicks(-range, range, 6), NiceTicks(0, peak, 4), "residual [" + s.unit + "]", "count", "%g", "%g");
+  Axes(img, p, NiceTicks(-range, range, 6), NiceTicks(0, peak, 4), "residual [" + s.unit + "]",
+       "count", "%g", "%g");
   for (int i = 0; i < bins; ++i) {
-    const cv::Point a = p.Map(-range + i * width, counts[i]), b = p.Map(-range + (i + 1) * width, 0);
+    const cv::Point a = p.Map(-range + i * width, counts[i]),
+                    b = p.Map(-range + (i + 1) * width, 0);
     cv::rectangle(img, cv::Rect(a, b), cv::Scalar(215, 180, 140), cv::FILLED);
     cv::rectangle(img, cv::Rect(a, b), cv::Scalar(160, 120, 80), 1);
   }
   cv::Point last;
   for (int k = 0; k <= 200; ++k) {
     const double x = -range + 2 * range * k / 200;
-    const double y = s.values.size() * width * std::exp(-0.5 * x * x / (s.sigma * s.sigma)) / (std::sqrt(2 * M_PI) * s.sigma);
+    const double y = s.values.size() * width * std::exp(-0.5 * x * x / (s.sigma * s.sigma)) /
+                     (std::sqrt(2 * M_PI) * s.sigma);
     const cv::Point q = p.Map(x, y);
     if (k > 0) cv::line(img, last, q, kSeries[3], 2, cv::LINE_AA);
     last = q;
@@ -386,8 +416,9 @@ void HistogramPanel(cv::Mat& img, cv::Rect area, const Series& s) {
   for (double v : s.values) ss += v * v;
   const double rms = s.values.empty() ? 0 : std::sqrt(ss / s.values.size());
   Put(img, s.title, cv::Point(area.x + area.width / 2, area.y - 24), 0.5, 1, 0);
-  Put(img, "fitted sigma " + Fmt("%.3g", s.sigma) + ", rms " + Fmt("%.3g", rms) + " " + s.unit + ", n " +
-               std::to_string(s.values.size()) + ", beyond 4.5 sigma: " + std::to_string(outside),
+  Put(img,
+      "fitted sigma " + Fmt("%.3g", s.sigma) + ", rms " + Fmt("%.3g", rms) + " " + s.unit + ", n " +
+          std::to_string(s.values.size()) + ", beyond 4.5 sigma: " + std::to_string(outside),
       cv::Point(area.x + area.width / 2, area.y - 7), 0.38, 1, 0);
 }
 
@@ -412,7 +443,8 @@ Figure Histograms(const PipelineResult& r) {
   }
   const int pw = 380, ph = 260, left = 80, gap = 110, top = 100;
   cv::Mat img(top + ph + 60, left + static_cast<int>(shown.size()) * (pw + gap), CV_8UC3, kWhite);
-  Put(img, "Residuals against the Gaussian of the fitted sigma (fitted rows)", cv::Point(left, 28), 0.6);
+  Put(img, "Residuals against the Gaussian of the fitted sigma (fitted rows)", cv::Point(left, 28),
+      0.6);
   for (size_t i = 0; i < shown.size(); ++i) {
     HistogramPanel(img, cv::Rect(left + static_cast<int>(i) * (pw + gap), top, pw, ph), *shown[i]);
   }
@@ -420,9 +452,10 @@ Figure Histograms(const PipelineResult& r) {
   f.name = "residual_histograms.png";
   f.section = "histograms";
   f.title = "Residual histograms";
-  f.caption = "Coordinates of observed minus model for the rows the fit uses; the red curve is the normal "
-              "density with the fitted (a-posteriori) sigma of the group. Heavy tails point at outliers, a "
-              "curve narrower than the bars at a missing effect or an optimistic sigma.";
+  f.caption =
+      "Coordinates of observed minus model for the rows the fit uses; the red curve is the normal "
+      "density with the fitted (a-posteriori) sigma of the group. Heavy tails point at outliers, a "
+      "curve narrower than the bars at a missing effect or an optimistic sigma.";
   f.image = img;
   return f;
 }
@@ -435,18 +468,21 @@ struct Rung {
   double edm_mm = NAN, cam_mm = NAN, px = NAN;
 };
 
-Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name, const std::string& title,
-                    const std::string& caption) {
+Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name,
+                    const std::string& title, const std::string& caption) {
   const int left = 90, top = 70, step = 150;
-  const bool has_px = std::any_of(rungs.begin(), rungs.end(), [](const Rung& g) { return std::isfinite(g.px); });
-  const bool has_mm = std::any_of(rungs.begin(), rungs.end(),
-                                  [](const Rung& g) { return std::isfinite(g.edm_mm) || std::isfinite(g.cam_mm); });
+  const bool has_px =
+      std::any_of(rungs.begin(), rungs.end(), [](const Rung& g) { return std::isfinite(g.px); });
+  const bool has_mm = std::any_of(rungs.begin(), rungs.end(), [](const Rung& g) {
+    return std::isfinite(g.edm_mm) || std::isfinite(g.cam_mm);
+  });
   const int pw = std::max(520, static_cast<int>(rungs.size()) * step), ph = 260;
   const int panels = (has_mm ? 1 : 0) + (has_px ? 1 : 0);
   cv::Mat img(top + panels * (ph + 110), left + pw + 60, CV_8UC3, kWhite);
   Put(img, title, cv::Point(left, 28), 0.6);
   int row = 0;
-  auto panel = [&](const std::vector<std::pair<std::string, double Rung::*>>& series, const std::string& unit) {
+  auto panel = [&](const std::vector<std::pair<std::string, double Rung::*>>& series,
+                   const std::string& unit) {
     std::vector<double> all;
     for (const Rung& g : rungs) {
       for (const auto& s : series) {
@@ -454,7 +490,8 @@ Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name, con
       }
     }
     if (all.empty()) return;
-    const double lo = *std::min_element(all.begin(), all.end()), hi = *std::max_element(all.begin(), all.end());
+    const double lo = *std::min_element(all.begin(), all.end()),
+                 hi = *std::max_element(all.begin(), all.end());
     Panel p;
     p.r = cv::Rect(left, top + row * (ph + 110), pw, ph);
     p.x0 = -0.5;
@@ -472,7 +509,8 @@ Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name, con
     Axes(img, p, {}, yt, "", "rms error [" + unit + "] (log)", "%g", "%g");
     for (size_t i = 0; i < rungs.size(); ++i) {
       const cv::Point a = p.Map(static_cast<double>(i), p.y0);
-      cv::line(img, cv::Point(a.x, p.r.y + p.r.height), cv::Point(a.x, p.r.y + p.r.height + 5), kInk, 1);
+      cv::line(img, cv::Point(a.x, p.r.y + p.r.height), cv::Point(a.x, p.r.y + p.r.height + 5),
+               kInk, 1);
       Put(img, rungs[i].label, cv::Point(a.x, p.r.y + p.r.height + 10), 0.42, 1, 2);
       // One effect per line under the tick.
       std::istringstream words(rungs[i].added);
@@ -526,10 +564,12 @@ double JsonRms(const json& j, const char* a, const char* b, const char* key) {
 std::string Added(const std::vector<std::string>& before, const std::vector<std::string>& after) {
   std::string out;
   for (const std::string& e : after) {
-    if (std::find(before.begin(), before.end(), e) == before.end()) out += (out.empty() ? "+" : " +") + e;
+    if (std::find(before.begin(), before.end(), e) == before.end())
+      out += (out.empty() ? "+" : " +") + e;
   }
   for (const std::string& e : before) {
-    if (std::find(after.begin(), after.end(), e) == after.end()) out += (out.empty() ? "-" : " -") + e;
+    if (std::find(after.begin(), after.end(), e) == after.end())
+      out += (out.empty() ? "-" : " -") + e;
   }
   return out;
 }
@@ -558,16 +598,20 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
     if (o.group == ObsGroup::kCam) cam_zooms.insert(o.zoom);
     if (o.group == ObsGroup::kPixel) pixel_zooms.insert(o.zoom);
   }
-  if (edm) figs.push_back(ErrorMap({"edm", "EDM points", "mm", 1e3, ObsGroup::kEdm, 0}, d.residuals, faces, r.fit_options, model));
+  if (edm)
+    figs.push_back(ErrorMap({"edm", "EDM points", "mm", 1e3, ObsGroup::kEdm, 0}, d.residuals, faces,
+                            r.fit_options, model));
   for (int z : cam_zooms) {
-    figs.push_back(ErrorMap({"cam_zoom" + std::to_string(z), "Camera points, zoom " + std::to_string(z), "mm", 1e3,
-                             ObsGroup::kCam, z},
-                            d.residuals, faces, r.fit_options, model));
+    figs.push_back(
+        ErrorMap({"cam_zoom" + std::to_string(z), "Camera points, zoom " + std::to_string(z), "mm",
+                  1e3, ObsGroup::kCam, z},
+                 d.residuals, faces, r.fit_options, model));
   }
   for (int z : pixel_zooms) {
-    figs.push_back(ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z), "px", 1.0,
-                             ObsGroup::kPixel, z},
-                            d.residuals, faces, r.fit_options, model));
+    figs.push_back(
+        ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z),
+                  "px", 1.0, ObsGroup::kPixel, z},
+                 d.residuals, faces, r.fit_options, model));
   }
 
   // This run's stepwise ladder.
@@ -579,21 +623,24 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
                        s.rms.edm_n ? s.rms.edm_m * 1e3 : NAN, s.rms.cam_n ? s.rms.cam_m * 1e3 : NAN,
                        s.rms.pixels_n ? s.rms.pixels_px : NAN});
     }
-    figs.push_back(LadderFigure(rungs, "ladder_stepwise.png", "The ladder of this run (forward stepwise)",
-                                "Error of the fitted rows after each effect the stepwise search added."));
+    figs.push_back(
+        LadderFigure(rungs, "ladder_stepwise.png", "The ladder of this run (forward stepwise)",
+                     "Error of the fitted rows after each effect the stepwise search added."));
   }
   // Across runs: earlier runs of this output folder, then this one.
   if (history.is_array() && !history.empty()) {
     std::vector<Rung> rungs;
     std::vector<std::string> prev;
     bool first = true;
-    auto add = [&](const std::string& label, const std::vector<std::string>& effects, const json& final) {
+    auto add = [&](const std::string& label, const std::vector<std::string>& effects,
+                   const json& final) {
       Rung g;
       g.label = label;
       g.added = first ? "" : Added(prev, effects);
       g.edm_mm = JsonRms(final, "records", "edm", "rms_m") * 1e3;
       g.cam_mm = JsonRms(final, "records", "cam", "rms_m") * 1e3;
-      if (final.contains("pixels") && final["pixels"].value("n", 0) > 0) g.px = final["pixels"]["rms_px"].get<double>();
+      if (final.contains("pixels") && final["pixels"].value("n", 0) > 0)
+        g.px = final["pixels"]["rms_px"].get<double>();
       rungs.push_back(g);
       prev = effects;
       first = false;
@@ -604,14 +651,16 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
       if (h.contains("effects")) effects = h["effects"].get<std::vector<std::string>>();
       add("run " + h.value("run", std::string("?")).substr(0, 3), effects, h["final"]);
     }
-    json final = {{"records",
-                   {{"edm", {{"rms_m", r.final_errors.edm.rms_m}, {"n", r.final_errors.edm.n}}},
-                    {"cam", {{"rms_m", r.final_errors.cam.rms_m}, {"n", r.final_errors.cam.n}}}}},
-                  {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
+    json final = {
+        {"records",
+         {{"edm", {{"rms_m", r.final_errors.edm.rms_m}, {"n", r.final_errors.edm.n}}},
+          {"cam", {{"rms_m", r.final_errors.cam.rms_m}, {"n", r.final_errors.cam.n}}}}},
+        {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
     add("this run", r.model.effects.Names(), final);
-    figs.push_back(LadderFigure(rungs, "ladder_runs.png", "The ladder across runs (this output folder's history)",
-                                "Final error of every run kept in the output folder (all rows, SPEC 6 `final`); "
-                                "red: the effects added (+) or removed (-) relative to the run before."));
+    figs.push_back(LadderFigure(
+        rungs, "ladder_runs.png", "The ladder across runs (this output folder's history)",
+        "Final error of every run kept in the output folder (all rows, SPEC 6 `final`); "
+        "red: the effects added (+) or removed (-) relative to the run before."));
   }
   for (int z : cam_zooms) {
     if (z < r.model.NumZooms()) figs.push_back(ImageArrows(z, r));

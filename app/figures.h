@@ -28,7 +28,7 @@ struct Figure {
   std::string section;  // "maps", "ladder", "image", "histograms"
   std::string title;
   std::string caption;
-  cv::Mat image;        // BGR, 8 bit
+  cv::Mat image;  // BGR, 8 bit
 };
 
 // `history` = report.json's "history" array (earlier runs, oldest first).

@@ -12,11 +12,13 @@ int main(int argc, char** argv) {
   rtscalib::app::RunArgs run;
   app.add_option("--config", run.config, "run the pipeline a config describes (configs/*.yaml)");
   app.add_option("--output", run.output, "output folder (overrides the config's `output`)");
-  app.add_option("--write-config", run.write_config, "also write the effective config to this new file");
+  app.add_option("--write-config", run.write_config,
+                 "also write the effective config to this new file");
   app.add_flag("--quiet", run.quiet, "no progress lines on stderr");
 
   rtscalib::app::PredictArgs predict;
-  CLI::App* pred = app.add_subcommand("predict", "predict records (x, y, z) or pixels (u, v) with a model");
+  CLI::App* pred =
+      app.add_subcommand("predict", "predict records (x, y, z) or pixels (u, v) with a model");
   pred->add_option("--model", predict.model, "model.yaml written by a run")->required();
   pred->add_option("--records", predict.records, "records.csv whose x, y, z are predicted");
   pred->add_option("--pixels", predict.pixels, "pixels.csv whose u, v are predicted");
@@ -28,7 +30,8 @@ int main(int argc, char** argv) {
       "diagnose", "run the pipeline and rank the catalogue effects the model lacks, best first");
   dg->add_option("--config", diag.config, "the run's config")->required();
   dg->add_option("--output", diag.output, "output folder (overrides the config's `output`)");
-  dg->add_flag("--auto", diag.diagnose_auto, "add significant effects one at a time and refit (the ladder)");
+  dg->add_flag("--auto", diag.diagnose_auto,
+               "add significant effects one at a time and refit (the ladder)");
   dg->add_flag("--quiet", diag.quiet, "no progress lines on stderr");
 
   CLI11_PARSE(app, argc, argv);

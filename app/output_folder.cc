@@ -11,7 +11,8 @@ namespace fs = std::filesystem;
 
 namespace rtscalib::app {
 
-OutputFolder::OutputFolder(const std::string& root) : root_(fs::absolute(root).lexically_normal().string()) {
+OutputFolder::OutputFolder(const std::string& root)
+    : root_(fs::absolute(root).lexically_normal().string()) {
   std::error_code ec;
   if (fs::exists(root_) && !fs::is_directory(root_)) {
     throw std::runtime_error("output folder '" + root_ + "' exists and is not a folder");
@@ -33,7 +34,8 @@ OutputFolder::OutputFolder(const std::string& root) : root_(fs::absolute(root).l
   std::tm tm{};
   localtime_r(&now, &tm);
   std::ostringstream name;
-  name << std::setw(3) << std::setfill('0') << last + 1 << "-" << std::put_time(&tm, "%Y%m%d-%H%M%S");
+  name << std::setw(3) << std::setfill('0') << last + 1 << "-"
+       << std::put_time(&tm, "%Y%m%d-%H%M%S");
   run_ = {(fs::path(root_) / "history" / name.str()).string(), name.str(), last + 1};
   fs::create_directories(run_.dir, ec);
   if (ec) throw std::runtime_error("cannot create run folder '" + run_.dir + "': " + ec.message());
@@ -47,7 +49,9 @@ void OutputFolder::Publish(const std::vector<std::string>& names) const {
     std::error_code ec;
     fs::remove_all(to, ec);  // the previous latest copy; its original stays in history
     fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing, ec);
-    if (ec) throw std::runtime_error("cannot copy '" + from.string() + "' to '" + to.string() + "': " + ec.message());
+    if (ec)
+      throw std::runtime_error("cannot copy '" + from.string() + "' to '" + to.string() +
+                               "': " + ec.message());
   }
 }
 

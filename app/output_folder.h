@@ -10,8 +10,8 @@
 namespace rtscalib::app {
 
 struct HistoryEntry {
-  std::string dir;       // absolute
-  std::string name;      // NNN-YYYYmmdd-HHMMSS
+  std::string dir;   // absolute
+  std::string name;  // NNN-YYYYmmdd-HHMMSS
   int number = 0;
 };
 

@@ -8,8 +8,8 @@
 #include "libcalib/extract/intrinsics_from_rays.h"
 #include "libcalib/extract/simplify.h"
 #include "libcalib/fit/init_from_pixels.h"
-#include "libcalib/fit/two_face.h"
 #include "libcalib/fit/start_models.h"
+#include "libcalib/fit/two_face.h"
 #include "libcalib/io/records.h"
 #include "libcalib/model/kinematics.h"
 #include "libcalib/sim/simulator.h"
@@ -72,7 +72,8 @@ void TwoFaceCheck(const Observations& obs, FaceComparison* f) {
   f->tilting_axis = d.tilting_axis;
   f->vertical_index = d.vertical_index;
   f->valid = true;
-  if (!edm) f->note = "read along zoom " + std::to_string(zoom) + "'s optical axis (no EDM records)";
+  if (!edm)
+    f->note = "read along zoom " + std::to_string(zoom) + "'s optical axis (no EDM records)";
 }
 
 // Options of the start from pixels alone (and of a zoom's camera from pixels).
@@ -110,8 +111,8 @@ Observations LoadObservations(const RunConfig& config, const std::string& work_d
     return obs;
   }
   if (!config.simulate) {
-    throw std::invalid_argument(config.config_path +
-                                ": the config needs data.records, data.pixels or a simulate section");
+    throw std::invalid_argument(
+        config.config_path + ": the config needs data.records, data.pixels or a simulate section");
   }
   progress->Step("simulating the instrument");
   SimulationOptions sim = *config.simulate;
@@ -123,8 +124,8 @@ Observations LoadObservations(const RunConfig& config, const std::string& work_d
                  std::to_string(data.obs.pixels.size()) + " pixel observations");
   const RenderSettings render = ParseRenderSettings(config);
   if (render.enabled && !sim.targets.boards.empty()) {
-    result->render = RenderAndDetect(render, sim.truth, sim.targets, work_dir + "/images",
-                                     &data.obs, progress);
+    result->render =
+        RenderAndDetect(render, sim.truth, sim.targets, work_dir + "/images", &data.obs, progress);
     if (!result->render.note.empty()) result->notes.push_back(result->render.note);
   }
   return std::move(data.obs);
@@ -132,8 +133,8 @@ Observations LoadObservations(const RunConfig& config, const std::string& work_d
 
 std::vector<Record> ReducedRecords(const std::vector<Record>& records,
                                    const std::optional<ExtractionResult>& extraction) {
-  const bool labelled = std::any_of(records.begin(), records.end(),
-                                    [](const Record& r) { return !r.set.empty(); });
+  const bool labelled =
+      std::any_of(records.begin(), records.end(), [](const Record& r) { return !r.set.empty(); });
   std::vector<Record> out;
   if (labelled) {
     for (const Record& r : records) {
@@ -168,7 +169,8 @@ FinalErrors ComputeFinalErrors(const InstrumentModel& model, const Observations&
   return f;
 }
 
-PipelineResult RunPipeline(const RunConfig& config, const std::string& work_dir, Progress* progress) {
+PipelineResult RunPipeline(const RunConfig& config, const std::string& work_dir,
+                           Progress* progress) {
   PipelineResult result;
   result.obs = LoadObservations(config, work_dir, &result, progress);
   const Observations& obs = result.obs;
@@ -203,7 +205,8 @@ PipelineResult RunPipeline(const RunConfig& config, const std::string& work_dir,
                              "); retried with intrinsics from the view rays");
       result.extraction = ExtractDhModel(obs.records, cameras, eo);
     }
-    for (const std::string& n : result.extraction->notes) result.notes.push_back("extraction: " + n);
+    for (const std::string& n : result.extraction->notes)
+      result.notes.push_back("extraction: " + n);
     // 2. Simplification (Sec. 4.1).
     progress->Step("simplifying (Klug Sec. 4.1)");
     const SimplifiedModel simple = Simplify(result.extraction->model);
@@ -225,7 +228,8 @@ PipelineResult RunPipeline(const RunConfig& config, const std::string& work_dir,
       const auto& poses = result.extraction->camera_poses;
       if (z < start.NumZooms() && z < static_cast<int>(poses.size()) && poses[z] > 0) continue;
       progress->Step("zoom " + std::to_string(z) + ": camera from its pixels");
-      for (const std::string& n : InitCameraFromPixels(obs.pixels, z, PixelStartOptions(config), &start)) {
+      for (const std::string& n :
+           InitCameraFromPixels(obs.pixels, z, PixelStartOptions(config), &start)) {
         result.notes.push_back("pixel start: " + n);
       }
     }

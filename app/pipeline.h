@@ -58,25 +58,25 @@ struct PipelineResult {
   std::optional<InstrumentModel> truth;  // only for simulated data, for the report
   std::optional<ExtractionResult> extraction;
   std::optional<InstrumentModel> simplified;
-  std::string closed_form;               // Eq. 90-style text of the simplified model
+  std::string closed_form;  // Eq. 90-style text of the simplified model
   std::optional<Table4> table4;
-  InstrumentModel start;                 // what the refinement started from
-  InstrumentModel reduced_model;         // refined on the reduced set
+  InstrumentModel start;          // what the refinement started from
+  InstrumentModel reduced_model;  // refined on the reduced set
   FitSummary reduced_fit;
-  InstrumentModel model;                 // the final model (full set)
+  InstrumentModel model;  // the final model (full set)
   FitSummary fit;
   Table5 table5;
   FinalErrors final_errors;
   std::optional<FaceComparison> faces;
   std::vector<std::string> notes;
   bool intrinsics_fitted = false;
-  FitOptions fit_options;                // what the full-set refinement used
+  FitOptions fit_options;  // what the full-set refinement used
   // Diagnosis of `model` (app/diagnosis_report.h); with diagnose.auto the
   // stepwise ladder whose last rung is `model`.
   std::optional<diagnose::Diagnosis> diagnosis;
   std::vector<diagnose::LadderStep> ladder;
   std::string ladder_stop;
-  RenderStageResult render;              // synthetic shots, when the config renders
+  RenderStageResult render;  // synthetic shots, when the config renders
 };
 
 // Loads or simulates the observations of a config (the data section, or the
@@ -85,7 +85,8 @@ struct PipelineResult {
 Observations LoadObservations(const RunConfig& config, const std::string& work_dir,
                               PipelineResult* result, Progress* progress);
 
-PipelineResult RunPipeline(const RunConfig& config, const std::string& work_dir, Progress* progress);
+PipelineResult RunPipeline(const RunConfig& config, const std::string& work_dir,
+                           Progress* progress);
 
 // Rows of the "reduced" set: set labels starting with "sweep" when the file
 // has labels, otherwise the rows of the extraction's sweeps poses.

@@ -23,8 +23,9 @@ int RunPredict(const PredictArgs& args) {
     RecordsFile in = ReadRecords(args.records);
     for (Record& r : in.records) {
       if (r.tool == Tool::kCam && r.zoom >= model.NumZooms()) {
-        throw std::invalid_argument(args.records + ":" + std::to_string(r.line) + ": column 'zoom': the model has " +
-                                    std::to_string(model.NumZooms()) + " zoom level(s), got " + std::to_string(r.zoom));
+        throw std::invalid_argument(
+            args.records + ":" + std::to_string(r.line) + ": column 'zoom': the model has " +
+            std::to_string(model.NumZooms()) + " zoom level(s), got " + std::to_string(r.zoom));
       }
       r.x = r.tool == Tool::kEdm ? PredictEdm(model, r.phi, r.theta, r.d)
                                  : PredictCam(model, r.zoom, r.phi, r.theta, r.u, r.v, r.d);
@@ -37,8 +38,9 @@ int RunPredict(const PredictArgs& args) {
   int behind = 0;
   for (PixelObservation& p : in.pixels) {
     if (p.zoom >= model.NumZooms()) {
-      throw std::invalid_argument(args.pixels + ":" + std::to_string(p.line) + ": column 'zoom': the model has " +
-                                  std::to_string(model.NumZooms()) + " zoom level(s), got " + std::to_string(p.zoom));
+      throw std::invalid_argument(
+          args.pixels + ":" + std::to_string(p.line) + ": column 'zoom': the model has " +
+          std::to_string(model.NumZooms()) + " zoom level(s), got " + std::to_string(p.zoom));
     }
     Eigen::Vector2d uv;
     if (!PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &uv)) {

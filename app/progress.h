@@ -24,7 +24,8 @@ class Progress {
   void Done() {
     if (!open_) return;
     open_ = false;
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     if (!quiet_) std::fprintf(stderr, "[rtscalib]   done: %s (%.2f s)\n", name_.c_str(), s);
   }
   bool quiet() const { return quiet_; }

@@ -16,7 +16,8 @@ namespace rtscalib::app {
 RenderSettings ParseRenderSettings(const RunConfig& config) {
   RenderSettings s;
   if (config.render_yaml.empty()) return s;
-  const YamlDocument doc = YamlDocument::Parse(config.render_yaml, config.config_path + " (section render)");
+  const YamlDocument doc =
+      YamlDocument::Parse(config.render_yaml, config.config_path + " (section render)");
   const YamlNode root = doc.Root();
   s.enabled = true;
   root.Read("enabled", &s.enabled);

@@ -18,7 +18,7 @@ namespace rtscalib::app {
 // The config's `render` section (keys documented in docs/config.md).
 struct RenderSettings {
   bool enabled = false;
-  int jobs = 2;              // worker processes
+  int jobs = 2;  // worker processes
   int supersample = 2;
   double noise_sigma = 1.0;  // grey levels
   double blur_sigma = 0.0;   // px

@@ -23,11 +23,20 @@ std::string Esc(const std::string& s) {
   out.reserve(s.size());
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -62,8 +71,9 @@ figcaption { font-size: 13px; color: #555; max-width: 1000px; }
 )";
 
 std::string Img(const Figure& f) {
-  return "<figure><img alt=\"" + Esc(f.title) + "\" src=\"data:image/png;base64," + Base64(EncodePng(f.image)) +
-         "\"><figcaption>" + Esc(f.caption) + "</figcaption></figure>\n";
+  return "<figure><img alt=\"" + Esc(f.title) + "\" src=\"data:image/png;base64," +
+         Base64(EncodePng(f.image)) + "\"><figcaption>" + Esc(f.caption) +
+         "</figcaption></figure>\n";
 }
 
 std::string Figures(const std::vector<Figure>& figs, const std::string& section) {
@@ -86,23 +96,24 @@ std::string ValueCell(const diagnose::RankedEffect& r) {
   if (r.has_equivalent) {
     out += "equivalent in the model: ";
     for (int k = 0; k < r.equivalent.num; ++k) {
-      out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " + Fmt("%.3g", r.equivalent.value[k]) + " " +
-             info.report_units[k];
+      out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " +
+             Fmt("%.3g", r.equivalent.value[k]) + " " + info.report_units[k];
     }
     return out;
   }
   if (!r.observable || r.redundant) return "-";
   if (IsKinematic(r.effect)) {
     for (int k = 0; k < r.value.num; ++k) {
-      out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " + Fmt("%.3g", r.value.value[k]) + " &plusmn; " +
-             Fmt("%.2g", r.value.sigma[k]) + " " + info.report_units[k];
+      out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " +
+             Fmt("%.3g", r.value.value[k]) + " &plusmn; " + Fmt("%.2g", r.value.sigma[k]) + " " +
+             info.report_units[k];
     }
     return out;
   }
   for (size_t i = 0; i < r.distortion.size() && i < 8; ++i) {
     const diagnose::DistortionValue& d = r.distortion[i];
-    out += (i ? "<br>" : "") + std::string("zoom ") + std::to_string(d.zoom) + " " + d.coefficient + " = " +
-           Fmt("%.3g", d.value) + " &plusmn; " + Fmt("%.2g", d.sigma);
+    out += (i ? "<br>" : "") + std::string("zoom ") + std::to_string(d.zoom) + " " + d.coefficient +
+           " = " + Fmt("%.3g", d.value) + " &plusmn; " + Fmt("%.2g", d.sigma);
   }
   if (r.distortion.size() > 8) out += "<br>...";
   return out;
@@ -110,19 +121,29 @@ std::string ValueCell(const diagnose::RankedEffect& r) {
 
 std::string RankingTable(const diagnose::Diagnosis& d) {
   std::ostringstream o;
-  o << "<table><tr><th>#</th><th>effect</th><th>rms before &rarr; after</th><th>&Delta;BIC</th><th>p</th>"
-       "<th>significant</th><th>identifiable</th><th>estimate (report units)</th><th>notes</th><th>config line</th></tr>\n";
+  o << "<table><tr><th>#</th><th>effect</th><th>rms before &rarr; "
+       "after</th><th>&Delta;BIC</th><th>p</th>"
+       "<th>significant</th><th>identifiable</th><th>estimate (report "
+       "units)</th><th>notes</th><th>config line</th></tr>\n";
   int i = 0;
   for (const diagnose::RankedEffect& r : d.ranking.entries) {
     const bool mm = r.rms_unit == "m";
-    o << "<tr class=\"" << (r.significant ? "sig" : r.redundant || !r.observable ? "red" : "") << "\"><td class=num>"
-      << ++i << "</td><td><b>" << Esc(r.name) << "</b><br><span class=small>" << Esc(Info(r.effect).signature)
-      << "</span></td><td class=num>" << Fmt("%.4g", r.rms_before * (mm ? 1e3 : 1)) << " &rarr; "
+    o << "<tr class=\""
+      << (r.significant                  ? "sig"
+          : r.redundant || !r.observable ? "red"
+                                         : "")
+      << "\"><td class=num>" << ++i << "</td><td><b>" << Esc(r.name) << "</b><br><span class=small>"
+      << Esc(Info(r.effect).signature) << "</span></td><td class=num>"
+      << Fmt("%.4g", r.rms_before * (mm ? 1e3 : 1)) << " &rarr; "
       << Fmt("%.4g", r.rms_after * (mm ? 1e3 : 1)) << (mm ? " mm" : " px")
-      << "<br><span class=small>" << Esc(r.after_source) << "</span></td><td class=num>" << Fmt("%.1f", r.delta_bic)
-      << "</td><td class=num>" << (r.p_value > 0 ? Fmt("%.2g", r.p_value) : std::string("&lt;1e-300"))
-      << "</td><td>" << (r.significant ? "<b>yes</b>" : "no")
-      << "</td><td>" << (r.redundant ? "redundant" : !r.observable ? "not seen" : r.identifiable ? "yes" : "no")
+      << "<br><span class=small>" << Esc(r.after_source) << "</span></td><td class=num>"
+      << Fmt("%.1f", r.delta_bic) << "</td><td class=num>"
+      << (r.p_value > 0 ? Fmt("%.2g", r.p_value) : std::string("&lt;1e-300")) << "</td><td>"
+      << (r.significant ? "<b>yes</b>" : "no") << "</td><td>"
+      << (r.redundant      ? "redundant"
+          : !r.observable  ? "not seen"
+          : r.identifiable ? "yes"
+                           : "no")
       << "</td><td class=est>" << ValueCell(r) << "</td><td class=notes>";
     std::vector<std::string> notes;
     if (!r.note.empty()) notes.push_back(Esc(r.note));
@@ -139,27 +160,37 @@ std::string RankingTable(const diagnose::Diagnosis& d) {
     for (size_t k = 0; k < notes.size(); ++k) o << (k ? "<br>" : "") << notes[k];
     o << "</td><td><code>" << Esc(r.config_line) << "</code></td></tr>\n";
   }
-  o << "</table><p class=small>Sorted best first: significant effects by &Delta;BIC, then the rest. "
-    << "&Delta;BIC = &sum;<sub>g</sub> n<sub>g</sub> log(RSS<sub>g,after</sub>/RSS<sub>g,before</sub>) + k log n "
+  o << "</table><p class=small>Sorted best first: significant effects by &Delta;BIC, then the "
+       "rest. "
+    << "&Delta;BIC = &sum;<sub>g</sub> n<sub>g</sub> "
+       "log(RSS<sub>g,after</sub>/RSS<sub>g,before</sub>) + k log n "
     << "over the observation groups; p from a cluster-robust Wald test, significant below "
-    << Fmt("%.2g", d.ranking.level) << " (" << Fmt("%g", 100 * d.ranking.level * std::max(d.ranking.tested, 1))
-    << "% over the " << d.ranking.tested << " effects tested). rms over the rows the fit uses; "
-    << "&ldquo;refined&rdquo;: after a refinement with the effect added, &ldquo;linearised&rdquo;: predicted "
+    << Fmt("%.2g", d.ranking.level) << " ("
+    << Fmt("%g", 100 * d.ranking.level * std::max(d.ranking.tested, 1)) << "% over the "
+    << d.ranking.tested << " effects tested). rms over the rows the fit uses; "
+    << "&ldquo;refined&rdquo;: after a refinement with the effect added, &ldquo;linearised&rdquo;: "
+       "predicted "
     << "from the Jacobian at the fitted model. docs/diagnostics.md explains every column.</p>\n";
   return o.str();
 }
 
-std::string HarmonicTable(const std::vector<diagnose::Harmonic>& hs, bool explained, double unit_length) {
+std::string HarmonicTable(const std::vector<diagnose::Harmonic>& hs, bool explained,
+                          double unit_length) {
   std::ostringstream o;
-  o << "<table><tr><th>structure</th><th>reading in error</th><th>face</th><th>amplitude</th><th>phase [deg]</th>"
+  o << "<table><tr><th>structure</th><th>reading in "
+       "error</th><th>face</th><th>amplitude</th><th>phase [deg]</th>"
        "<th>p</th>"
     << (explained ? "<th>explained by</th>" : "") << "</tr>\n";
   for (const diagnose::Harmonic& h : hs) {
-    o << "<tr><td>" << Esc(diagnose::HarmonicName(h.probe, unit_length)) << "</td><td>" << diagnose::ReadingName(h.probe.reading) << "</td><td class=num>" << h.probe.face
-      << "</td><td class=num>" << Fmt("%.3g", h.amplitude) << " &plusmn; " << Fmt("%.2g", h.amplitude_sigma) << " "
-      << Esc(h.unit) << "</td><td class=num>" << Fmt("%.0f", h.phase_deg) << "</td><td class=num>"
-      << Fmt("%.2g", h.p_value) << "</td>";
-    if (explained) o << "<td>" << (h.explained_by.empty() ? "<b>nothing in the catalogue</b>" : Esc(h.explained_by)) << "</td>";
+    o << "<tr><td>" << Esc(diagnose::HarmonicName(h.probe, unit_length)) << "</td><td>"
+      << diagnose::ReadingName(h.probe.reading) << "</td><td class=num>" << h.probe.face
+      << "</td><td class=num>" << Fmt("%.3g", h.amplitude) << " &plusmn; "
+      << Fmt("%.2g", h.amplitude_sigma) << " " << Esc(h.unit) << "</td><td class=num>"
+      << Fmt("%.0f", h.phase_deg) << "</td><td class=num>" << Fmt("%.2g", h.p_value) << "</td>";
+    if (explained)
+      o << "<td>"
+        << (h.explained_by.empty() ? "<b>nothing in the catalogue</b>" : Esc(h.explained_by))
+        << "</td>";
     o << "</tr>\n";
   }
   o << "</table>\n";
@@ -193,13 +224,16 @@ std::string Base64(const std::vector<unsigned char>& bytes) {
 std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const json& report,
                        const std::vector<Figure>& figs) {
   std::ostringstream o;
-  const std::string run = report.contains("rtscalib") ? report["rtscalib"].value("run", std::string()) : "";
+  const std::string run =
+      report.contains("rtscalib") ? report["rtscalib"].value("run", std::string()) : "";
   o << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
     << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-    << "<title>rtscalib report " << Esc(run) << "</title><style>" << kStyle << "</style></head><body>\n";
-  o << "<h1>rtscalib report</h1><p class=meta>run " << Esc(run) << " &middot; config <code>" << Esc(config.config_path)
-    << "</code> &middot; " << r.obs.records.size() << " records (" << Esc(r.obs.records_source) << "), "
-    << r.obs.pixels.size() << " image points" << (r.obs.pixels.empty() ? "" : " (" + Esc(r.obs.pixels_source) + ")")
+    << "<title>rtscalib report " << Esc(run) << "</title><style>" << kStyle
+    << "</style></head><body>\n";
+  o << "<h1>rtscalib report</h1><p class=meta>run " << Esc(run) << " &middot; config <code>"
+    << Esc(config.config_path) << "</code> &middot; " << r.obs.records.size() << " records ("
+    << Esc(r.obs.records_source) << "), " << r.obs.pixels.size() << " image points"
+    << (r.obs.pixels.empty() ? "" : " (" + Esc(r.obs.pixels_source) + ")")
     << (r.simulated ? " &middot; simulated data" : "") << "</p>\n";
 
   // 1. Verdict.
@@ -212,35 +246,42 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
       o << "<p" << (i == 1 ? " class=lead" : "") << ">" << Esc(d.verdict[i]) << "</p>\n";
     }
     if (next) {
-      o << "<p>Add it with this line in the config, then run again:<br><code>" << Esc(next->config_line)
-        << "</code></p>\n";
+      o << "<p>Add it with this line in the config, then run again:<br><code>"
+        << Esc(next->config_line) << "</code></p>\n";
     }
     o << "</section>\n";
   } else {
-    o << "<section class=verdict><p>The diagnosis is switched off (<code>diagnose.enabled: false</code>).</p></section>\n";
+    o << "<section class=verdict><p>The diagnosis is switched off (<code>diagnose.enabled: "
+         "false</code>).</p></section>\n";
   }
 
   // 2. The ladder.
-  const bool has_history = report.contains("history") && report["history"].is_array() && !report["history"].empty();
+  const bool has_history =
+      report.contains("history") && report["history"].is_array() && !report["history"].empty();
   if (!r.ladder.empty() || has_history) {
     o << "<h2 id=\"ladder\">Watch the error fall</h2>\n";
     if (!r.ladder.empty()) {
-      o << "<h3>This run: forward stepwise (" << Esc(r.ladder_stop) << ")</h3><table><tr><th>step</th><th>added</th>"
-           "<th>model</th><th>EDM rms [mm]</th><th>camera rms [mm]</th><th>pixels rms [px]</th><th>BIC</th></tr>\n";
+      o << "<h3>This run: forward stepwise (" << Esc(r.ladder_stop)
+        << ")</h3><table><tr><th>step</th><th>added</th>"
+           "<th>model</th><th>EDM rms [mm]</th><th>camera rms [mm]</th><th>pixels rms "
+           "[px]</th><th>BIC</th></tr>\n";
       for (size_t i = 0; i < r.ladder.size(); ++i) {
         const diagnose::LadderStep& s = r.ladder[i];
-        o << "<tr><td class=num>" << i << "</td><td>" << Esc(s.added.empty() ? "(start)" : s.added) << "</td><td>"
-          << Esc(s.model_description) << "</td>" << GroupCells(s.rms) << "<td class=num>" << Fmt("%.1f", s.bic)
-          << "</td></tr>\n";
+        o << "<tr><td class=num>" << i << "</td><td>" << Esc(s.added.empty() ? "(start)" : s.added)
+          << "</td><td>" << Esc(s.model_description) << "</td>" << GroupCells(s.rms)
+          << "<td class=num>" << Fmt("%.1f", s.bic) << "</td></tr>\n";
       }
       o << "</table>\n";
     }
     if (has_history) {
-      o << "<h3>Runs in this output folder</h3><table><tr><th>run</th><th>model</th><th>EDM rms [mm]</th>"
+      o << "<h3>Runs in this output folder</h3><table><tr><th>run</th><th>model</th><th>EDM rms "
+           "[mm]</th>"
            "<th>camera rms [mm]</th><th>pixels rms [px]</th></tr>\n";
-      auto row = [&](const std::string& name, const std::string& kin, const json& effects, const json& final) {
+      auto row = [&](const std::string& name, const std::string& kin, const json& effects,
+                     const json& final) {
         auto rms = [&](const char* tool) {
-          if (!final.contains("records") || !final["records"].contains(tool)) return std::string("-");
+          if (!final.contains("records") || !final["records"].contains(tool))
+            return std::string("-");
           const json& t = final["records"][tool];
           return t.value("n", 0) > 0 ? Mm(t.value("rms_m", 0.0)) : std::string("-");
         };
@@ -249,14 +290,16 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
         const std::string px = final.contains("pixels") && final["pixels"].value("n", 0) > 0
                                    ? Fmt("%.4g", final["pixels"].value("rms_px", 0.0))
                                    : "-";
-        o << "<tr><td>" << Esc(name) << "</td><td>" << Esc(kin) << ", effects: [" << Esc(eff) << "]</td><td class=num>"
-          << rms("edm") << "</td><td class=num>" << rms("cam") << "</td><td class=num>" << px << "</td></tr>\n";
+        o << "<tr><td>" << Esc(name) << "</td><td>" << Esc(kin) << ", effects: [" << Esc(eff)
+          << "]</td><td class=num>" << rms("edm") << "</td><td class=num>" << rms("cam")
+          << "</td><td class=num>" << px << "</td></tr>\n";
       };
       for (const json& h : report["history"]) {
         row(h.value("run", std::string("?")), h.value("kinematics", std::string("?")),
             h.value("effects", json::array()), h.value("final", json::object()));
       }
-      row(run + " (this run)", KinematicsName(r.model.kinematics), r.model.effects.Names(), report.value("final", json::object()));
+      row(run + " (this run)", KinematicsName(r.model.kinematics), r.model.effects.Names(),
+          report.value("final", json::object()));
       o << "</table>\n";
     }
     o << Figures(figs, "ladder");
@@ -271,44 +314,52 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     o << "<h2 id=\"ranking\">Which effect is missing</h2>\n" << RankingTable(d);
     o << "<h2 id=\"structure\">Structure outside the catalogue</h2>\n";
     if (d.harmonics.unexplained.empty()) {
-      o << "<p>None: no harmonic of the phi, theta or distance readings (1 to 4 per turn, or of the EDM unit "
+      o << "<p>None: no harmonic of the phi, theta or distance readings (1 to 4 per turn, or of "
+           "the EDM unit "
            "length) is significant once every catalogue effect is allowed for.</p>\n";
     } else {
-      o << "<p>Significant once every catalogue effect is allowed for; reported as what they are, not under an "
+      o << "<p>Significant once every catalogue effect is allowed for; reported as what they are, "
+           "not under an "
            "effect's name (error = amplitude &middot; sin(k x &minus; phase)):</p>\n"
         << HarmonicTable(d.harmonics.unexplained, false, r.model.edm_cyclic_unit_length);
     }
     if (!d.harmonics.before_catalogue.empty()) {
-      o << "<h3>Harmonics in the residuals of this model</h3>\n" << HarmonicTable(d.harmonics.before_catalogue, true, r.model.edm_cyclic_unit_length);
+      o << "<h3>Harmonics in the residuals of this model</h3>\n"
+        << HarmonicTable(d.harmonics.before_catalogue, true, r.model.edm_cyclic_unit_length);
     }
-    o << "<h2 id=\"outliers\">Outliers (w-test)</h2>\n<p>" << d.outliers.flagged << " of " << d.outliers.tested
+    o << "<h2 id=\"outliers\">Outliers (w-test)</h2>\n<p>" << d.outliers.flagged << " of "
+      << d.outliers.tested
       << " observations flagged; critical w = " << Fmt("%.2f", d.outliers.critical_w)
-      << " (Bonferroni over all observations). Worst observations:</p>\n<table><tr><th>w</th><th>flagged</th>"
+      << " (Bonferroni over all observations). Worst "
+         "observations:</p>\n<table><tr><th>w</th><th>flagged</th>"
          "<th>observation</th><th>|residual|</th></tr>\n";
     for (const diagnose::OutlierEntry& e : d.outliers.worst) {
       const bool px = e.group == diagnose::ObsGroup::kPixel;
-      o << "<tr><td class=num>" << Fmt("%.2f", e.w) << "</td><td>" << (e.flagged ? "<b>yes</b>" : "no") << "</td><td>"
-        << Esc(e.where) << "</td><td class=num>" << (px ? Fmt("%.3g px", e.size) : Fmt("%.3g mm", e.size * 1e3))
-        << "</td></tr>\n";
+      o << "<tr><td class=num>" << Fmt("%.2f", e.w) << "</td><td>"
+        << (e.flagged ? "<b>yes</b>" : "no") << "</td><td>" << Esc(e.where) << "</td><td class=num>"
+        << (px ? Fmt("%.3g px", e.size) : Fmt("%.3g mm", e.size * 1e3)) << "</td></tr>\n";
     }
     o << "</table>\n";
   }
-  o << "<h2 id=\"final\">Final errors (all rows, SPEC 6)</h2>\n<table><tr><th>group</th><th>mean</th><th>std</th>"
+  o << "<h2 id=\"final\">Final errors (all rows, SPEC "
+       "6)</h2>\n<table><tr><th>group</th><th>mean</th><th>std</th>"
        "<th>rms</th><th>n</th></tr>\n";
   auto stats = [&](const char* name, const ErrorStats& s) {
     if (s.n == 0) return;
-    o << "<tr><td>" << name << "</td><td class=num>" << Mm(s.mean_m) << " mm</td><td class=num>" << Mm(s.std_m)
-      << " mm</td><td class=num>" << Mm(s.rms_m) << " mm</td><td class=num>" << s.n << "</td></tr>\n";
+    o << "<tr><td>" << name << "</td><td class=num>" << Mm(s.mean_m) << " mm</td><td class=num>"
+      << Mm(s.std_m) << " mm</td><td class=num>" << Mm(s.rms_m) << " mm</td><td class=num>" << s.n
+      << "</td></tr>\n";
   };
   stats("EDM points", r.final_errors.edm);
   stats("camera points", r.final_errors.cam);
   if (r.final_errors.pixels.n > 0) {
     o << "<tr><td>image points</td><td class=num>" << Fmt("%.4g", r.final_errors.pixels.mean_px)
-      << " px</td><td></td><td class=num>" << Fmt("%.4g", r.final_errors.pixels.rms_px) << " px</td><td class=num>"
-      << r.final_errors.pixels.n << "</td></tr>\n";
+      << " px</td><td></td><td class=num>" << Fmt("%.4g", r.final_errors.pixels.rms_px)
+      << " px</td><td class=num>" << r.final_errors.pixels.n << "</td></tr>\n";
   }
-  o << "</table>\n<p class=small>Refinement " << (r.fit.converged ? "converged" : "did NOT converge") << " in "
-    << r.fit.iterations << " iterations; fitted sigmas: EDM " << Mm(r.fit.sigma_edm_m) << " mm, camera "
+  o << "</table>\n<p class=small>Refinement "
+    << (r.fit.converged ? "converged" : "did NOT converge") << " in " << r.fit.iterations
+    << " iterations; fitted sigmas: EDM " << Mm(r.fit.sigma_edm_m) << " mm, camera "
     << Mm(r.fit.sigma_cam_m) << " mm, pixels " << Fmt("%.3g", r.fit.sigma_pixel_px) << " px; "
     << r.fit.excluded_critical << " rows in the critical regions excluded.</p>\n";
 
@@ -319,11 +370,13 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     for (const std::string& n : r.notes) o << "<li>" << Esc(n) << "</li>";
     o << "</ul>\n";
   }
-  o << "<p class=small>rtscalib 0.1.0 &middot; report.json holds every number of this page.</p>\n</body></html>\n";
+  o << "<p class=small>rtscalib 0.1.0 &middot; report.json holds every number of this "
+       "page.</p>\n</body></html>\n";
   return o.str();
 }
 
-void WriteReportHtml(const RunConfig& config, const PipelineResult& r, const json& report, const OutputFolder& out) {
+void WriteReportHtml(const RunConfig& config, const PipelineResult& r, const json& report,
+                     const OutputFolder& out) {
   const json history = report.value("history", json::array());
   const std::vector<Figure> figs = MakeFigures(r, history);
   const std::filesystem::path dir = std::filesystem::path(out.run_dir()) / "figures";

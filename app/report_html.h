@@ -21,12 +21,12 @@
 namespace rtscalib::app {
 
 // `report` is the run's report.json (for the history and the final errors).
-std::string ReportHtml(const RunConfig& config, const PipelineResult& result, const nlohmann::json& report,
-                       const std::vector<Figure>& figures);
+std::string ReportHtml(const RunConfig& config, const PipelineResult& result,
+                       const nlohmann::json& report, const std::vector<Figure>& figures);
 
 // Writes <run>/figures/*.png and <run>/report.html.
-void WriteReportHtml(const RunConfig& config, const PipelineResult& result, const nlohmann::json& report,
-                     const OutputFolder& out);
+void WriteReportHtml(const RunConfig& config, const PipelineResult& result,
+                     const nlohmann::json& report, const OutputFolder& out);
 
 std::string Base64(const std::vector<unsigned char>& bytes);
 

@@ -24,7 +24,8 @@ std::string Fmt(const char* f, double v) {
 
 json PoseJson(const PoseBlock& p, const PoseSigma* s) {
   const Eigen::Vector3d e = p.Euler();
-  json j = {{"euler", {e[0], e[1], e[2]}}, {"t", {p.t[0], p.t[1], p.t[2]}},
+  json j = {{"euler", {e[0], e[1], e[2]}},
+            {"t", {p.t[0], p.t[1], p.t[2]}},
             {"q", {p.q[0], p.q[1], p.q[2], p.q[3]}}};
   if (s) {
     j["euler_sigma"] = {s->euler[0], s->euler[1], s->euler[2]};
@@ -58,7 +59,9 @@ json ModelJson(const InstrumentModel& m) {
   for (int z = 0; z < m.NumZooms(); ++z) {
     const CameraTool& c = m.cams[z];
     json cj = {{"zoom", z},
-               {"tool", PoseJson(c.flange_from_cam, s && z < (int)m.sigmas.cam_tools.size() ? &m.sigmas.cam_tools[z] : nullptr)},
+               {"tool", PoseJson(c.flange_from_cam, s && z < (int)m.sigmas.cam_tools.size()
+                                                        ? &m.sigmas.cam_tools[z]
+                                                        : nullptr)},
                {"intrinsics", c.intrinsics},
                {"distortion", c.distortion}};
     if (s && z < (int)m.sigmas.intrinsics.size()) cj["intrinsics_sigma"] = m.sigmas.intrinsics[z];
@@ -73,7 +76,8 @@ json ModelJson(const InstrumentModel& m) {
         ToReportUnits(e, m.EffectValue(e), m.sigmas.effect_cov[static_cast<int>(e)]);
     json ej = json::object();
     for (int k = 0; k < v.num; ++k) {
-      ej[info.param_names[k]] = {{"value", v.value[k]}, {"sigma", v.sigma[k]}, {"unit", info.report_units[k]}};
+      ej[info.param_names[k]] = {
+          {"value", v.value[k]}, {"sigma", v.sigma[k]}, {"unit", info.report_units[k]}};
     }
     eff[info.name] = ej;
   }
@@ -82,12 +86,14 @@ json ModelJson(const InstrumentModel& m) {
 }
 
 json ErrorsJson(const ModelErrors& e) {
-  return {{"edm", StatsJson(e.edm)}, {"cam", StatsJson(e.cam)}, {"compound", StatsJson(e.compound)}};
+  return {
+      {"edm", StatsJson(e.edm)}, {"cam", StatsJson(e.cam)}, {"compound", StatsJson(e.compound)}};
 }
 
 json FitJson(const FitSummary& f) {
   json corr = json::array();
-  for (const auto& [name, rho] : f.strong_correlations) corr.push_back({{"pair", name}, {"rho", rho}});
+  for (const auto& [name, rho] : f.strong_correlations)
+    corr.push_back({{"pair", name}, {"rho", rho}});
   return {{"converged", f.converged},
           {"iterations", f.iterations},
           {"initial_cost", f.initial_cost},
@@ -108,7 +114,8 @@ json FitJson(const FitSummary& f) {
 }  // namespace
 
 json StatsJson(const ErrorStats& s) {
-  return {{"mean_m", s.mean_m}, {"std_m", s.std_m}, {"rms_m", s.rms_m}, {"max_m", s.max_m}, {"n", s.n}};
+  return {
+      {"mean_m", s.mean_m}, {"std_m", s.std_m}, {"rms_m", s.rms_m}, {"max_m", s.max_m}, {"n", s.n}};
 }
 
 json HistoryJson(const OutputFolder& out) {
@@ -163,8 +170,11 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
     j["simplification"] = {{"model", ModelJson(*r.simplified)}, {"closed_form", r.closed_form}};
   }
   if (r.table4) {
-    j["table4"] = {{"A", {{"dh", ErrorsJson(r.table4->dh_a)}, {"simplified", ErrorsJson(r.table4->simplified_a)}}},
-                   {"B", {{"dh", ErrorsJson(r.table4->dh_b)}, {"simplified", ErrorsJson(r.table4->simplified_b)}}}};
+    j["table4"] = {
+        {"A",
+         {{"dh", ErrorsJson(r.table4->dh_a)}, {"simplified", ErrorsJson(r.table4->simplified_a)}}},
+        {"B",
+         {{"dh", ErrorsJson(r.table4->dh_b)}, {"simplified", ErrorsJson(r.table4->simplified_b)}}}};
   }
   j["table5"] = {{"reduced", ErrorsJson(r.table5.reduced)},
                  {"cross", r.table5.has_cross ? ErrorsJson(r.table5.cross) : json()},
@@ -185,8 +195,9 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                   {"face1", ModelJson(f.face1)},
                   {"face2", ModelJson(f.face2)}};
   }
-  j["final"] = {{"records", {{"edm", StatsJson(r.final_errors.edm)}, {"cam", StatsJson(r.final_errors.cam)}}},
-                {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
+  j["final"] = {
+      {"records", {{"edm", StatsJson(r.final_errors.edm)}, {"cam", StatsJson(r.final_errors.cam)}}},
+      {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
   j["diagnosis"] = DiagnosisJson(r);
   if (r.render.ran) {
     j["rendering"] = {{"shots", r.render.shots},
@@ -209,16 +220,17 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
 std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   std::ostringstream o;
   auto stats = [](const ErrorStats& s) {
-    return s.n == 0 ? std::string("        -          ") : Fmt("%.2e", s.mean_m) + " +- " + Fmt("%.2e", s.std_m);
+    return s.n == 0 ? std::string("        -          ")
+                    : Fmt("%.2e", s.mean_m) + " +- " + Fmt("%.2e", s.std_m);
   };
   auto dh_table = [&](const InstrumentModel& m, const char* title) {
     o << title << "\n  joint   alpha_i        a_i [m]        gamma_i                  d_i [m]\n";
     const char* var[2] = {"phi", "theta"};
     for (int i = 0; i < 2; ++i) {
       const auto& p = m.links[i].p;
-      o << "  " << i + 1 << "       " << Fmt("%+.6f", p[kDhAlpha]) << "     " << Fmt("%+.4e", p[kDhA])
-        << "    " << var[i] << " " << (p[kDhGamma] < 0 ? "- " : "+ ") << Fmt("%.6f", std::abs(p[kDhGamma]))
-        << "      " << Fmt("%+.4e", p[kDhD]) << "\n";
+      o << "  " << i + 1 << "       " << Fmt("%+.6f", p[kDhAlpha]) << "     "
+        << Fmt("%+.4e", p[kDhA]) << "    " << var[i] << " " << (p[kDhGamma] < 0 ? "- " : "+ ")
+        << Fmt("%.6f", std::abs(p[kDhGamma])) << "      " << Fmt("%+.4e", p[kDhD]) << "\n";
     }
   };
   auto pose_row = [&](const char* name, const PoseBlock& p) {
@@ -231,24 +243,29 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   auto transforms = [&](const InstrumentModel& m, const char* title) {
     o << title << "\n  transform   alpha    beta     gamma    t_x [m]      t_y [m]      t_z [m]\n";
     pose_row("M_B", m.base);
-    for (int z = 0; z < m.NumZooms(); ++z) pose_row(("M_T(CAM" + std::to_string(z) + ")").c_str(), m.cams[z].flange_from_cam);
+    for (int z = 0; z < m.NumZooms(); ++z)
+      pose_row(("M_T(CAM" + std::to_string(z) + ")").c_str(), m.cams[z].flange_from_cam);
     pose_row("M_T(EDM)", m.edm);
   };
 
   o << "rtscalib report\n===============\nconfig: " << config.config_path << "\n";
   o << "data: " << r.obs.records.size() << " records (" << r.obs.records_source << "), "
-    << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "") << "\n\n";
+    << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "")
+    << "\n\n";
   if (r.extraction) {
     dh_table(r.extraction->model, "Table 1 - extracted DH parameters (Klug Sec. 3)");
     o << "\n";
-    transforms(r.extraction->model, "Table 2 - extracted base and tool transforms (Euler a, b, g: Eq. 83)");
+    transforms(r.extraction->model,
+               "Table 2 - extracted base and tool transforms (Euler a, b, g: Eq. 83)");
     o << "\n";
   }
   if (!r.closed_form.empty()) o << "Simplified model (Sec. 4.1):\n" << r.closed_form << "\n\n";
   if (r.table4) {
-    o << "Table 4 - error of the extracted (DH) and the simplified model [m], mean +- std (Eq. 92/93)\n";
+    o << "Table 4 - error of the extracted (DH) and the simplified model [m], mean +- std (Eq. "
+         "92/93)\n";
     o << "  method  tool        e_DH                    e_simplified\n";
-    const ModelErrors* rows[4] = {&r.table4->dh_a, &r.table4->simplified_a, &r.table4->dh_b, &r.table4->simplified_b};
+    const ModelErrors* rows[4] = {&r.table4->dh_a, &r.table4->simplified_a, &r.table4->dh_b,
+                                  &r.table4->simplified_b};
     for (int m = 0; m < 2; ++m) {
       const ModelErrors& dh = *rows[2 * m];
       const ModelErrors& si = *rows[2 * m + 1];
@@ -259,7 +276,8 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     }
     o << "\n";
   }
-  o << "Table 5 - refined model, method B [m]\n  tool        e_optimized             e_optimized,cross       e_optimized,full\n";
+  o << "Table 5 - refined model, method B [m]\n  tool        e_optimized             "
+       "e_optimized,cross       e_optimized,full\n";
   const Table5& t = r.table5;
   auto row5 = [&](const char* name, const ErrorStats& a, const ErrorStats& b, const ErrorStats& c) {
     o << "  " << std::left << std::setw(10) << name << std::right << stats(a) << "   "
@@ -268,7 +286,8 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   row5("EDM", t.reduced.edm, t.cross.edm, t.full.edm);
   row5("camera", t.reduced.cam, t.cross.cam, t.full.cam);
   row5("compound", t.reduced.compound, t.cross.compound, t.full.compound);
-  o << "  (reduced set: " << t.reduced_rows << " records; full set: " << t.full_rows << " records)\n\n";
+  o << "  (reduced set: " << t.reduced_rows << " records; full set: " << t.full_rows
+    << " records)\n\n";
   if (r.model.kinematics == Kinematics::kDh) {
     dh_table(r.model, "Table 6 - refined DH parameters");
     o << "\n";
@@ -293,18 +312,21 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
         o << "  " << Info(e).name << " (per zoom, see model.yaml)\n";
         continue;
       }
-      const EffectReportValue v = ToReportUnits(e, r.model.EffectValue(e), r.model.sigmas.effect_cov[static_cast<int>(e)]);
+      const EffectReportValue v =
+          ToReportUnits(e, r.model.EffectValue(e), r.model.sigmas.effect_cov[static_cast<int>(e)]);
       o << "  " << std::left << std::setw(16) << Info(e).name << std::right;
       for (int k = 0; k < v.num; ++k) {
-        o << "  " << Info(e).param_names[k] << " = " << Fmt("%.4g", v.value[k]) << " +- " << Fmt("%.2g", v.sigma[k]) << " " << Info(e).report_units[k];
+        o << "  " << Info(e).param_names[k] << " = " << Fmt("%.4g", v.value[k]) << " +- "
+          << Fmt("%.2g", v.sigma[k]) << " " << Info(e).report_units[k];
       }
       o << "\n";
     }
     o << "\n";
   }
   if (r.faces && r.faces->valid) {
-    o << "Two-face check (one model per face)\n  collimation " << Fmt("%.2f", r.faces->collimation * kArcsec)
-      << "\"  tilting axis " << Fmt("%.2f", r.faces->tilting_axis * kArcsec) << "\"  vertical index "
+    o << "Two-face check (one model per face)\n  collimation "
+      << Fmt("%.2f", r.faces->collimation * kArcsec) << "\"  tilting axis "
+      << Fmt("%.2f", r.faces->tilting_axis * kArcsec) << "\"  vertical index "
       << Fmt("%.2f", r.faces->vertical_index * kArcsec) << "\"\n\n";
   }
   const FinalErrors& f = r.final_errors;
@@ -312,18 +334,22 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     o << "Synthetic shots: " << r.render.shots << " rendered, " << r.render.found_tags << " of "
       << r.render.expected_tags << " visible tags detected (skipped: " << r.render.skipped_border
       << " at the border, " << r.render.skipped_grazing << " grazing, " << r.render.skipped_small
-      << " too small); detected vs exact corners RMS " << Fmt("%.3f", r.render.detection_rms_px) << " px\n\n";
+      << " too small); detected vs exact corners RMS " << Fmt("%.3f", r.render.detection_rms_px)
+      << " px\n\n";
   }
   o << "Final (all observations): EDM " << stats(f.edm) << " m (n=" << f.edm.n << "), camera "
     << stats(f.cam) << " m (n=" << f.cam.n << ")";
-  if (f.pixels.n > 0) o << ", pixels rms " << Fmt("%.3f", f.pixels.rms_px) << " px (n=" << f.pixels.n << ")";
-  o << "\nRefinement: " << (r.fit.converged ? "converged" : "NOT converged") << " in " << r.fit.iterations
-    << " iterations, " << Fmt("%.3f", r.fit.seconds) << " s; excluded (critical region): " << r.fit.excluded_critical << "\n";
+  if (f.pixels.n > 0)
+    o << ", pixels rms " << Fmt("%.3f", f.pixels.rms_px) << " px (n=" << f.pixels.n << ")";
+  o << "\nRefinement: " << (r.fit.converged ? "converged" : "NOT converged") << " in "
+    << r.fit.iterations << " iterations, " << Fmt("%.3f", r.fit.seconds)
+    << " s; excluded (critical region): " << r.fit.excluded_critical << "\n";
   o << "Gauge freedoms held:\n";
   for (const std::string& g : r.fit.fixed_gauges) o << "  - " << g << "\n";
   if (!r.fit.strong_correlations.empty()) {
     o << "Strongly correlated parameters (|rho| > 0.95):\n";
-    for (const auto& [pair, rho] : r.fit.strong_correlations) o << "  " << pair << "  rho = " << Fmt("%+.3f", rho) << "\n";
+    for (const auto& [pair, rho] : r.fit.strong_correlations)
+      o << "  " << pair << "  rho = " << Fmt("%+.3f", rho) << "\n";
   }
   for (const std::string& n : r.notes) o << "note: " << n << "\n";
   return o.str();

@@ -48,7 +48,8 @@ int RunCalibration(const RunArgs& args) {
   if (result.simulated) {
     WriteRecords(out.RunFile("records.csv"), result.obs.records);
     if (!result.obs.pixels.empty()) WritePixels(out.RunFile("pixels.csv"), result.obs.pixels);
-    if (result.truth) WriteModelYaml(out.RunFile("truth.yaml"), *result.truth, {{"what", "simulated truth"}});
+    if (result.truth)
+      WriteModelYaml(out.RunFile("truth.yaml"), *result.truth, {{"what", "simulated truth"}});
   }
   ModelMetadata meta = {{"program", "rtscalib 0.1.0"},
                         {"config", config.config_path},
@@ -64,7 +65,8 @@ int RunCalibration(const RunArgs& args) {
   out.Publish({"model.yaml", "report.json", "report.txt", "report.html", "figures"});
   progress.Done();
   std::cout << (args.diagnose ? DiagnosisText(result) : text);
-  std::cout << "\nwritten: " << out.root() << "/{model.yaml, report.json, report.txt, report.html, figures/}\n";
+  std::cout << "\nwritten: " << out.root()
+            << "/{model.yaml, report.json, report.txt, report.html, figures/}\n";
   return 0;
 }
 

@@ -102,7 +102,8 @@ void BM_DiagnoseThreeZoomPixels(benchmark::State& state) {
     b.first_id = i * board.NumTags();
     const double yaw = M_PI / 2 * i;
     // Boards 4 m away around the station, facing it.
-    b.ref_from_board = Rigid3::FromEuler({M_PI / 2, 0.0, yaw}, {4.0 * std::sin(yaw), 4.0 * std::cos(yaw), 0.0});
+    b.ref_from_board =
+        Rigid3::FromEuler({M_PI / 2, 0.0, yaw}, {4.0 * std::sin(yaw), 4.0 * std::cos(yaw), 0.0});
     o.targets.boards.push_back(b);
   }
   o.shots.shots_per_board = 6;

@@ -83,7 +83,9 @@ struct Result {
 // One planar view per (shot, board) of one zoom, in the board's frame.
 Result OpenCvZoom(const Data& d, int zoom) {
   const TargetScene& scene = d.options.targets;
-  std::map<std::pair<std::string, int>, std::pair<std::vector<cv::Point3f>, std::vector<cv::Point2f>>> views;
+  std::map<std::pair<std::string, int>,
+           std::pair<std::vector<cv::Point3f>, std::vector<cv::Point2f>>>
+      views;
   for (const PixelObservation& p : d.obs.pixels) {
     if (p.zoom != zoom) continue;
     int board = -1;
@@ -112,10 +114,10 @@ Result OpenCvZoom(const Data& d, int zoom) {
   cv::Mat dist = cv::Mat::zeros(1, 5, CV_64F);
   std::vector<cv::Mat> rvecs, tvecs;
   cv::Mat std_intr, std_extr, per_view;
-  cv::calibrateCamera(object, image, size, k, dist, rvecs, tvecs, std_intr, std_extr, per_view,
-                      cv::CALIB_USE_INTRINSIC_GUESS | cv::CALIB_FIX_K3,
-                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100,
-                                       DBL_EPSILON));
+  cv::calibrateCamera(
+      object, image, size, k, dist, rvecs, tvecs, std_intr, std_extr, per_view,
+      cv::CALIB_USE_INTRINSIC_GUESS | cv::CALIB_FIX_K3,
+      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, DBL_EPSILON));
   Result r;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.intrinsics = {k.at<double>(0, 0), k.at<double>(1, 1), k.at<double>(0, 2), k.at<double>(1, 2)};
@@ -143,7 +145,8 @@ std::vector<Result> Joint(const Data& d) {
   fo.fit_intrinsics = true;
   fo.sigma_pixel_px = 0.3;
   Refine(d.obs, fo, &model);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<Result> out(kZooms);
   for (int z = 0; z < kZooms; ++z) {
     out[z].intrinsics = model.cams[z].intrinsics;
@@ -163,8 +166,8 @@ void PrintTable() {
   const Data& d = TheData();
   const std::vector<Result> joint = Joint(d);
   std::printf("intrinsics error against the truth [px] (|fit - truth|; sigma reported by each)\n");
-  std::printf("%-4s %-8s %9s %9s %9s %9s %9s %8s %6s\n", "zoom", "method", "dfx", "dfy", "dcx", "dcy",
-              "max", "time_s", "views");
+  std::printf("%-4s %-8s %9s %9s %9s %9s %9s %8s %6s\n", "zoom", "method", "dfx", "dfy", "dcx",
+              "dcy", "max", "time_s", "views");
   bool ok = true;
   for (int z = 0; z < kZooms; ++z) {
     const CameraTool& t = d.options.truth.cams[z];
@@ -172,7 +175,8 @@ void PrintTable() {
     for (const auto& [name, r] : {std::pair<const char*, const Result&>{"opencv", cv},
                                   std::pair<const char*, const Result&>{"joint", joint[z]}}) {
       std::printf("%-4d %-8s", z, name);
-      for (int i = 0; i < 4; ++i) std::printf(" %9.4f", std::abs(r.intrinsics[i] - t.intrinsics[i]));
+      for (int i = 0; i < 4; ++i)
+        std::printf(" %9.4f", std::abs(r.intrinsics[i] - t.intrinsics[i]));
       std::printf(" %9.4f %8.3f %6d\n", MaxError(r, t), r.seconds, r.views);
       std::printf("%-4s %-8s", "", "  sigma");
       for (int i = 0; i < 4; ++i) std::printf(" %9.4f", r.sigma[i]);
@@ -181,7 +185,8 @@ void PrintTable() {
     ok = ok && MaxError(joint[z], t) <= MaxError(cv, t);
   }
   std::printf("joint time is for all %d zooms together (start from pixels + refinement)\n", kZooms);
-  std::printf("joint model at least as accurate as OpenCV at every zoom: %s\n\n", ok ? "yes" : "NO");
+  std::printf("joint model at least as accurate as OpenCV at every zoom: %s\n\n",
+              ok ? "yes" : "NO");
 }
 
 void BM_OpenCvCalibrateCamera(benchmark::State& state) {

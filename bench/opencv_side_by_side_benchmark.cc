@@ -20,16 +20,16 @@ constexpr int kPoints = 1000;
 
 struct Setup {
   std::array<double, kNumIntrinsics> intrinsics{1000, 1003, 645, 478};
-  std::array<double, kNumDistortion> dist{-0.12, 0.05,  8e-4, -5e-4, -0.01, 0.05,  -0.01,
-                                          0.002, 1e-3,  -5e-4, -8e-4, 3e-4, 0.01, -0.015};
+  std::array<double, kNumDistortion> dist{-0.12, 0.05, 8e-4,  -5e-4, -0.01, 0.05, -0.01,
+                                          0.002, 1e-3, -5e-4, -8e-4, 3e-4,  0.01, -0.015};
   cv::Mat K, D;
-  std::vector<cv::Point3d> points;  // camera frame
-  std::vector<cv::Point2d> pixels;  // their images
+  std::vector<cv::Point3d> points;        // camera frame
+  std::vector<cv::Point2d> pixels;        // their images
   std::vector<cv::Point2d> reference_xy;  // normalised (x', y') of the points
 
   Setup() {
-    K = (cv::Mat_<double>(3, 3) << intrinsics[0], 0, intrinsics[2], 0, intrinsics[1],
-         intrinsics[3], 0, 0, 1);
+    K = (cv::Mat_<double>(3, 3) << intrinsics[0], 0, intrinsics[2], 0, intrinsics[1], intrinsics[3],
+         0, 0, 1);
     D = cv::Mat(1, kNumDistortion, CV_64F, dist.data()).clone();
     std::mt19937 rng(1);
     std::uniform_real_distribution<double> ux(-0.64, 0.64), uy(-0.48, 0.48), uz(1, 20);
@@ -51,7 +51,8 @@ double MaxError(const std::vector<cv::Point2d>& xy) {
   const Setup& s = TheSetup();
   double worst = 0;
   for (size_t i = 0; i < xy.size(); ++i) {
-    worst = std::max(worst, std::hypot(xy[i].x - s.reference_xy[i].x, xy[i].y - s.reference_xy[i].y));
+    worst =
+        std::max(worst, std::hypot(xy[i].x - s.reference_xy[i].x, xy[i].y - s.reference_xy[i].y));
   }
   return worst;
 }

@@ -61,8 +61,8 @@ void BM_Render(benchmark::State& state) {
     pose.translation.x() += 1e-4 * (seed % 16);  // a new pose every time
     benchmark::DoNotOptimize(renderer.Render(pose, f.cam, ++seed).data);
   }
-  state.counters["images/s"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                                  benchmark::Counter::kIsRate);
+  state.counters["images/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Render)
     ->ArgNames({"supersample", "noise"})
@@ -86,8 +86,8 @@ void BM_Detect(benchmark::State& state) {
   size_t found = 0;
   for (auto _ : state) found = detector.Detect(img).size();
   state.counters["tags"] = static_cast<double>(found);
-  state.counters["images/s"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                                  benchmark::Counter::kIsRate);
+  state.counters["images/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Detect)
     ->ArgNames({"threads", "refine"})
@@ -123,8 +123,8 @@ void BM_RenderShots(benchmark::State& state) {
   options.progress = false;
   for (auto _ : state) RenderShots(f.scene, shots, options);
   std::filesystem::remove_all(dir);
-  state.counters["images/s"] = benchmark::Counter(static_cast<double>(state.iterations() * shots.size()),
-                                                  benchmark::Counter::kIsRate);
+  state.counters["images/s"] = benchmark::Counter(
+      static_cast<double>(state.iterations() * shots.size()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_RenderShots)
     ->ArgNames({"jobs"})

@@ -253,7 +253,8 @@ TagDetector::TagDetector(const DetectorOptions& options) : impl_(std::make_uniqu
   td->decode_sharpening = options.decode_sharpening;
   for (const std::string& name : options.families) {
     impl_->families.push_back(CreateTagFamily(name));
-    apriltag_detector_add_family_bits(td, impl_->families.back().get(), std::max(2, options.max_hamming));
+    apriltag_detector_add_family_bits(td, impl_->families.back().get(),
+                                      std::max(2, options.max_hamming));
     impl_->width_at_border[name] = impl_->families.back()->width_at_border;
   }
 }
@@ -263,7 +264,8 @@ TagDetector::~TagDetector() = default;
 const DetectorOptions& TagDetector::options() const { return impl_->options; }
 
 std::vector<TagDetection> TagDetector::Detect(const cv::Mat& gray) {
-  if (gray.type() != CV_8UC1) throw std::invalid_argument("TagDetector::Detect: expected a CV_8UC1 image");
+  if (gray.type() != CV_8UC1)
+    throw std::invalid_argument("TagDetector::Detect: expected a CV_8UC1 image");
   cv::Mat img = gray.isContinuous() ? gray : gray.clone();
   image_u8_t im{img.cols, img.rows, static_cast<int32_t>(img.step[0]), img.data};
   zarray_t* found = apriltag_detector_detect(impl_->detector, &im);
@@ -279,10 +281,12 @@ std::vector<TagDetection> TagDetector::Detect(const cv::Mat& gray) {
     d.hamming = det->hamming;
     d.decision_margin = det->decision_margin;
     // libapriltag's pixel (x, y) spans [x, x+1): its coordinates are OpenCV's + 0.5.
-    for (int k = 0; k < 4; ++k) d.apriltag_corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
+    for (int k = 0; k < 4; ++k)
+      d.apriltag_corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
     d.corners = d.apriltag_corners;
     if (impl_->options.refine_corners) {
-      d.refined = RefineTagCorners(img, impl_->width_at_border[d.family], impl_->options, &d.corners);
+      d.refined =
+          RefineTagCorners(img, impl_->width_at_border[d.family], impl_->options, &d.corners);
     }
     out.push_back(d);
   }

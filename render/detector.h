@@ -36,11 +36,11 @@ namespace rtscalib::render {
 
 struct DetectorOptions {
   std::vector<std::string> families = {"tag36h11"};
-  int threads = 1;                 // libapriltag worker threads
-  float quad_sigma = 0.0f;         // Gaussian blur before segmentation [px]
+  int threads = 1;          // libapriltag worker threads
+  float quad_sigma = 0.0f;  // Gaussian blur before segmentation [px]
   double decode_sharpening = 0.25;
-  int max_hamming = 1;             // detections with more corrected bits are dropped
-  bool refine_corners = true;      // our edge refinement (else libapriltag's corners)
+  int max_hamming = 1;         // detections with more corrected bits are dropped
+  bool refine_corners = true;  // our edge refinement (else libapriltag's corners)
   // Refinement needs a code bit of at least this many pixels (the profiles
   // must fit inside one bit on either side of the edge).
   double min_bit_pixels = 2.5;
@@ -55,9 +55,9 @@ struct TagDetection {
   int id = -1;
   int hamming = 0;
   double decision_margin = 0;
-  std::array<Eigen::Vector2d, 4> corners;   // TargetCorner order, OpenCV pixels
+  std::array<Eigen::Vector2d, 4> corners;           // TargetCorner order, OpenCV pixels
   std::array<Eigen::Vector2d, 4> apriltag_corners;  // libapriltag's, same order, +0.5 shift undone
-  bool refined = false;  // corners are the sub-pixel refined ones
+  bool refined = false;                             // corners are the sub-pixel refined ones
 };
 
 class TagDetector {

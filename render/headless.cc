@@ -75,8 +75,8 @@ pid_t SpawnXvfb(const std::string& xvfb, int n, const std::string& screen, const
   // -noreset: by default an X server resets when its last client leaves, and a
   // client connecting during the reset is refused; the readiness probe below
   // would trigger exactly that.
-  std::vector<std::string> args = {xvfb,      disp,  "-screen", "0", screen,
-                                   "-nolisten", "tcp", "-noreset"};
+  std::vector<std::string> args = {xvfb,   disp,        "-screen", "0",
+                                   screen, "-nolisten", "tcp",     "-noreset"};
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -107,7 +107,8 @@ pid_t SpawnXvfb(const std::string& xvfb, int n, const std::string& screen, const
 std::string HeadlessOptions::Check() const {
   if (xvfb.empty()) return "xvfb: expected a program name, got an empty string";
   if (screen.empty()) return "screen: expected WxHxD (e.g. 1920x1080x24), got an empty string";
-  if (first_display < 0) return "first_display: expected >= 0, got " + std::to_string(first_display);
+  if (first_display < 0)
+    return "first_display: expected >= 0, got " + std::to_string(first_display);
   if (max_tries < 1) return "max_tries: expected >= 1, got " + std::to_string(max_tries);
   if (!(start_timeout_s > 0)) return "start_timeout_s: expected > 0";
   return "";
@@ -124,7 +125,8 @@ std::string FindExecutable(const std::string& program) {
     if (dir.empty()) dir = ".";
     const std::string full = dir + "/" + program;
     struct stat st;
-    if (::stat(full.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(full.c_str(), X_OK) == 0) {
+    if (::stat(full.c_str(), &st) == 0 && S_ISREG(st.st_mode) &&
+        ::access(full.c_str(), X_OK) == 0) {
       return full;
     }
   }
@@ -164,15 +166,15 @@ HeadlessDisplay::HeadlessDisplay(const HeadlessOptions& options) {
       throw DisplayError(std::string("could not fork to start Xvfb: ") + std::strerror(errno));
     }
     const std::string disp = ":" + std::to_string(n);
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::duration<double>(options.start_timeout_s);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(options.start_timeout_s);
     bool exited = false, ready = false;
     while (std::chrono::steady_clock::now() < deadline) {
       int status = 0;
       if (::waitpid(pid, &status, WNOHANG) == pid) {
         exited = true;
-        last_failure = "Xvfb " + disp + " exited (status " + std::to_string(status) + "): " +
-                       ReadTail(log, 400);
+        last_failure = "Xvfb " + disp + " exited (status " + std::to_string(status) +
+                       "): " + ReadTail(log, 400);
         break;
       }
       // Ready only when the server on :n is ours: another process may have

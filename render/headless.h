@@ -33,11 +33,11 @@ class DisplayError : public std::runtime_error {
 };
 
 struct HeadlessOptions {
-  std::string xvfb = "Xvfb";           // program, looked up on PATH
+  std::string xvfb = "Xvfb";            // program, looked up on PATH
   std::string screen = "1920x1080x24";  // Xvfb -screen 0 argument
-  int first_display = 99;              // search starts at :first_display
-  int max_tries = 64;                  // display numbers tried
-  double start_timeout_s = 15.0;       // wait for the server to accept clients
+  int first_display = 99;               // search starts at :first_display
+  int max_tries = 64;                   // display numbers tried
+  double start_timeout_s = 15.0;        // wait for the server to accept clients
 
   // Empty when valid, else what is wrong.
   std::string Check() const;

@@ -96,7 +96,8 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor
   // failing distortion near the rim).
   constexpr int kStep = 4;
   constexpr double kTolerance = 1e-3;  // px, far below the corner accuracy
-  const int gw = (cam.width - 1 + kStep - 1) / kStep + 1, gh = (cam.height - 1 + kStep - 1) / kStep + 1;
+  const int gw = (cam.width - 1 + kStep - 1) / kStep + 1,
+            gh = (cam.height - 1 + kStep - 1) / kStep + 1;
   auto node_u = [&](int i) { return std::min(i * kStep, cam.width - 1); };
   auto node_v = [&](int j) { return std::min(j * kStep, cam.height - 1); };
   cv::Mat ideal_u(cam.height, cam.width, CV_64FC1), ideal_v(cam.height, cam.width, CV_64FC1);
@@ -197,7 +198,8 @@ std::string RenderOptions::Check() const {
   if (supersample < 1 || supersample > 8) {
     return "supersample: expected 1..8, got " + std::to_string(supersample);
   }
-  if (!(background >= 0 && background <= 255)) return "background: expected a grey level in [0, 255]";
+  if (!(background >= 0 && background <= 255))
+    return "background: expected a grey level in [0, 255]";
   if (ink >= paper) return "ink/paper: expected ink < paper";
   if (!(exposure > 0)) return "exposure: expected > 0";
   if (!(blur_sigma >= 0)) return "blur_sigma: expected >= 0";
@@ -331,8 +333,9 @@ void SceneRenderer::Impl::Build() {
     mapper->ScalarVisibilityOff();
     BoardActors ba;
     ba.ref_from_board = board.ref_from_board;
-    ba.outline = {Eigen::Vector3d(tex.x_min(), tex.y_min(), 0), Eigen::Vector3d(tex.x_max(), tex.y_min(), 0),
-                  Eigen::Vector3d(tex.x_max(), tex.y_max(), 0), Eigen::Vector3d(tex.x_min(), tex.y_max(), 0)};
+    ba.outline = {
+        Eigen::Vector3d(tex.x_min(), tex.y_min(), 0), Eigen::Vector3d(tex.x_max(), tex.y_min(), 0),
+        Eigen::Vector3d(tex.x_max(), tex.y_max(), 0), Eigen::Vector3d(tex.x_min(), tex.y_max(), 0)};
     ba.front = Ptr<vtkActor>::New();
     ba.front->SetMapper(mapper);
     ba.front->SetTexture(texture);
@@ -474,7 +477,8 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
                               std::uint64_t image_seed) {
   Impl& im = *impl_;
   const RenderOptions& o = im.options;
-  auto it = std::find_if(im.maps.begin(), im.maps.end(), [&](const DistortionMap& m) { return m.Matches(cam); });
+  auto it = std::find_if(im.maps.begin(), im.maps.end(),
+                         [&](const DistortionMap& m) { return m.Matches(cam); });
   if (it == im.maps.end()) {
     im.maps.push_front(BuildDistortionMap(cam, o.max_canvas_factor));
     if (im.maps.size() > Impl::kMaxMaps) im.maps.pop_back();
@@ -485,8 +489,8 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
   im.RenderCanvas(ref_from_cam, cam, map.canvas, &im.canvas);
   cv::Mat* img = &im.canvas;
   if (!map.identity) {
-    cv::remap(im.canvas, im.distorted, map.map_x, map.map_y, cv::INTER_LINEAR,
-              cv::BORDER_CONSTANT, cv::Scalar(o.background));
+    cv::remap(im.canvas, im.distorted, map.map_x, map.map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+              cv::Scalar(o.background));
     img = &im.distorted;
   }
   if (o.blur_sigma > 0) cv::GaussianBlur(*img, *img, cv::Size(), o.blur_sigma, o.blur_sigma);

@@ -31,17 +31,17 @@
 namespace rtscalib::render {
 
 struct RenderOptions {
-  int supersample = 2;          // render at k x the size, then k x k box average
-  double background = 90;       // grey level of everything but the boards [0, 255]
-  unsigned char ink = 20;       // printed black [0, 255]
-  unsigned char paper = 235;    // printed white [0, 255]
-  bool lighting = false;        // false: flat (paper = `paper` at any angle);
-                                // true: ambient 0.3 + diffuse 0.7 from a headlight
-  double exposure = 1.0;        // gain on all grey levels before noise (> 0)
-  double blur_sigma = 0;        // Gaussian optical blur, output pixels (0 = off)
-  double noise_sigma = 0;       // Gaussian sensor noise, grey levels (0 = off)
-  std::uint64_t seed = 1;       // noise seed, mixed with Render()'s image seed
-  int max_anisotropy = 1;       // anisotropic texture filtering (1 = isotropic mipmaps)
+  int supersample = 2;        // render at k x the size, then k x k box average
+  double background = 90;     // grey level of everything but the boards [0, 255]
+  unsigned char ink = 20;     // printed black [0, 255]
+  unsigned char paper = 235;  // printed white [0, 255]
+  bool lighting = false;      // false: flat (paper = `paper` at any angle);
+                              // true: ambient 0.3 + diffuse 0.7 from a headlight
+  double exposure = 1.0;      // gain on all grey levels before noise (> 0)
+  double blur_sigma = 0;      // Gaussian optical blur, output pixels (0 = off)
+  double noise_sigma = 0;     // Gaussian sensor noise, grey levels (0 = off)
+  std::uint64_t seed = 1;     // noise seed, mixed with Render()'s image seed
+  int max_anisotropy = 1;     // anisotropic texture filtering (1 = isotropic mipmaps)
   // Largest canvas side for the ideal image, as a multiple of the output side;
   // rays of strongly distorted lenses beyond it show `background`.
   double max_canvas_factor = 3.0;

@@ -40,7 +40,8 @@ std::string Num(double v) {
 bool ValidId(const std::string& id) {
   if (id.empty() || id[0] == '.') return false;
   for (char c : id) {
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) return false;
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
+      return false;
   }
   return true;
 }
@@ -51,8 +52,11 @@ std::string ImageName(const Shot& s) { return s.id + ".png"; }
 class Progress {
  public:
   Progress(std::string what, int total, bool enabled)
-      : what_(std::move(what)), total_(total), enabled_(enabled),
-        start_(std::chrono::steady_clock::now()), last_(start_) {}
+      : what_(std::move(what)),
+        total_(total),
+        enabled_(enabled),
+        start_(std::chrono::steady_clock::now()),
+        last_(start_) {}
   void Update(int done) {
     if (!enabled_) return;
     const auto now = std::chrono::steady_clock::now();
@@ -205,8 +209,8 @@ void RenderInWorkers(const TargetScene& scene, const std::vector<Shot>& shots,
   }
   if (!error.empty()) throw std::runtime_error("RenderShots: " + error);
   if (crashed || done != static_cast<int>(indices.size())) {
-    throw std::runtime_error("RenderShots: a worker process died after " + std::to_string(done) + " of " +
-                             std::to_string(indices.size()) + " images");
+    throw std::runtime_error("RenderShots: a worker process died after " + std::to_string(done) +
+                             " of " + std::to_string(indices.size()) + " images");
   }
 }
 
@@ -225,12 +229,15 @@ std::string CheckShots(const std::vector<Shot>& shots) {
   for (size_t i = 0; i < shots.size(); ++i) {
     const Shot& s = shots[i];
     const std::string where = "shot " + std::to_string(i) + " ('" + s.id + "'): ";
-    if (!ValidId(s.id)) return where + "id: expected letters, digits, '_', '-', '.' (no leading '.')";
+    if (!ValidId(s.id))
+      return where + "id: expected letters, digits, '_', '-', '.' (no leading '.')";
     if (!ids.insert(s.id).second) return where + "id: duplicated";
-    if (s.face != 1 && s.face != 2) return where + "face: expected 1 or 2, got " + std::to_string(s.face);
+    if (s.face != 1 && s.face != 2)
+      return where + "face: expected 1 or 2, got " + std::to_string(s.face);
     if (s.zoom < 0) return where + "zoom: expected >= 0, got " + std::to_string(s.zoom);
     if (s.cam.width < 1 || s.cam.height < 1) return where + "cam: expected a positive image size";
-    if (!(s.cam.intrinsics[0] > 0 && s.cam.intrinsics[1] > 0)) return where + "cam: expected fx, fy > 0";
+    if (!(s.cam.intrinsics[0] > 0 && s.cam.intrinsics[1] > 0))
+      return where + "cam: expected fx, fy > 0";
   }
   return "";
 }
@@ -240,7 +247,8 @@ std::string RenderShotsOptions::Check() const {
   if (jobs < 1) return "jobs: expected >= 1, got " + std::to_string(jobs);
   if (num_shards < 1) return "num_shards: expected >= 1, got " + std::to_string(num_shards);
   if (shard < 0 || shard >= num_shards) {
-    return "shard: expected 0.." + std::to_string(num_shards - 1) + ", got " + std::to_string(shard);
+    return "shard: expected 0.." + std::to_string(num_shards - 1) + ", got " +
+           std::to_string(shard);
   }
   if (png_compression < 0 || png_compression > 9) return "png_compression: expected 0..9";
   if (const std::string m = render.Check(); !m.empty()) return "render." + m;
@@ -271,7 +279,8 @@ RenderShotsResult RenderShots(const TargetScene& scene, const std::vector<Shot>&
   if (const std::string m = options.Check(); !m.empty()) {
     throw std::invalid_argument("RenderShotsOptions: " + m);
   }
-  if (const std::string m = CheckShots(shots); !m.empty()) throw std::invalid_argument("shots: " + m);
+  if (const std::string m = CheckShots(shots); !m.empty())
+    throw std::invalid_argument("shots: " + m);
   fs::create_directories(options.out_dir);
 
   std::vector<int> indices;
@@ -297,15 +306,16 @@ RenderShotsResult RenderShots(const TargetScene& scene, const std::vector<Shot>&
         }
         for (int c = 0; c < 4; ++c) {
           if (!t.in_image[c]) continue;
-          ex << s.face << "," << s.zoom << "," << Num(s.phi) << "," << Num(s.theta) << "," << s.id << ","
-             << t.id << "," << c << "," << Num(t.X[c].x()) << "," << Num(t.X[c].y()) << ","
+          ex << s.face << "," << s.zoom << "," << Num(s.phi) << "," << Num(s.theta) << "," << s.id
+             << "," << t.id << "," << c << "," << Num(t.X[c].x()) << "," << Num(t.X[c].y()) << ","
              << Num(t.X[c].z()) << "," << Num(t.uv[c].x()) << "," << Num(t.uv[c].y()) << ","
              << TagStatusName(t.status) << "\n";
           ++result.exact_corners;
         }
       }
     }
-    if (!st || !ex) throw std::runtime_error("RenderShots: could not write the tables in " + options.out_dir);
+    if (!st || !ex)
+      throw std::runtime_error("RenderShots: could not write the tables in " + options.out_dir);
   }
   if (indices.empty()) return result;
 
@@ -356,11 +366,12 @@ void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& 
       found[k] = {dir, entry.path().string(), exact.string()};
     }
   }
-  if (n < 0) throw std::runtime_error("MergeShards: no shard tables (shots.shard-K-of-N.csv) found");
+  if (n < 0)
+    throw std::runtime_error("MergeShards: no shard tables (shots.shard-K-of-N.csv) found");
   for (int k = 0; k < n; ++k) {
     if (found.count(k) == 0) {
-      throw std::runtime_error("MergeShards: shard " + std::to_string(k) + " of " + std::to_string(n) +
-                               " is missing");
+      throw std::runtime_error("MergeShards: shard " + std::to_string(k) + " of " +
+                               std::to_string(n) + " is missing");
     }
   }
   fs::create_directories(out_dir);
@@ -373,11 +384,13 @@ void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& 
     std::ifstream in(t.shots);
     std::string line;
     std::getline(in, line);
-    if (line != kShotsHeader) throw std::runtime_error("MergeShards: unexpected header in " + t.shots);
+    if (line != kShotsHeader)
+      throw std::runtime_error("MergeShards: unexpected header in " + t.shots);
     while (std::getline(in, line)) {
       if (line.empty()) continue;
       const std::vector<std::string> cells = SplitCsvLine(line);
-      if (cells.size() != 7) throw std::runtime_error("MergeShards: bad row in " + t.shots + ": " + line);
+      if (cells.size() != 7)
+        throw std::runtime_error("MergeShards: bad row in " + t.shots + ": " + line);
       const int index = std::stoi(cells[0]);
       if (shot_rows.count(index) != 0) {
         throw std::runtime_error("MergeShards: shot index " + cells[0] + " appears in two shards");
@@ -391,7 +404,8 @@ void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& 
     }
     std::ifstream ex(t.exact);
     std::getline(ex, line);
-    if (line != kExactHeader) throw std::runtime_error("MergeShards: unexpected header in " + t.exact);
+    if (line != kExactHeader)
+      throw std::runtime_error("MergeShards: unexpected header in " + t.exact);
     while (std::getline(ex, line)) {
       if (line.empty()) continue;
       const std::vector<std::string> cells = SplitCsvLine(line);
@@ -417,7 +431,8 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
   if (const std::string m = options.Check(); !m.empty()) {
     throw std::invalid_argument("DetectShotsOptions: " + m);
   }
-  if (const std::string m = CheckShots(shots); !m.empty()) throw std::invalid_argument("shots: " + m);
+  if (const std::string m = CheckShots(shots); !m.empty())
+    throw std::invalid_argument("shots: " + m);
   DetectorOptions dopt = options.detector;
   dopt.families.clear();
   for (const TagBoard& b : scene.boards) {
@@ -448,12 +463,14 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
         const cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
         if (img.empty()) throw std::runtime_error("DetectShots: cannot read image " + path);
         if (img.cols != s.cam.width || img.rows != s.cam.height) {
-          throw std::runtime_error("DetectShots: " + path + " is " + std::to_string(img.cols) + "x" +
-                                   std::to_string(img.rows) + ", the shot's camera " +
-                                   std::to_string(s.cam.width) + "x" + std::to_string(s.cam.height));
+          throw std::runtime_error("DetectShots: " + path + " is " + std::to_string(img.cols) +
+                                   "x" + std::to_string(img.rows) + ", the shot's camera " +
+                                   std::to_string(s.cam.width) + "x" +
+                                   std::to_string(s.cam.height));
         }
         const std::vector<TagDetection> dets = detector.Detect(img);
-        const std::vector<ExpectedTag> expected = ExpectTags(scene, s.ref_from_cam, s.cam, options.visibility);
+        const std::vector<ExpectedTag> expected =
+            ExpectTags(scene, s.ref_from_cam, s.cam, options.visibility);
         ShotStats& stats = result.stats[i];
         stats.shot = s.id;
         for (const MatchedTag& m : MatchDetections(dets, expected, options.match, &stats)) {

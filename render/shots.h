@@ -46,12 +46,12 @@ struct Shot {
 };
 
 struct RenderShotsOptions {
-  std::string out_dir;        // created if missing
-  int jobs = 1;               // worker processes (1 = render in this process)
-  int shard = 0;              // render shots with index % num_shards == shard
+  std::string out_dir;  // created if missing
+  int jobs = 1;         // worker processes (1 = render in this process)
+  int shard = 0;        // render shots with index % num_shards == shard
   int num_shards = 1;
-  bool progress = true;       // progress lines on stderr
-  int png_compression = 1;    // zlib level 0..9 (1: fast, images are noise-free-ish)
+  bool progress = true;     // progress lines on stderr
+  int png_compression = 1;  // zlib level 0..9 (1: fast, images are noise-free-ish)
   RenderOptions render;
   VisibilityOptions visibility;  // statuses in exact.csv
   HeadlessOptions headless;
@@ -60,9 +60,9 @@ struct RenderShotsOptions {
 };
 
 struct RenderShotsResult {
-  int rendered = 0;           // images written by this call
-  int exact_corners = 0;      // rows of exact.csv
-  double seconds = 0;         // wall time of the rendering
+  int rendered = 0;       // images written by this call
+  int exact_corners = 0;  // rows of exact.csv
+  double seconds = 0;     // wall time of the rendering
 };
 
 // Empty when `shots` are valid (ids unique and usable as file names, sizes
@@ -87,10 +87,10 @@ std::string ExactTableName(int shard, int num_shards);
 void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& out_dir);
 
 struct DetectShotsOptions {
-  DetectorOptions detector;     // families default to the scene's families
+  DetectorOptions detector;  // families default to the scene's families
   MatchOptions match;
   VisibilityOptions visibility;
-  int jobs = 1;                 // detection threads (one TagDetector each)
+  int jobs = 1;  // detection threads (one TagDetector each)
   bool progress = true;
 
   std::string Check() const;  // empty when valid

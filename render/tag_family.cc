@@ -46,7 +46,8 @@ const FamilyEntry& FamilyOrThrow(const std::string& name) {
   if (e == nullptr) {
     std::string known;
     for (const std::string& k : KnownTagFamilies()) known += (known.empty() ? "" : ", ") + k;
-    throw std::invalid_argument("unknown AprilTag family '" + name + "'; expected one of: " + known);
+    throw std::invalid_argument("unknown AprilTag family '" + name +
+                                "'; expected one of: " + known);
   }
   return *e;
 }

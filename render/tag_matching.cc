@@ -35,14 +35,22 @@ bool Blocks(const Occluder& o, const Eigen::Vector3d& a, const Eigen::Vector3d& 
 
 const char* TagStatusName(TagStatus status) {
   switch (status) {
-    case TagStatus::kVisible: return "visible";
-    case TagStatus::kBehind: return "behind";
-    case TagStatus::kBackFacing: return "back_facing";
-    case TagStatus::kOutside: return "outside";
-    case TagStatus::kOccluded: return "occluded";
-    case TagStatus::kBorder: return "border";
-    case TagStatus::kGrazing: return "grazing";
-    case TagStatus::kSmall: return "small";
+    case TagStatus::kVisible:
+      return "visible";
+    case TagStatus::kBehind:
+      return "behind";
+    case TagStatus::kBackFacing:
+      return "back_facing";
+    case TagStatus::kOutside:
+      return "outside";
+    case TagStatus::kOccluded:
+      return "occluded";
+    case TagStatus::kBorder:
+      return "border";
+    case TagStatus::kGrazing:
+      return "grazing";
+    case TagStatus::kSmall:
+      return "small";
   }
   return "?";
 }
@@ -91,7 +99,8 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
         t.X[c] = board.ref_from_board * corners[c];
         const Eigen::Vector3d p = cam_from_ref * t.X[c];
         const Eigen::Vector3d to_cam = (centre - t.X[c]).normalized();
-        t.view_angle = std::max(t.view_angle, std::acos(std::clamp(to_cam.dot(printed_normal), -1.0, 1.0)));
+        t.view_angle =
+            std::max(t.view_angle, std::acos(std::clamp(to_cam.dot(printed_normal), -1.0, 1.0)));
         if (!(p.z() > 0)) {
           behind = true;
           continue;
@@ -110,8 +119,8 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
         }
         t.projected[c] = true;
         t.uv[c] = Eigen::Vector2d(px[0], px[1]);
-        t.in_image[c] = px[0] >= -0.5 && px[0] < cam.width - 0.5 && px[1] >= -0.5 &&
-                        px[1] < cam.height - 0.5;
+        t.in_image[c] =
+            px[0] >= -0.5 && px[0] < cam.width - 0.5 && px[1] >= -0.5 && px[1] < cam.height - 0.5;
         any_in = any_in || t.in_image[c];
         const double m = options.border_margin_px;
         all_inner = all_inner && px[0] >= m - 0.5 && px[0] <= cam.width - 0.5 - m &&
@@ -119,7 +128,8 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
       }
       if (!behind && !failed) {
         double min_edge = 1e300;
-        for (int c = 0; c < 4; ++c) min_edge = std::min(min_edge, (t.uv[(c + 1) % 4] - t.uv[c]).norm());
+        for (int c = 0; c < 4; ++c)
+          min_edge = std::min(min_edge, (t.uv[(c + 1) % 4] - t.uv[c]).norm());
         t.bit_px = min_edge / wab;
       }
       bool occluded = false;
@@ -152,7 +162,8 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
 }
 
 void ShotStats::Add(const ShotStats& o) {
-  const double sq = rms_error_px * rms_error_px * corners_kept + o.rms_error_px * o.rms_error_px * o.corners_kept;
+  const double sq =
+      rms_error_px * rms_error_px * corners_kept + o.rms_error_px * o.rms_error_px * o.corners_kept;
   expected += o.expected;
   found += o.found;
   missed += o.missed;
@@ -181,12 +192,23 @@ std::vector<MatchedTag> MatchDetections(const std::vector<TagDetection>& detecti
     const ExpectedTag& t = expected[i];
     index[{t.family, t.id}] = i;
     switch (t.status) {
-      case TagStatus::kVisible: ++stats->expected; break;
-      case TagStatus::kBorder: ++stats->skipped_border; break;
-      case TagStatus::kGrazing: ++stats->skipped_grazing; break;
-      case TagStatus::kSmall: ++stats->skipped_small; break;
-      case TagStatus::kOccluded: ++stats->skipped_occluded; break;
-      default: break;
+      case TagStatus::kVisible:
+        ++stats->expected;
+        break;
+      case TagStatus::kBorder:
+        ++stats->skipped_border;
+        break;
+      case TagStatus::kGrazing:
+        ++stats->skipped_grazing;
+        break;
+      case TagStatus::kSmall:
+        ++stats->skipped_small;
+        break;
+      case TagStatus::kOccluded:
+        ++stats->skipped_occluded;
+        break;
+      default:
+        break;
     }
   }
   std::vector<bool> seen(expected.size(), false);

@@ -30,7 +30,16 @@
 
 namespace rtscalib::render {
 
-enum class TagStatus { kVisible, kBehind, kBackFacing, kOutside, kOccluded, kBorder, kGrazing, kSmall };
+enum class TagStatus {
+  kVisible,
+  kBehind,
+  kBackFacing,
+  kOutside,
+  kOccluded,
+  kBorder,
+  kGrazing,
+  kSmall
+};
 const char* TagStatusName(TagStatus status);
 
 struct VisibilityOptions {
@@ -46,12 +55,12 @@ struct ExpectedTag {
   int id = 0;     // tag id (TargetCorner::target)
   std::string family;
   TagStatus status = TagStatus::kOutside;
-  std::array<Eigen::Vector3d, 4> X;    // corners, reference frame [m], TargetCorner order
-  std::array<Eigen::Vector2d, 4> uv;   // exact projections [px] (where `projected`)
-  std::array<bool, 4> projected{};     // in front of the camera, projection valid
-  std::array<bool, 4> in_image{};      // projected and inside [-0.5, size - 0.5)
-  double view_angle = 0;               // largest over the corners [rad]
-  double bit_px = 0;                   // smallest edge / width_at_border [px]
+  std::array<Eigen::Vector3d, 4> X;   // corners, reference frame [m], TargetCorner order
+  std::array<Eigen::Vector2d, 4> uv;  // exact projections [px] (where `projected`)
+  std::array<bool, 4> projected{};    // in front of the camera, projection valid
+  std::array<bool, 4> in_image{};     // projected and inside [-0.5, size - 0.5)
+  double view_angle = 0;              // largest over the corners [rad]
+  double bit_px = 0;                  // smallest edge / width_at_border [px]
 };
 
 // Every tag of `scene` as seen by camera `cam` at `ref_from_cam`.
@@ -72,23 +81,23 @@ struct MatchOptions {
 // Per-shot bookkeeping: nothing is dropped silently.
 struct ShotStats {
   std::string shot;
-  int expected = 0;          // visible tags
-  int found = 0;             // visible tags detected and kept
-  int missed = 0;            // visible tags not detected (or dropped below)
-  int unrefined = 0;         // visible tags detected, refinement failed, dropped
-  int mismatched = 0;        // visible tags detected with corners off, dropped
-  int skipped_border = 0;    // tags in view but skipped, by reason
+  int expected = 0;        // visible tags
+  int found = 0;           // visible tags detected and kept
+  int missed = 0;          // visible tags not detected (or dropped below)
+  int unrefined = 0;       // visible tags detected, refinement failed, dropped
+  int mismatched = 0;      // visible tags detected with corners off, dropped
+  int skipped_border = 0;  // tags in view but skipped, by reason
   int skipped_grazing = 0;
   int skipped_small = 0;
   int skipped_occluded = 0;
-  int dropped_skipped = 0;   // detections of skipped tags (dropped)
-  int unknown = 0;           // detections of ids/families not in the scene
-  int duplicate = 0;         // second detections of one tag (dropped)
-  double rms_error_px = 0;   // kept corners vs exact projections
+  int dropped_skipped = 0;  // detections of skipped tags (dropped)
+  int unknown = 0;          // detections of ids/families not in the scene
+  int duplicate = 0;        // second detections of one tag (dropped)
+  double rms_error_px = 0;  // kept corners vs exact projections
   double max_error_px = 0;
 
   void Add(const ShotStats& o);  // sums the counts (for totals), errors combined
-  int corners_kept = 0;      // 4 * found (for combining RMS)
+  int corners_kept = 0;          // 4 * found (for combining RMS)
 };
 
 struct MatchedTag {

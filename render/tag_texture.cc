@@ -54,7 +54,8 @@ void AxisBreakpoints(int count, double start0, double pitch, double bit, int cod
 
 std::string TagTextureOptions::Check() const {
   if (pixels_per_bit != 0 && !IsPowerOfTwo(pixels_per_bit)) {
-    return "pixels_per_bit: expected 0 (auto) or a power of two, got " + std::to_string(pixels_per_bit);
+    return "pixels_per_bit: expected 0 (auto) or a power of two, got " +
+           std::to_string(pixels_per_bit);
   }
   if (!IsPowerOfTwo(max_pixels_per_bit)) {
     return "max_pixels_per_bit: expected a power of two, got " + std::to_string(max_pixels_per_bit);
@@ -110,7 +111,8 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
     throw std::invalid_argument(
         "TagBoard: spacing " + std::to_string(board.spacing) + " m is too small for " +
         board.family + ": its code images extend " + std::to_string(off) +
-        " bit(s) beyond the tag square, so spacing must be >= " + std::to_string(2 * off * bit) + " m");
+        " bit(s) beyond the tag square, so spacing must be >= " + std::to_string(2 * off * bit) +
+        " m");
   }
   // A gap is printed as a whole number of white bits; a gap of (almost) zero
   // width lets neighbouring code images touch.
@@ -126,8 +128,8 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
     while (ppb > 1 && std::max(bits_x, bits_y) * ppb > options.max_texture_size) ppb /= 2;
   }
   if (std::max(bits_x, bits_y) * ppb > options.max_texture_size) {
-    throw std::invalid_argument("TagBoard: " + std::to_string(bits_x) + " x " + std::to_string(bits_y) +
-                                " bits at " + std::to_string(ppb) +
+    throw std::invalid_argument("TagBoard: " + std::to_string(bits_x) + " x " +
+                                std::to_string(bits_y) + " bits at " + std::to_string(ppb) +
                                 " texel(s) per bit exceed max_texture_size " +
                                 std::to_string(options.max_texture_size));
   }

@@ -50,9 +50,9 @@ struct TagTextureOptions {
 };
 
 struct TagTexture {
-  cv::Mat image;            // CV_8UC1, rows = board y, columns = board x
-  int pixels_per_bit = 0;   // texels per code bit
-  double bit_size = 0;      // one code bit on the board [m]
+  cv::Mat image;           // CV_8UC1, rows = board y, columns = board x
+  int pixels_per_bit = 0;  // texels per code bit
+  double bit_size = 0;     // one code bit on the board [m]
   // Breakpoints of board -> texel along x and y (strictly increasing; texel
   // coordinates continuous, texel i spans [i, i+1)).
   std::vector<double> x_board, x_texel;

@@ -109,7 +109,8 @@ std::vector<int> Inliers(const std::vector<Eigen::Vector3d>& X, const std::vecto
   const Eigen::Vector3d n = plane.ref_from_plane.col(2);
   std::vector<int> out;
   for (size_t i = 0; i < X.size(); ++i) {
-    if (!used[i] && std::abs(n.dot(X[i] - plane.centroid)) <= tol) out.push_back(static_cast<int>(i));
+    if (!used[i] && std::abs(n.dot(X[i] - plane.centroid)) <= tol)
+      out.push_back(static_cast<int>(i));
   }
   return out;
 }
@@ -494,7 +495,8 @@ bool Linearize(const Problem& pb, const State& s, Linearization* lin) {
   for (int j = 0; j < kNumIntrinsics; ++j) intrinsics[j] = Dual::Variable(s.intrinsics[j], j);
   for (int i = 0; i < kNumDistortion; ++i) dist[i] = Dual(s.distortion[i]);
   for (size_t f = 0; f < pb.free.size(); ++f) {
-    dist[pb.free[f]] = Dual::Variable(s.distortion[pb.free[f]], kNumIntrinsics + static_cast<int>(f));
+    dist[pb.free[f]] =
+        Dual::Variable(s.distortion[pb.free[f]], kNumIntrinsics + static_cast<int>(f));
   }
   for (size_t k = 0; k < ns; ++k) {
     const Shot& shot = (*pb.shots)[k];
@@ -590,7 +592,8 @@ bool SolveStep(const Linearization& lin, double lambda, Vector* dc, std::vector<
   return true;
 }
 
-State ApplyStep(const Problem& pb, const State& s, const Vector& dc, const std::vector<Vector6>& dp) {
+State ApplyStep(const Problem& pb, const State& s, const Vector& dc,
+                const std::vector<Vector6>& dp) {
   State out = s;
   for (int j = 0; j < pb.NumCamera(); ++j) CameraParam(pb, &out, j) += dc[j];
   for (size_t k = 0; k < dp.size(); ++k) out.cam_from_ref[k] = Perturb(s.cam_from_ref[k], dp[k]);
@@ -672,10 +675,10 @@ std::vector<int> DistortionGroups::FreeCoefficients() const {
   std::vector<int> out;
   for (int i = 0; i < kNumDistortion; ++i) {
     const bool free = (i == kK1 || i == kK2 || i == kK3)   ? radial
-                      : (i == kP1 || i == kP2)              ? tangential
-                      : (i == kK4 || i == kK5 || i == kK6)  ? rational
-                      : (i >= kS1 && i <= kS4)              ? thin_prism
-                                                            : sensor_tilt;
+                      : (i == kP1 || i == kP2)             ? tangential
+                      : (i == kK4 || i == kK5 || i == kK6) ? rational
+                      : (i >= kS1 && i <= kS4)             ? thin_prism
+                                                           : sensor_tilt;
     if (free) out.push_back(i);
   }
   return out;
@@ -706,7 +709,8 @@ std::string CalibrateViewsOptions::Check() const {
         << min_points_per_plane << "; ";
   }
   if (!(plane_tolerance_m > 0) || !std::isfinite(plane_tolerance_m)) {
-    msg << "plane_tolerance_m must be a positive number of metres, got " << plane_tolerance_m << "; ";
+    msg << "plane_tolerance_m must be a positive number of metres, got " << plane_tolerance_m
+        << "; ";
   }
   if (max_iterations < 1) msg << "max_iterations must be >= 1, got " << max_iterations << "; ";
   if (!(rms_tolerance_px > 0) || !std::isfinite(rms_tolerance_px)) {
@@ -717,8 +721,8 @@ std::string CalibrateViewsOptions::Check() const {
   return s;
 }
 
-ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int width,
-                                int height, const CalibrateViewsOptions& options) {
+ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int width, int height,
+                                const CalibrateViewsOptions& options) {
   if (const std::string error = options.Check(); !error.empty()) {
     throw std::invalid_argument("CalibrateViews options: " + error);
   }
@@ -799,10 +803,9 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   if (2 * num_points <= unknowns) {
     std::ostringstream msg;
     msg << "CalibrateViews (zoom " << out.zoom << "): " << num_points << " points give "
-        << 2 * num_points << " equations for " << unknowns << " unknowns ("
-        << problem.NumCamera() << " camera parameters with distortion "
-        << options.distortion.Names() << ", 6 per shot for " << shots.size()
-        << " shots); more points are needed";
+        << 2 * num_points << " equations for " << unknowns << " unknowns (" << problem.NumCamera()
+        << " camera parameters with distortion " << options.distortion.Names()
+        << ", 6 per shot for " << shots.size() << " shots); more points are needed";
     throw std::invalid_argument(msg.str());
   }
 
@@ -833,7 +836,8 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
       }
       sum += r.squaredNorm();
       const Eigen::Vector3d Xc = state.cam_from_ref[k] * shot.X[i];
-      if (Xc.head<2>().norm() / Xc.z() >= out.max_trusted_radius) ++out.points_beyond_trusted_radius;
+      if (Xc.head<2>().norm() / Xc.z() >= out.max_trusted_radius)
+        ++out.points_beyond_trusted_radius;
     }
     pose.rms_px = std::sqrt(sum / pose.num_points);
     total += sum;

@@ -63,11 +63,11 @@ struct DistortionGroups {
 
 struct CalibrateViewsOptions {
   DistortionGroups distortion;
-  int min_shots = 2;               // usable shots needed (>= 1)
-  int min_points_per_shot = 4;     // fewer: the shot is excluded (>= 4)
-  int min_points_per_plane = 8;    // planar subsets used by OpenCV's initialisation (>= 4)
-  double plane_tolerance_m = 1e-3; // distance within which points count as coplanar [m]
-  int max_iterations = 100;        // Levenberg-Marquardt iterations of step 4
+  int min_shots = 2;                // usable shots needed (>= 1)
+  int min_points_per_shot = 4;      // fewer: the shot is excluded (>= 4)
+  int min_points_per_plane = 8;     // planar subsets used by OpenCV's initialisation (>= 4)
+  double plane_tolerance_m = 1e-3;  // distance within which points count as coplanar [m]
+  int max_iterations = 100;         // Levenberg-Marquardt iterations of step 4
   // Step 4 has converged when an iteration improves the RMS by less than this
   // [px] (far below any detector's noise; exact data reach ~1e-13 px).
   double rms_tolerance_px = 1e-10;
@@ -81,7 +81,7 @@ struct ShotPose {
   double phi = 0, theta = 0;  // the shot's readings [rad]
   Rigid3 ref_from_cam;
   int num_points = 0;
-  double rms_px = 0;          // this shot's reprojection RMS
+  double rms_px = 0;  // this shot's reprojection RMS
 };
 
 struct ExcludedShot {
@@ -95,14 +95,14 @@ struct ViewsCalibration {
   int width = 0, height = 0;
   std::array<double, kNumIntrinsics> intrinsics{};  // fx fy cx cy [px]
   std::array<double, kNumDistortion> distortion{};  // OpenCV order
-  std::vector<ShotPose> shots;        // usable shots, in order of first appearance
-  std::vector<ExcludedShot> excluded; // shots left out, with the reason
-  int num_points = 0;                 // observations used
-  double rms_px = 0;                  // sqrt(mean(du^2 + dv^2)) over the used points
-  double opencv_rms_px = 0;           // the same after step 3 (OpenCV's estimate)
-  std::string init_note;              // how step 2 went (e.g. the radial-only fallback)
-  int iterations = 0;                 // of step 4
-  bool converged = false;             // step 4 met its tolerance within max_iterations
+  std::vector<ShotPose> shots;                      // usable shots, in order of first appearance
+  std::vector<ExcludedShot> excluded;               // shots left out, with the reason
+  int num_points = 0;                               // observations used
+  double rms_px = 0;                                // sqrt(mean(du^2 + dv^2)) over the used points
+  double opencv_rms_px = 0;                         // the same after step 3 (OpenCV's estimate)
+  std::string init_note;   // how step 2 went (e.g. the radial-only fallback)
+  int iterations = 0;      // of step 4
+  bool converged = false;  // step 4 met its tolerance within max_iterations
   // MaxTrustedRadius of the result and how many used points lie beyond it
   // (their pixels cannot be back-projected; > 0 means the distortion model
   // folds inside the data and should be questioned).
@@ -110,7 +110,7 @@ struct ViewsCalibration {
   int points_beyond_trusted_radius = 0;
 };
 
-ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int width,
-                                int height, const CalibrateViewsOptions& options = {});
+ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int width, int height,
+                                const CalibrateViewsOptions& options = {});
 
 }  // namespace rtscalib::camera

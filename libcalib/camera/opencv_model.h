@@ -35,7 +35,20 @@ constexpr int kNumIntrinsics = 4;
 constexpr int kNumDistortion = 14;
 
 enum DistortionIndex {
-  kK1 = 0, kK2, kP1, kP2, kK3, kK4, kK5, kK6, kS1, kS2, kS3, kS4, kTauX, kTauY
+  kK1 = 0,
+  kK2,
+  kP1,
+  kP2,
+  kK3,
+  kK4,
+  kK5,
+  kK6,
+  kS1,
+  kS2,
+  kS3,
+  kS4,
+  kTauX,
+  kTauY
 };
 
 // OpenCV's tilt matrix: matProjZ * Ry(tauy) * Rx(taux) with OpenCV's sign
@@ -47,9 +60,9 @@ void TiltMatrix(const T& taux, const T& tauy, T m[9]) {
   const T ctx = cos(taux), stx = sin(taux), cty = cos(tauy), sty = sin(tauy);
   // matRotXY = matRotY * matRotX with
   //   matRotX = [1 0 0; 0 ctx stx; 0 -stx ctx], matRotY = [cty 0 -sty; 0 1 0; sty 0 cty]
-  const T r[9] = {cty, sty * stx, -sty * ctx,  //
-                  T(0), ctx, stx,              //
-                  sty, -cty * stx, cty * ctx};
+  const T r[9] = {cty,  sty * stx,  -sty * ctx,  //
+                  T(0), ctx,        stx,         //
+                  sty,  -cty * stx, cty * ctx};
   // matProjZ = [r22 0 -r02; 0 r22 -r12; 0 0 1]
   const T p[9] = {r[8], T(0), -r[2], T(0), r[8], -r[5], T(0), T(0), T(1)};
   for (int i = 0; i < 3; ++i) {
@@ -67,10 +80,10 @@ void DistortNormalized(const T* dist, const T& x, const T& y, T* xd, T* yd) {
   const T r6 = r4 * r2;
   const T radial = (T(1) + dist[kK1] * r2 + dist[kK2] * r4 + dist[kK3] * r6) /
                    (T(1) + dist[kK4] * r2 + dist[kK5] * r4 + dist[kK6] * r6);
-  *xd = x * radial + T(2) * dist[kP1] * x * y + dist[kP2] * (r2 + T(2) * x * x) +
-        dist[kS1] * r2 + dist[kS2] * r4;
-  *yd = y * radial + dist[kP1] * (r2 + T(2) * y * y) + T(2) * dist[kP2] * x * y +
-        dist[kS3] * r2 + dist[kS4] * r4;
+  *xd = x * radial + T(2) * dist[kP1] * x * y + dist[kP2] * (r2 + T(2) * x * x) + dist[kS1] * r2 +
+        dist[kS2] * r4;
+  *yd = y * radial + dist[kP1] * (r2 + T(2) * y * y) + T(2) * dist[kP2] * x * y + dist[kS3] * r2 +
+        dist[kS4] * r4;
 }
 
 // Projects a point in the camera frame to a pixel. Returns false for points on
@@ -163,17 +176,15 @@ void DistortionResidual(const T* dist, const T& x, const T& y, const T& xd, cons
   const T dradial_dr2 = (dnum * den - num * dden) / (den * den);
   const T ds_x = dist[kS1] + T(2) * dist[kS2] * r2;  // d(s1 r2 + s2 r4)/dr2
   const T ds_y = dist[kS3] + T(2) * dist[kS4] * r2;
-  f[0] = x * radial + T(2) * dist[kP1] * x * y + dist[kP2] * (r2 + T(2) * x * x) +
-         dist[kS1] * r2 + dist[kS2] * r4 - xd;
-  f[1] = y * radial + dist[kP1] * (r2 + T(2) * y * y) + T(2) * dist[kP2] * x * y +
-         dist[kS3] * r2 + dist[kS4] * r4 - yd;
+  f[0] = x * radial + T(2) * dist[kP1] * x * y + dist[kP2] * (r2 + T(2) * x * x) + dist[kS1] * r2 +
+         dist[kS2] * r4 - xd;
+  f[1] = y * radial + dist[kP1] * (r2 + T(2) * y * y) + T(2) * dist[kP2] * x * y + dist[kS3] * r2 +
+         dist[kS4] * r4 - yd;
   // d r2/dx = 2x, d r2/dy = 2y
   J[0] = radial + T(2) * x * x * dradial_dr2 + T(2) * dist[kP1] * y + T(6) * dist[kP2] * x +
          T(2) * ds_x * x;
-  J[1] = T(2) * x * y * dradial_dr2 + T(2) * dist[kP1] * x + T(2) * dist[kP2] * y +
-         T(2) * ds_x * y;
-  J[2] = T(2) * x * y * dradial_dr2 + T(2) * dist[kP1] * x + T(2) * dist[kP2] * y +
-         T(2) * ds_y * x;
+  J[1] = T(2) * x * y * dradial_dr2 + T(2) * dist[kP1] * x + T(2) * dist[kP2] * y + T(2) * ds_x * y;
+  J[2] = T(2) * x * y * dradial_dr2 + T(2) * dist[kP1] * x + T(2) * dist[kP2] * y + T(2) * ds_y * x;
   J[3] = radial + T(2) * y * y * dradial_dr2 + T(6) * dist[kP1] * y + T(2) * dist[kP2] * x +
          T(2) * ds_y * y;
 }

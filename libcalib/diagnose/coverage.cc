@@ -17,7 +17,8 @@ std::string Num(double v) {
 
 }  // namespace
 
-Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model, const FitOptions& fit) {
+Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
+                         const FitOptions& fit) {
   Coverage c;
   std::vector<double> phis, zeniths, edm;
   c.corner_fraction.assign(model.NumZooms(), 0.0);
@@ -26,7 +27,8 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model, 
     const CameraTool& cam = model.cams[zoom];
     const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
     const double half_diag = 0.5 * std::hypot(cam.width, cam.height);
-    c.corner_fraction[zoom] = std::max(c.corner_fraction[zoom], std::hypot(u - cx, v - cy) / half_diag);
+    c.corner_fraction[zoom] =
+        std::max(c.corner_fraction[zoom], std::hypot(u - cx, v - cy) / half_diag);
   };
   auto pointing = [&](int face, double phi, double theta) {
     c.faces.insert(face);
@@ -66,7 +68,8 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model, 
   }
   if (!edm.empty()) {
     std::sort(edm.begin(), edm.end());
-    edm.erase(std::unique(edm.begin(), edm.end(), [](double a, double b) { return std::abs(a - b) < 1e-6; }),
+    edm.erase(std::unique(edm.begin(), edm.end(),
+                          [](double a, double b) { return std::abs(a - b) < 1e-6; }),
               edm.end());
     c.min_edm_m = edm.front();
     c.max_edm_m = edm.back();
@@ -83,12 +86,14 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model, 
 std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const InstrumentModel& model,
                                        const CoverageRules& rules) {
   std::vector<std::string> out;
-  const bool steep = c.min_zenith_deg < rules.steep_zenith_deg || c.max_zenith_deg > 180.0 - rules.steep_zenith_deg;
+  const bool steep = c.min_zenith_deg < rules.steep_zenith_deg ||
+                     c.max_zenith_deg > 180.0 - rules.steep_zenith_deg;
   auto need_steep = [&] {
     if (!steep) {
-      out.push_back("steep sights (zenith angle below " + Num(rules.steep_zenith_deg) + " deg or above " +
-                    Num(180.0 - rules.steep_zenith_deg) + " deg; the data span " + Num(c.min_zenith_deg) +
-                    " to " + Num(c.max_zenith_deg) + " deg)");
+      out.push_back("steep sights (zenith angle below " + Num(rules.steep_zenith_deg) +
+                    " deg or above " + Num(180.0 - rules.steep_zenith_deg) +
+                    " deg; the data span " + Num(c.min_zenith_deg) + " to " +
+                    Num(c.max_zenith_deg) + " deg)");
     }
   };
   auto need_faces = [&] {
@@ -102,8 +107,8 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
   };
   auto need_wide_zenith = [&] {
     if (c.max_zenith_deg - c.min_zenith_deg < rules.wide_zenith_deg) {
-      out.push_back("a wider range of zenith angles (the data span " + Num(c.min_zenith_deg) + " to " +
-                    Num(c.max_zenith_deg) + " deg)");
+      out.push_back("a wider range of zenith angles (the data span " + Num(c.min_zenith_deg) +
+                    " to " + Num(c.max_zenith_deg) + " deg)");
     }
   };
   auto need_edm = [&] {
@@ -136,30 +141,36 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
       break;
     case Effect::kEdmScale:
       need_edm();
-      if (c.has_edm && (c.max_edm_m < rules.distance_ratio * c.min_edm_m || c.max_edm_m < rules.long_distance_m)) {
-        out.push_back("longer EDM distances (more than " + Num(rules.distance_ratio) + " times the shortest and " +
-                      Num(rules.long_distance_m) + " m or more; the data span " + Num(c.min_edm_m) + " to " +
-                      Num(c.max_edm_m) + " m)");
+      if (c.has_edm && (c.max_edm_m < rules.distance_ratio * c.min_edm_m ||
+                        c.max_edm_m < rules.long_distance_m)) {
+        out.push_back("longer EDM distances (more than " + Num(rules.distance_ratio) +
+                      " times the shortest and " + Num(rules.long_distance_m) +
+                      " m or more; the data span " + Num(c.min_edm_m) + " to " + Num(c.max_edm_m) +
+                      " m)");
       }
       break;
     case Effect::kEdmCyclic: {
       need_edm();
       const double u = model.edm_cyclic_unit_length;
-      if (c.has_edm && (c.distinct_edm < 6 || c.finest_edm_step_m > u / 4 || c.max_edm_m - c.min_edm_m < u)) {
-        out.push_back("EDM distances spaced finer than U/4 = " + Num(u / 4) + " m over at least one unit length U = " +
-                      Num(u) + " m (the data have " + std::to_string(c.distinct_edm) + " distinct distances)");
+      if (c.has_edm &&
+          (c.distinct_edm < 6 || c.finest_edm_step_m > u / 4 || c.max_edm_m - c.min_edm_m < u)) {
+        out.push_back("EDM distances spaced finer than U/4 = " + Num(u / 4) +
+                      " m over at least one unit length U = " + Num(u) + " m (the data have " +
+                      std::to_string(c.distinct_edm) + " distinct distances)");
       }
       break;
     }
     default: {  // distortion groups
       if (!c.has_cam) {
-        out.push_back("camera observations (pixels.csv, or cam rows spread over the image in records.csv)");
+        out.push_back(
+            "camera observations (pixels.csv, or cam rows spread over the image in records.csv)");
         break;
       }
       for (size_t z = 0; z < c.corner_fraction.size(); ++z) {
         if (c.corner_fraction[z] > 0 && c.corner_fraction[z] < rules.corner_fraction) {
-          out.push_back("points near the image corners at zoom " + std::to_string(z) + " (the farthest reaches " +
-                        Num(100 * c.corner_fraction[z]) + "% of the half-diagonal)");
+          out.push_back("points near the image corners at zoom " + std::to_string(z) +
+                        " (the farthest reaches " + Num(100 * c.corner_fraction[z]) +
+                        "% of the half-diagonal)");
         }
       }
       break;

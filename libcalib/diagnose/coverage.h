@@ -5,8 +5,8 @@
 //   collimation   c/sin z, sign flips with face     -> steep sights, both faces
 //   tilting_axis  i cot z, sign flips with face     -> steep sights, both faces
 //   vertical_index constant dz, flips with face     -> both faces
-//   hz_eccentricity, hz_scale, axis_wobble          -> a full turn in phi (wobble: steep sights too)
-//   v_eccentricity, v_scale                         -> a wide zenith range, both faces
+//   hz_eccentricity, hz_scale, axis_wobble          -> a full turn in phi (wobble: steep sights
+//   too) v_eccentricity, v_scale                         -> a wide zenith range, both faces
 //   edm_scale                                       -> distances over a wide range
 //   edm_offset                                      -> EDM distances at all
 //   edm_cyclic                                      -> distances sampled finer than U/4 over >= U
@@ -27,27 +27,28 @@ namespace rtscalib::diagnose {
 
 // Thresholds of the requirements above (degrees, metres, fractions).
 struct CoverageRules {
-  double steep_zenith_deg = 60.0;   // a sight is steep below this zenith angle or above 180 - it
-  double wide_zenith_deg = 90.0;    // zenith range counted as wide
-  double full_turn_deg = 270.0;     // phi span counted as a full turn
-  double distance_ratio = 5.0;      // max / min EDM distance for scale
+  double steep_zenith_deg = 60.0;  // a sight is steep below this zenith angle or above 180 - it
+  double wide_zenith_deg = 90.0;   // zenith range counted as wide
+  double full_turn_deg = 270.0;    // phi span counted as a full turn
+  double distance_ratio = 5.0;     // max / min EDM distance for scale
   double long_distance_m = 10.0;
-  double corner_fraction = 0.7;     // of the half-diagonal from the image centre
+  double corner_fraction = 0.7;  // of the half-diagonal from the image centre
 };
 
 struct Coverage {
   std::set<int> faces;
   double min_zenith_deg = 0, max_zenith_deg = 0;
-  double phi_span_deg = 0;          // 360 minus the largest gap between pointings
+  double phi_span_deg = 0;  // 360 minus the largest gap between pointings
   bool has_edm = false, has_cam = false;
   double min_edm_m = 0, max_edm_m = 0;
   int distinct_edm = 0;
-  double finest_edm_step_m = 0;     // smallest gap between distinct EDM distances
+  double finest_edm_step_m = 0;         // smallest gap between distinct EDM distances
   std::vector<double> corner_fraction;  // per zoom: farthest observed pixel / half-diagonal
-  int records = 0, pixels = 0;      // used (outside the critical regions)
+  int records = 0, pixels = 0;          // used (outside the critical regions)
 };
 
-Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model, const FitOptions& fit);
+Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
+                         const FitOptions& fit);
 
 std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const InstrumentModel& model,
                                        const CoverageRules& rules = {});

@@ -31,9 +31,15 @@ std::string Rms(const GroupRms& g) {
 // "EDM points 0.323 -> 0.0908 mm, camera points 0.0326 -> 0.0221 mm rms"
 std::string Change(const GroupRms& a, const GroupRms& b) {
   std::vector<std::string> parts;
-  if (a.edm_n > 0) parts.push_back("EDM points " + Fmt("%.3g", a.edm_m * 1e3) + " -> " + Fmt("%.3g", b.edm_m * 1e3) + " mm");
-  if (a.cam_n > 0) parts.push_back("camera points " + Fmt("%.3g", a.cam_m * 1e3) + " -> " + Fmt("%.3g", b.cam_m * 1e3) + " mm");
-  if (a.pixels_n > 0) parts.push_back("image points " + Fmt("%.3g", a.pixels_px) + " -> " + Fmt("%.3g", b.pixels_px) + " px");
+  if (a.edm_n > 0)
+    parts.push_back("EDM points " + Fmt("%.3g", a.edm_m * 1e3) + " -> " +
+                    Fmt("%.3g", b.edm_m * 1e3) + " mm");
+  if (a.cam_n > 0)
+    parts.push_back("camera points " + Fmt("%.3g", a.cam_m * 1e3) + " -> " +
+                    Fmt("%.3g", b.cam_m * 1e3) + " mm");
+  if (a.pixels_n > 0)
+    parts.push_back("image points " + Fmt("%.3g", a.pixels_px) + " -> " + Fmt("%.3g", b.pixels_px) +
+                    " px");
   std::string out;
   for (size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
   return out + " rms";
@@ -44,8 +50,9 @@ std::string ValueText(const RankedEffect& r) {
   if (!IsKinematic(r.effect)) return "";
   std::string out;
   for (int k = 0; k < r.value.num; ++k) {
-    out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " + Fmt("%.3g", r.value.value[k]) + " +- " +
-           Fmt("%.2g", r.value.sigma[k]) + " " + info.report_units[k];
+    out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " +
+           Fmt("%.3g", r.value.value[k]) + " +- " + Fmt("%.2g", r.value.sigma[k]) + " " +
+           info.report_units[k];
   }
   return out;
 }
@@ -61,8 +68,8 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
   }
   if (significant.empty()) {
     v.push_back("No catalogue effect is missing: none of the " + std::to_string(d.ranking.tested) +
-                " effects tested is significant at the " + Fmt("%g", 100 * d.ranking.level * d.ranking.tested) +
-                "% level.");
+                " effects tested is significant at the " +
+                Fmt("%g", 100 * d.ranking.level * d.ranking.tested) + "% level.");
   } else {
     const RankedEffect& r = *significant.front();
     std::string s = "Add " + r.name + " next: " + Change(r.before, r.after) + " (delta BIC " +
@@ -80,7 +87,8 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
       v.push_back(also + " (add one at a time; `rtscalib diagnose --auto` does it).");
     } else if (significant.size() > 1) {
       std::string also;
-      for (size_t i = 1; i < significant.size(); ++i) also += (i > 1 ? ", " : "") + significant[i]->name;
+      for (size_t i = 1; i < significant.size(); ++i)
+        also += (i > 1 ? ", " : "") + significant[i]->name;
       v.push_back("Also significant alone, but not once " + r.name + " is in: " + also + ".");
     }
   }
@@ -90,8 +98,8 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
   if (d.outliers.flagged > 0) {
     v.push_back(std::to_string(d.outliers.flagged) + " of " + std::to_string(d.outliers.tested) +
                 " observations fail the w-test (w > " + Fmt("%.2f", d.outliers.critical_w) +
-                "); the worst is " + d.outliers.worst.front().where + " (w = " +
-                Fmt("%.1f", d.outliers.worst.front().w) + ").");
+                "); the worst is " + d.outliers.worst.front().where +
+                " (w = " + Fmt("%.1f", d.outliers.worst.front().w) + ").");
   }
   return v;
 }
@@ -131,7 +139,8 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   d.kinematics = model.kinematics;
   d.effects = model.effects.Names();
   d.model_description = std::string(KinematicsName(model.kinematics)) + ", effects: [";
-  for (size_t i = 0; i < d.effects.size(); ++i) d.model_description += (i ? ", " : "") + d.effects[i];
+  for (size_t i = 0; i < d.effects.size(); ++i)
+    d.model_description += (i ? ", " : "") + d.effects[i];
   d.model_description += "]";
   for (int g = 0; g < 3; ++g) d.sigma[g] = fit.sigma[g];
   d.coverage = MeasureCoverage(obs, model, fit.options);
@@ -149,7 +158,8 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   lo.fit = fit.options;
   for (int g = 0; g < 3; ++g) lo.sigma[g] = fit.sigma[g];
   lo.candidates = candidates;
-  if (settings.harmonics) lo.probes = DefaultProbes(d.coverage.faces, d.coverage.has_edm, settings.max_harmonic);
+  if (settings.harmonics)
+    lo.probes = DefaultProbes(d.coverage.faces, d.coverage.has_edm, settings.max_harmonic);
   const Linearization lin = Linearize(obs, model, lo);
   const Reduced red = Reduce(lin);
   d.num_rows = lin.NumRows();
@@ -165,9 +175,11 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   }
   Projector nuisance(lin.NumRows());
   if (settings.harmonics) {
-    d.harmonics = AnalyseHarmonics(lin, red, catalogue, settings.significance, settings.max_unexplained);
+    d.harmonics =
+        AnalyseHarmonics(lin, red, catalogue, settings.significance, settings.max_unexplained);
     for (const Harmonic& h : d.harmonics.unexplained) {
-      if (const ColumnBlock* b = lin.Find(h.block)) nuisance.Add(red.extra.middleCols(b->first, b->size));
+      if (const ColumnBlock* b = lin.Find(h.block))
+        nuisance.Add(red.extra.middleCols(b->first, b->size));
     }
   }
   if (model.kinematics == Kinematics::kDh && !contained.empty()) {
@@ -193,7 +205,8 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
 
   d.residuals = ObservationResiduals(obs, model, fit.options);
   if (settings.outliers) {
-    d.outliers = TestOutliers(obs, lin, red, d.residuals, settings.significance, settings.outliers_listed);
+    d.outliers =
+        TestOutliers(obs, lin, red, d.residuals, settings.significance, settings.outliers_listed);
   }
   d.verdict = Verdict(d);
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

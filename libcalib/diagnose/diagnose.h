@@ -55,7 +55,7 @@ struct Diagnosis {
   double sigma[3] = {0, 0, 0};                 // whitening sigmas (fitted noise per group)
   int num_rows = 0, num_parameters = 0;
   int excluded_critical = 0;
-  std::vector<std::string> verdict;            // most important first
+  std::vector<std::string> verdict;  // most important first
   double seconds = 0;
 
   // The first significant effect, if any (what to add next).
@@ -64,6 +64,5 @@ struct Diagnosis {
 
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
                    const Settings& settings);
-
 
 }  // namespace rtscalib::diagnose

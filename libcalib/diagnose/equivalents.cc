@@ -47,7 +47,8 @@ EquivalentTerms EquivalentSurveyingTerms(const InstrumentModel& dh, const FitOpt
     const FitSummary s = Refine(obs, o, &sph);
     std::vector<double> dist;
     for (const RecordResidual& r : RecordResiduals(sph, obs.records)) {
-      if (r.valid && !InCriticalRegion(obs.records[r.index].theta, o.min_zenith_rad, o.max_zenith_rad)) {
+      if (r.valid &&
+          !InCriticalRegion(obs.records[r.index].theta, o.min_zenith_rad, o.max_zenith_rad)) {
         dist.push_back(r.distance);
       }
     }

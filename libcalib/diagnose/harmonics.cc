@@ -15,7 +15,8 @@ Eigen::MatrixXd Columns(const Eigen::MatrixXd& m, const ColumnBlock& b) {
   return m.middleCols(b.first, b.size);
 }
 
-Harmonic MakeHarmonic(const ColumnBlock& block, const ColumnTest& t, double level, double unit_length) {
+Harmonic MakeHarmonic(const ColumnBlock& block, const ColumnTest& t, double level,
+                      double unit_length) {
   Harmonic h;
   h.probe = block.probe;
   h.block = block.name;
@@ -44,8 +45,8 @@ Harmonic MakeHarmonic(const ColumnBlock& block, const ColumnTest& t, double leve
   const char* what = block.probe.reading == Reading::kPhi     ? "phi (horizontal angle) error"
                      : block.probe.reading == Reading::kTheta ? "theta (vertical angle) error"
                                                               : "distance error";
-  std::snprintf(buf, sizeof(buf), ": %s %.3g %s (+- %.2g), phase %.0f deg, face %d", what, h.amplitude,
-                h.unit.c_str(), h.amplitude_sigma, h.phase_deg, block.probe.face);
+  std::snprintf(buf, sizeof(buf), ": %s %.3g %s (+- %.2g), phase %.0f deg, face %d", what,
+                h.amplitude, h.unit.c_str(), h.amplitude_sigma, h.phase_deg, block.probe.face);
   h.description = HarmonicName(block.probe, unit_length) + buf;
   return h;
 }
@@ -60,8 +61,9 @@ std::string HarmonicName(const Probe& p, double unit_length_m) {
                   p.harmonic, unit_length_m, unit_length_m / p.harmonic);
     return buf;
   }
-  const std::string times = p.harmonic >= 1 && p.harmonic <= 4 ? kTimes[p.harmonic]
-                                                               : std::to_string(p.harmonic) + " times";
+  const std::string times = p.harmonic >= 1 && p.harmonic <= 4
+                                ? kTimes[p.harmonic]
+                                : std::to_string(p.harmonic) + " times";
   return times + " per turn in " + ReadingName(p.variable);
 }
 
@@ -96,7 +98,8 @@ HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
   // 1. Against the fitted model alone.
   std::vector<int> raw_significant;
   for (size_t j = 0; j < probes.size(); ++j) {
-    const ColumnTest t = TestColumns(red.r, Columns(red.extra, *probes[j]), red.cluster, g, dof_base);
+    const ColumnTest t =
+        TestColumns(red.r, Columns(red.extra, *probes[j]), red.cluster, g, dof_base);
     if (t.rank > 0 && t.p_value < out.level) raw_significant.push_back(static_cast<int>(j));
   }
 
@@ -123,8 +126,10 @@ HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
     int best = -1;
     double best_p = 1.0, best_wald = 0.0;
     for (size_t j = 0; j < probes.size(); ++j) {
-      if (std::find(selected.begin(), selected.end(), static_cast<int>(j)) != selected.end()) continue;
-      const ColumnTest t = TestColumns(ys, sel.Apply(t_cat[j]), red.cluster, g, dof_base + cat.rank() + sel.rank());
+      if (std::find(selected.begin(), selected.end(), static_cast<int>(j)) != selected.end())
+        continue;
+      const ColumnTest t =
+          TestColumns(ys, sel.Apply(t_cat[j]), red.cluster, g, dof_base + cat.rank() + sel.rank());
       if (t.rank == 0) continue;
       if (t.p_value < best_p || (t.p_value == best_p && t.wald > best_wald)) {
         best = static_cast<int>(j);
@@ -152,7 +157,8 @@ HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
 
   // 3. What the catalogue explains.
   for (int j : raw_significant) {
-    const ColumnTest raw = TestColumns(red.r, Columns(red.extra, *probes[j]), red.cluster, g, dof_base);
+    const ColumnTest raw =
+        TestColumns(red.r, Columns(red.extra, *probes[j]), red.cluster, g, dof_base);
     Harmonic h = MakeHarmonic(*probes[j], raw, out.level, lin.edm_cyclic_unit_length);
     const bool unexplained = std::find(selected.begin(), selected.end(), j) != selected.end();
     if (!unexplained) {

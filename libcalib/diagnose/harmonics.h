@@ -2,10 +2,11 @@
 //
 // A probe (linearization.h) is the error of one reading as a harmonic of one
 // variable on one face:
-//   phi* = phi + A sin(k phi - p)        "k times per turn in phi"   (horizontal encoder, k >= 2 not in the catalogue)
-//   theta* = theta + A sin(k theta - p)  "k times per turn in theta" (vertical encoder)
-//   theta* = theta + A sin(k phi - p)    zenith error periodic in phi (axis tilt; k = 1 is the base tilt)
-//   d* = d + A sin(2 pi k d / U - p)     distance error periodic in d (k = 1 is edm_cyclic)
+//   phi* = phi + A sin(k phi - p)        "k times per turn in phi"   (horizontal encoder, k >= 2
+//   not in the catalogue) theta* = theta + A sin(k theta - p)  "k times per turn in theta"
+//   (vertical encoder) theta* = theta + A sin(k phi - p)    zenith error periodic in phi (axis
+//   tilt; k = 1 is the base tilt) d* = d + A sin(2 pi k d / U - p)     distance error periodic in d
+//   (k = 1 is edm_cyclic)
 // for k = 1..4 and each face with data. Residuals projected onto a probe's
 // columns are the residuals' harmonic content in that reading, measured in
 // the reading's own units (arcsec, mm), with whatever the fitted model can
@@ -34,15 +35,15 @@ namespace rtscalib::diagnose {
 
 struct Harmonic {
   Probe probe;
-  double amplitude = 0;        // arcsec (phi, theta readings) or mm (distance)
+  double amplitude = 0;  // arcsec (phi, theta readings) or mm (distance)
   double amplitude_sigma = 0;
-  double phase_deg = 0;        // error = amplitude * sin(k x - phase), in [0, 360)
+  double phase_deg = 0;  // error = amplitude * sin(k x - phase), in [0, 360)
   std::string unit;
   double wald = 0, p_value = 1;
   bool significant = false;
-  std::string explained_by;    // catalogue effect that removes it; "" if none does
-  std::string description;     // "twice per turn in phi: phi reading error 3.1 arcsec (face 1)"
-  std::string block;           // the probe's column block name
+  std::string explained_by;  // catalogue effect that removes it; "" if none does
+  std::string description;   // "twice per turn in phi: phi reading error 3.1 arcsec (face 1)"
+  std::string block;         // the probe's column block name
 };
 
 struct HarmonicAnalysis {

@@ -19,17 +19,23 @@ namespace rtscalib::diagnose {
 
 const char* GroupName(ObsGroup g) {
   switch (g) {
-    case ObsGroup::kEdm: return "edm";
-    case ObsGroup::kCam: return "cam";
-    default: return "pixels";
+    case ObsGroup::kEdm:
+      return "edm";
+    case ObsGroup::kCam:
+      return "cam";
+    default:
+      return "pixels";
   }
 }
 
 const char* ReadingName(Reading r) {
   switch (r) {
-    case Reading::kPhi: return "phi";
-    case Reading::kTheta: return "theta";
-    default: return "distance";
+    case Reading::kPhi:
+      return "phi";
+    case Reading::kTheta:
+      return "theta";
+    default:
+      return "distance";
   }
 }
 
@@ -124,7 +130,8 @@ class FreeBlocks {
           }
         }
         b.size = static_cast<int>(b.distortion.size());
-        for (int i : Info(e).distortion_indices) candidate_of_index[i] = static_cast<int>(blocks->size());
+        for (int i : Info(e).distortion_indices)
+          candidate_of_index[i] = static_cast<int>(blocks->size());
       }
       next_col += b.size;
       blocks->push_back(b);
@@ -258,7 +265,8 @@ ReadingDerivatives RecordDerivatives(const InstrumentModel& m, const Record& r, 
   return out;
 }
 
-ReadingDerivatives PixelDerivatives(const InstrumentModel& m, const PixelObservation& p, bool need[3]) {
+ReadingDerivatives PixelDerivatives(const InstrumentModel& m, const PixelObservation& p,
+                                    bool need[3]) {
   ReadingDerivatives out;
   Eigen::Vector2d a, b;
   auto diff = [&](double dphi, double dtheta, Eigen::Vector3d* out3) {
@@ -274,9 +282,12 @@ ReadingDerivatives PixelDerivatives(const InstrumentModel& m, const PixelObserva
 
 double ProbeVariable(const Probe& probe, double phi, double theta, double d, double unit_length) {
   switch (probe.variable) {
-    case Reading::kPhi: return phi;
-    case Reading::kTheta: return theta;
-    default: return 2.0 * M_PI * d / unit_length;
+    case Reading::kPhi:
+      return phi;
+    case Reading::kTheta:
+      return theta;
+    default:
+      return 2.0 * M_PI * d / unit_length;
   }
 }
 
@@ -292,7 +303,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
 
   InstrumentModel work = model;
   for (Effect e : options.candidates) {
-    if (work.effects.Has(e)) throw std::invalid_argument(std::string(Info(e).name) + " is already in the model");
+    if (work.effects.Has(e))
+      throw std::invalid_argument(std::string(Info(e).name) + " is already in the model");
     if (IsKinematic(e)) {
       work.effects.Add(e);
       work.EffectValue(e) = {0.0, 0.0};
@@ -360,8 +372,13 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
                                       " deg, theta " + Deg(r.theta) + " deg");
         }
         index[key] = static_cast<int>(groups.size());
-        groups.push_back({edm ? ObsGroup::kEdm : ObsGroup::kCam, edm ? -1 : r.zoom, r.phi, r.theta,
-                          r.face, c->second, {i}});
+        groups.push_back({edm ? ObsGroup::kEdm : ObsGroup::kCam,
+                          edm ? -1 : r.zoom,
+                          r.phi,
+                          r.theta,
+                          r.face,
+                          c->second,
+                          {i}});
       } else {
         groups[it->second].indices.push_back(i);
       }
@@ -373,7 +390,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
       if (it == shot_group.end()) {
         shot_group[key] = static_cast<int>(groups.size());
         lin.cluster_names.push_back("shot " + p.shot);
-        groups.push_back({ObsGroup::kPixel, p.zoom, p.phi, p.theta, p.face, lin.num_clusters++, {i}});
+        groups.push_back(
+            {ObsGroup::kPixel, p.zoom, p.phi, p.theta, p.face, lin.num_clusters++, {i}});
       } else {
         groups[it->second].indices.push_back(i);
       }
@@ -396,7 +414,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
       f->inv_sigma = inv_sigma;
       for (int i : g.indices) f->points.push_back({obs.pixels[i].X, obs.pixels[i].uv});
       blocks = f->layout.blocks;
-      cost.reset(MakeCost(f, 2 * static_cast<int>(g.indices.size()), decisions.ActiveSize(f->layout)));
+      cost.reset(
+          MakeCost(f, 2 * static_cast<int>(g.indices.size()), decisions.ActiveSize(f->layout)));
     } else {
       auto* f = new RecordGroupResidual;
       f->layout = LayoutFor(&work, g.zoom);
@@ -408,7 +427,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
         f->rows.push_back({r.u, r.v, r.d, r.x, inv_sigma});
       }
       blocks = f->layout.blocks;
-      cost.reset(MakeCost(f, 3 * static_cast<int>(g.indices.size()), decisions.ActiveSize(f->layout)));
+      cost.reset(
+          MakeCost(f, 3 * static_cast<int>(g.indices.size()), decisions.ActiveSize(f->layout)));
     }
     std::vector<double> test(cost->num_residuals());
     if (!cost->Evaluate(blocks.data(), test.data(), nullptr)) {
@@ -443,7 +463,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
     throw std::runtime_error("the model could not be evaluated at the fitted parameters");
   }
   const int n = static_cast<int>(residuals.size());
-  if (n != static_cast<int>(lin.rows.size()) || jac.num_cols != static_cast<int>(col_target.size())) {
+  if (n != static_cast<int>(lin.rows.size()) ||
+      jac.num_cols != static_cast<int>(col_target.size())) {
     throw std::logic_error("linearization: row or column bookkeeping does not match Ceres");
   }
   lin.r = Eigen::Map<const Eigen::VectorXd>(residuals.data(), n);
@@ -486,8 +507,9 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
       b.probe = p;
       b.first = col;
       b.size = 2;
-      b.name = std::string(ReadingName(p.reading)) + " error, harmonic " + std::to_string(p.harmonic) +
-               " of " + ReadingName(p.variable) + ", face " + std::to_string(p.face);
+      b.name = std::string(ReadingName(p.reading)) + " error, harmonic " +
+               std::to_string(p.harmonic) + " of " + ReadingName(p.variable) + ", face " +
+               std::to_string(p.face);
       b.param_names = {b.name + " [cos]", b.name + " [sin]"};
       lin.blocks.push_back(b);
       col += 2;
@@ -523,7 +545,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
         const double deriv = p.reading == Reading::kPhi     ? d.dphi[row.component]
                              : p.reading == Reading::kTheta ? d.dtheta[row.component]
                                                             : d.dd[row.component];
-        const double x = p.harmonic * ProbeVariable(p, phi, theta, dist, model.edm_cyclic_unit_length);
+        const double x =
+            p.harmonic * ProbeVariable(p, phi, theta, dist, model.edm_cyclic_unit_length);
         const int c = num_candidate_cols + 2 * static_cast<int>(k);
         lin.extra(i, c) = deriv * std::cos(x);
         lin.extra(i, c + 1) = deriv * std::sin(x);

@@ -44,10 +44,10 @@ enum class Reading { kPhi, kTheta, kDistance };
 const char* ReadingName(Reading r);
 
 struct Probe {
-  Reading reading = Reading::kPhi;    // which reading is in error
-  Reading variable = Reading::kPhi;   // the error is periodic in this variable
-  int harmonic = 1;                   // k
-  int face = 1;                       // rows of this face only
+  Reading reading = Reading::kPhi;   // which reading is in error
+  Reading variable = Reading::kPhi;  // the error is periodic in this variable
+  int harmonic = 1;                  // k
+  int face = 1;                      // rows of this face only
 };
 
 // One row of the stacked residual vector.
@@ -76,9 +76,9 @@ struct ColumnBlock {
 };
 
 struct LinearizeOptions {
-  FitOptions fit;                   // as used by the fit (zenith limits, fit_intrinsics, threads)
+  FitOptions fit;  // as used by the fit (zenith limits, fit_intrinsics, threads)
   double sigma[3] = {1e-5, 1e-5, 0.5};  // whitening per ObsGroup (the fit's a-posteriori sigmas)
-  std::vector<Effect> candidates;   // effects not in the model whose columns to add
+  std::vector<Effect> candidates;       // effects not in the model whose columns to add
   std::vector<Probe> probes;
 };
 
@@ -90,7 +90,8 @@ struct Linearization {
   std::vector<ColumnBlock> blocks;
   std::vector<ResidualRow> rows;
   int num_clusters = 0;
-  std::vector<std::string> cluster_names;  // "face 1, phi 30.0 deg, theta 90.0 deg" or "shot z0f1s3"
+  std::vector<std::string>
+      cluster_names;  // "face 1, phi 30.0 deg, theta 90.0 deg" or "shot z0f1s3"
   double sigma[3] = {1, 1, 1};
   int num_observations[3] = {0, 0, 0};  // records (edm, cam) and pixel points used
   int excluded_critical = 0;

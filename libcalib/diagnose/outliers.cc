@@ -53,8 +53,11 @@ OutlierReport TestOutliers(const Observations& obs, const Linearization& lin, co
     return residuals[it.group == ObsGroup::kPixel ? num_records + it.index : it.index];
   };
   auto stratum_key = [&](const ObservationResidual& r, bool coarse) {
-    const int bin = r.group == ObsGroup::kPixel || coarse ? 0 : static_cast<int>(std::floor(2.0 * std::log2(r.d)));
-    return std::make_tuple(static_cast<int>(r.group), r.group == ObsGroup::kEdm ? 0 : r.zoom, bin, coarse);
+    const int bin = r.group == ObsGroup::kPixel || coarse
+                        ? 0
+                        : static_cast<int>(std::floor(2.0 * std::log2(r.d)));
+    return std::make_tuple(static_cast<int>(r.group), r.group == ObsGroup::kEdm ? 0 : r.zoom, bin,
+                           coarse);
   };
   std::map<std::tuple<int, int, int, bool>, Stratum> strata;
   for (const auto& [key, it] : items) {

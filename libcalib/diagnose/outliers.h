@@ -29,11 +29,11 @@ namespace rtscalib::diagnose {
 struct OutlierEntry {
   ObsGroup group = ObsGroup::kEdm;
   int index = 0;
-  std::string where;      // file:line or shot/tag
-  double w = 0;           // normal deviate of the observation's test statistic
+  std::string where;  // file:line or shot/tag
+  double w = 0;       // normal deviate of the observation's test statistic
   double p_value = 1;
   bool flagged = false;
-  double size = 0;        // |residual| [m] or [px]
+  double size = 0;  // |residual| [m] or [px]
 };
 
 struct OutlierReport {

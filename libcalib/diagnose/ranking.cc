@@ -13,7 +13,8 @@ namespace {
 void Finish(GroupRms* g) {
   g->edm_m = g->edm_n > 0 ? std::sqrt(g->edm_ss / g->edm_n) : 0.0;
   g->cam_m = g->cam_n > 0 ? std::sqrt(g->cam_ss / g->cam_n) : 0.0;
-  g->records_m = g->edm_n + g->cam_n > 0 ? std::sqrt((g->edm_ss + g->cam_ss) / (g->edm_n + g->cam_n)) : 0.0;
+  g->records_m =
+      g->edm_n + g->cam_n > 0 ? std::sqrt((g->edm_ss + g->cam_ss) / (g->edm_n + g->cam_n)) : 0.0;
   g->pixels_px = g->pixels_n > 0 ? std::sqrt(g->pixels_ss / g->pixels_n) : 0.0;
 }
 
@@ -31,7 +32,8 @@ std::array<double, 4> Cov2(const Eigen::MatrixXd& c) {
 // -2 x the change of the Gaussian log-likelihood with one free variance per
 // group (so a group whose noise estimate the missing effect inflated is not
 // down-weighted in the comparison).
-double GroupLogRatio(const Linearization& lin, const Eigen::VectorXd& before, const Eigen::VectorXd& after) {
+double GroupLogRatio(const Linearization& lin, const Eigen::VectorXd& before,
+                     const Eigen::VectorXd& after) {
   double b[3] = {0, 0, 0}, a[3] = {0, 0, 0};
   int rows[3] = {0, 0, 0};
   for (int i = 0; i < lin.NumRows(); ++i) {
@@ -50,7 +52,8 @@ double GroupLogRatio(const Linearization& lin, const Eigen::VectorXd& before, co
 }  // namespace
 
 double GroupRms::WhitenedRss(const double sigma[3]) const {
-  return edm_ss / (sigma[0] * sigma[0]) + cam_ss / (sigma[1] * sigma[1]) + pixels_ss / (sigma[2] * sigma[2]);
+  return edm_ss / (sigma[0] * sigma[0]) + cam_ss / (sigma[1] * sigma[1]) +
+         pixels_ss / (sigma[2] * sigma[2]);
 }
 
 double GroupRms::Bic(int num_parameters) const {
@@ -93,7 +96,9 @@ GroupRms RmsOfModel(const Observations& obs, const InstrumentModel& model, const
     }
   }
   for (const PixelResidual& p : PixelResiduals(model, obs.pixels)) {
-    if (!p.valid || InCriticalRegion(obs.pixels[p.index].theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
+    if (!p.valid ||
+        InCriticalRegion(obs.pixels[p.index].theta, fit.min_zenith_rad, fit.max_zenith_rad))
+      continue;
     g.pixels_ss += p.delta.squaredNorm();
     ++g.pixels_n;
   }
@@ -188,9 +193,11 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
     if (!r.observable || r.redundant) {
       r.identifiable = false;
       r.delta_bic = r.num_params * log_n;
-      r.note = !r.observable ? "the data do not see this effect at all"
-                             : "the model's parameters absorb this effect (to first order): " +
-                                   AbsorbedBy(*b) + "; it cannot be told apart from them with these data";
+      r.note =
+          !r.observable
+              ? "the data do not see this effect at all"
+              : "the model's parameters absorb this effect (to first order): " + AbsorbedBy(*b) +
+                    "; it cannot be told apart from them with these data";
       out.entries.push_back(r);
       continue;
     }
@@ -201,7 +208,8 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
     r.delta_bic = GroupLogRatio(lin, y, y - t.fitted) + t.rank * log_n;
     r.wald = t.wald;
     r.p_value = t.p_value;
-    const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.base.rank());
+    const ColumnTest plain =
+        TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.base.rank());
     r.after = RmsOfWhitened(lin, red.r - plain.fitted);
 
     // r regressed on its own derivative gives minus the Gauss-Newton step.
@@ -248,7 +256,8 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
                     r.before.Main() - r.after.Main() > floor;
     if (!r.identifiable) {
       char buf[160];
-      std::snprintf(buf, sizeof(buf), "strongly correlated with %s (rho %+.3f)", r.correlated_with.c_str(), r.rho);
+      std::snprintf(buf, sizeof(buf), "strongly correlated with %s (rho %+.3f)",
+                    r.correlated_with.c_str(), r.rho);
       r.note = buf;
     }
     out.entries.push_back(r);
@@ -276,10 +285,11 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
     out.entries.push_back(r);
   }
 
-  std::stable_sort(out.entries.begin(), out.entries.end(), [](const RankedEffect& a, const RankedEffect& b) {
-    if (a.significant != b.significant) return a.significant;
-    return a.delta_bic < b.delta_bic;
-  });
+  std::stable_sort(out.entries.begin(), out.entries.end(),
+                   [](const RankedEffect& a, const RankedEffect& b) {
+                     if (a.significant != b.significant) return a.significant;
+                     return a.delta_bic < b.delta_bic;
+                   });
 
   // Aliases among the best significant effects.
   auto block_of = [&](Effect e) -> const ColumnBlock* {
@@ -297,8 +307,9 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
       const ColumnBlock* bo = block_of(o.effect);
       Projector p = nu;
       p.Add(red.extra.middleCols(bo->first, bo->size));
-      const ColumnTest t = TestColumns(p.Apply(red.r), p.Apply(red.extra.middleCols(be->first, be->size)),
-                                       red.cluster, lin.num_clusters, red.base.rank() + p.rank());
+      const ColumnTest t =
+          TestColumns(p.Apply(red.r), p.Apply(red.extra.middleCols(be->first, be->size)),
+                      red.cluster, lin.num_clusters, red.base.rank() + p.rank());
       if (!(t.rank > 0 && t.p_value < out.level)) r.aliases.push_back(o.name);
     }
   }
@@ -313,8 +324,8 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
       const RankedEffect& o = out.entries[i];
       if (!o.significant) continue;
       const ColumnBlock* bo = block_of(o.effect);
-      const ColumnTest t = TestColumns(yb, p.Apply(red.extra.middleCols(bo->first, bo->size)), red.cluster,
-                                       lin.num_clusters, red.base.rank() + p.rank());
+      const ColumnTest t = TestColumns(yb, p.Apply(red.extra.middleCols(bo->first, bo->size)),
+                                       red.cluster, lin.num_clusters, red.base.rank() + p.rank());
       if (t.rank > 0 && t.p_value < out.level) out.also_after_best.push_back(o.name);
     }
   }

@@ -69,7 +69,7 @@ GroupRms RmsOfWhitened(const Linearization& lin, const Eigen::VectorXd& r);
 GroupRms RmsOfModel(const Observations& obs, const InstrumentModel& model, const FitOptions& fit);
 
 struct RankingOptions {
-  double significance = 0.01;        // family-wise level over the effects tested
+  double significance = 0.01;  // family-wise level over the effects tested
   double identifiable_rho = 0.95;
   double redundant_fraction = 1e-3;
   int refine_top = 2;
@@ -85,27 +85,27 @@ struct DistortionValue {
 struct RankedEffect {
   Effect effect = Effect::kCollimation;
   std::string name;
-  int num_params = 0;               // rank of its columns in these data
+  int num_params = 0;  // rank of its columns in these data
   GroupRms before, after;
   double rms_before = 0, rms_after = 0;
   std::string rms_unit;
   double delta_rss = 0, delta_bic = 0, wald = 0, p_value = 1;
   bool observable = true, redundant = false, identifiable = true, significant = false;
-  std::string correlated_with;      // the model parameter with the largest |rho|
+  std::string correlated_with;  // the model parameter with the largest |rho|
   double rho = 0;
-  std::array<double, 2> si{};       // estimate in SI (kinematic effects)
+  std::array<double, 2> si{};  // estimate in SI (kinematic effects)
   std::array<double, 4> si_cov{};
-  EffectReportValue value;          // in report units
+  EffectReportValue value;  // in report units
   std::vector<DistortionValue> distortion;
-  bool has_equivalent = false;      // redundant: value read off the model
+  bool has_equivalent = false;  // redundant: value read off the model
   EffectReportValue equivalent;
-  std::vector<std::string> needs;   // what data would make it identifiable / better determined
+  std::vector<std::string> needs;  // what data would make it identifiable / better determined
   // Other significant effects that explain the same structure in these data
   // (each one, added, leaves the other insignificant): first-order aliases
   // such as radial/rational distortion.
   std::vector<std::string> aliases;
   std::string config_line;
-  std::string after_source;         // "refined" or "linearised"
+  std::string after_source;  // "refined" or "linearised"
   std::string note;
 };
 
@@ -123,13 +123,13 @@ struct Ranking {
 struct RankingInput {
   const Observations* obs = nullptr;
   const InstrumentModel* model = nullptr;
-  FitOptions fit;                          // as the fit used them
+  FitOptions fit;  // as the fit used them
   const Linearization* lin = nullptr;
   const Reduced* red = nullptr;
-  const Projector* nuisance = nullptr;     // unexplained harmonics, in the reduced space
+  const Projector* nuisance = nullptr;  // unexplained harmonics, in the reduced space
   const Coverage* coverage = nullptr;
   const EquivalentTerms* equivalents = nullptr;  // dh only
-  std::vector<Effect> contained;           // catalogue effects the kinematics already contain
+  std::vector<Effect> contained;                 // catalogue effects the kinematics already contain
 };
 
 Ranking RankEffects(const RankingInput& in, const RankingOptions& options);

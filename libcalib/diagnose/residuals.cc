@@ -18,7 +18,8 @@ void AngularComponents(const Eigen::Vector3d& dir, const Eigen::Vector3d& delta,
   const double z = std::acos(std::clamp(dir.z(), -1.0, 1.0));
   const double sz = std::max(std::sin(z), 1e-9);
   *dhz = delta.dot(Eigen::Vector3d(std::cos(hz), -std::sin(hz), 0.0)) / sz;
-  *dz = delta.dot(Eigen::Vector3d(std::sin(hz) * std::cos(z), std::cos(hz) * std::cos(z), -std::sin(z)));
+  *dz = delta.dot(
+      Eigen::Vector3d(std::sin(hz) * std::cos(z), std::cos(hz) * std::cos(z), -std::sin(z)));
 }
 
 }  // namespace
@@ -78,7 +79,8 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
     o.v = p.uv.y();
     o.critical = InCriticalRegion(p.theta, fit.min_zenith_rad, fit.max_zenith_rad);
     Eigen::Vector2d pred;
-    if (p.zoom >= 0 && p.zoom < model.NumZooms() && PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &pred)) {
+    if (p.zoom >= 0 && p.zoom < model.NumZooms() &&
+        PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &pred)) {
       const CameraTool& cam = model.cams[p.zoom];
       double ray_obs[3], ray_pred[3];
       if (camera::PixelToRay(cam.intrinsics.data(), cam.distortion.data(), p.uv.data(), ray_obs) &&
@@ -101,13 +103,15 @@ std::string Where(const Observations& obs, ObsGroup group, int index) {
   char buf[256];
   if (group == ObsGroup::kPixel) {
     const PixelObservation& p = obs.pixels[index];
-    std::snprintf(buf, sizeof(buf), "shot %s, target %d corner %d", p.shot.c_str(), p.target, p.corner);
+    std::snprintf(buf, sizeof(buf), "shot %s, target %d corner %d", p.shot.c_str(), p.target,
+                  p.corner);
     if (p.line > 0) return obs.pixels_source + ":" + std::to_string(p.line) + " (" + buf + ")";
     return obs.pixels_source + ", row " + std::to_string(index + 1) + " (" + buf + ")";
   }
   const Record& r = obs.records[index];
   std::snprintf(buf, sizeof(buf), "%s, face %d, phi %.2f deg, theta %.2f deg, d %.3g m",
-                r.tool == Tool::kEdm ? "edm" : "cam", r.face, r.phi * 180 / M_PI, r.theta * 180 / M_PI, r.d);
+                r.tool == Tool::kEdm ? "edm" : "cam", r.face, r.phi * 180 / M_PI,
+                r.theta * 180 / M_PI, r.d);
   if (r.line > 0) return obs.records_source + ":" + std::to_string(r.line) + " (" + buf + ")";
   return obs.records_source + ", row " + std::to_string(index + 1) + " (" + buf + ")";
 }

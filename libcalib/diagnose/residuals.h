@@ -25,19 +25,19 @@ namespace rtscalib::diagnose {
 
 struct ObservationResidual {
   ObsGroup group = ObsGroup::kEdm;
-  int index = 0;   // into obs.records or obs.pixels
+  int index = 0;  // into obs.records or obs.pixels
   int face = 1;
   int zoom = 0;
   double phi = 0, theta = 0;
-  double d = 0;    // EDM distance or ray length [m]; 0 for pixels
+  double d = 0;         // EDM distance or ray length [m]; 0 for pixels
   double u = 0, v = 0;  // observed pixel (cam records and pixels)
   bool valid = false;
   bool critical = false;  // in a critical region (not used by the fit)
   Eigen::Vector3d delta = Eigen::Vector3d::Zero();
-  double along = 0;  // [m] (records)
-  double hz = 0;     // [rad]
-  double zenith = 0; // [rad]
-  double size = 0;   // |delta| [m] or [px]
+  double along = 0;   // [m] (records)
+  double hz = 0;      // [rad]
+  double zenith = 0;  // [rad]
+  double size = 0;    // |delta| [m] or [px]
 };
 
 // Every observation, critical-region rows marked (zenith limits of `fit`).

@@ -34,11 +34,11 @@ double NormalCritical(double alpha);
 
 struct ColumnTest {
   Eigen::VectorXd beta;
-  Eigen::MatrixXd cov;          // the covariance behind `wald` (classical or robust)
+  Eigen::MatrixXd cov;  // the covariance behind `wald` (classical or robust)
   Eigen::MatrixXd cov_classic, cov_robust;
-  Eigen::VectorXd fitted;       // T b
-  double rss_before = 0;        // y'y
-  double rss_after = 0;         // e'e
+  Eigen::VectorXd fitted;  // T b
+  double rss_before = 0;   // y'y
+  double rss_after = 0;    // e'e
   double delta_rss = 0;
   double wald = 0;
   double p_value = 1;

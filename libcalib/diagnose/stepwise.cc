@@ -36,7 +36,8 @@ StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& m
     if (IsKinematic(next->effect)) {
       m.EffectValue(next->effect) = next->si;
     } else {
-      for (const DistortionValue& d : next->distortion) m.cams[d.zoom].distortion[d.index] = d.value;
+      for (const DistortionValue& d : next->distortion)
+        m.cams[d.zoom].distortion[d.index] = d.value;
     }
     added = next->name;
     out.fit = Refine(obs, fit_options, &m);

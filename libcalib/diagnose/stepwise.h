@@ -14,7 +14,7 @@
 namespace rtscalib::diagnose {
 
 struct LadderStep {
-  std::string added;                 // "" on the first rung
+  std::string added;  // "" on the first rung
   std::string model_description;
   std::vector<std::string> effects;
   GroupRms rms;
@@ -27,7 +27,7 @@ struct StepwiseResult {
   std::vector<LadderStep> ladder;
   InstrumentModel model;  // the last rung's model
   FitSummary fit;
-  Diagnosis diagnosis;    // of the last rung
+  Diagnosis diagnosis;  // of the last rung
   std::string stop_reason;
 };
 

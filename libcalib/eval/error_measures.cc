@@ -38,9 +38,9 @@ std::vector<RecordResidual> RecordResiduals(const InstrumentModel& model,
     RecordResidual res;
     res.index = static_cast<int>(i);
     try {
-      const Eigen::Vector3d calc =
-          r.tool == Tool::kEdm ? PredictEdm(model, r.phi, r.theta, r.d)
-                               : PredictCam(model, r.zoom, r.phi, r.theta, r.u, r.v, r.d);
+      const Eigen::Vector3d calc = r.tool == Tool::kEdm
+                                       ? PredictEdm(model, r.phi, r.theta, r.d)
+                                       : PredictCam(model, r.zoom, r.phi, r.theta, r.u, r.v, r.d);
       res.delta = r.x - calc;
       res.distance = res.delta.norm();
     } catch (const std::exception&) {
@@ -126,7 +126,8 @@ void AddEdmOffAxis(const InstrumentModel& model, const std::vector<Record>& reco
       if (principal.Contains(*r) && (!p.c0 || r->d < p.c0->d)) p.c0 = r;
     }
     for (const Record* r : p.cam) {
-      if (p.c0 && r->d == p.c0->d && std::abs(r->u - p.c0->u - 1.0) < 0.5 && r->v == p.c0->v) p.cu = r;
+      if (p.c0 && r->d == p.c0->d && std::abs(r->u - p.c0->u - 1.0) < 0.5 && r->v == p.c0->v)
+        p.cu = r;
     }
   }
   for (const auto& [key, p] : poses) {

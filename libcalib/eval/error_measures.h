@@ -36,7 +36,7 @@ struct PixelStats {
   double mean_px = 0;  // mean |du, dv|
   double max_px = 0;
   int n = 0;
-  int failed = 0;      // points behind the camera under the model
+  int failed = 0;  // points behind the camera under the model
 };
 
 enum class ErrorMethod { kA, kB };
@@ -47,10 +47,10 @@ struct ModelErrors {
 
 // One evaluated record (for maps and diagnostics).
 struct RecordResidual {
-  int index = -1;            // into the records vector
-  double distance = 0;       // ||x_meas - x_calc||
-  Eigen::Vector3d delta;     // x_meas - x_calc
-  bool valid = true;         // false if the model could not evaluate it
+  int index = -1;         // into the records vector
+  double distance = 0;    // ||x_meas - x_calc||
+  Eigen::Vector3d delta;  // x_meas - x_calc
+  bool valid = true;      // false if the model could not evaluate it
 };
 
 struct PixelResidual {

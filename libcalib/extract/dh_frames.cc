@@ -20,8 +20,8 @@ Eigen::Matrix3d LinkFrame::Rotation() const {
 
 LinkFrame FirstFrame(const Line3& axis) {
   LinkFrame f;
-  f.o = axis.point;                       // Eq. 44
-  f.z = axis.direction.normalized();      // Eq. 43
+  f.o = axis.point;                   // Eq. 44
+  f.z = axis.direction.normalized();  // Eq. 43
   const Eigen::Vector3d x0 = Eigen::Vector3d::UnitX();
   const Eigen::Vector3d px = x0 - x0.dot(f.z) * f.z;  // Eq. 45
   if (px.norm() >= kMinProjection) {

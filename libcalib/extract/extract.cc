@@ -23,10 +23,9 @@ std::string NoSweepMessage(int joint, const SweepSearch& search, const ExtractOp
     << Num(o.max_zenith_rad * 180 / M_PI, 4) << "] deg) of one tool, distance and pixel with "
     << (joint == 1 ? "the same theta and different phi" : "the same phi and different theta")
     << " (Klug Sec. 3.1.2: "
-    << (joint == 1 ? "theta = pi/2, phi over [0, 2 pi)" : "phi = 0, theta over [0, pi]")
-    << "). " << search.usable.size() << " rows were usable; " << search.excluded.face2
-    << " face-2 rows and " << search.excluded.critical_zenith
-    << " rows in the critical zenith regions were excluded.";
+    << (joint == 1 ? "theta = pi/2, phi over [0, 2 pi)" : "phi = 0, theta over [0, pi]") << "). "
+    << search.usable.size() << " rows were usable; " << search.excluded.face2 << " face-2 rows and "
+    << search.excluded.critical_zenith << " rows in the critical zenith regions were excluded.";
   return s.str();
 }
 
@@ -57,8 +56,8 @@ ExtractionResult ExtractDhModel(const std::vector<Record>& records,
   out.excluded = search.excluded;
   out.usable_rows = static_cast<int>(search.usable.size());
   out.candidate_sweeps = search.candidates;
-  notes.push_back(std::to_string(records.size()) + " records: " +
-                  std::to_string(search.usable.size()) + " usable, " +
+  notes.push_back(std::to_string(records.size()) +
+                  " records: " + std::to_string(search.usable.size()) + " usable, " +
                   std::to_string(search.excluded.face2) + " face-2 rows not used, " +
                   std::to_string(search.excluded.critical_zenith) +
                   " face-1 rows excluded in the critical zenith regions");
@@ -105,9 +104,9 @@ ExtractionResult ExtractDhModel(const std::vector<Record>& records,
                   Num(m.links[0].p[kDhGamma]) + " rad (gamma_1 = " + Num(link1[kDhGamma]) +
                   " at phi = " + Num(phi2) + "), alpha = " + Num(link1[kDhAlpha]) +
                   " rad, a = " + Num(link1[kDhA]) + " m");
-  notes.push_back("link 2: frame 3 = frame 2 (Eq. 50), {d, gamma, alpha, a} = {" +
-                  Num(link2[0]) + ", " + Num(link2[1]) + ", " + Num(link2[2]) + ", " +
-                  Num(link2[3]) + "}; the tool transforms carry the rest");
+  notes.push_back("link 2: frame 3 = frame 2 (Eq. 50), {d, gamma, alpha, a} = {" + Num(link2[0]) +
+                  ", " + Num(link2[1]) + ", " + Num(link2[2]) + ", " + Num(link2[3]) +
+                  "}; the tool transforms carry the rest");
 
   // 5. Base and tools.
   m.base = PoseBlock::FromRigid(BaseFromFirstFrame(out.frames[0]));
@@ -124,8 +123,8 @@ ExtractionResult ExtractDhModel(const std::vector<Record>& records,
                       "defaults");
       continue;
     }
-    const auto cam = ExtractCameraTool(records, search.usable, m, z, *out.principal_points[z],
-                                       given, options);
+    const auto cam =
+        ExtractCameraTool(records, search.usable, m, z, *out.principal_points[z], given, options);
     if (!cam) {
       notes.push_back("zoom " + std::to_string(z) +
                       ": no usable camera rows; its flange_from_cam is left as configured");

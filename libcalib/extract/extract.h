@@ -35,19 +35,19 @@
 namespace rtscalib {
 
 struct ExtractionResult {
-  InstrumentModel model;              // kinematics = dh
-  std::array<JointFeature, 2> joints; // joint 1 (phi), joint 2 (theta)
+  InstrumentModel model;               // kinematics = dh
+  std::array<JointFeature, 2> joints;  // joint 1 (phi), joint 2 (theta)
   // Frames 1..3 (index 0..2) in the reference frame, at the configuration of
   // the joint-2 sweep (phi = sweeps[1].constant_control); frame 3 = frame 2.
   std::array<LinkFrame, 3> frames;
-  std::array<Sweep, 2> sweeps;        // the sweeps the joints were fitted to
+  std::array<Sweep, 2> sweeps;  // the sweeps the joints were fitted to
   std::vector<Sweep> candidate_sweeps;
   ExcludedRows excluded;
   int usable_rows = 0;
   std::vector<std::optional<PrincipalPoint>> principal_points;  // per zoom
-  std::vector<int> camera_poses;      // per zoom: poses used for the camera tool (0 = none)
-  int edm_poses = 0;                  // poses used for the EDM tool
-  std::vector<std::string> notes;     // human-readable account of every step
+  std::vector<int> camera_poses;   // per zoom: poses used for the camera tool (0 = none)
+  int edm_poses = 0;               // poses used for the EDM tool
+  std::vector<std::string> notes;  // human-readable account of every step
 };
 
 // Throws std::invalid_argument when options.Check() fails and ExtractionError

@@ -85,15 +85,19 @@ std::optional<RayIntrinsicsEstimate> EstimateIntrinsicsFromRays(const std::vecto
     for (const Record* r : p.cam) by_pixel[{r->u, r->v}].push_back(r);
     std::optional<Eigen::Vector3d> centre;
     if (p.edm.size() >= 2) {
-      const Record* a = *std::min_element(p.edm.begin(), p.edm.end(), [](auto* x, auto* y) { return x->d < y->d; });
-      const Record* b = *std::max_element(p.edm.begin(), p.edm.end(), [](auto* x, auto* y) { return x->d < y->d; });
+      const Record* a = *std::min_element(p.edm.begin(), p.edm.end(),
+                                          [](auto* x, auto* y) { return x->d < y->d; });
+      const Record* b = *std::max_element(p.edm.begin(), p.edm.end(),
+                                          [](auto* x, auto* y) { return x->d < y->d; });
       if (b->d > a->d) centre = a->x - a->d * (b->x - a->x) / (b->d - a->d);
     }
     std::vector<Eigen::Vector3d> dirs;
     std::vector<Eigen::Vector2d> pix;
     for (const auto& [uv, rows] : by_pixel) {
-      const Record* a = *std::min_element(rows.begin(), rows.end(), [](auto* x, auto* y) { return x->d < y->d; });
-      const Record* b = *std::max_element(rows.begin(), rows.end(), [](auto* x, auto* y) { return x->d < y->d; });
+      const Record* a =
+          *std::min_element(rows.begin(), rows.end(), [](auto* x, auto* y) { return x->d < y->d; });
+      const Record* b =
+          *std::max_element(rows.begin(), rows.end(), [](auto* x, auto* y) { return x->d < y->d; });
       Eigen::Vector3d dir;
       if (b->d > a->d) {
         dir = (b->x - a->x) / (b->d - a->d);
@@ -118,12 +122,16 @@ std::optional<RayIntrinsicsEstimate> EstimateIntrinsicsFromRays(const std::vecto
   out.poses = static_cast<int>(fx.size());
   out.camera.intrinsics = {Median(fx), Median(fy), Median(cx), Median(cy)};
   out.camera.distortion.fill(0.0);
-  out.camera.width = static_cast<int>(std::ceil(std::max(2.0 * out.camera.intrinsics[2], umax + 1.0)));
-  out.camera.height = static_cast<int>(std::ceil(std::max(2.0 * out.camera.intrinsics[3], vmax + 1.0)));
+  out.camera.width =
+      static_cast<int>(std::ceil(std::max(2.0 * out.camera.intrinsics[2], umax + 1.0)));
+  out.camera.height =
+      static_cast<int>(std::ceil(std::max(2.0 * out.camera.intrinsics[3], vmax + 1.0)));
   out.note = "zoom " + std::to_string(zoom) + ": intrinsics from view rays at " +
-             std::to_string(out.poses) + " poses (DLT, median): fx " + std::to_string(out.camera.intrinsics[0]) +
-             ", fy " + std::to_string(out.camera.intrinsics[1]) + ", cx " + std::to_string(out.camera.intrinsics[2]) +
-             ", cy " + std::to_string(out.camera.intrinsics[3]) + " px; image size taken as " +
+             std::to_string(out.poses) + " poses (DLT, median): fx " +
+             std::to_string(out.camera.intrinsics[0]) + ", fy " +
+             std::to_string(out.camera.intrinsics[1]) + ", cx " +
+             std::to_string(out.camera.intrinsics[2]) + ", cy " +
+             std::to_string(out.camera.intrinsics[3]) + " px; image size taken as " +
              std::to_string(out.camera.width) + " x " + std::to_string(out.camera.height);
   return out;
 }

@@ -73,8 +73,8 @@ JointFeature AnalyseSweep(const std::vector<Record>& records, const Sweep& sweep
   for (int k = 0; k + 1 < f.num_points; ++k) {
     const double delta = sweep.Control(records, k + 1) - sweep.Control(records, k);
     if (!(delta > 0.0 && delta < M_PI)) continue;
-    const double s = std::abs(
-        (pts[k] - circle.center).cross(pts[k + 1] - circle.center).dot(circle.normal));
+    const double s =
+        std::abs((pts[k] - circle.center).cross(pts[k + 1] - circle.center).dot(circle.normal));
     if (s > best) {
       best = s;
       best_k = k;

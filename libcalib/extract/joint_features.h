@@ -34,11 +34,11 @@ struct JointFeature {
   // axis L = c + s n~. Line: the centroid and the direction of increasing control.
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
-  double radius = 0.0;      // circle radius r (Eq. 30) [m]; +inf when the circle fit fails
-  double circle_rms = 0.0;  // RMS distance of the points to the circle [m]
-  double plane_rms = 0.0;   // RMS distance of the points to the plane [m]
-  double line_rms = 0.0;    // RMS distance of the points to the fitted line [m]
-  double spread = 0.0;      // largest distance of a point from the centroid [m]
+  double radius = 0.0;          // circle radius r (Eq. 30) [m]; +inf when the circle fit fails
+  double circle_rms = 0.0;      // RMS distance of the points to the circle [m]
+  double plane_rms = 0.0;       // RMS distance of the points to the plane [m]
+  double line_rms = 0.0;        // RMS distance of the points to the fitted line [m]
+  double spread = 0.0;          // largest distance of a point from the centroid [m]
   int sign_rows[2] = {-1, -1};  // record indices used for the sign (Eq. 31)
   // Constellation of this joint's axis with the next one's (Eq. 40/47); for
   // the last joint, with itself (Eq. 50: identical). Filled by the frames.

@@ -122,16 +122,15 @@ InstrumentModel SnapModel(const InstrumentModel& model, std::vector<std::string>
 }
 
 const std::array<const char*, kNumTrigTerms>& TrigTermNames() {
-  static const std::array<const char*, kNumTrigTerms> names = {
-      "1",
-      "cos(phi)",
-      "sin(phi)",
-      "cos(theta)",
-      "sin(theta)",
-      "cos(phi)*cos(theta)",
-      "cos(phi)*sin(theta)",
-      "sin(phi)*cos(theta)",
-      "sin(phi)*sin(theta)"};
+  static const std::array<const char*, kNumTrigTerms> names = {"1",
+                                                               "cos(phi)",
+                                                               "sin(phi)",
+                                                               "cos(theta)",
+                                                               "sin(theta)",
+                                                               "cos(phi)*cos(theta)",
+                                                               "cos(phi)*sin(theta)",
+                                                               "sin(phi)*cos(theta)",
+                                                               "sin(phi)*sin(theta)"};
   return names;
 }
 

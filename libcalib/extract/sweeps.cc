@@ -218,8 +218,8 @@ SweepSearch FindSweeps(const std::vector<Record>& records,
       for (const auto& line : Cluster(rows, fixed, options.angle_tolerance_rad, fixed_periodic)) {
         // One row per control value: the first of each cluster of equal readings.
         std::vector<int> sweep_rows;
-        for (const auto& same : Cluster(line, varying, options.angle_tolerance_rad,
-                                        varying_periodic)) {
+        for (const auto& same :
+             Cluster(line, varying, options.angle_tolerance_rad, varying_periodic)) {
           sweep_rows.push_back(*std::min_element(same.begin(), same.end()));
         }
         if (static_cast<int>(sweep_rows.size()) < options.min_sweep_points) continue;

@@ -38,8 +38,8 @@ struct Sweep {
   int joint = 1;  // 1: theta constant, phi varies; 2: phi constant, theta varies
   int face = 1;
   Tool tool = Tool::kEdm;
-  int zoom = 0;   // camera sweeps only
-  double d = 1.0; // EDM distance or camera ray length [m]
+  int zoom = 0;                                            // camera sweeps only
+  double d = 1.0;                                          // EDM distance or camera ray length [m]
   Eigen::Vector2d pixel_offset = Eigen::Vector2d::Zero();  // camera: pixel - principal point [px]
   double constant_control = 0.0;  // the fixed theta (joint 1) or phi (joint 2) [rad]
   // Indices into the records, one per control value, in increasing control order.
@@ -82,7 +82,7 @@ std::vector<std::optional<PrincipalPoint>> FindPrincipalPoints(
 struct SweepSearch {
   std::vector<int> usable;  // indices of the usable rows (face 1, outside critical regions)
   ExcludedRows excluded;
-  std::vector<Sweep> candidates;  // every sweep found, both joints
+  std::vector<Sweep> candidates;        // every sweep found, both joints
   std::optional<Sweep> joint1, joint2;  // the chosen ones (see above)
 };
 

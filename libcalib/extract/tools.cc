@@ -86,7 +86,8 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
       for (int k = 0; k < 3; ++k) {
         if ((off - steps[k]).norm() <= options.pixel_tolerance_px) {
           auto it = by_d.try_emplace(std::llround(r.d / options.distance_tolerance_m),
-                                     std::array<int, 3>{-1, -1, -1}).first;
+                                     std::array<int, 3>{-1, -1, -1})
+                        .first;
           if (it->second[k] < 0) it->second[k] = i;
         }
       }
@@ -104,8 +105,8 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
   if (triplets.empty() && !all_rows) {
     std::ostringstream s;
     s << "cannot extract the camera tool of zoom " << zoom << ": " << rows.size()
-      << " usable camera rows, but no pose has rows at the principal point (" << Num(c.x())
-      << ", " << Num(c.y()) << ")" << (principal_point.detected ? " (detected)" : "")
+      << " usable camera rows, but no pose has rows at the principal point (" << Num(c.x()) << ", "
+      << Num(c.y()) << ")" << (principal_point.detected ? " (detected)" : "")
       << " and at +1 px in u and in v with the same ray length (Klug Sec. 3.1.10, Eq. 67). "
          "Record F_CAM at these three pixels at each pose, or give the camera's intrinsics "
          "(then every camera row is used, with exact_camera_rays).";
@@ -182,15 +183,14 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
                           "and in v (Klug Eq. 67)");
   }
   out.camera.flange_from_cam = PoseBlock::FromRigid(k.b_from_a);
-  out.poses = all_rows ? static_cast<int>(
-                             GroupByPose(records, rows, options.angle_tolerance_rad).size())
-                       : static_cast<int>(triplets.size());
+  out.poses = all_rows
+                  ? static_cast<int>(GroupByPose(records, rows, options.angle_tolerance_rad).size())
+                  : static_cast<int>(triplets.size());
   out.rms = k.rms;
   std::ostringstream note;
   note << "camera tool zoom " << zoom << ": " << out.poses << " poses"
        << (all_rows ? " (no pixel triplet: every camera row, exact rays)" : "")
-       << ", principal point ("
-       << Num(c.x()) << ", " << Num(c.y()) << ") "
+       << ", principal point (" << Num(c.x()) << ", " << Num(c.y()) << ") "
        << (principal_point.detected ? "detected (most shared triplet centre)"
                                     : "from the intrinsics")
        << (options.exact_camera_rays ? ", exact back-projected rays"
@@ -224,9 +224,9 @@ std::optional<EdmToolEstimate> ExtractEdmTool(const std::vector<Record>& records
     const Record& ra = records[by_d.begin()->second];
     const Record& rb = records[std::next(by_d.begin())->second];
     const Eigen::Vector3d z = (rb.x - ra.x).normalized();
-    const Eigen::Matrix3d ref =
-        reference_zoom >= 0 ? RefFromCam(model, reference_zoom, ra.phi, ra.theta).rotation
-                            : RefFromFlange(model, ra.phi, ra.theta).rotation;
+    const Eigen::Matrix3d ref = reference_zoom >= 0
+                                    ? RefFromCam(model, reference_zoom, ra.phi, ra.theta).rotation
+                                    : RefFromFlange(model, ra.phi, ra.theta).rotation;
     Eigen::Vector3d x = Eigen::Vector3d::Zero();
     for (int k = 0; k < 2; ++k) {  // Eq. 79 with x, then footnote 8's y
       const Eigen::Vector3d axis = ref.col(k);
@@ -239,8 +239,8 @@ std::optional<EdmToolEstimate> ExtractEdmTool(const std::vector<Record>& records
     }
     if (x.isZero()) continue;  // cannot happen: x and y cannot both be parallel to z
     const double da = ra.d;
-    a.insert(a.end(), {Eigen::Vector3d(0, 0, da), Eigen::Vector3d(1, 0, da),
-                       Eigen::Vector3d(0, 0, da + 1)});
+    a.insert(a.end(),
+             {Eigen::Vector3d(0, 0, da), Eigen::Vector3d(1, 0, da), Eigen::Vector3d(0, 0, da + 1)});
     b.insert(b.end(), {ToFlange(model, ra, ra.x), ToFlange(model, ra, ra.x + x),
                        ToFlange(model, ra, ra.x + z)});
     ++poses;

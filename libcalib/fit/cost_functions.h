@@ -216,8 +216,8 @@ struct ShotResidual {
         for (int c = 0; c < 2; ++c) {
           T out;
           out.a = pixel[c].a;
-          out.v = pixel[c].v[0] * x_cam[0].v + pixel[c].v[1] * x_cam[1].v +
-                  pixel[c].v[2] * x_cam[2].v;
+          out.v =
+              pixel[c].v[0] * x_cam[0].v + pixel[c].v[1] * x_cam[1].v + pixel[c].v[2] * x_cam[2].v;
           for (int i = 0; i < camera::kNumIntrinsics + camera::kNumDistortion; ++i) {
             const double d = pixel[c].v[3 + i];
             if (slot[i] >= 0) {

@@ -76,9 +76,9 @@ camera::CalibrateViewsOptions ViewsOptions(const InitFromPixelsOptions& o) {
 
 std::string Describe(const camera::ViewsCalibration& v) {
   std::ostringstream s;
-  s << "zoom " << v.zoom << ": OpenCV start from " << v.shots.size() << " shots, "
-    << v.num_points << " points, rms " << v.rms_px << " px, fx " << v.intrinsics[0] << " fy "
-    << v.intrinsics[1] << " cx " << v.intrinsics[2] << " cy " << v.intrinsics[3];
+  s << "zoom " << v.zoom << ": OpenCV start from " << v.shots.size() << " shots, " << v.num_points
+    << " points, rms " << v.rms_px << " px, fx " << v.intrinsics[0] << " fy " << v.intrinsics[1]
+    << " cx " << v.intrinsics[2] << " cy " << v.intrinsics[3];
   if (!v.excluded.empty()) s << ", " << v.excluded.size() << " shot(s) excluded";
   if (!v.init_note.empty()) s << " (" << v.init_note << ")";
   return s.str();
@@ -126,7 +126,8 @@ InstrumentModel DhFromSpherical(const InstrumentModel& s) {
   d.base = PoseBlock::FromRigid(s.base.ToRigid() * ideal_base);
   d.edm = PoseBlock::FromRigid(m_t * s.edm.ToRigid());
   d.cams = s.cams;
-  for (CameraTool& c : d.cams) c.flange_from_cam = PoseBlock::FromRigid(m_t * c.flange_from_cam.ToRigid());
+  for (CameraTool& c : d.cams)
+    c.flange_from_cam = PoseBlock::FromRigid(m_t * c.flange_from_cam.ToRigid());
   return d;
 }
 
@@ -141,7 +142,8 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
     result.notes.push_back(std::to_string(excluded) +
                            " pixel observation(s) in the critical region not used for the start");
   }
-  if (zooms.empty()) throw std::invalid_argument("InitFromPixels: no pixel observations to start from");
+  if (zooms.empty())
+    throw std::invalid_argument("InitFromPixels: no pixel observations to start from");
   const int num_zooms = zooms.rbegin()->first + 1;
 
   // 1. Per zoom: intrinsics, distortion and shot poses from OpenCV.
@@ -153,12 +155,14 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
   std::vector<PosedShot> shots;
   for (const auto& [zoom, obs] : zooms) {
     CameraTool cam = SizeFor(options, zoom, obs, &result.notes);
-    camera::ViewsCalibration v = camera::CalibrateViews(obs, cam.width, cam.height, ViewsOptions(options));
+    camera::ViewsCalibration v =
+        camera::CalibrateViews(obs, cam.width, cam.height, ViewsOptions(options));
     result.notes.push_back(Describe(v));
     cam.intrinsics = v.intrinsics;
     cam.distortion = v.distortion;
     m.cams[zoom] = cam;
-    for (const camera::ShotPose& s : v.shots) shots.push_back({zoom, s.phi, s.theta, s.ref_from_cam});
+    for (const camera::ShotPose& s : v.shots)
+      shots.push_back({zoom, s.phi, s.theta, s.ref_from_cam});
     result.views[zoom] = std::move(v);
   }
   for (int z = 0; z < num_zooms; ++z) {
@@ -266,8 +270,8 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
   return result;
 }
 
-std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation>& pixels,
-                                              int zoom, const InitFromPixelsOptions& options,
+std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation>& pixels, int zoom,
+                                              const InitFromPixelsOptions& options,
                                               InstrumentModel* model) {
   std::vector<std::string> notes;
   int excluded = 0;

@@ -72,8 +72,8 @@ InstrumentModel DhFromSpherical(const InstrumentModel& spherical);
 // Sets zoom `zoom`'s camera of `model` (extending model->cams if needed)
 // from that zoom's pixels, given the rest of the chain (see above). Returns
 // notes for the run log.
-std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation>& pixels,
-                                              int zoom, const InitFromPixelsOptions& options,
+std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation>& pixels, int zoom,
+                                              const InitFromPixelsOptions& options,
                                               InstrumentModel* model);
 
 // Distortion groups enabled in an effect set.

@@ -8,9 +8,9 @@
 #include <cmath>
 #include <map>
 #include <set>
-#include <tuple>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/cost_functions.h"
@@ -25,7 +25,8 @@ std::string FitOptions::Check() const {
   if (!(loss_scale > 0)) return "fit.robust_loss.scale must be > 0";
   if (max_iterations < 1) return "fit.max_iterations must be >= 1";
   if (translation_bound_m < 0) return "fit.translation_bound_m must be >= 0";
-  if (!(min_zenith_rad < max_zenith_rad)) return "fit.critical_region: min_zenith must be < max_zenith";
+  if (!(min_zenith_rad < max_zenith_rad))
+    return "fit.critical_region: min_zenith must be < max_zenith";
   if (num_threads < 1) return "fit.threads must be >= 1";
   return "";
 }
@@ -58,7 +59,7 @@ class Parameterization {
     Kind kind = Kind::kFree;
     std::string name;
     int size = 0;
-    std::vector<int> frozen;           // kSubset
+    std::vector<int> frozen;               // kSubset
     const double* bound_centre = nullptr;  // translations: Klug Eq. 98 window centre
   };
 
@@ -76,7 +77,8 @@ class Parameterization {
           "link1.d and link1.gamma_offset held at their start values (equivalent to base "
           "translation along and rotation about axis 1)");
       summary->fixed_gauges.push_back(
-          "link2 {d, gamma_offset, alpha, a} held (the EDM and camera tool transforms absorb them)");
+          "link2 {d, gamma_offset, alpha, a} held (the EDM and camera tool transforms absorb "
+          "them)");
       Set(m.edm.q.data(), {Kind::kNoRoll, "edm.rotation", 4});
       summary->fixed_gauges.push_back(
           "EDM roll about its ray held at the extraction's convention (Klug Eq. 79)");
@@ -87,7 +89,8 @@ class Parameterization {
       Set(m.edm.q.data(), {Kind::kConstant, "edm.rotation", 4});
       Set(m.edm.t.data(), {Kind::kSubset, "edm.t", 3, {2}});
       summary->fixed_gauges.push_back(
-          "spherical: EDM rotation is the line of sight (held); EDM t_z held (edm_offset models it)");
+          "spherical: EDM rotation is the line of sight (held); EDM t_z held (edm_offset models "
+          "it)");
     }
     std::vector<int> frozen_distortion;
     {
@@ -109,11 +112,12 @@ class Parameterization {
           {Kind::kFree, zs + ".t", 3, {}, start.cams[z].flange_from_cam.t.data()});
       Set(cam.intrinsics.data(),
           {o.fit_intrinsics ? Kind::kFree : Kind::kConstant, zs + ".intrinsics", 4});
-      Set(cam.distortion.data(), {Kind::kSubset, zs + ".distortion", camera::kNumDistortion,
-                                  frozen_distortion});
+      Set(cam.distortion.data(),
+          {Kind::kSubset, zs + ".distortion", camera::kNumDistortion, frozen_distortion});
     }
     for (Effect e : m.effects.List()) {
-      if (IsKinematic(e)) Set(m.EffectValue(e).data(), {Kind::kFree, Info(e).name, Info(e).num_params});
+      if (IsKinematic(e))
+        Set(m.EffectValue(e).data(), {Kind::kFree, Info(e).name, Info(e).num_params});
     }
   }
 
@@ -237,9 +241,8 @@ bool TangentCovariance(ceres::Problem* problem, const std::vector<const double*>
   // Columns within a row are ascending, so the upper triangle is filled.
   Eigen::VectorXd scale(n);
   for (int i = 0; i < n; ++i) scale[i] = jtj(i, i) > 0 ? 1.0 / std::sqrt(jtj(i, i)) : 0.0;
-  const Eigen::MatrixXd scaled = scale.asDiagonal() *
-                                 jtj.selfadjointView<Eigen::Upper>().toDenseMatrix() *
-                                 scale.asDiagonal();
+  const Eigen::MatrixXd scaled =
+      scale.asDiagonal() * jtj.selfadjointView<Eigen::Upper>().toDenseMatrix() * scale.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
   if (eig.info() != Eigen::Success) return false;
   const Eigen::VectorXd& lambda = eig.eigenvalues();  // ascending
@@ -292,7 +295,8 @@ void FillSigmas(ceres::Problem* problem, const std::map<const double*, BlockInfo
       const double d = std::sqrt(c(i, i) * c(j, j));
       if (d <= 0) continue;
       const double rho = c(i, j) / d;
-      if (std::abs(rho) > 0.95) summary->strong_correlations.push_back({names[i] + " ~ " + names[j], rho});
+      if (std::abs(rho) > 0.95)
+        summary->strong_correlations.push_back({names[i] + " ~ " + names[j], rho});
     }
   }
 
@@ -379,7 +383,8 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
     for (Effect e : m.effects.List()) {
       if (Info(e).redundant_in_dh) {
         m.effects.Remove(e);
-        summary.message += std::string(" ") + Info(e).name + " is redundant with the dh model (not fitted);";
+        summary.message +=
+            std::string(" ") + Info(e).name + " is redundant with the dh model (not fitted);";
       }
     }
   }
@@ -392,8 +397,8 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
       continue;
     }
     if (r.tool == Tool::kCam && r.zoom >= m.NumZooms()) {
-      throw std::invalid_argument(obs.records_source + ":" + std::to_string(r.line) +
-                                  ": zoom " + std::to_string(r.zoom) + " has no camera in the model");
+      throw std::invalid_argument(obs.records_source + ":" + std::to_string(r.line) + ": zoom " +
+                                  std::to_string(r.zoom) + " has no camera in the model");
     }
     records.push_back(static_cast<int>(i));
   }
@@ -470,9 +475,12 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
     refs.clear();
     auto loss = [&]() -> ceres::LossFunction* {
       switch (options.loss) {
-        case RobustLoss::kHuber: return new ceres::HuberLoss(options.loss_scale);
-        case RobustLoss::kCauchy: return new ceres::CauchyLoss(options.loss_scale);
-        default: return nullptr;
+        case RobustLoss::kHuber:
+          return new ceres::HuberLoss(options.loss_scale);
+        case RobustLoss::kCauchy:
+          return new ceres::CauchyLoss(options.loss_scale);
+        default:
+          return nullptr;
       }
     };
     for (const RecordGroup& g : record_groups) {
@@ -602,8 +610,7 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   if (options.compute_covariance) {
     FillSigmas(problem.get(), param.FreeBlocks(*problem), &m, &summary, options.num_threads);
   }
-  summary.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }
 

@@ -25,7 +25,7 @@ struct FitOptions {
   double sigma_pixel_px = 0.5;    // a-priori sigma of a pixel coordinate
   bool reestimate_sigmas = true;  // variance-component estimate per group
   RobustLoss loss = RobustLoss::kNone;
-  double loss_scale = 3.0;        // in sigmas
+  double loss_scale = 3.0;  // in sigmas
   int max_iterations = 200;
   // Klug Eq. 98's |t| <= t_max, here a window of +- this around the start
   // (extraction) value of every translation block. Klug used 1e-2 m around
@@ -50,11 +50,11 @@ struct FitSummary {
   double seconds = 0;
   int num_residuals = 0, num_parameters = 0;
   int excluded_critical = 0;
-  double sigma0_records = 1, sigma0_pixels = 1;  // a-posteriori / a-priori sigma
-  double sigma_edm_m = 0, sigma_cam_m = 0, sigma_pixel_px = 0;  // a-posteriori sigmas
-  std::vector<std::string> fixed_gauges;         // human-readable
+  double sigma0_records = 1, sigma0_pixels = 1;                     // a-posteriori / a-priori sigma
+  double sigma_edm_m = 0, sigma_cam_m = 0, sigma_pixel_px = 0;      // a-posteriori sigmas
+  std::vector<std::string> fixed_gauges;                            // human-readable
   std::vector<std::pair<std::string, double>> strong_correlations;  // "a ~ b", rho
-  std::vector<std::string> downweighted;         // robust loss: observations down-weighted
+  std::vector<std::string> downweighted;  // robust loss: observations down-weighted
   std::string message;
 };
 

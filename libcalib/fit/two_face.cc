@@ -13,8 +13,8 @@ namespace {
 // Horizontal direction and zenith angle of a model's line of sight at a reading.
 void RayAngles(const InstrumentModel& m, int zoom, double phi, double theta, double* hz,
                double* z) {
-  const Eigen::Vector3d dir = (zoom < 0 ? RefFromEdm(m, phi, theta)
-                                        : RefFromCam(m, zoom, phi, theta)).rotation.col(2);
+  const Eigen::Vector3d dir =
+      (zoom < 0 ? RefFromEdm(m, phi, theta) : RefFromCam(m, zoom, phi, theta)).rotation.col(2);
   *hz = std::atan2(dir.x(), dir.y());
   *z = std::acos(std::clamp(dir.z(), -1.0, 1.0));
 }

@@ -76,8 +76,7 @@ CircleFit FitCircle(const std::vector<Eigen::Vector3d>& points) {
   const int n = static_cast<int>(points.size());
 
   // Eq. 21: 2D coordinates in the plane (normalised units).
-  const Eigen::Matrix<double, 2, Eigen::Dynamic> ac =
-      fit.plane.basis.leftCols<2>().transpose() * a;
+  const Eigen::Matrix<double, 2, Eigen::Dynamic> ac = fit.plane.basis.leftCols<2>().transpose() * a;
   // Eq. 25/26: [2u 2v 1] [c1 c2 k3]^T = u^2 + v^2.
   Eigen::MatrixXd m(n, 3);
   Eigen::VectorXd b(n);
@@ -140,8 +139,7 @@ LineFit FitLine(const std::vector<Eigen::Vector3d>& points) {
 }
 
 Eigen::Vector3d CorrectNormalSign(const Eigen::Vector3d& normal, const Eigen::Vector3d& center,
-                                  const Eigen::Vector3d& x_first,
-                                  const Eigen::Vector3d& x_second) {
+                                  const Eigen::Vector3d& x_first, const Eigen::Vector3d& x_second) {
   const double s = (x_first - center).cross(x_second - center).dot(normal);
   return s < 0.0 ? Eigen::Vector3d(-normal) : normal;  // Eq. 32: sign(0) = +1
 }

@@ -35,7 +35,7 @@
 namespace rtscalib {
 
 struct PlaneFit {
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  // x_bar (Eq. 14)
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();   // x_bar (Eq. 14)
   Eigen::Matrix3d basis = Eigen::Matrix3d::Identity();  // B = [b_1 b_2 b_3], det +1 (Eq. 19)
   double scale = 1.0;                                   // k (Eq. 18)
   // Singular values of A~ (Eq. 15), descending; they are scaled by 1/k.
@@ -47,9 +47,9 @@ struct PlaneFit {
 
 struct CircleFit {
   PlaneFit plane;
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // c (Eq. 30)
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); // plane normal, sign as fitted
-  double radius = 0.0;                               // r (Eq. 30)
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();   // c (Eq. 30)
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // plane normal, sign as fitted
+  double radius = 0.0;                                // r (Eq. 30)
   // RMS of the points' 3D distances to the circle:
   // sqrt(mean(h_i^2 + (rho_i - r)^2)), h = out-of-plane, rho = in-plane distance to c.
   double rms = 0.0;
@@ -59,9 +59,9 @@ struct CircleFit {
 };
 
 struct LineFit {
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();      // the centroid, a point on the line
-  Eigen::Vector3d direction = Eigen::Vector3d::UnitX(); // unit, sign as fitted
-  double rms = 0.0;     // RMS of the perpendicular distances
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();       // the centroid, a point on the line
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  // unit, sign as fitted
+  double rms = 0.0;                                      // RMS of the perpendicular distances
   double extent = 0.0;  // max - min of the points' positions along the line
 };
 
@@ -77,8 +77,7 @@ LineFit FitLine(const std::vector<Eigen::Vector3d>& points);
 // (recorded at increasing control values, less than pi apart) is a positive
 // rotation about it around `center`.
 Eigen::Vector3d CorrectNormalSign(const Eigen::Vector3d& normal, const Eigen::Vector3d& center,
-                                  const Eigen::Vector3d& x_first,
-                                  const Eigen::Vector3d& x_second);
+                                  const Eigen::Vector3d& x_first, const Eigen::Vector3d& x_second);
 // The prismatic counterpart: `direction` turned so that x_second - x_first
 // (increasing control) points along it; sign(0) = +1 as in Eq. 32.
 Eigen::Vector3d CorrectDirectionSign(const Eigen::Vector3d& direction,

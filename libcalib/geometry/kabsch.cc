@@ -32,7 +32,7 @@ KabschResult Kabsch(const std::vector<Eigen::Vector3d>& a, const std::vector<Eig
   const Eigen::Matrix3d& v = svd.matrixV();
   Eigen::Vector3d diag(1.0, 1.0, (v * u.transpose()).determinant() < 0.0 ? -1.0 : 1.0);
   KabschResult out;
-  out.b_from_a.rotation = v * diag.asDiagonal() * u.transpose();  // Eq. 56
+  out.b_from_a.rotation = v * diag.asDiagonal() * u.transpose();     // Eq. 56
   out.b_from_a.translation = b_bar - out.b_from_a.rotation * a_bar;  // Eq. 57
 
   const Eigen::Vector3d s = svd.singularValues();

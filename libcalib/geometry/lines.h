@@ -42,11 +42,11 @@ struct LineTolerances {
 };
 
 struct ClosestPoints {
-  double s = 0.0, t = 0.0;               // s_c, t_c (Eq. 41)
+  double s = 0.0, t = 0.0;                        // s_c, t_c (Eq. 41)
   Eigen::Vector3d q_s = Eigen::Vector3d::Zero();  // on line 0 (Eq. 42)
   Eigen::Vector3d q_t = Eigen::Vector3d::Zero();  // on line 1 (Eq. 42)
-  double distance = 0.0;                 // |q_s - q_t|
-  double sin_angle = 0.0;                // |sin| of the angle between the directions
+  double distance = 0.0;                          // |q_s - q_t|
+  double sin_angle = 0.0;                         // |sin| of the angle between the directions
   LineConstellation constellation = LineConstellation::kSkewed;
 };
 

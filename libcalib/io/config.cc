@@ -28,9 +28,8 @@ const Names<FaceMode> kFaceModeNames = {{"joint", FaceMode::kJoint},
 const Names<IntrinsicsMode> kIntrinsicsNames = {{"auto", IntrinsicsMode::kAuto},
                                                 {"fit", IntrinsicsMode::kFit},
                                                 {"fixed", IntrinsicsMode::kFixed}};
-const Names<RobustLoss> kLossNames = {{"none", RobustLoss::kNone},
-                                      {"huber", RobustLoss::kHuber},
-                                      {"cauchy", RobustLoss::kCauchy}};
+const Names<RobustLoss> kLossNames = {
+    {"none", RobustLoss::kNone}, {"huber", RobustLoss::kHuber}, {"cauchy", RobustLoss::kCauchy}};
 
 template <typename E>
 const std::string& NameOf(const Names<E>& names, E value) {
@@ -303,17 +302,18 @@ void ReadPlan(const YamlNode& m, AcquisitionPlan* out) {
     grid->Require("theta_steps");
     ReadCount(*grid, "phi_steps", &out->grid_phi_steps, 1, "grid steps in phi");
     ReadCount(*grid, "theta_steps", &out->grid_theta_steps, 1, "grid steps in theta");
-    ReadNumbers(*grid, "edm_distances", &out->grid_edm_distances, IsPositive,
-                "distances > 0 [m]");
+    ReadNumbers(*grid, "edm_distances", &out->grid_edm_distances, IsPositive, "distances > 0 [m]");
     ReadNumbers(*grid, "cam_ray_lengths", &out->grid_cam_ray_lengths, IsPositive,
                 "ray lengths > 0 [m]");
     ReadCount(*grid, "pixels_per_axis", &out->grid_pixels_per_axis, 1, "pixels per image axis");
   }
   if (const std::optional<YamlNode> faces = m.Find("faces")) {
-    out->faces = ReadIndexList(*faces, [](int f) { return f == 1 || f == 2; }, "faces 1 or 2");
+    out->faces = ReadIndexList(
+        *faces, [](int f) { return f == 1 || f == 2; }, "faces 1 or 2");
   }
   if (const std::optional<YamlNode> zooms = m.Find("zooms")) {
-    out->zooms = ReadIndexList(*zooms, [](int z) { return z >= 0; }, "zoom levels >= 0");
+    out->zooms = ReadIndexList(
+        *zooms, [](int z) { return z >= 0; }, "zoom levels >= 0");
   }
 }
 
@@ -336,8 +336,9 @@ TagBoard ReadBoard(const YamlNode& m) {
 
 void ReadShots(const YamlNode& m, ShotPlan* out) {
   ReadCount(m, "shots_per_board", &out->shots_per_board, 1, "shots per board");
-  ReadNumber(m, "fill", &out->fill, [](double x) { return x > 0 && x <= 1; },
-             "a fraction of the image in (0, 1]");
+  ReadNumber(
+      m, "fill", &out->fill, [](double x) { return x > 0 && x <= 1; },
+      "a fraction of the image in (0, 1]");
   ReadNumber(m, "pointing_jitter", &out->pointing_jitter, IsNonNegative,
              "a fraction of the field of view >= 0");
 }
@@ -382,17 +383,19 @@ InstrumentModel ReadTruth(const YamlNode& m, const ModelSettings& model, int pla
       if (!e) entry.key.FailChoice(AllEffectNames());
       const EffectInfo& info = Info(*e);
       if (IsDistortion(*e)) {
-        entry.key.Fail("a kinematic or EDM effect (distortion coefficients go in "
-                       "simulate.truth.cameras[zoom].distortion)");
+        entry.key.Fail(
+            "a kinematic or EDM effect (distortion coefficients go in "
+            "simulate.truth.cameras[zoom].distortion)");
       }
       if (kinematics == Kinematics::kDh && info.redundant_in_dh) {
-        entry.key.Fail("an effect that the dh kinematics does not already hold (put it into "
-                       "the links and tools, or use kinematics: spherical)");
+        entry.key.Fail(
+            "an effect that the dh kinematics does not already hold (put it into "
+            "the links and tools, or use kinematics: spherical)");
       }
       std::string expected = std::to_string(info.num_params) + " value(s) in report units [";
       for (int i = 0; i < info.num_params; ++i) {
-        expected += std::string(i ? ", " : "") + info.param_names[i] + " (" +
-                    info.report_units[i] + ")";
+        expected +=
+            std::string(i ? ", " : "") + info.param_names[i] + " (" + info.report_units[i] + ")";
       }
       expected += "]";
       const std::vector<double> report = entry.value.IsScalar()
@@ -441,8 +444,9 @@ void ReadSimulate(const YamlNode& m, const ModelSettings& model, SimulationOptio
 void ReadDiagnose(const YamlNode& m, DiagnoseOptions* out) {
   m.Read("enabled", &out->enabled);
   m.Read("auto", &out->auto_add);
-  ReadNumber(m, "significance", &out->significance, [](double x) { return x > 0 && x < 1; },
-             "a test level in (0, 1)");
+  ReadNumber(
+      m, "significance", &out->significance, [](double x) { return x > 0 && x < 1; },
+      "a test level in (0, 1)");
 }
 
 // --- dump ---------------------------------------------------------------------
@@ -618,8 +622,7 @@ RunConfig LoadConfig(const std::string& path) {
   const bool have_data = !config.records_path.empty() || !config.pixels_path.empty();
   if (!have_data && !simulate) {
     throw InputError::Key(path, "data", 0, 0,
-                          "data.records and/or data.pixels, or a simulate section",
-                          "neither");
+                          "data.records and/or data.pixels, or a simulate section", "neither");
   }
   if (have_data && simulate) {
     config.notes.push_back(path +

@@ -71,7 +71,7 @@ struct RunConfig {
   bool truth_from_paper = false;
   std::string render_yaml;  // the `render` section as YAML text; "" when absent
   DiagnoseOptions diagnose;
-  std::string output_dir;   // absolute; default <config_dir>/out
+  std::string output_dir;          // absolute; default <config_dir>/out
   std::vector<std::string> notes;  // things worth a line in the run log
 };
 

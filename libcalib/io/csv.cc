@@ -131,8 +131,8 @@ CsvTable CsvTable::Parse(std::istream& in, const std::string& name, const Column
     table.rows_.push_back({line_no, std::move(fields)});
   }
   if (!have_header) {
-    throw InputError::File(name, 0, "no rows",
-                           "a header row and at least one data row", "an empty file");
+    throw InputError::File(name, 0, "no rows", "a header row and at least one data row",
+                           "an empty file");
   }
   std::vector<std::string> missing;
   for (const std::string& required : columns.required) {
@@ -143,8 +143,8 @@ CsvTable CsvTable::Parse(std::istream& in, const std::string& name, const Column
     for (const auto& [column_name, index] : table.index_) present[index] = column_name;
     std::string expected = "a column named '" + missing.front() + "' in the header (required";
     if (missing.size() > 1) {
-      expected += "; also missing: " +
-                  Join(std::vector<std::string>(missing.begin() + 1, missing.end()));
+      expected +=
+          "; also missing: " + Join(std::vector<std::string>(missing.begin() + 1, missing.end()));
     }
     throw InputError::Cell(name, header_line, missing.front(), expected + ")", Join(present));
   }
@@ -163,8 +163,8 @@ CsvTable CsvTable::Parse(std::istream& in, const std::string& name, const Column
                            " (not part of this file's format)");
   }
   if (table.rows_.empty()) {
-    throw InputError::File(name, header_line, "no rows",
-                           "at least one data row after the header", "header only");
+    throw InputError::File(name, header_line, "no rows", "at least one data row after the header",
+                           "header only");
   }
   return table;
 }
@@ -227,8 +227,8 @@ CsvWriter::~CsvWriter() {
 
 void CsvWriter::Row(const std::vector<std::string>& fields) {
   if (fields.size() != num_columns_) {
-    throw std::logic_error("CsvWriter::Row: " + std::to_string(fields.size()) +
-                           " fields for " + std::to_string(num_columns_) + " columns in " + path_);
+    throw std::logic_error("CsvWriter::Row: " + std::to_string(fields.size()) + " fields for " +
+                           std::to_string(num_columns_) + " columns in " + path_);
   }
   std::string line;
   for (size_t i = 0; i < fields.size(); ++i) {

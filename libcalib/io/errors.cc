@@ -45,8 +45,8 @@ InputError InputError::Cell(const std::string& file, int line, const std::string
   return Make(std::move(e));
 }
 
-InputError InputError::Key(const std::string& file, const std::string& key, int line,
-                           int position, const std::string& expected, const std::string& got) {
+InputError InputError::Key(const std::string& file, const std::string& key, int line, int position,
+                           const std::string& expected, const std::string& got) {
   InputError e("");
   e.file = file;
   e.key = key;

@@ -266,9 +266,9 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
   }
 
   InstrumentModel model;
-  model.kinematics = root.Require("kinematics")
-                         .AsEnum<Kinematics>({{"dh", Kinematics::kDh},
-                                              {"spherical", Kinematics::kSpherical}});
+  model.kinematics =
+      root.Require("kinematics")
+          .AsEnum<Kinematics>({{"dh", Kinematics::kDh}, {"spherical", Kinematics::kSpherical}});
   const YamlNode unit = root.Require("edm_cyclic_unit_length");
   model.edm_cyclic_unit_length = unit.AsDouble();
   if (!(model.edm_cyclic_unit_length > 0)) unit.Fail("a unit length > 0 [m]");
@@ -316,8 +316,8 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
       ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicNames, s.intrinsics.back().data(),
                     camera::kNumIntrinsics, true);
       s.distortion.emplace_back();
-      ReadNamedInto(item.Require("distortion_sigma"), kDistortionNames,
-                    s.distortion.back().data(), camera::kNumDistortion, true);
+      ReadNamedInto(item.Require("distortion_sigma"), kDistortionNames, s.distortion.back().data(),
+                    camera::kNumDistortion, true);
     }
     model.cams.push_back(cam);
   }

@@ -27,8 +27,7 @@ int ReadZoom(const CsvTable& t, int row) {
                             "a zoom level (integer >= 0)");
 }
 
-Eigen::Vector3d ReadPoint(const CsvTable& t, int row, const char* x, const char* y,
-                          const char* z) {
+Eigen::Vector3d ReadPoint(const CsvTable& t, int row, const char* x, const char* y, const char* z) {
   return {t.Number(row, x), t.Number(row, y), t.Number(row, z)};
 }
 
@@ -94,9 +93,9 @@ void WriteRecords(const std::string& path, const std::vector<Record>& records) {
 }
 
 PixelsFile ReadPixels(const std::string& path) {
-  const CsvTable t = CsvTable::Read(path, {{"face", "zoom", "phi", "theta", "shot", "target",
-                                            "corner", "X", "Y", "Z", "u", "v"},
-                                           {}});
+  const CsvTable t = CsvTable::Read(
+      path,
+      {{"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"}, {}});
   PixelsFile out;
   out.notes = t.notes();
   out.pixels.reserve(t.NumRows());
@@ -120,8 +119,8 @@ PixelsFile ReadPixels(const std::string& path) {
 }
 
 void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels) {
-  CsvWriter w(path, {"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z",
-                     "u", "v"});
+  CsvWriter w(
+      path, {"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"});
   for (const PixelObservation& p : pixels) {
     w.Row({std::to_string(p.face), std::to_string(p.zoom), FormatDouble(p.phi),
            FormatDouble(p.theta), p.shot, std::to_string(p.target), std::to_string(p.corner),

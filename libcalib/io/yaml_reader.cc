@@ -160,9 +160,8 @@ std::optional<YamlNode> YamlNode::Find(const std::string& key) const {
     const std::string child_path = ChildPath(key);
     state_->used.insert(child_path);
     // An empty value (`key:`) has no useful mark of its own; point at the key.
-    const YAML::Mark mark = it->second.IsNull() || it->second.Mark().is_null()
-                                ? it->first.Mark()
-                                : it->second.Mark();
+    const YAML::Mark mark =
+        it->second.IsNull() || it->second.Mark().is_null() ? it->first.Mark() : it->second.Mark();
     return YamlNode(state_, it->second, child_path, mark);
   }
   return std::nullopt;
@@ -335,8 +334,7 @@ YamlDocument YamlDocument::Parse(const std::string& text, const std::string& nam
   try {
     state->root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError::File(name, Line(e.mark), "YAML syntax", "valid YAML", e.msg,
-                           Column(e.mark));
+    throw InputError::File(name, Line(e.mark), "YAML syntax", "valid YAML", e.msg, Column(e.mark));
   }
   YamlDocument doc(state);
   doc.Root().RequireMap();

@@ -76,13 +76,13 @@ class YamlNode {
   std::vector<YamlNode> Items() const;
 
   // --- scalars ------------------------------------------------------------
-  double AsDouble() const;            // finite
-  double AsDoubleOrNan() const;       // finite, or .nan/.inf (uncertainties)
+  double AsDouble() const;       // finite
+  double AsDoubleOrNan() const;  // finite, or .nan/.inf (uncertainties)
   int AsInt() const;
   std::uint64_t AsUint64() const;
-  bool AsBool() const;                // true/false (and YAML 1.1 yes/no/on/off)
+  bool AsBool() const;  // true/false (and YAML 1.1 yes/no/on/off)
   std::string AsString() const;
-  std::vector<double> AsDoubles() const;          // a list of finite numbers
+  std::vector<double> AsDoubles() const;             // a list of finite numbers
   std::vector<double> AsDoubles(size_t size) const;  // ... of exactly `size`
   std::vector<int> AsInts() const;
   template <typename E>

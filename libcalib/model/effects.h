@@ -11,15 +11,12 @@
 //   collimation      [c]                     rad
 //   tilting_axis     [i]                     rad
 //   vertical_index   [v0]                    rad
-//   hz_eccentricity  [e cos(phi_e), e sin(phi_e)]      rad; e sin(phi - phi_e) = p0 sin(phi) - p1 cos(phi)
-//   v_eccentricity   [e cos(theta_e), e sin(theta_e)]  rad; same form in theta
-//   hz_scale         [s]                     ratio
-//   v_scale          [s]                     ratio
-//   axis_wobble      [w cos(phi_w), w sin(phi_w)]      rad
-//   edm_offset       [k0]                    m
-//   edm_scale        [m]                     ratio
-//   edm_cyclic       [A cos(psi), A sin(psi)]           m; A sin(2 pi d/U + psi) = p0 sin(.) + p1 cos(.)
-//   distortion groups: indices into OpenCV's 14 coefficients, per zoom.
+//   hz_eccentricity  [e cos(phi_e), e sin(phi_e)]      rad; e sin(phi - phi_e) = p0 sin(phi) - p1
+//   cos(phi) v_eccentricity   [e cos(theta_e), e sin(theta_e)]  rad; same form in theta hz_scale
+//   [s]                     ratio v_scale          [s]                     ratio axis_wobble [w
+//   cos(phi_w), w sin(phi_w)]      rad edm_offset       [k0]                    m edm_scale [m]
+//   ratio edm_cyclic       [A cos(psi), A sin(psi)]           m; A sin(2 pi d/U + psi) = p0 sin(.)
+//   + p1 cos(.) distortion groups: indices into OpenCV's 14 coefficients, per zoom.
 #pragma once
 
 #include <array>
@@ -61,7 +58,7 @@ struct EffectInfo {
   Effect effect;
   const char* name;
   EffectKind kind;
-  int num_params;                       // kinematic effects: size of its block
+  int num_params;  // kinematic effects: size of its block
   std::array<const char*, 2> param_names;
   std::array<const char*, 2> report_units;  // after polar conversion (see below)
   const char* definition;

@@ -56,9 +56,9 @@ struct CameraTool {
 // Standard deviations for every parameter, filled by the fit (tangent-space
 // rotation sigmas in radians about the block's local axes).
 struct PoseSigma {
-  std::array<double, 3> rotation{};     // rad, about local x, y, z
-  std::array<double, 3> euler{};        // rad, of [a, b, g]
-  std::array<double, 3> t{};            // m
+  std::array<double, 3> rotation{};  // rad, about local x, y, z
+  std::array<double, 3> euler{};     // rad, of [a, b, g]
+  std::array<double, 3> t{};         // m
 };
 struct ModelSigmas {
   bool valid = false;

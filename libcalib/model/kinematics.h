@@ -5,7 +5,8 @@
 //   theta* = theta + v0 + e_v sin(theta - theta_e) + s_v theta
 //   d*     = d + k0 + m d + A sin(2 pi d / U + psi)
 // Chain (SPEC 4; wobble rotates about the base origin in reference axes):
-//   dh:        ref_from_flange = T(t_B) W(phi) R_B * Z1(phi*) X1 * Z2(theta*) X2        (Klug Eq. 2-9)
+//   dh:        ref_from_flange = T(t_B) W(phi) R_B * Z1(phi*) X1 * Z2(theta*) X2        (Klug Eq.
+//   2-9)
 //              Z_i = Tz(d_i) Rz(q_i + gamma_i), X_i = Tx(a_i) Rx(alpha_i)              (Eq. 3, 4)
 //   spherical: ref_from_flange = T(t_B) W(phi) R_B * Rz(-phi*) Ry(i) Rx(-theta*) Ry(c)  (Eq. 84-91)
 //   W(phi) = Rx(w cos(phi - phi_w)) Ry(w sin(phi - phi_w))

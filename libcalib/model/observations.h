@@ -13,14 +13,14 @@ enum class Tool { kEdm, kCam };
 
 struct Record {
   int face = 1;
-  int zoom = 0;          // ignored for EDM rows
+  int zoom = 0;  // ignored for EDM rows
   double phi = 0, theta = 0;
   Tool tool = Tool::kEdm;
-  double u = 0, v = 0;   // cam rows only
-  double d = 1;          // EDM distance or camera ray length [m]
+  double u = 0, v = 0;                          // cam rows only
+  double d = 1;                                 // EDM distance or camera ray length [m]
   Eigen::Vector3d x = Eigen::Vector3d::Zero();  // point in the reference frame [m]
-  std::string set;       // free label, may be empty
-  int line = 0;          // 1-based line in the source file (0 = not from a file)
+  std::string set;                              // free label, may be empty
+  int line = 0;  // 1-based line in the source file (0 = not from a file)
 };
 
 struct PixelObservation {
@@ -29,8 +29,8 @@ struct PixelObservation {
   double phi = 0, theta = 0;
   std::string shot;
   int target = 0, corner = 0;
-  Eigen::Vector3d X = Eigen::Vector3d::Zero();  // known point, reference frame [m]
-  Eigen::Vector2d uv = Eigen::Vector2d::Zero(); // observed pixel
+  Eigen::Vector3d X = Eigen::Vector3d::Zero();   // known point, reference frame [m]
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // observed pixel
   int line = 0;
 };
 

@@ -25,8 +25,8 @@ struct TagBoard {
   int first_id = 0;
   int rows = 3;
   int cols = 4;
-  double tag_size = 0.08;   // edge of the black square [m]
-  double spacing = 0.02;    // white gap between neighbouring tags [m]
+  double tag_size = 0.08;  // edge of the black square [m]
+  double spacing = 0.02;   // white gap between neighbouring tags [m]
   Rigid3 ref_from_board;
 
   int NumTags() const { return rows * cols; }
@@ -58,7 +58,8 @@ struct TargetScene {
     for (const TagBoard& b : boards) {
       for (int i = 0; i < b.NumTags(); ++i) {
         const auto corners = b.CornersInBoard(i);
-        for (int k = 0; k < 4; ++k) out.push_back({b.first_id + i, k, b.ref_from_board * corners[k]});
+        for (int k = 0; k < 4; ++k)
+          out.push_back({b.first_id + i, k, b.ref_from_board * corners[k]});
       }
     }
     return out;

@@ -26,8 +26,8 @@ std::vector<Pose> PlanPoses(const AcquisitionPlan& plan) {
   }
   for (int i = 0; i < plan.grid_phi_steps; ++i) {
     for (int j = 0; j < plan.grid_theta_steps; ++j) {
-      poses.push_back({2.0 * M_PI * i / plan.grid_phi_steps,
-                       M_PI * (j + 0.5) / plan.grid_theta_steps, "grid"});
+      poses.push_back(
+          {2.0 * M_PI * i / plan.grid_phi_steps, M_PI * (j + 0.5) / plan.grid_theta_steps, "grid"});
     }
   }
   return poses;
@@ -52,7 +52,8 @@ std::string NoiseOptions::Check() const {
 }
 
 std::string AcquisitionPlan::Check() const {
-  if (sweeps && sweep_points < 4) return "plan.sweep_points must be >= 4 (got " + std::to_string(sweep_points) + ")";
+  if (sweeps && sweep_points < 4)
+    return "plan.sweep_points must be >= 4 (got " + std::to_string(sweep_points) + ")";
   if (edm_distances.empty()) return "plan.edm_distances must not be empty";
   for (double d : edm_distances) {
     if (!(d > 0)) return "plan.edm_distances must be > 0";
@@ -60,7 +61,8 @@ std::string AcquisitionPlan::Check() const {
   if (!(cam_ray_length > 0)) return "plan.cam_ray_length must be > 0";
   if (grid_phi_steps < 0 || grid_theta_steps < 0) return "plan.grid steps must be >= 0";
   for (int f : faces) {
-    if (f != 1 && f != 2) return "plan.faces entries must be 1 or 2 (got " + std::to_string(f) + ")";
+    if (f != 1 && f != 2)
+      return "plan.faces entries must be 1 or 2 (got " + std::to_string(f) + ")";
   }
   if (faces.empty()) return "plan.faces must not be empty";
   for (int z : zooms) {
@@ -101,9 +103,9 @@ InstrumentModel PaperTruth(int num_zooms) {
     // (near gimbal lock, where only g - a matters) would turn the optical axis
     // 2.2 deg off the EDM ray, which no coaxial RTS camera is; Table 2's value
     // keeps it within 1e-3 rad, as Klug's Table 4 (camera, method A) shows.
-    cam.flange_from_cam = PoseBlock::FromRigid(Rigid3::FromEuler(
-        {-1.5020 + 1.5e-4 * z, 1.5646 - 0.8e-4 * z, 3.2103 + 1.2e-4 * z},
-        {-0.1451e-3 + 2e-5 * z, -2.152e-9 + 1e-5 * z, 0.1505e-3 - 1.5e-5 * z}));
+    cam.flange_from_cam = PoseBlock::FromRigid(
+        Rigid3::FromEuler({-1.5020 + 1.5e-4 * z, 1.5646 - 0.8e-4 * z, 3.2103 + 1.2e-4 * z},
+                          {-0.1451e-3 + 2e-5 * z, -2.152e-9 + 1e-5 * z, 0.1505e-3 - 1.5e-5 * z}));
     cam.width = 1280;
     cam.height = 960;
     const double f = 1500.0 * std::pow(2.0, z);
@@ -342,7 +344,8 @@ TargetScene ZoomScene(const InstrumentModel& truth, int rows, int cols, double d
     const double half_view = distance * 0.5 * cam.width / cam.intrinsics[0];
     const double tag = half_view / (cols * 1.25);
     const double phi = 0.3 + 0.8 * z;
-    scene.boards.push_back(FacingBoard(station, 1000 * z, rows, cols, tag, distance, phi, -0.2, 0.5));
+    scene.boards.push_back(
+        FacingBoard(station, 1000 * z, rows, cols, tag, distance, phi, -0.2, 0.5));
     scene.boards.push_back(FacingBoard(station, 1000 * z + 500, rows, cols, 1.3 * tag,
                                        1.3 * distance, phi - 0.8, 0.3, -0.6));
   }
@@ -386,8 +389,8 @@ InstrumentModel PerturbedStart(const InstrumentModel& truth, std::uint64_t seed,
   InstrumentModel m = truth;
   auto move_pose = [&](PoseBlock* p) {
     Rigid3 r = p->ToRigid();
-    r.rotation = r.rotation *
-                 RotationFromEuler<double>({scale * n(rng), scale * n(rng), scale * n(rng)});
+    r.rotation =
+        r.rotation * RotationFromEuler<double>({scale * n(rng), scale * n(rng), scale * n(rng)});
     r.translation += scale * Eigen::Vector3d(n(rng), n(rng), n(rng));
     *p = PoseBlock::FromRigid(r);
   };

@@ -37,8 +37,8 @@ struct AcquisitionPlan {
   std::vector<double> edm_distances{1.0, 2.0};
   double cam_ray_length = 1.0;
   double pixel_offset = 1.0;
-  bool sweeps = true;          // the paper's two joint sweeps ("sweep1", "sweep2")
-  int grid_phi_steps = 0;      // 0 = no grid
+  bool sweeps = true;      // the paper's two joint sweeps ("sweep1", "sweep2")
+  int grid_phi_steps = 0;  // 0 = no grid
   int grid_theta_steps = 0;
   // Grid rows also use these distances and image points (fractions of the
   // image size, e.g. 0.1 .. 0.9), so that held-out points differ in angle,
@@ -68,7 +68,7 @@ struct SimulationOptions {
   InstrumentModel truth;
   NoiseOptions noise;
   AcquisitionPlan plan;
-  TargetScene targets;   // empty = no pixel observations
+  TargetScene targets;  // empty = no pixel observations
   ShotPlan shots;
   std::string Check() const;
 };

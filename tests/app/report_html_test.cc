@@ -24,7 +24,8 @@ namespace fs = std::filesystem;
 class ReportRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new fs::path(fs::temp_directory_path() / ("rtscalib_report_test_" + std::to_string(::getpid())));
+    dir_ = new fs::path(fs::temp_directory_path() /
+                        ("rtscalib_report_test_" + std::to_string(::getpid())));
     fs::remove_all(*dir_);
     fs::create_directories(*dir_);
     std::ofstream(*dir_ / "run.yaml") << R"(
@@ -78,7 +79,8 @@ TEST_F(ReportRun, ReportJsonHasTheSpecDiagnosis) {
   // Every catalogue effect not in the model is listed (SPEC 6).
   EXPECT_EQ(d["ranking"].size(), EffectCatalogue().size());
   const nlohmann::json& top = d["ranking"][0];
-  for (const char* key : {"effect", "rms_before", "rms_after", "delta_bic", "significant", "identifiable", "config_line"}) {
+  for (const char* key : {"effect", "rms_before", "rms_after", "delta_bic", "significant",
+                          "identifiable", "config_line"}) {
     EXPECT_TRUE(top.contains(key)) << key;
   }
   EXPECT_EQ(top["effect"], "hz_eccentricity");
@@ -110,13 +112,16 @@ TEST_F(ReportRun, HtmlIsSelfContainedAndReadsTopDown) {
 }
 
 bool HaveChromium() {
-  return std::system("command -v chromium > /dev/null 2>&1 || command -v chromium-browser > /dev/null 2>&1") == 0;
+  return std::system(
+             "command -v chromium > /dev/null 2>&1 || command -v chromium-browser > /dev/null "
+             "2>&1") == 0;
 }
 
 TEST_F(ReportRun, LoadsInHeadlessChromiumWithoutErrors) {
   if (!HaveChromium()) {
-    GTEST_SKIP() << "chromium is not installed (scripts/install-deps.sh installs it): report.html was not "
-                    "checked in a browser";
+    GTEST_SKIP()
+        << "chromium is not installed (scripts/install-deps.sh installs it): report.html was not "
+           "checked in a browser";
   }
   const fs::path png = *dir_ / "report.png";
   const std::string cmd = std::string(RTSCALIB_SOURCE_DIR) + "/scripts/render-report.sh '" +

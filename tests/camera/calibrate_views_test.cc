@@ -49,7 +49,8 @@ TagBoard FacingBoard(const Eigen::Vector3d& centre, const Eigen::Vector3d& viewe
   b.ref_from_board.rotation = r * Rx(tilt_x) * Ry(tilt_y);
   const double w = b.cols * b.tag_size + (b.cols - 1) * b.spacing;
   const double h = b.rows * b.tag_size + (b.rows - 1) * b.spacing;
-  b.ref_from_board.translation = centre - b.ref_from_board.rotation * Eigen::Vector3d(w / 2, h / 2, 0);
+  b.ref_from_board.translation =
+      centre - b.ref_from_board.rotation * Eigen::Vector3d(w / 2, h / 2, 0);
   return b;
 }
 
@@ -99,7 +100,8 @@ std::vector<PixelObservation> Observe(const TargetScene& scene, Truth* truth, in
     }
   }
   for (size_t b = 0; b + 1 < std::min<size_t>(3, scene.boards.size()); ++b) {
-    aims.push_back({0.5 * (scene.boards[b].CentreInRef() + scene.boards[b + 1].CentreInRef()), 0.0});
+    aims.push_back(
+        {0.5 * (scene.boards[b].CentreInRef() + scene.boards[b + 1].CentreInRef()), 0.0});
   }
   std::vector<PixelObservation> out;
   for (size_t s = 0; s < aims.size(); ++s) {
@@ -119,7 +121,8 @@ std::vector<PixelObservation> Observe(const TargetScene& scene, Truth* truth, in
           const Eigen::Vector3d Xc = cam_from_ref * X;
           if (Xc.z() < 0.1 || Xc.head<2>().norm() / Xc.z() > 1.0) continue;
           double uv[2];
-          if (!ProjectToPixel(truth->intrinsics.data(), truth->distortion.data(), Xc.data(), uv)) continue;
+          if (!ProjectToPixel(truth->intrinsics.data(), truth->distortion.data(), Xc.data(), uv))
+            continue;
           if (uv[0] < 0 || uv[0] > kWidth - 1 || uv[1] < 0 || uv[1] > kHeight - 1) continue;
           PixelObservation p;
           p.shot = id;
@@ -165,10 +168,11 @@ double MaxMapDifference(const ViewsCalibration& cal, const Truth& truth) {
 }
 
 void PrintFigures(const char* name, const ViewsCalibration& cal) {
-  std::printf("[ figures  ] %s: %zu shots, %d points, OpenCV start %.3g px, refined %.3g px in %d "
-              "iterations (%s)\n",
-              name, cal.shots.size(), cal.num_points, cal.opencv_rms_px, cal.rms_px, cal.iterations,
-              cal.init_note.c_str());
+  std::printf(
+      "[ figures  ] %s: %zu shots, %d points, OpenCV start %.3g px, refined %.3g px in %d "
+      "iterations (%s)\n",
+      name, cal.shots.size(), cal.num_points, cal.opencv_rms_px, cal.rms_px, cal.iterations,
+      cal.init_note.c_str());
 }
 
 TEST(CalibrateViews, RecoversRadialAndTangentialDistortionFromExactPixels) {
@@ -264,8 +268,8 @@ TEST(CalibrateViews, RecoversEachDistortionGroup) {
 
 TEST(CalibrateViews, RecoversEveryGroupAtOnce) {
   Truth truth;
-  truth.distortion = {-0.1, 0.03, 1e-3, -6e-4, -0.005, 0.05, -0.01, 0.002,
-                      1e-3, -5e-4, -8e-4, 3e-4, 0.01, -0.015};
+  truth.distortion = {-0.1,  0.03, 1e-3,  -6e-4, -0.005, 0.05, -0.01,
+                      0.002, 1e-3, -5e-4, -8e-4, 3e-4,   0.01, -0.015};
   const auto pixels = Observe(FiveBoardScene(), &truth, 5, 0.0, 4);
   CalibrateViewsOptions options;
   options.distortion = {true, true, true, true, true};
@@ -296,7 +300,8 @@ TEST(CalibrateViews, RecoversFromASingleBoard) {
   const ViewsCalibration cal = CalibrateViews(pixels, kWidth, kHeight);
   PrintFigures("single board", cal);
   EXPECT_LT(cal.rms_px, kExactRmsPx);
-  for (int i = 0; i < kNumIntrinsics; ++i) EXPECT_NEAR(cal.intrinsics[i], truth.intrinsics[i], 1e-5);
+  for (int i = 0; i < kNumIntrinsics; ++i)
+    EXPECT_NEAR(cal.intrinsics[i], truth.intrinsics[i], 1e-5);
   EXPECT_NEAR(cal.distortion[kK1], truth.distortion[kK1], 1e-8);
 }
 
@@ -314,18 +319,21 @@ TEST(CalibrateViews, NoisyPixels) {
   PrintFigures("noise 0.3 px", cal);
   EXPECT_TRUE(cal.converged);
   EXPECT_NEAR(cal.rms_px, std::sqrt(2.0) * sigma, 0.05);
-  for (int i = 0; i < kNumIntrinsics; ++i) EXPECT_NEAR(cal.intrinsics[i], truth.intrinsics[i], 1.0) << i;
-  std::printf("[ figures  ] noise 0.3 px: fx fy cx cy errors %.3f %.3f %.3f %.3f px, k1 k2 errors "
-              "%.2g %.2g\n",
-              cal.intrinsics[0] - truth.intrinsics[0], cal.intrinsics[1] - truth.intrinsics[1],
-              cal.intrinsics[2] - truth.intrinsics[2], cal.intrinsics[3] - truth.intrinsics[3],
-              cal.distortion[kK1] - truth.distortion[kK1], cal.distortion[kK2] - truth.distortion[kK2]);
+  for (int i = 0; i < kNumIntrinsics; ++i)
+    EXPECT_NEAR(cal.intrinsics[i], truth.intrinsics[i], 1.0) << i;
+  std::printf(
+      "[ figures  ] noise 0.3 px: fx fy cx cy errors %.3f %.3f %.3f %.3f px, k1 k2 errors "
+      "%.2g %.2g\n",
+      cal.intrinsics[0] - truth.intrinsics[0], cal.intrinsics[1] - truth.intrinsics[1],
+      cal.intrinsics[2] - truth.intrinsics[2], cal.intrinsics[3] - truth.intrinsics[3],
+      cal.distortion[kK1] - truth.distortion[kK1], cal.distortion[kK2] - truth.distortion[kK2]);
 }
 
 // ---------------------------------------------------------------------------
 // Input errors.
 
-std::string ErrorOf(const std::vector<PixelObservation>& pixels, const CalibrateViewsOptions& o = {}) {
+std::string ErrorOf(const std::vector<PixelObservation>& pixels,
+                    const CalibrateViewsOptions& o = {}) {
   try {
     CalibrateViews(pixels, kWidth, kHeight, o);
   } catch (const std::exception& e) {

@@ -33,11 +33,11 @@ constexpr int kHeight = 960;
 
 // Distortion groups as bit flags (SPEC 4 effect names).
 enum Group {
-  kRadial = 1,       // k1 k2 k3
-  kTangential = 2,   // p1 p2
-  kRational = 4,     // k4 k5 k6
-  kThinPrism = 8,    // s1..s4
-  kTilt = 16,        // taux tauy
+  kRadial = 1,      // k1 k2 k3
+  kTangential = 2,  // p1 p2
+  kRational = 4,    // k4 k5 k6
+  kThinPrism = 8,   // s1..s4
+  kTilt = 16,       // taux tauy
   kAllGroups = 31,
 };
 
@@ -61,7 +61,9 @@ struct TestCamera {
 // the image and the test points (r <= 0.96) inside the trusted region; the
 // tests assert that premise with MaxTrustedRadius.
 TestCamera RandomCamera(int mask, std::mt19937* rng) {
-  auto u = [rng](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(*rng); };
+  auto u = [rng](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(*rng);
+  };
   TestCamera c;
   const double f = u(900, 1200);
   c.intrinsics = {f, f * u(0.99, 1.01), u(620, 660), u(460, 500)};
@@ -126,7 +128,8 @@ std::vector<cv::Point3d> TestPoints(std::mt19937* rng) {
 std::vector<cv::Point2d> TestPixels(std::mt19937* rng) {
   std::vector<cv::Point2d> px;
   for (int i = 0; i <= 16; ++i) {
-    for (int j = 0; j <= 12; ++j) px.emplace_back((kWidth - 1) * i / 16.0, (kHeight - 1) * j / 12.0);
+    for (int j = 0; j <= 12; ++j)
+      px.emplace_back((kWidth - 1) * i / 16.0, (kHeight - 1) * j / 12.0);
   }
   std::uniform_real_distribution<double> uu(0, kWidth - 1), uv(0, kHeight - 1);
   for (int i = 0; i < 100; ++i) px.emplace_back(uu(*rng), uv(*rng));
@@ -199,8 +202,9 @@ TEST(UndistortPixel, MatchesCvUndistortPointsForEveryDistortionGroupCombination)
       }
     }
   }
-  std::printf("[ figures  ] UndistortPixel vs cv::undistortPoints: max |d xy| = %.3g (normalised)\n",
-              worst);
+  std::printf(
+      "[ figures  ] UndistortPixel vs cv::undistortPoints: max |d xy| = %.3g (normalised)\n",
+      worst);
   std::printf("[ figures  ] project(unproject(p)) - p: max %.3g px\n", worst_round_trip);
 }
 
@@ -252,7 +256,8 @@ TEST(MaxTrustedRadius, ClosedForms) {
   std::array<double, kNumDistortion> d{};
   d[kK1] = -0.3;
   EXPECT_NEAR(MaxTrustedRadius(d.data()), 1.0 / std::sqrt(0.9), 1e-14);
-  EXPECT_NEAR(MaxTrustedDistortedRadius(d.data()), RadialMap(d.data(), 1.0 / std::sqrt(0.9)), 1e-14);
+  EXPECT_NEAR(MaxTrustedDistortedRadius(d.data()), RadialMap(d.data(), 1.0 / std::sqrt(0.9)),
+              1e-14);
   d[kK1] = 0.2;  // pincushion: monotone everywhere
   EXPECT_EQ(MaxTrustedRadius(d.data()), std::numeric_limits<double>::infinity());
   d = {};
@@ -279,7 +284,8 @@ TEST(MaxTrustedRadius, IsTheFirstTurnOrPoleOfTheRadialMap) {
     for (int i = 1; i <= 1000; ++i) {
       const double r = r_scan * i / 1000.0 * (1 - 1e-6);
       ASSERT_GT(RadialDenominator(d.data(), r), 0.0) << trial;
-      ASSERT_GT(RadialMap(d.data(), r + h) - RadialMap(d.data(), r - h), 0.0) << trial << " r=" << r;
+      ASSERT_GT(RadialMap(d.data(), r + h) - RadialMap(d.data(), r - h), 0.0)
+          << trial << " r=" << r;
     }
     if (std::isfinite(r_max)) {
       ++finite;
@@ -342,9 +348,9 @@ TEST(UndistortPixel, AgreesWithOpenCvNearTheEdgeOfTheTrustedRegion) {
     }
   }
   std::vector<cv::Point2d> expected;
-  cv::undistortPoints(px, expected, CvCameraMatrix(cam), CvDistortion(cam), cv::noArray(),
-                      cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100000, 1e-14));
+  cv::undistortPoints(
+      px, expected, CvCameraMatrix(cam), CvDistortion(cam), cv::noArray(), cv::noArray(),
+      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100000, 1e-14));
   double worst = 0;
   for (size_t i = 0; i < px.size(); ++i) {
     const double uv[2] = {px[i].x, px[i].y};
@@ -355,11 +361,11 @@ TEST(UndistortPixel, AgreesWithOpenCvNearTheEdgeOfTheTrustedRegion) {
     EXPECT_NEAR(y, expected[i].y, 1e-10) << px[i];
     worst = std::max(worst, std::hypot(x - expected[i].x, y - expected[i].y));
   }
-  std::printf("[ figures  ] k1=-0.35 k2=0.02: r_max = %.6f, rho_max = %.6f; up to 0.999 rho_max "
-              "|ours - OpenCV| <= %.3g (normalised)\n",
-              r_max, rho_max, worst);
+  std::printf(
+      "[ figures  ] k1=-0.35 k2=0.02: r_max = %.6f, rho_max = %.6f; up to 0.999 rho_max "
+      "|ours - OpenCV| <= %.3g (normalised)\n",
+      r_max, rho_max, worst);
 }
-
 
 // ---------------------------------------------------------------------------
 // Derivatives: ceres::Jet autodiff against central differences.
@@ -529,7 +535,8 @@ void ExpectGradientsAgree(const ceres::CostFunction& cost, const double* const* 
 
 TEST(CostFunctors, PassGradientChecker) {
   std::mt19937 rng(48);
-  for (int mask : {0, int(kRadial), kRadial | kTangential, kRational | kThinPrism, int(kAllGroups)}) {
+  for (int mask :
+       {0, int(kRadial), kRadial | kTangential, kRational | kThinPrism, int(kAllGroups)}) {
     const TestCamera cam = RandomCamera(mask, &rng);
     std::array<double, 4> intr = cam.intrinsics;
     std::array<double, 14> dist = cam.dist;

@@ -45,9 +45,11 @@ TEST(Coverage, AGridInBothFacesLacksNothingForTheAngles) {
   const InstrumentModel truth = PaperTruth(1);
   obs.records = PlanRecords(plan, truth);
   const Coverage c = MeasureCoverage(obs, truth, FitOptions{});
-  for (Effect e : {Effect::kCollimation, Effect::kTiltingAxis, Effect::kVerticalIndex, Effect::kHzEccentricity,
-                   Effect::kVEccentricity, Effect::kAxisWobble, Effect::kEdmScale, Effect::kEdmCyclic}) {
-    EXPECT_TRUE(WhatWouldHelp(e, c, truth).empty()) << Info(e).name << ": " << WhatWouldHelp(e, c, truth)[0];
+  for (Effect e :
+       {Effect::kCollimation, Effect::kTiltingAxis, Effect::kVerticalIndex, Effect::kHzEccentricity,
+        Effect::kVEccentricity, Effect::kAxisWobble, Effect::kEdmScale, Effect::kEdmCyclic}) {
+    EXPECT_TRUE(WhatWouldHelp(e, c, truth).empty())
+        << Info(e).name << ": " << WhatWouldHelp(e, c, truth)[0];
   }
 }
 

@@ -39,7 +39,8 @@ inline AcquisitionPlan SmallPlan() {
 
 inline InstrumentModel SphericalTruth() {
   InstrumentModel m = IdealModel(Kinematics::kSpherical, 1, PaperTruth(1).cams[0]);
-  m.cams[0].flange_from_cam = PoseBlock::FromRigid(Rigid3::FromEuler({2e-3, -1e-3, 4e-3}, {1e-4, -2e-4, 3e-4}));
+  m.cams[0].flange_from_cam =
+      PoseBlock::FromRigid(Rigid3::FromEuler({2e-3, -1e-3, 4e-3}, {1e-4, -2e-4, 3e-4}));
   m.edm.t = {2e-4, -1e-4, 0.0};
   m.base = PoseBlock::FromRigid(Rigid3::FromEuler({1e-4, -2e-4, 0.3}, {1.0, 2.0, 0.5}));
   return m;

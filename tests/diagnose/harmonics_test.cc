@@ -15,8 +15,8 @@ using testing::SmallPlan;
 
 // Records of `truth` whose horizontal encoder reads phi while the instrument
 // points at phi + A sin(2 phi - p): an error outside the catalogue.
-SimulatedData TwicePerTurnEncoder(const InstrumentModel& truth, double amplitude_rad, double phase_rad,
-                                  std::uint64_t seed) {
+SimulatedData TwicePerTurnEncoder(const InstrumentModel& truth, double amplitude_rad,
+                                  double phase_rad, std::uint64_t seed) {
   SimulationOptions o;
   o.seed = seed;
   o.truth = truth;
@@ -26,7 +26,8 @@ SimulatedData TwicePerTurnEncoder(const InstrumentModel& truth, double amplitude
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   for (Record& r : data.obs.records) {
-    const double phi = r.phi + amplitude_rad * std::sin(2 * r.phi - phase_rad) + noise.angle_rad * n(rng);
+    const double phi =
+        r.phi + amplitude_rad * std::sin(2 * r.phi - phase_rad) + noise.angle_rad * n(rng);
     const double theta = r.theta + noise.angle_rad * n(rng);
     r.x = r.tool == Tool::kEdm ? PredictEdm(truth, phi, theta, r.d + noise.distance_m * n(rng))
                                : PredictCam(truth, r.zoom, phi, theta, r.u, r.v, r.d);
@@ -44,7 +45,8 @@ TEST(Harmonics, TwicePerTurnEncoderErrorIsUnexplainedAndNotMislabelled) {
   for (const Harmonic& h : d.harmonics.unexplained) found += "  " + h.description + "\n";
   int phi2 = 0;
   for (const Harmonic& h : d.harmonics.unexplained) {
-    if (h.probe.reading == Reading::kPhi && h.probe.variable == Reading::kPhi && h.probe.harmonic == 2) {
+    if (h.probe.reading == Reading::kPhi && h.probe.variable == Reading::kPhi &&
+        h.probe.harmonic == 2) {
       ++phi2;
       EXPECT_TRUE(h.significant);
       // Within 20% and 20 deg: the fit's own parameters cannot absorb a
@@ -77,7 +79,8 @@ TEST(Harmonics, HalfPeriodCyclicErrorIsUnexplained) {
   for (Record& r : data.obs.records) {
     const double phi = r.phi + noise.angle_rad * n(rng), theta = r.theta + noise.angle_rad * n(rng);
     if (r.tool == Tool::kEdm) {
-      const double err = amplitude * std::sin(2 * 2 * M_PI * r.d / truth.edm_cyclic_unit_length - phase);
+      const double err =
+          amplitude * std::sin(2 * 2 * M_PI * r.d / truth.edm_cyclic_unit_length - phase);
       r.x = PredictEdm(truth, phi, theta, r.d + err + noise.distance_m * n(rng));
     } else {
       r.x = PredictCam(truth, r.zoom, phi, theta, r.u, r.v, r.d);
@@ -108,7 +111,8 @@ TEST(Harmonics, EccentricityIsExplainedByTheCatalogue) {
   o.seed = 31;
   o.truth = PaperTruth(1);
   o.truth.effects.Add(Effect::kHzEccentricity);
-  o.truth.EffectValue(Effect::kHzEccentricity) = FromReportUnits(Effect::kHzEccentricity, {5.0, 60.0});
+  o.truth.EffectValue(Effect::kHzEccentricity) =
+      FromReportUnits(Effect::kHzEccentricity, {5.0, 60.0});
   o.plan = SmallPlan();
   o.noise = PaperNoise();
   const Fitted f = FitBaseline(Simulate(o), o.truth, 32);
@@ -142,7 +146,8 @@ TEST(Control, NoHiddenEffectFlagsNothingIn19Of20Seeds) {
     const bool any = d.Next() != nullptr || !d.harmonics.unexplained.empty();
     if (any) {
       ++flagged;
-      what += "seed " + std::to_string(seed) + ": " + (d.Next() ? d.Next()->name : d.harmonics.unexplained[0].description) + "\n";
+      what += "seed " + std::to_string(seed) + ": " +
+              (d.Next() ? d.Next()->name : d.harmonics.unexplained[0].description) + "\n";
     }
   }
   EXPECT_LE(flagged, 1) << what;

@@ -43,13 +43,15 @@ TEST(Outliers, GrossErrorIsFlaggedWithItsLine) {
   EXPECT_EQ(d.outliers.worst.front().index, target);
   EXPECT_TRUE(d.outliers.worst.front().flagged);
   EXPECT_EQ(d.outliers.flagged, 1);
-  EXPECT_EQ(d.outliers.worst.front().where.rfind("records.csv:123", 0), 0u) << d.outliers.worst.front().where;
+  EXPECT_EQ(d.outliers.worst.front().where.rfind("records.csv:123", 0), 0u)
+      << d.outliers.worst.front().where;
 }
 
 TEST(Outliers, CleanDataFlagNothing) {
   const Fitted f = FitBaseline(Data(43), PaperTruth(1), 44);
   const Diagnosis d = testing::DiagnoseFitted(f);
-  EXPECT_EQ(d.outliers.flagged, 0) << d.outliers.worst.front().where << " w " << d.outliers.worst.front().w;
+  EXPECT_EQ(d.outliers.flagged, 0)
+      << d.outliers.worst.front().where << " w " << d.outliers.worst.front().w;
   EXPECT_GT(d.outliers.tested, 100);
 }
 

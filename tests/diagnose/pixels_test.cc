@@ -25,7 +25,8 @@ TargetScene Boards() {
     TagBoard b = board;
     b.first_id = i * board.NumTags();
     const double yaw = M_PI / 2 * i;
-    b.ref_from_board = Rigid3::FromEuler({M_PI / 2, 0.0, yaw}, {2.5 * std::sin(yaw), 2.5 * std::cos(yaw), 0.0});
+    b.ref_from_board =
+        Rigid3::FromEuler({M_PI / 2, 0.0, yaw}, {2.5 * std::sin(yaw), 2.5 * std::cos(yaw), 0.0});
     scene.boards.push_back(b);
   }
   return scene;

@@ -20,7 +20,7 @@ using testing::SphericalTruth;
 
 struct HiddenEffect {
   Effect effect;
-  std::array<double, 2> report_value;  // kinematic effects, report units
+  std::array<double, 2> report_value;              // kinematic effects, report units
   std::vector<std::pair<int, double>> distortion;  // (coefficient index, value)
   // Sensor tilt is, to first order, a camera rotation plus a principal point
   // shift: it is identifiable only when the intrinsics are known.
@@ -61,13 +61,15 @@ TEST_P(HiddenEffectTest, RanksFirstAndAddingItReachesTheNoiseFloor) {
   const RankedEffect& top = d.ranking.entries.front();
   std::string table;
   for (const RankedEffect& r : d.ranking.entries) {
-    table += "  " + r.name + " dBIC " + std::to_string(r.delta_bic) + " p " + std::to_string(r.p_value) +
-             (r.significant ? " significant" : "") + "\n";
+    table += "  " + r.name + " dBIC " + std::to_string(r.delta_bic) + " p " +
+             std::to_string(r.p_value) + (r.significant ? " significant" : "") + "\n";
   }
   // rational_distortion is radial_distortion's first-order alias (k4, k5, k6
   // columns are -k1, -k2, -k3 at zero distortion): either may rank first.
   if (h.effect == Effect::kRationalDistortion) {
-    EXPECT_TRUE(top.effect == Effect::kRationalDistortion || top.effect == Effect::kRadialDistortion) << table;
+    EXPECT_TRUE(top.effect == Effect::kRationalDistortion ||
+                top.effect == Effect::kRadialDistortion)
+        << table;
   } else {
     EXPECT_EQ(top.name, Info(h.effect).name) << table;
   }
@@ -81,32 +83,35 @@ TEST_P(HiddenEffectTest, RanksFirstAndAddingItReachesTheNoiseFloor) {
   FitOptions fo = f.options;
   Refine(f.data.obs, fo, &with);
   const double floor = RecordsRms(f.truth, f);
-  EXPECT_LE(RecordsRms(with, f), 1.1 * floor) << "noise floor " << floor << " m, baseline "
-                                              << RecordsRms(f.model, f) << " m";
+  EXPECT_LE(RecordsRms(with, f), 1.1 * floor)
+      << "noise floor " << floor << " m, baseline " << RecordsRms(f.model, f) << " m";
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Catalogue, HiddenEffectTest,
-    ::testing::Values(HiddenEffect{Effect::kCollimation, {8.0, 0}, {}},
-                      HiddenEffect{Effect::kTiltingAxis, {10.0, 0}, {}},
-                      HiddenEffect{Effect::kVerticalIndex, {8.0, 0}, {}},
-                      HiddenEffect{Effect::kHzEccentricity, {5.0, 40.0}, {}},
-                      HiddenEffect{Effect::kVEccentricity, {6.0, -30.0}, {}},
-                      HiddenEffect{Effect::kHzScale, {20.0, 0}, {}},
-                      HiddenEffect{Effect::kVScale, {30.0, 0}, {}},
-                      HiddenEffect{Effect::kAxisWobble, {5.0, 70.0}, {}},
-                      HiddenEffect{Effect::kEdmOffset, {0.8, 0}, {}},
-                      HiddenEffect{Effect::kEdmScale, {20.0, 0}, {}},
-                      HiddenEffect{Effect::kEdmCyclic, {0.3, 25.0}, {}},
-                      HiddenEffect{Effect::kRadialDistortion, {}, {{camera::kK1, 0.02}}},
-                      HiddenEffect{Effect::kTangentialDistortion, {}, {{camera::kP1, 4e-4}, {camera::kP2, -3e-4}}},
-                      HiddenEffect{Effect::kRationalDistortion, {}, {{camera::kK4, 0.03}}},
-                      // s1, s3 alone are tangential's p2, p1 up to a camera rotation; the
-                      // r^4 terms s2, s4 are thin prism's own.
-                      HiddenEffect{Effect::kThinPrism,
-                                   {},
-                                   {{camera::kS1, 5e-4}, {camera::kS2, 4e-3}, {camera::kS3, -4e-4}, {camera::kS4, -3e-3}}},
-                      HiddenEffect{Effect::kSensorTilt, {}, {{camera::kTauX, 1e-3}, {camera::kTauY, -1e-3}}, false}),
+    ::testing::Values(
+        HiddenEffect{Effect::kCollimation, {8.0, 0}, {}},
+        HiddenEffect{Effect::kTiltingAxis, {10.0, 0}, {}},
+        HiddenEffect{Effect::kVerticalIndex, {8.0, 0}, {}},
+        HiddenEffect{Effect::kHzEccentricity, {5.0, 40.0}, {}},
+        HiddenEffect{Effect::kVEccentricity, {6.0, -30.0}, {}},
+        HiddenEffect{Effect::kHzScale, {20.0, 0}, {}}, HiddenEffect{Effect::kVScale, {30.0, 0}, {}},
+        HiddenEffect{Effect::kAxisWobble, {5.0, 70.0}, {}},
+        HiddenEffect{Effect::kEdmOffset, {0.8, 0}, {}},
+        HiddenEffect{Effect::kEdmScale, {20.0, 0}, {}},
+        HiddenEffect{Effect::kEdmCyclic, {0.3, 25.0}, {}},
+        HiddenEffect{Effect::kRadialDistortion, {}, {{camera::kK1, 0.02}}},
+        HiddenEffect{
+            Effect::kTangentialDistortion, {}, {{camera::kP1, 4e-4}, {camera::kP2, -3e-4}}},
+        HiddenEffect{Effect::kRationalDistortion, {}, {{camera::kK4, 0.03}}},
+        // s1, s3 alone are tangential's p2, p1 up to a camera rotation; the
+        // r^4 terms s2, s4 are thin prism's own.
+        HiddenEffect{
+            Effect::kThinPrism,
+            {},
+            {{camera::kS1, 5e-4}, {camera::kS2, 4e-3}, {camera::kS3, -4e-4}, {camera::kS4, -3e-3}}},
+        HiddenEffect{
+            Effect::kSensorTilt, {}, {{camera::kTauX, 1e-3}, {camera::kTauY, -1e-3}}, false}),
     [](const auto& info) { return std::string(Info(info.param.effect).name); });
 
 // The linearised estimate (no confirming refinement) is the hidden value:
@@ -136,7 +141,8 @@ TEST(Ranking, LinearEstimateIsTheHiddenValue) {
 // With the intrinsics fitted, a small sensor tilt is a camera rotation plus a
 // principal point shift: reported as absorbed (redundant), never significant.
 TEST(Ranking, SensorTiltWithFittedIntrinsicsIsAbsorbed) {
-  const Fitted f = SimulateHidden({Effect::kSensorTilt, {}, {{camera::kTauX, 1e-3}, {camera::kTauY, -1e-3}}, true}, 9);
+  const Fitted f = SimulateHidden(
+      {Effect::kSensorTilt, {}, {{camera::kTauX, 1e-3}, {camera::kTauY, -1e-3}}, true}, 9);
   const Diagnosis d = DiagnoseFitted(f);
   for (const RankedEffect& r : d.ranking.entries) {
     EXPECT_FALSE(r.significant) << r.name;

@@ -34,7 +34,8 @@ TEST(Statistics, ProjectorDropsDirectionsAlreadyInTheSpan) {
   b.col(1) = Eigen::VectorXd::Random(50);
   EXPECT_EQ(p.Add(b), 1);
   EXPECT_LT(p.Apply(a).norm(), 1e-12);
-  EXPECT_NEAR((p.basis().transpose() * p.basis() - Eigen::MatrixXd::Identity(4, 4)).norm(), 0, 1e-12);
+  EXPECT_NEAR((p.basis().transpose() * p.basis() - Eigen::MatrixXd::Identity(4, 4)).norm(), 0,
+              1e-12);
 }
 
 // A column with no relation to the data is significant at level a in about

@@ -22,7 +22,8 @@ TEST(Stepwise, AddsTheHiddenEffectsOneByOneAndStops) {
   o.seed = 51;
   o.truth = PaperTruth(1);
   o.truth.effects.Add(Effect::kHzEccentricity);
-  o.truth.EffectValue(Effect::kHzEccentricity) = FromReportUnits(Effect::kHzEccentricity, {4.0, 30.0});
+  o.truth.EffectValue(Effect::kHzEccentricity) =
+      FromReportUnits(Effect::kHzEccentricity, {4.0, 30.0});
   o.truth.effects.Add(Effect::kEdmScale);
   o.truth.EffectValue(Effect::kEdmScale) = FromReportUnits(Effect::kEdmScale, {25.0, 0});
   o.plan = SmallPlan();
@@ -49,7 +50,8 @@ TEST(Stepwise, StopsAtMaxSteps) {
   o.seed = 53;
   o.truth = PaperTruth(1);
   o.truth.effects.Add(Effect::kHzEccentricity);
-  o.truth.EffectValue(Effect::kHzEccentricity) = FromReportUnits(Effect::kHzEccentricity, {4.0, 30.0});
+  o.truth.EffectValue(Effect::kHzEccentricity) =
+      FromReportUnits(Effect::kHzEccentricity, {4.0, 30.0});
   o.truth.effects.Add(Effect::kEdmScale);
   o.truth.EffectValue(Effect::kEdmScale) = FromReportUnits(Effect::kEdmScale, {25.0, 0});
   o.plan = SmallPlan();

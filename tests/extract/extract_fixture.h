@@ -106,8 +106,8 @@ inline InstrumentModel RandomTruth(std::mt19937& rng, double offset_m, double an
 // Klug Tables 6/7 (the optimised PLT 300), one camera.
 inline InstrumentModel Plt300Truth() {
   InstrumentModel m = IdealModel(Kinematics::kDh, 1, CameraTool{});
-  m.base = PoseBlock::FromRigid(Rigid3::FromEuler({3.1416, 0.0, 0.0504},
-                                                  {5.915e-9, 7.216e-9, 3.312e-9}));
+  m.base = PoseBlock::FromRigid(
+      Rigid3::FromEuler({3.1416, 0.0, 0.0504}, {5.915e-9, 7.216e-9, 3.312e-9}));
   // DhLink order {d, gamma_offset, alpha, a}.
   m.links[0].p = {0.0, -1.5203, 1.570808, 0.0};
   m.links[1].p = {0.0684e-3, -0.4432e-3, 0.2055e-3, -0.1117e-3};
@@ -135,8 +135,9 @@ inline HeldOutError MaxHeldOutError(const InstrumentModel& truth, const Instrume
     e.edm = std::max(e.edm, (PredictEdm(truth, p, t, d) - PredictEdm(model, p, t, d)).norm());
     for (int z = 0; z < truth.NumZooms(); ++z) {
       const double u = f(rng) * truth.cams[z].width, v = f(rng) * truth.cams[z].height;
-      e.cam = std::max(e.cam, (PredictCam(truth, z, p, t, u, v, d) -
-                               PredictCam(model, z, p, t, u, v, d)).norm());
+      e.cam = std::max(
+          e.cam,
+          (PredictCam(truth, z, p, t, u, v, d) - PredictCam(model, z, p, t, u, v, d)).norm());
     }
   }
   return e;

@@ -12,11 +12,11 @@
 namespace rtscalib {
 namespace {
 
-using ::testing::HasSubstr;
 using fixture::MaxHeldOutError;
 using fixture::PaperPlan;
 using fixture::PaperPlanRecords;
 using fixture::RandomTruth;
+using ::testing::HasSubstr;
 
 // Held-out points at 5 m. The extraction is exact for an instrument without
 // effects, so only double round-off remains: points of ~1 m carry ~1e-16 m,

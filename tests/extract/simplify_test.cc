@@ -68,7 +68,7 @@ TEST(Simplify, SnappedParametersAreEq85To88) {
   const InstrumentModel m = SnapModel(Tables1And2());
   EXPECT_DOUBLE_EQ(m.links[0].p[kDhGamma], -M_PI / 2);  // Eq. 85
   EXPECT_DOUBLE_EQ(m.links[0].p[kDhAlpha], M_PI / 2);
-  for (double v : m.links[1].p) EXPECT_EQ(v, 0.0);       // Eq. 86
+  for (double v : m.links[1].p) EXPECT_EQ(v, 0.0);                   // Eq. 86
   EXPECT_LT((m.base.ToRigid().rotation - Rx(M_PI)).norm(), kExact);  // Eq. 87
   EXPECT_LT((m.edm.ToRigid().rotation - Rz(M_PI) * Ry(M_PI / 2) * Rx(-M_PI / 2)).norm(),
             kExact);  // Eq. 88

@@ -35,13 +35,13 @@ InstrumentModel ModelWithEverything(Kinematics k) {
     m.effects.Add(info.effect);
     if (IsKinematic(info.effect)) m.EffectValue(info.effect) = {3e-5, -2e-5};
   }
-  m.cams[0].distortion = {-0.12, 0.05,  8e-4,  -5e-4, -0.01, 0.05,  -0.01,
-                          0.002, 1e-3,  -5e-4, -8e-4, 3e-4,  0.01,  -0.015};
+  m.cams[0].distortion = {-0.12, 0.05, 8e-4,  -5e-4, -0.01, 0.05, -0.01,
+                          0.002, 1e-3, -5e-4, -8e-4, 3e-4,  0.01, -0.015};
   return m;
 }
 
-std::vector<const ceres::Manifold*> ManifoldsFor(const BlockLayout& layout,
-                                                 std::vector<std::unique_ptr<ceres::Manifold>>* own) {
+std::vector<const ceres::Manifold*> ManifoldsFor(
+    const BlockLayout& layout, std::vector<std::unique_ptr<ceres::Manifold>>* own) {
   std::vector<const ceres::Manifold*> out(layout.blocks.size(), nullptr);
   for (int i : {layout.base_q, layout.tool_q}) {
     own->push_back(std::make_unique<ceres::EigenQuaternionManifold>());
@@ -84,7 +84,9 @@ void ExpectGradientsMatch(ceres::CostFunction* cost, const BlockLayout& layout) 
     const double scale = std::max(numeric.cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_GT(user.cwiseAbs().maxCoeff(), 0.0) << "block " << b << " has no derivative";
     EXPECT_LE((user - numeric).cwiseAbs().maxCoeff(), kBlockRelativePrecision * scale)
-        << "block " << b << "\nautodiff:\n" << user << "\nnumeric:\n" << numeric;
+        << "block " << b << "\nautodiff:\n"
+        << user << "\nnumeric:\n"
+        << numeric;
   }
 }
 
@@ -112,7 +114,8 @@ TEST_P(CostFunctionGradients, CameraRecordGroupWithDistortion) {
   f->edm = false;
   f->phi = 2.1;
   f->theta = 1.9;
-  for (const auto& [u, v] : std::vector<std::pair<double, double>>{{640, 480}, {100, 80}, {1200, 900}}) {
+  for (const auto& [u, v] :
+       std::vector<std::pair<double, double>>{{640, 480}, {100, 80}, {1200, 900}}) {
     f->rows.push_back({u, v, 2.5, PredictCam(m, 0, 2.11, 1.89, u, v, 2.5), 1.0 / 1e-5});
   }
   const BlockLayout layout = f->layout;
@@ -174,7 +177,8 @@ struct PlainShotResidual {
                                   x_cam.data(), pixel)) {
         return false;
       }
-      for (int c = 0; c < 2; ++c) r[2 * k + c] = (pixel[c] - T(shot->points[k].uv[c])) * T(shot->inv_sigma);
+      for (int c = 0; c < 2; ++c)
+        r[2 * k + c] = (pixel[c] - T(shot->points[k].uv[c])) * T(shot->inv_sigma);
     }
     return true;
   }
@@ -211,7 +215,8 @@ TEST_P(CostFunctionGradients, ShotChainedJacobianEqualsPlainAutodiff) {
     double scale = 0;
     for (double x : j_plain[b]) scale = std::max(scale, std::abs(x));
     for (size_t i = 0; i < j_plain[b].size(); ++i) {
-      EXPECT_NEAR(j_fast[b][i], j_plain[b][i], 1e-9 * std::max(scale, 1.0)) << "block " << b << " entry " << i;
+      EXPECT_NEAR(j_fast[b][i], j_plain[b][i], 1e-9 * std::max(scale, 1.0))
+          << "block " << b << " entry " << i;
     }
   }
 }

@@ -22,13 +22,16 @@ InstrumentModel RandomTruth(std::uint64_t seed, int zooms) {
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   InstrumentModel m = PaperTruth(zooms);
-  m.base = PoseBlock::FromRigid(Rigid3::FromEuler({M_PI + 2e-4 * n(rng), 2e-4 * n(rng), M_PI * u(rng)},
-                                                  {2.0 * u(rng), 2.0 * u(rng), 1.5 + 0.2 * u(rng)}));
-  m.links[0].p = {3e-4 * n(rng), -M_PI / 2 + 0.01 * n(rng), M_PI / 2 + 3e-4 * n(rng), 3e-4 * n(rng)};
+  m.base =
+      PoseBlock::FromRigid(Rigid3::FromEuler({M_PI + 2e-4 * n(rng), 2e-4 * n(rng), M_PI * u(rng)},
+                                             {2.0 * u(rng), 2.0 * u(rng), 1.5 + 0.2 * u(rng)}));
+  m.links[0].p = {3e-4 * n(rng), -M_PI / 2 + 0.01 * n(rng), M_PI / 2 + 3e-4 * n(rng),
+                  3e-4 * n(rng)};
   m.links[1].p = {2e-4 * n(rng), 3e-4 * n(rng), 3e-4 * n(rng), 2e-4 * n(rng)};
   auto jitter = [&](PoseBlock* p) {
     Rigid3 r = p->ToRigid();
-    r.rotation = r.rotation * RotationFromEuler<double>({5e-4 * n(rng), 5e-4 * n(rng), 5e-3 * n(rng)});
+    r.rotation =
+        r.rotation * RotationFromEuler<double>({5e-4 * n(rng), 5e-4 * n(rng), 5e-3 * n(rng)});
     r.translation += 3e-4 * Eigen::Vector3d(n(rng), n(rng), n(rng));
     *p = PoseBlock::FromRigid(r);
   };
@@ -44,7 +47,7 @@ InstrumentModel RandomTruth(std::uint64_t seed, int zooms) {
 }
 
 AcquisitionPlan TrainingPlan() {
-  AcquisitionPlan plan;  // Klug's sweeps ...
+  AcquisitionPlan plan;      // Klug's sweeps ...
   plan.grid_phi_steps = 10;  // ... plus a grid that spans the image
   plan.grid_theta_steps = 6;
   return plan;

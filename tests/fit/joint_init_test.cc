@@ -36,8 +36,10 @@ double MaxCamDifference(const InstrumentModel& a, const InstrumentModel& b, int 
 TEST(DhFromSpherical, PredictsLikeTheSphericalModel) {
   InstrumentModel s = IdealModel(Kinematics::kSpherical, 2, CameraTool{});
   s.base = PoseBlock::FromRigid(Rigid3::FromEuler({0.01, -0.02, 1.3}, {1.0, -2.0, 0.4}));
-  s.cams[0].flange_from_cam = PoseBlock::FromRigid(Rigid3::FromEuler({0.003, 0.002, -0.01}, {0.01, 0.05, 0.1}));
-  s.cams[1].flange_from_cam = PoseBlock::FromRigid(Rigid3::FromEuler({-0.001, 0.004, 0.02}, {0.02, 0.04, 0.1}));
+  s.cams[0].flange_from_cam =
+      PoseBlock::FromRigid(Rigid3::FromEuler({0.003, 0.002, -0.01}, {0.01, 0.05, 0.1}));
+  s.cams[1].flange_from_cam =
+      PoseBlock::FromRigid(Rigid3::FromEuler({-0.001, 0.004, 0.02}, {0.02, 0.04, 0.1}));
   s.cams[1].intrinsics = {2000, 2001, 330, 250};
   const InstrumentModel d = DhFromSpherical(s);
   EXPECT_EQ(d.kinematics, Kinematics::kDh);

@@ -59,8 +59,9 @@ TEST(FitCircle, ExactCirclesOfManyScalesAndArcs) {
         EXPECT_LT(fit.rms, kExact * scale * 10);
         EXPECT_LT(fit.plane.rms, kExact * scale * 10);
         EXPECT_NEAR(fit.plane.basis.determinant(), 1.0, 1e-12);  // Eq. 19: no reflection
-        EXPECT_LT((fit.plane.basis.transpose() * fit.plane.basis -
-                   Eigen::Matrix3d::Identity()).norm(), 1e-12);
+        EXPECT_LT(
+            (fit.plane.basis.transpose() * fit.plane.basis - Eigen::Matrix3d::Identity()).norm(),
+            1e-12);
       }
     }
   }

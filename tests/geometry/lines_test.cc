@@ -27,9 +27,9 @@ TEST(ClosestPointsOfLines, SkewedLinesMeetTheCommonNormal) {
     const double s_true = u(rng) * 3, t_true = u(rng) * 3;
     // Direction of line 1: perpendicular to the common normal, not parallel to d0.
     const double angle = M_PI / 2 + M_PI / 3 * u(rng);
-    const Eigen::Vector3d d1 = (std::cos(angle) * d0.normalized() +
-                                std::sin(angle) * normal.cross(d0).normalized()) *
-                               (1.0 + u(rng) * 0.5);
+    const Eigen::Vector3d d1 =
+        (std::cos(angle) * d0.normalized() + std::sin(angle) * normal.cross(d0).normalized()) *
+        (1.0 + u(rng) * 0.5);
     const Eigen::Vector3d q_s = l0.point + s_true * d0;
     const Eigen::Vector3d q_t = q_s + dist * normal;
     const Line3 l1{q_t - t_true * d1, d1};

@@ -10,9 +10,9 @@
 namespace rtscalib {
 namespace {
 
+using ::testing::HasSubstr;
 using testing_io::CatchInputError;
 using testing_io::TempDir;
-using ::testing::HasSubstr;
 
 constexpr double kRadPerArcsec = M_PI / (180.0 * 3600.0);
 
@@ -85,7 +85,7 @@ TEST(Config, DocsFullExampleLoadsWithEveryKey) {
   EXPECT_EQ(truth.NumZooms(), 2);
   EXPECT_EQ(truth.cams[0].intrinsics[2], 321.5);
   EXPECT_EQ(truth.cams[0].distortion[0], -0.1);
-  EXPECT_TRUE(truth.effects.Has(Effect::kRadialDistortion));   // from the coefficients
+  EXPECT_TRUE(truth.effects.Has(Effect::kRadialDistortion));  // from the coefficients
   EXPECT_FALSE(truth.effects.Has(Effect::kThinPrism));
   EXPECT_EQ(truth.links[0].p[kDhAlpha], 1.5708);
   const auto hz = truth.EffectValue(Effect::kHzEccentricity);
@@ -130,9 +130,8 @@ TEST(Config, UnknownKeysEverywhereAreAllReported) {
 
 TEST(Config, RenderSectionIsKeptRawAndNotChecked) {
   TempDir dir;
-  const RunConfig c = LoadConfig(
-      dir.Write("run.yaml",
-                std::string(kSimulateOnly) + "render: {anything: [1, 2], deep: {x: 1}}\n"));
+  const RunConfig c = LoadConfig(dir.Write(
+      "run.yaml", std::string(kSimulateOnly) + "render: {anything: [1, 2], deep: {x: 1}}\n"));
   EXPECT_THAT(c.render_yaml, HasSubstr("anything"));
   EXPECT_THAT(c.render_yaml, HasSubstr("deep"));
 }
@@ -150,8 +149,8 @@ TEST(Config, UnknownEffectListsValidNames) {
 
 TEST(Config, EffectsAlreadyInDhAreRejected) {
   TempDir dir;
-  const InputError e = ConfigError(dir, std::string(kSimulateOnly) +
-                                            "model: {kinematics: dh, effects: [collimation]}\n");
+  const InputError e = ConfigError(
+      dir, std::string(kSimulateOnly) + "model: {kinematics: dh, effects: [collimation]}\n");
   EXPECT_EQ(e.key, "model.effects[0]");
   EXPECT_THAT(e.expected, HasSubstr("spherical"));
   // ... but fine in the spherical kinematics.
@@ -189,21 +188,20 @@ TEST(Config, WrongTypesNameKeyLineExpectedAndGot) {
 
 TEST(Config, NegativeSigma) {
   TempDir dir;
-  const InputError e = ConfigError(dir, std::string(kSimulateOnly) +
-                                            "fit:\n  sigmas: {edm_m: 1e-5, cam_m: -1e-5}\n");
+  const InputError e = ConfigError(
+      dir, std::string(kSimulateOnly) + "fit:\n  sigmas: {edm_m: 1e-5, cam_m: -1e-5}\n");
   EXPECT_EQ(e.key, "fit.sigmas.cam_m");
   EXPECT_EQ(e.got, "-1e-5");
   EXPECT_THAT(e.expected, HasSubstr("> 0"));
-  const InputError noise =
-      ConfigError(dir, "simulate: {noise: {pixel_px: -0.1}}\n");
+  const InputError noise = ConfigError(dir, "simulate: {noise: {pixel_px: -0.1}}\n");
   EXPECT_EQ(noise.key, "simulate.noise.pixel_px");
 }
 
 TEST(Config, ZenithLimitsMustBeInOrder) {
   TempDir dir;
-  const InputError e = ConfigError(
-      dir, std::string(kSimulateOnly) +
-               "fit:\n  critical_region: {min_zenith_deg: 100, max_zenith_deg: 90}\n");
+  const InputError e =
+      ConfigError(dir, std::string(kSimulateOnly) +
+                           "fit:\n  critical_region: {min_zenith_deg: 100, max_zenith_deg: 90}\n");
   EXPECT_EQ(e.key, "fit.critical_region.max_zenith_deg");
   EXPECT_EQ(e.line, 3);
   const InputError range = ConfigError(
@@ -213,11 +211,11 @@ TEST(Config, ZenithLimitsMustBeInOrder) {
 
 TEST(Config, DistortionAtMost14) {
   TempDir dir;
-  const InputError e = ConfigError(
-      dir, std::string(kSimulateOnly) +
-               "model:\n  cameras:\n"
-               "    - {width: 640, height: 480, fx: 1, fy: 1, cx: 0, cy: 0,"
-               " distortion: [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]}\n");
+  const InputError e =
+      ConfigError(dir, std::string(kSimulateOnly) +
+                           "model:\n  cameras:\n"
+                           "    - {width: 640, height: 480, fx: 1, fy: 1, cx: 0, cy: 0,"
+                           " distortion: [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]}\n");
   EXPECT_EQ(e.key, "model.cameras[0].distortion");
   EXPECT_EQ(e.line, 4);
   EXPECT_THAT(e.expected, HasSubstr("at most 14"));
@@ -231,8 +229,8 @@ TEST(Config, CameraSizeMustBePositive) {
                "    - {width: 0, height: 480, fx: 1, fy: 1, cx: 0, cy: 0}\n");
   EXPECT_EQ(e.key, "model.cameras[1].width");
   EXPECT_EQ(e.line, 5);
-  const InputError height = ConfigError(
-      dir, "simulate:\n  truth:\n    cameras: [{height: -480}]\n");
+  const InputError height =
+      ConfigError(dir, "simulate:\n  truth:\n    cameras: [{height: -480}]\n");
   EXPECT_EQ(height.key, "simulate.truth.cameras[0].height");
   const InputError missing = ConfigError(
       dir, std::string(kSimulateOnly) + "model:\n  cameras: [{width: 640, height: 480, fx: 1}]\n");
@@ -266,18 +264,18 @@ TEST(Config, SimulateWithoutTruthAsksForPaperTruth) {
 
 TEST(Config, TruthCamerasMustCoverThePlanZooms) {
   TempDir dir;
-  const InputError e = ConfigError(
-      dir, "simulate:\n  plan: {zooms: [0, 1]}\n  truth: {cameras: [{fx: 900}]}\n");
+  const InputError e =
+      ConfigError(dir, "simulate:\n  plan: {zooms: [0, 1]}\n  truth: {cameras: [{fx: 900}]}\n");
   EXPECT_EQ(e.key, "simulate.plan.zooms");
   EXPECT_EQ(e.line, 2);
 }
 
 TEST(Config, TruthEffectsInReportUnits) {
   TempDir dir;
-  const RunConfig c = LoadConfig(dir.Write(
-      "run.yaml",
-      "simulate:\n  truth:\n    kinematics: spherical\n"
-      "    effects: {collimation: 10, edm_offset: [-1.5], axis_wobble: [3, 90]}\n"));
+  const RunConfig c = LoadConfig(
+      dir.Write("run.yaml",
+                "simulate:\n  truth:\n    kinematics: spherical\n"
+                "    effects: {collimation: 10, edm_offset: [-1.5], axis_wobble: [3, 90]}\n"));
   const InstrumentModel& truth = c.simulate->truth;
   EXPECT_EQ(truth.kinematics, Kinematics::kSpherical);
   EXPECT_NEAR(truth.EffectValue(Effect::kCollimation)[0], 10 * kRadPerArcsec, 1e-18);
@@ -285,8 +283,8 @@ TEST(Config, TruthEffectsInReportUnits) {
   EXPECT_NEAR(truth.EffectValue(Effect::kAxisWobble)[1], 3 * kRadPerArcsec, 1e-18);
   EXPECT_EQ(truth.effects.List().size(), 3u);
 
-  const InputError count = ConfigError(
-      dir, "simulate:\n  truth:\n    effects: {hz_eccentricity: [5]}\n");
+  const InputError count =
+      ConfigError(dir, "simulate:\n  truth:\n    effects: {hz_eccentricity: [5]}\n");
   EXPECT_EQ(count.key, "simulate.truth.effects.hz_eccentricity");
   EXPECT_THAT(count.expected, HasSubstr("e (arcsec), phi_e (deg)"));
   const InputError name = ConfigError(dir, "simulate:\n  truth:\n    effects: {hz_ecc: [5, 1]}\n");
@@ -364,14 +362,14 @@ TEST(Config, DumpLoadsBackToTheSameConfig) {
 
 TEST(Config, TruthPoseAsQuaternion) {
   TempDir dir;
-  const RunConfig c = LoadConfig(dir.Write(
-      "run.yaml", "simulate:\n  truth: {base: {q: [0, 0, 0.6, 0.8], t: [1, 2, 3]}}\n"));
+  const RunConfig c = LoadConfig(
+      dir.Write("run.yaml", "simulate:\n  truth: {base: {q: [0, 0, 0.6, 0.8], t: [1, 2, 3]}}\n"));
   EXPECT_EQ(c.simulate->truth.base.q, (std::array<double, 4>{0, 0, 0.6, 0.8}));
   EXPECT_EQ(ConfigError(dir, "simulate:\n  truth: {base: {q: [0, 0, 0.6, 0.9]}}\n").key,
             "simulate.truth.base.q");
   EXPECT_EQ(
       ConfigError(dir, "simulate:\n  truth: {base: {q: [0, 0, 0, 1], euler: [0, 0, 0]}}\n").key,
-            "simulate.truth.base.q");
+      "simulate.truth.base.q");
 }
 
 }  // namespace

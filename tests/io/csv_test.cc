@@ -10,8 +10,8 @@
 namespace rtscalib {
 namespace {
 
-using testing_io::CatchInputError;
 using ::testing::HasSubstr;
+using testing_io::CatchInputError;
 
 CsvTable ParseText(const std::string& text, const CsvTable::Columns& columns) {
   std::istringstream in(text);
@@ -69,8 +69,9 @@ TEST(Csv, DuplicateColumnIsAnError) {
 }
 
 TEST(Csv, MissingFileNamesThePath) {
-  const InputError e =
-      CatchInputError([] { CsvTable::Read("/nonexistent/dir/x.csv", {{"a"}, {}}); });
+  const InputError e = CatchInputError([] {
+    CsvTable::Read("/nonexistent/dir/x.csv", {{"a"}, {}});
+  });
   EXPECT_EQ(e.file, "/nonexistent/dir/x.csv");
   EXPECT_THAT(e.what(), HasSubstr("cannot open"));
 }

@@ -14,9 +14,9 @@
 namespace rtscalib {
 namespace {
 
+using ::testing::HasSubstr;
 using testing_io::CatchInputError;
 using testing_io::TempDir;
-using ::testing::HasSubstr;
 
 // A non-trivial model: the ideal instrument of kinematics `k`, every block
 // perturbed, all effects that `k` can hold switched on, distortion in two
@@ -91,9 +91,9 @@ InstrumentModel RandomModel(Kinematics k, int zooms, bool with_sigmas, unsigned 
       if (!IsKinematic(e)) continue;
       const double a = 1e-12 * (1.5 + unif(rng)), b = 1e-12 * (1.5 + unif(rng));
       const double c = 1e-13 * unif(rng);  // |c| < sqrt(a b): a valid covariance
-      s.effect_cov[static_cast<int>(e)] =
-          Info(e).num_params == 1 ? std::array<double, 4>{a, 0, 0, 0}
-                                  : std::array<double, 4>{a, c, c, b};
+      s.effect_cov[static_cast<int>(e)] = Info(e).num_params == 1
+                                              ? std::array<double, 4>{a, 0, 0, 0}
+                                              : std::array<double, 4>{a, c, c, b};
     }
   }
   return m;
@@ -172,8 +172,8 @@ void ExpectRoundTrip(const InstrumentModel& m) {
   }
 
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> phi(0, 2 * M_PI), theta(0.1, 2 * M_PI - 0.1),
-      d(0.5, 50), u(50, 590), v(50, 430);
+  std::uniform_real_distribution<double> phi(0, 2 * M_PI), theta(0.1, 2 * M_PI - 0.1), d(0.5, 50),
+      u(50, 590), v(50, 430);
   for (int i = 0; i < 200; ++i) {
     const double p = phi(rng), t = theta(rng), dist = d(rng);
     EXPECT_EQ(PredictEdm(r, p, t, dist), PredictEdm(m, p, t, dist));
@@ -245,8 +245,8 @@ TEST(ModelIo, UnknownKeyIsAnError) {
 
 TEST(ModelIo, EditedEulerMustAgreeWithQuaternion) {
   TempDir dir;
-  const InputError e = EditedModelError(
-      dir, [](YAML::Node& n) { n["base"]["euler"] = YAML::Load("[0.1, 0, 0]"); });
+  const InputError e =
+      EditedModelError(dir, [](YAML::Node& n) { n["base"]["euler"] = YAML::Load("[0.1, 0, 0]"); });
   EXPECT_EQ(e.key, "base.euler");
   EXPECT_THAT(e.expected, HasSubstr("predictions use q"));
 }

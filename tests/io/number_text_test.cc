@@ -12,8 +12,8 @@ TEST(NumberText, ParsesDecimalNumbersOnly) {
   EXPECT_EQ(ParseFiniteDouble("1.5"), 1.5);
   EXPECT_EQ(ParseFiniteDouble("+2e-3"), 2e-3);
   EXPECT_EQ(ParseFiniteDouble("-.5"), -0.5);
-  for (const char* bad : {"", "abc", "1.5x", "nan", "NaN", "inf", "-inf", "Infinity", "0x10",
-                          "+-1", "1,5", " 1"}) {
+  for (const char* bad :
+       {"", "abc", "1.5x", "nan", "NaN", "inf", "-inf", "Infinity", "0x10", "+-1", "1,5", " 1"}) {
     EXPECT_FALSE(ParseFiniteDouble(bad).has_value()) << bad;
   }
   EXPECT_TRUE(std::isnan(*ParseDouble("nan")));

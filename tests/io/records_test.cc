@@ -10,9 +10,9 @@
 namespace rtscalib {
 namespace {
 
+using ::testing::HasSubstr;
 using testing_io::CatchInputError;
 using testing_io::TempDir;
-using ::testing::HasSubstr;
 
 constexpr const char* kHeader = "face,zoom,phi,theta,tool,u,v,d,x,y,z,set\n";
 constexpr const char* kEdmRow = "1,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,sweep1\n";
@@ -143,9 +143,9 @@ TEST(Records, CamRowsNeedPixels) {
 
 TEST(Records, ExtraColumnIsIgnoredWithANote) {
   TempDir dir;
-  const std::string path = dir.Write(
-      "records.csv", "face,zoom,phi,theta,tool,u,v,d,x,y,z,set,temperature\n"
-                     "1,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,,21.5\n");
+  const std::string path = dir.Write("records.csv",
+                                     "face,zoom,phi,theta,tool,u,v,d,x,y,z,set,temperature\n"
+                                     "1,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,,21.5\n");
   const RecordsFile file = ReadRecords(path);
   EXPECT_EQ(file.records.size(), 1u);
   ASSERT_EQ(file.notes.size(), 1u);

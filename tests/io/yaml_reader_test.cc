@@ -10,8 +10,8 @@
 namespace rtscalib {
 namespace {
 
-using testing_io::CatchInputError;
 using ::testing::HasSubstr;
+using testing_io::CatchInputError;
 
 enum class Colour { kRed, kGreen };
 const std::vector<std::pair<std::string, Colour>> kColours = {{"red", Colour::kRed},
@@ -72,8 +72,7 @@ TEST(YamlReader, TypeErrorsNameFileKeyLineAndValue) {
   EXPECT_EQ(e2.got, ".inf");
   EXPECT_EQ(e2.expected, "a finite number");
 
-  const InputError e3 =
-      CatchInputError([&] { fit.Require("colour").AsEnum<Colour>(kColours); });
+  const InputError e3 = CatchInputError([&] { fit.Require("colour").AsEnum<Colour>(kColours); });
   EXPECT_EQ(e3.expected, "one of red, green");
 
   const InputError e4 = CatchInputError([&] { fit.Require("list").AsDoubles(); });

@@ -42,7 +42,8 @@ void Accumulate(const std::vector<TagDetection>& detections, const TargetScene& 
     for (int k = 0; k < 4; ++k) {
       const Eigen::Vector3d p = cam_from_ref * corners[d.id][k];
       double px[2];
-      ASSERT_TRUE(camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), p.data(), px));
+      ASSERT_TRUE(
+          camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), p.data(), px));
       const double e = (d.corners[k] - Eigen::Vector2d(px[0], px[1])).norm();
       errors->sum_sq += e * e;
       errors->max = std::max(errors->max, e);
@@ -59,8 +60,8 @@ TEST(DetectorTest, CornerOrderIsTargetCornerOrder) {
   const CameraTool cam = TestCamera(false);
   // Upright and rolled by 90 degrees: the order follows the tag, not the image.
   for (double roll : {0.0, M_PI / 2}) {
-    const Rigid3 pose = AimAt(Eigen::Vector3d::Zero(), scene.boards[0].CentreInRef(), cam.intrinsics[2],
-                              cam.intrinsics[3], roll, cam);
+    const Rigid3 pose = AimAt(Eigen::Vector3d::Zero(), scene.boards[0].CentreInRef(),
+                              cam.intrinsics[2], cam.intrinsics[3], roll, cam);
     TagDetector detector;
     const std::vector<TagDetection> detections = detector.Detect(renderer.Render(pose, cam));
     ASSERT_EQ(detections.size(), 12u);
@@ -103,8 +104,8 @@ TEST(DetectorTest, RefinedCornersMatchExactProjectionsWithDistortion) {
   // The refinement must beat libapriltag's own corners.
   EXPECT_LT(errors.Rms(), 0.5 * apriltag.Rms());
   RecordProperty("rms_px", std::to_string(errors.Rms()));
-  std::printf("refined RMS %.4f px (max %.4f), libapriltag RMS %.4f px over %d corners\n", errors.Rms(),
-              errors.max, apriltag.Rms(), errors.corners);
+  std::printf("refined RMS %.4f px (max %.4f), libapriltag RMS %.4f px over %d corners\n",
+              errors.Rms(), errors.max, apriltag.Rms(), errors.corners);
 }
 
 TEST(DetectorTest, AllFourteenDistortionCoefficients) {
@@ -114,8 +115,8 @@ TEST(DetectorTest, AllFourteenDistortionCoefficients) {
   CameraTool cam = TestCamera(false);
   // k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4 taux tauy: rational, thin prism and a
   // tilted sensor all move the picture by pixels at the rim.
-  cam.distortion = {-0.08, 0.02, 2e-4, -1e-4, 0.002, 0.01, 0.001, 0.0005,
-                    1e-3, -1e-4, -1e-3, 1e-4, 0.002, -0.001};
+  cam.distortion = {-0.08,  0.02, 2e-4,  -1e-4, 0.002, 0.01,  0.001,
+                    0.0005, 1e-3, -1e-4, -1e-3, 1e-4,  0.002, -0.001};
   TagDetector detector;
   Errors errors;
   for (int i = 0; i < 4; ++i) {
@@ -148,7 +149,8 @@ TEST(DetectorTest, NoiseAndBlurKeepSubPixelAccuracy) {
     Accumulate(detections, scene, pose, cam, &errors);
   }
   EXPECT_LE(errors.Rms(), 0.1);
-  std::printf("noisy RMS %.4f px (max %.4f) over %d corners\n", errors.Rms(), errors.max, errors.corners);
+  std::printf("noisy RMS %.4f px (max %.4f) over %d corners\n", errors.Rms(), errors.max,
+              errors.corners);
 }
 
 TEST(DetectorTest, OtherFamilies) {

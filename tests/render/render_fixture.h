@@ -60,12 +60,11 @@ inline CameraTool TestCamera(bool distorted) {
 // A camera at `centre` turned so that reference point `target` is seen at
 // pixel (u, v) of `cam` (distortion ignored for the aim), rolled by `roll`
 // radians about that line of sight.
-inline Rigid3 AimAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& target, double u, double v,
-                    double roll, const CameraTool& cam) {
-  const Eigen::Vector3d ray_cam =
-      Eigen::Vector3d((u - cam.intrinsics[2]) / cam.intrinsics[0],
-                      (v - cam.intrinsics[3]) / cam.intrinsics[1], 1.0)
-          .normalized();
+inline Rigid3 AimAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& target, double u,
+                    double v, double roll, const CameraTool& cam) {
+  const Eigen::Vector3d ray_cam = Eigen::Vector3d((u - cam.intrinsics[2]) / cam.intrinsics[0],
+                                                  (v - cam.intrinsics[3]) / cam.intrinsics[1], 1.0)
+                                      .normalized();
   const Eigen::Vector3d ray_ref = (target - centre).normalized();
   const Eigen::Matrix3d turn =
       Eigen::Quaterniond::FromTwoVectors(ray_cam, ray_ref).toRotationMatrix();

@@ -20,7 +20,8 @@ using testing::FrontBoard;
 using testing::SceneOf;
 using testing::TestCamera;
 
-Eigen::Vector2d Project(const CameraTool& cam, const Rigid3& ref_from_cam, const Eigen::Vector3d& x_ref) {
+Eigen::Vector2d Project(const CameraTool& cam, const Rigid3& ref_from_cam,
+                        const Eigen::Vector3d& x_ref) {
   const Eigen::Vector3d p = ref_from_cam.Inverse() * x_ref;
   double px[2];
   EXPECT_TRUE(camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), p.data(), px));
@@ -70,7 +71,8 @@ double LeftEdgeError(const cv::Mat& img, const CameraTool& cam, const TagBoard& 
     const double exact = top.x() + t * (bottom.x() - top.x());
     const int i0 = static_cast<int>(std::floor(exact)) - 2, i1 = i0 + 5;  // 2-3 px either side
     double area = 0;  // of the ink part of the strip, in pixels
-    for (int u = i0; u <= i1; ++u) area += (options.paper - img.at<float>(v, u)) / (options.paper - options.ink);
+    for (int u = i0; u <= i1; ++u)
+      area += (options.paper - img.at<float>(v, u)) / (options.paper - options.ink);
     const double measured = i1 + 0.5 - area;
     sum_err += measured - exact;
     ++n;
@@ -181,7 +183,8 @@ TEST(SceneRendererTest, LightingShadesObliqueBoards) {
   // Turned by 60 degrees about its vertical centre line.
   const Eigen::Vector3d centre = board.CentreInRef();
   board.ref_from_board.rotation = Ry(M_PI / 3);
-  board.ref_from_board.translation = centre - board.ref_from_board.rotation * Eigen::Vector3d(0.19, 0.14, 0);
+  board.ref_from_board.translation =
+      centre - board.ref_from_board.rotation * Eigen::Vector3d(0.19, 0.14, 0);
   RenderOptions options;
   options.lighting = true;
   SceneRenderer lit(SceneOf(board), options);
@@ -201,8 +204,8 @@ TEST(SceneRendererTest, TheBackOfABoardIsBlank) {
   SceneRenderer renderer(SceneOf(board));
   const CameraTool cam = TestCamera(false);
   // From 4 m, behind the board, looking back at it.
-  const Rigid3 behind = testing::AimAt(Eigen::Vector3d(0, 0, 4), board.CentreInRef(), cam.intrinsics[2],
-                                       cam.intrinsics[3], 0.0, cam);
+  const Rigid3 behind = testing::AimAt(Eigen::Vector3d(0, 0, 4), board.CentreInRef(),
+                                       cam.intrinsics[2], cam.intrinsics[3], 0.0, cam);
   const cv::Mat img = renderer.Render(behind, cam);
   double lo, hi;
   cv::minMaxLoc(img, &lo, &hi);
@@ -224,7 +227,9 @@ TEST(SceneRendererTest, NearerBoardsHideFartherOnes) {
   const TargetScene near_only = SceneOf(front);
   SceneRenderer near_renderer(near_only);
   const cv::Mat near_img = near_renderer.Render(Rigid3(), cam);
-  EXPECT_EQ(cv::norm(img(cv::Rect(610, 450, 60, 60)), near_img(cv::Rect(610, 450, 60, 60)), cv::NORM_INF), 0.0);
+  EXPECT_EQ(
+      cv::norm(img(cv::Rect(610, 450, 60, 60)), near_img(cv::Rect(610, 450, 60, 60)), cv::NORM_INF),
+      0.0);
 }
 
 TEST(SceneRendererTest, OptionsAreChecked) {

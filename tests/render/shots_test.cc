@@ -153,7 +153,8 @@ TEST(ShotsTest, InvalidInputIsRejected) {
   options.num_shards = 2;
   EXPECT_NE(options.Check(), "");
   EXPECT_THROW(RenderShots(scene, shots, options), std::invalid_argument);
-  EXPECT_THROW(DetectShots(scene, shots, "/nonexistent-folder", DetectShotsOptions()), std::runtime_error);
+  EXPECT_THROW(DetectShots(scene, shots, "/nonexistent-folder", DetectShotsOptions()),
+               std::runtime_error);
 }
 
 }  // namespace

@@ -105,15 +105,16 @@ TEST(MatchDetectionsTest, BorderTagsAreSkippedAndCounted) {
   const TargetScene scene = SceneOf(FrontBoard(4, 6, 2.0));
   const CameraTool cam = TestCamera(true);
   // Board centre near the top-left image corner: tags cut on two sides.
-  const Rigid3 pose = AimAt(Eigen::Vector3d::Zero(), scene.boards[0].CentreInRef(), 60, 40, 0.1, cam);
+  const Rigid3 pose =
+      AimAt(Eigen::Vector3d::Zero(), scene.boards[0].CentreInRef(), 60, 40, 0.1, cam);
   ShotStats stats;
   ExpectOnlyGoodCorners(scene, pose, cam, &stats);
   EXPECT_GT(stats.skipped_border, 0);
   EXPECT_GT(stats.found, 0);
   EXPECT_EQ(stats.missed, 0);
   EXPECT_EQ(stats.found, stats.expected);
-  std::printf("border: %d found, %d skipped, %d detections dropped\n", stats.found, stats.skipped_border,
-              stats.dropped_skipped);
+  std::printf("border: %d found, %d skipped, %d detections dropped\n", stats.found,
+              stats.skipped_border, stats.dropped_skipped);
 }
 
 TEST(MatchDetectionsTest, GrazingTagsAreSkippedAndCounted) {
@@ -133,7 +134,8 @@ TEST(MatchDetectionsTest, GrazingTagsAreSkippedAndCounted) {
   EXPECT_GE(stats.skipped_grazing, 10);
   EXPECT_EQ(stats.found, stats.expected);
   EXPECT_GT(stats.dropped_skipped, 0);  // libapriltag did decode grazing tags
-  std::printf("grazing: %d skipped, %d detections dropped\n", stats.skipped_grazing, stats.dropped_skipped);
+  std::printf("grazing: %d skipped, %d detections dropped\n", stats.skipped_grazing,
+              stats.dropped_skipped);
 }
 
 TEST(MatchDetectionsTest, CountsUnknownDuplicateAndMismatchedDetections) {
@@ -154,8 +156,8 @@ TEST(MatchDetectionsTest, CountsUnknownDuplicateAndMismatchedDetections) {
   unrefined.corners = expected[2].uv;
   unrefined.refined = false;
   ShotStats stats;
-  const std::vector<MatchedTag> kept =
-      MatchDetections({good, good, unknown, wrong_place, unrefined}, expected, MatchOptions(), &stats);
+  const std::vector<MatchedTag> kept = MatchDetections(
+      {good, good, unknown, wrong_place, unrefined}, expected, MatchOptions(), &stats);
   ASSERT_EQ(kept.size(), 1u);
   EXPECT_EQ(kept[0].id, 0);
   EXPECT_EQ(stats.expected, 12);

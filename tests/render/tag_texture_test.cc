@@ -93,7 +93,8 @@ TEST(TagTextureTest, CodeImageMatchesLibapriltagBitForBit) {
         const double x = top_left.x() + (c - info.border_offset() + 0.5) * bit;
         const double y = top_left.y() + (r - info.border_offset() + 0.5) * bit;
         const Eigen::Vector2d t = tex.TexelFromBoard(x, y);
-        ASSERT_EQ(TexelAt(tex, t, 0, 0), code.at<uint8_t>(r, c)) << "tag " << i << " bit " << r << "," << c;
+        ASSERT_EQ(TexelAt(tex, t, 0, 0), code.at<uint8_t>(r, c))
+            << "tag " << i << " bit " << r << "," << c;
       }
     }
   }

@@ -128,9 +128,9 @@ TEST(ShotPlanning, NoCornerBeyondTheTrustedRadius) {
   for (const PixelObservation& p : data.obs.pixels) {
     const Rigid3 ref_from_cam = RefFromCam(truth, 0, p.phi, p.theta);
     const Eigen::Vector3d ray = (ref_from_cam.Inverse() * p.X).normalized();
-    const Eigen::Vector3d back = ref_from_cam.Inverse().rotation *
-                                 (PredictCam(truth, 0, p.phi, p.theta, p.uv.x(), p.uv.y(), 1.0) -
-                                  ref_from_cam.translation);
+    const Eigen::Vector3d back =
+        ref_from_cam.Inverse().rotation *
+        (PredictCam(truth, 0, p.phi, p.theta, p.uv.x(), p.uv.y(), 1.0) - ref_from_cam.translation);
     // 1e-9: exact projection and Newton back-projection agree to round-off.
     EXPECT_LT((back.normalized() - ray).norm(), 1e-9) << p.shot << " target " << p.target;
   }
