@@ -123,6 +123,12 @@ bool PropagateDhSigmas(const InstrumentModel& dh, const FitOptions& fit,
   return true;
 }
 
+std::string Short(double x) {
+  std::ostringstream s;
+  s << std::setprecision(2) << x;
+  return s.str();
+}
+
 std::string Fixed(double x, int digits) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(digits) << x;
@@ -149,7 +155,7 @@ SurveyorConstants ComputeSurveyorConstants(const InstrumentModel& model, const F
       out.notes.push_back(
           "c, i, v0 and k0 are the dh model's equivalents: a spherical model with these terms "
           "fitted to the dh model's EDM predictions (both faces) reproduces them to " +
-          FormatShortestDouble(eq.fit_rms_m) + " m RMS.");
+          Short(eq.fit_rms_m) + " m RMS.");
       if (model.sigmas.valid) {
         have_eq_sigma = PropagateDhSigmas(model, fit, &eq_sigma, &sigma_why);
       } else {
