@@ -49,12 +49,13 @@ int RunExport(const ExportArgs& args) {
     throw std::invalid_argument("export: --format must be opencv, urdf or surveyor, got '" +
                                 args.format + "'");
   }
+  std::string existing;
   for (const fs::path& f : files) {
-    if (fs::exists(f) && !args.force) {
-      throw std::runtime_error(
-          "export: '" + f.string() +
-          "' exists; rtscalib does not overwrite files you have (use --force)");
-    }
+    if (fs::exists(f)) existing += (existing.empty() ? "'" : ", '") + f.string() + "'";
+  }
+  if (!existing.empty() && !args.force) {
+    throw std::runtime_error("export: " + existing +
+                             " exist(s); rtscalib does not overwrite files you have (use --force)");
   }
   fs::create_directories(dir);
 

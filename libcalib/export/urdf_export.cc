@@ -1,6 +1,7 @@
 #include "libcalib/export/urdf_export.h"
 
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 #include "libcalib/io/number_text.h"
@@ -23,8 +24,9 @@ std::string ValueText(const InstrumentModel& model, Effect e) {
   std::string out;
   for (int i = 0; i < info.num_params; ++i) {
     if (i) out += ", ";
-    out += std::string(info.param_names[i]) + " = " + FormatShortestDouble(r.value[i]) + " " +
-           info.report_units[i];
+    std::ostringstream v;
+    v << std::setprecision(6) << r.value[i];
+    out += std::string(info.param_names[i]) + " = " + v.str() + " " + info.report_units[i];
   }
   return out;
 }
