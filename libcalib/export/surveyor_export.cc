@@ -155,7 +155,9 @@ SurveyorConstants ComputeSurveyorConstants(const InstrumentModel& model, const F
       out.notes.push_back(
           "c, i, v0 and k0 are the dh model's equivalents: a spherical model with these terms "
           "fitted to the dh model's EDM predictions (both faces) reproduces them to " +
-          Short(eq.fit_rms_m) + " m RMS.");
+          Short(eq.fit_rms_m) +
+          " m RMS (what remains is geometry these terms cannot express, such as a DH link "
+          "offset).");
       if (model.sigmas.valid) {
         have_eq_sigma = PropagateDhSigmas(model, fit, &eq_sigma, &sigma_why);
       } else {
