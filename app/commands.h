@@ -27,4 +27,13 @@ struct PredictArgs {
 };
 int RunPredict(const PredictArgs& args);
 
+// `rtscalib export --model M --format opencv|urdf|surveyor` (app/export_command.cc).
+struct ExportArgs {
+  std::string model;
+  std::string format;
+  std::string out;     // default: the model's folder + /export/
+  bool force = false;  // allow replacing existing files
+};
+int RunExport(const ExportArgs& args);
+
 }  // namespace rtscalib::app

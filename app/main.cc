@@ -34,10 +34,21 @@ int main(int argc, char** argv) {
                "add significant effects one at a time and refit (the ladder)");
   dg->add_flag("--quiet", diag.quiet, "no progress lines on stderr");
 
+  rtscalib::app::ExportArgs exp;
+  CLI::App* ex = app.add_subcommand(
+      "export", "write a model for other tools: OpenCV cameras, a URDF, surveyor's constants");
+  ex->add_option("--model", exp.model, "model.yaml written by a run")->required();
+  ex->add_option("--format", exp.format, "opencv | urdf | surveyor")
+      ->required()
+      ->check(CLI::IsMember({"opencv", "urdf", "surveyor"}));
+  ex->add_option("--out", exp.out, "output folder (default: the model's folder + /export/)");
+  ex->add_flag("--force", exp.force, "replace files that exist");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (pred->parsed()) return rtscalib::app::RunPredict(predict);
     if (dg->parsed()) return rtscalib::app::RunDiagnose(diag);
+    if (ex->parsed()) return rtscalib::app::RunExport(exp);
     if (run.config.empty()) {
       std::cerr << app.help();
       return 2;

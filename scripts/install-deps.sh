@@ -9,6 +9,8 @@ packages=(
   libvtk9-dev libapriltag-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
+  # tests/export reads the exported URDF back with KDL
+  liburdfdom-dev liborocos-kdl-dev libkdl-parser-dev
   xvfb xauth libgl1-mesa-dri libglx-mesa0 mesa-utils
   # headless browser: scripts/render-report.sh checks report.html in it
   chromium

@@ -1,0 +1,55 @@
+#include "libcalib/export/opencv_export.h"
+
+#include <opencv2/core.hpp>
+#include <stdexcept>
+
+namespace rtscalib::exports {
+
+int OpenCvDistortionCount(const InstrumentModel& model, int zoom) {
+  if (zoom < 0 || zoom >= model.NumZooms()) {
+    throw std::out_of_range("zoom level " + std::to_string(zoom) + " is not in the model (it has " +
+                            std::to_string(model.NumZooms()) + " zoom levels)");
+  }
+  int needed = 0;
+  for (Effect e : model.effects.List()) {
+    if (!IsDistortion(e)) continue;
+    for (int i : Info(e).distortion_indices) needed = std::max(needed, i + 1);
+  }
+  const auto& d = model.cams[zoom].distortion;
+  for (int i = 0; i < camera::kNumDistortion; ++i) {
+    if (d[i] != 0.0) needed = std::max(needed, i + 1);
+  }
+  // The lengths cv::projectPoints and friends accept.
+  for (int n : {4, 5, 8, 12}) {
+    if (needed <= n) return n;
+  }
+  return camera::kNumDistortion;
+}
+
+std::string OpenCvCameraFileName(int zoom) {
+  return "camera_zoom" + std::to_string(zoom) + ".yaml";
+}
+
+void WriteOpenCvCamera(const std::string& path, const InstrumentModel& model, int zoom) {
+  const int n = OpenCvDistortionCount(model, zoom);
+  const CameraTool& cam = model.cams[zoom];
+  const auto& k = cam.intrinsics;
+  const cv::Mat camera_matrix = (cv::Mat_<double>(3, 3) << k[0], 0, k[2], 0, k[1], k[3], 0, 0, 1);
+  cv::Mat dist(1, n, CV_64F);
+  for (int i = 0; i < n; ++i) dist.at<double>(0, i) = cam.distortion[i];
+
+  cv::FileStorage fs;
+  if (!fs.open(path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML)) {
+    throw std::runtime_error("cannot write " + path);
+  }
+  fs.writeComment("rtscalib camera, zoom level " + std::to_string(zoom) +
+                  ": OpenCV pinhole model (cv::projectPoints conventions); pixels");
+  fs << "zoom" << zoom;
+  fs << "image_width" << cam.width;
+  fs << "image_height" << cam.height;
+  fs << "camera_matrix" << camera_matrix;
+  fs << "distortion_coefficients" << dist;
+  fs.release();
+}
+
+}  // namespace rtscalib::exports
