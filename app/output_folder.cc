@@ -253,30 +253,38 @@ void PlaceSymlink(const fs::path& at, const std::string& target) {
 void CheckTop(const fs::path& root) {
   std::error_code ec;
   if (!fs::exists(root, ec)) return;
-  const std::string before = "found before the run started";
+  // Every conflict at once, so that one look at the message is enough.
+  std::vector<InputError> errors;
+  auto foreign = [&](const fs::path& at, const std::string& expected, const std::string& got) {
+    try {
+      ThrowForeign(at, expected, got, "found before the run started");
+    } catch (const InputError& e) {
+      errors.push_back(e);
+    }
+  };
   for (const std::string& name : OutputFolder::TopFiles()) {
     const Found f = Classify(root, root / name, TopTarget(name), name);
     if (f.owner == Owner::kForeign) {
-      ThrowForeign(root / name, "no file of this name or rtscalib's symlink to " + TopTarget(name),
-                   f.got, before);
+      foreign(root / name, "no file of this name or rtscalib's symlink to " + TopTarget(name),
+              f.got);
     }
   }
   std::string got;
   if (!IsOurLatest(root / kLatest, &got)) {
-    ThrowForeign(root / kLatest, "no file of this name or rtscalib's symlink into history/", got,
-                 before);
+    foreign(root / kLatest, "no file of this name or rtscalib's symlink into history/", got);
   }
   for (const char* dir : {kFigures, kHistory}) {
     const fs::file_status st = fs::symlink_status(root / dir, ec);
     if (!ec && st.type() != fs::file_type::not_found && st.type() != fs::file_type::directory) {
-      ThrowForeign(root / dir, "nothing or a folder", "a file or symlink", before);
+      foreign(root / dir, "nothing or a folder", "a file or symlink");
     }
   }
   const fs::file_status st = fs::symlink_status(root / kManifest, ec);
   if (!ec && st.type() != fs::file_type::not_found && st.type() != fs::file_type::regular) {
-    ThrowForeign(root / kManifest, "rtscalib's manifest file", "a folder, symlink or special file",
-                 before);
+    foreign(root / kManifest, "rtscalib's manifest file", "a folder, symlink or special file");
   }
+  if (errors.size() == 1) throw errors.front();
+  if (!errors.empty()) throw InputError::Combine(errors);
 }
 
 void MakeFolder(const fs::path& dir) {
@@ -467,15 +475,23 @@ std::vector<OutputFolder::PublishStep> OutputFolder::PlanPublish(
                      WriteFileAtomic((root / kManifest).string(), m.dump(2) + "\n");
                    }});
   // Figures of the run shown before that this run lacks now dangle; they are
-  // rtscalib's own symlinks, so they go.
-  steps.push_back({"remove dangling figure links", [root] {
+  // rtscalib's own symlinks, so they go. So do plain copies an earlier
+  // version published that this run lacks (history keeps their originals).
+  steps.push_back({"remove figures this run lacks", [root, figures] {
                      std::error_code ec2;
+                     std::vector<fs::path> stale;
                      for (const auto& e : fs::directory_iterator(root / kFigures, ec2)) {
                        const std::string f = e.path().filename().string();
-                       if (!e.is_symlink(ec2)) continue;
-                       if (fs::read_symlink(e.path(), ec2).string() != FigureTarget(f)) continue;
-                       if (!fs::exists(e.path(), ec2)) ::unlink(e.path().c_str());
+                       const std::string rel = std::string(kFigures) + "/" + f;
+                       const Found found = Classify(root, e.path(), FigureTarget(f), rel);
+                       const bool dangling =
+                           found.owner == Owner::kOurs && !fs::exists(e.path(), ec2);
+                       const bool old_copy =
+                           found.owner == Owner::kLegacy &&
+                           std::find(figures.begin(), figures.end(), f) == figures.end();
+                       if (dangling || old_copy) stale.push_back(e.path());
                      }
+                     for (const fs::path& p : stale) ::unlink(p.c_str());
                    }});
   return steps;
 }
