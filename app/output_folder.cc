@@ -132,7 +132,8 @@ RunState ReadState(const fs::path& dir, std::string* reason) {
   }
   const long pid = std::atol(pid_text.c_str());
   const bool exists = pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
-  const bool same = exists && (start.empty() || ProcessStart(pid) == start);
+  const std::string now_start = exists ? ProcessStart(pid) : "";
+  const bool same = exists && (start.empty() || now_start.empty() || now_start == start);
   if (same) {
     *reason = "pid " + pid_text + " is still writing it";
     return RunState::kRunning;
@@ -363,7 +364,12 @@ void OutputFolder::Write(const std::string& name, std::string_view bytes) const 
 }
 
 void OutputFolder::MarkComplete() {
-  SyncFolder(run_.dir);  // the renames of the run's files first, then the status
+  // The renames of the run's files reach the disk first, then the status.
+  std::error_code ec;
+  if (fs::is_directory(fs::path(run_.dir) / kFigures, ec)) {
+    SyncFolder((fs::path(run_.dir) / kFigures).string());
+  }
+  SyncFolder(run_.dir);
   WriteFileAtomic(RunFile(kStatus), StatusText("complete"));
   complete_ = true;
   run_.state = RunState::kComplete;
