@@ -14,6 +14,7 @@
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <regex>
 #include <sstream>
 
 #include "app/safe_write.h"
@@ -142,14 +143,18 @@ RunState ReadState(const fs::path& dir, std::string* reason) {
   return RunState::kKilled;
 }
 
-// Entries of history/ (NNN-...; hidden names are entries being created).
+// Entries of history/ (NNN-YYYYmmdd-HHMMSS; hidden `.new-<pid>` folders are
+// entries being created).
 std::vector<HistoryEntry> ScanHistory(const fs::path& history) {
   std::vector<HistoryEntry> out;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(history, ec)) {
     const std::string name = e.path().filename().string();
-    if (name.empty() || name[0] == '.' || !e.is_directory(ec)) continue;
-    const int n = std::atoi(name.substr(0, name.find('-')).c_str());
+    // Only rtscalib's names: anything else in history/ is not a run.
+    static const std::regex kEntry(R"(([0-9]{3,})-[0-9]{8}-[0-9]{6})");
+    std::smatch m;
+    if (!std::regex_match(name, m, kEntry) || !e.is_directory(ec)) continue;
+    const int n = std::atoi(m[1].str().c_str());
     if (n <= 0) continue;
     out.push_back({e.path().string(), name, n, RunState::kComplete, ""});
   }
@@ -186,7 +191,8 @@ Found Classify(const fs::path& root, const fs::path& at, const std::string& our_
                const std::string& rel) {
   std::error_code ec;
   const fs::file_status st = fs::symlink_status(at, ec);
-  if (ec || st.type() == fs::file_type::not_found) return {Owner::kAbsent, "", ""};
+  if (st.type() == fs::file_type::not_found) return {Owner::kAbsent, "", ""};
+  if (ec) return {Owner::kForeign, "a file that cannot be inspected: " + ec.message(), ""};
   if (st.type() == fs::file_type::symlink) {
     const std::string target = fs::read_symlink(at, ec).string();
     if (!ec && target == our_target) return {Owner::kOurs, "", ""};
@@ -207,12 +213,12 @@ Found Classify(const fs::path& root, const fs::path& at, const std::string& our_
   return {Owner::kForeign, "a file rtscalib did not write", ""};
 }
 
-[[noreturn]] void ThrowForeign(const fs::path& at, const std::string& expected,
-                               const std::string& got, const std::string& when) {
-  throw InputError::File(at.string(), 0,
-                         "not written by rtscalib, which never replaces or removes it (" + when +
-                             "; move it away or choose another --output)",
-                         expected, got);
+InputError ForeignError(const fs::path& at, const std::string& expected, const std::string& got,
+                        const std::string& when) {
+  return InputError::File(at.string(), 0,
+                          "not written by rtscalib, which never replaces or removes it (" + when +
+                              "; move it away or choose another --output)",
+                          expected, got);
 }
 
 std::string TopTarget(const std::string& name) { return std::string(kLatest) + "/" + name; }
@@ -222,8 +228,8 @@ std::string FigureTarget(const std::string& name) {
 bool IsOurLatest(const fs::path& at, std::string* got) {
   std::error_code ec;
   const fs::file_status st = fs::symlink_status(at, ec);
-  if (ec || st.type() == fs::file_type::not_found) return true;
-  if (st.type() != fs::file_type::symlink) {
+  if (st.type() == fs::file_type::not_found) return true;
+  if (ec || st.type() != fs::file_type::symlink) {
     *got = "a file or folder that is not a symlink";
     return false;
   }
@@ -238,7 +244,9 @@ bool IsOurLatest(const fs::path& at, std::string* got) {
 void PlaceSymlink(const fs::path& at, const std::string& target) {
   const fs::path tmp =
       at.parent_path() / ("." + at.filename().string() + ".tmp-" + std::to_string(::getpid()));
-  ::unlink(tmp.c_str());  // a leftover of this pid's own (the name is rtscalib's)
+  struct stat st {};
+  // A leftover of a killed run with this pid; only ever a symlink.
+  if (::lstat(tmp.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) ::unlink(tmp.c_str());
   if (::symlink(target.c_str(), tmp.c_str()) != 0) {
     throw WriteError(at.string(), ErrnoText(errno) + " (symlink " + tmp.string() + ")");
   }
@@ -257,11 +265,7 @@ void CheckTop(const fs::path& root) {
   // Every conflict at once, so that one look at the message is enough.
   std::vector<InputError> errors;
   auto foreign = [&](const fs::path& at, const std::string& expected, const std::string& got) {
-    try {
-      ThrowForeign(at, expected, got, "found before the run started");
-    } catch (const InputError& e) {
-      errors.push_back(e);
-    }
+    errors.push_back(ForeignError(at, expected, got, "found before the run started"));
   };
   for (const std::string& name : OutputFolder::TopFiles()) {
     const Found f = Classify(root, root / name, TopTarget(name), name);
@@ -274,14 +278,18 @@ void CheckTop(const fs::path& root) {
   if (!IsOurLatest(root / kLatest, &got)) {
     foreign(root / kLatest, "no file of this name or rtscalib's symlink into history/", got);
   }
-  for (const char* dir : {kFigures, kHistory}) {
-    const fs::file_status st = fs::symlink_status(root / dir, ec);
-    if (!ec && st.type() != fs::file_type::not_found && st.type() != fs::file_type::directory) {
-      foreign(root / dir, "nothing or a folder", "a file or symlink");
-    }
+  // history/ may be a symlink to a folder elsewhere (another disk); figures/
+  // holds rtscalib's relative symlinks and must be a folder here.
+  const fs::file_status figures = fs::symlink_status(root / kFigures, ec);
+  if (figures.type() != fs::file_type::not_found && figures.type() != fs::file_type::directory) {
+    foreign(root / kFigures, "nothing or a folder", "a file or symlink");
+  }
+  const fs::file_status history = fs::status(root / kHistory, ec);
+  if (history.type() != fs::file_type::not_found && history.type() != fs::file_type::directory) {
+    foreign(root / kHistory, "nothing or a folder", "a file");
   }
   const fs::file_status st = fs::symlink_status(root / kManifest, ec);
-  if (!ec && st.type() != fs::file_type::not_found && st.type() != fs::file_type::regular) {
+  if (st.type() != fs::file_type::not_found && st.type() != fs::file_type::regular) {
     foreign(root / kManifest, "rtscalib's manifest file", "a folder, symlink or special file");
   }
   if (errors.size() == 1) throw errors.front();
@@ -335,7 +343,7 @@ OutputFolder::OutputFolder(const std::string& root)
   // every visible entry has a status file.
   const FolderLock lock(history / kLock);
   earlier_ = ScanHistory(history);
-  const int number = earlier_.empty() ? 1 : earlier_.back().number + 1;
+  int number = earlier_.empty() ? 1 : earlier_.back().number + 1;
   for (HistoryEntry& e : earlier_) e.state = ReadState(e.dir, &e.reason);
 
   std::ostringstream name;
@@ -346,11 +354,15 @@ OutputFolder::OutputFolder(const std::string& root)
     throw WriteError(staging.string(), ErrnoText(errno) + " (creating the run's folder)");
   }
   WriteFileAtomic((staging / kStatus).string(), StatusText("running"));
-  const fs::path dir = history / name.str();
-  // Numbers are unique under the lock; mkdir-style EEXIST is still checked
-  // in case an older rtscalib without the lock writes into the same folder.
-  if (fs::exists(dir, ec)) {
-    throw WriteError(dir.string(), "exists already (another rtscalib without the lock?)");
+  fs::path dir = history / name.str();
+  // Numbers are unique under the lock. An rtscalib version without the lock
+  // may still have made this name meanwhile: rename() would fail on it (it
+  // is not empty), so the number after is taken instead.
+  for (int next = number + 1; fs::exists(dir, ec); ++next) {
+    number = next;
+    name.str("");
+    name << std::setw(3) << std::setfill('0') << number << "-" << Now("%Y%m%d-%H%M%S");
+    dir = history / name.str();
   }
   if (::rename(staging.c_str(), dir.c_str()) != 0) {
     throw WriteError(dir.string(), ErrnoText(errno) + " (rename from " + staging.string() + ")");
@@ -414,8 +426,8 @@ std::vector<OutputFolder::PublishStep> OutputFolder::PlanPublish(
                      if (st.type() == fs::file_type::not_found) {
                        MakeFolder(root / kFigures);
                      } else if (st.type() != fs::file_type::directory) {
-                       ThrowForeign(root / kFigures, "nothing or a folder", "a file or symlink",
-                                    during);
+                       throw ForeignError(root / kFigures, "nothing or a folder",
+                                          "a file or symlink", during);
                      }
                    }});
   for (const std::string& name : TopFiles()) {
@@ -424,7 +436,7 @@ std::vector<OutputFolder::PublishStep> OutputFolder::PlanPublish(
     steps.push_back({"link " + name, [root, name, during] {
                        const Found f = Classify(root, root / name, TopTarget(name), name);
                        if (f.owner == Owner::kForeign) {
-                         ThrowForeign(
+                         throw ForeignError(
                              root / name,
                              "no file of this name or rtscalib's symlink to " + TopTarget(name),
                              f.got, during);
@@ -454,9 +466,9 @@ std::vector<OutputFolder::PublishStep> OutputFolder::PlanPublish(
   steps.push_back({"switch latest", [root, entry, during] {
                      std::string got;
                      if (!IsOurLatest(root / kLatest, &got)) {
-                       ThrowForeign(root / kLatest,
-                                    "no file of this name or rtscalib's symlink into history/", got,
-                                    during);
+                       throw ForeignError(
+                           root / kLatest,
+                           "no file of this name or rtscalib's symlink into history/", got, during);
                      }
                      PlaceSymlink(root / kLatest, entry);
                      SyncFolder(root.string());

@@ -226,6 +226,7 @@ TEST_F(OutputFolderTest, WriterKeepModeNeverReplacesAnExistingFile) {
 // --- history and publishing ----------------------------------------------
 
 TEST_F(OutputFolderTest, TopShowsTheLatestRunAndHistoryKeepsTheEarlierOne) {
+  Put(root_ / "history" / "2024-notes" / "x.txt", "the user's, not a run");
   const std::string a = FakeRun(root_, kFiguresA);
   EXPECT_EQ(TopRun(root_), a);
   const std::string b = FakeRun(root_, kFiguresB);
@@ -245,6 +246,7 @@ TEST_F(OutputFolderTest, TopShowsTheLatestRunAndHistoryKeepsTheEarlierOne) {
   EXPECT_EQ(next.earlier()[1].name, b);
   EXPECT_EQ(next.earlier()[1].state, RunState::kComplete);
   EXPECT_EQ(next.run().number, 3);
+  EXPECT_EQ(Read(root_ / "history" / "2024-notes" / "x.txt"), "the user's, not a run");
 }
 
 TEST_F(OutputFolderTest, UsersFilesUnderPublishedNamesStopTheRunBeforeItStarts) {
