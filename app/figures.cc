@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
 
 #include "libcalib/eval/error_measures.h"
@@ -578,7 +579,10 @@ std::string Added(const std::vector<std::string>& before, const std::vector<std:
 
 std::vector<unsigned char> EncodePng(const cv::Mat& image) {
   std::vector<unsigned char> out;
-  cv::imencode(".png", image, out);
+  if (image.empty() || !cv::imencode(".png", image, out) || out.empty()) {
+    throw std::runtime_error("PNG encoding failed for a " + std::to_string(image.cols) + "x" +
+                             std::to_string(image.rows) + " figure");
+  }
   return out;
 }
 

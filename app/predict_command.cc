@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "app/commands.h"
+#include "app/safe_write.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
 #include "libcalib/model/kinematics.h"
@@ -18,6 +19,8 @@ int RunPredict(const PredictArgs& args) {
     throw std::runtime_error("predict: '" + args.out +
                              "' exists; rtscalib does not overwrite files you have (use --force)");
   }
+  // kKeep also covers a file that appears while predicting.
+  const Existing existing = args.force ? Existing::kReplace : Existing::kKeep;
   const InstrumentModel model = ReadModelYaml(args.model);
   if (!args.records.empty()) {
     RecordsFile in = ReadRecords(args.records);
@@ -30,7 +33,8 @@ int RunPredict(const PredictArgs& args) {
       r.x = r.tool == Tool::kEdm ? PredictEdm(model, r.phi, r.theta, r.d)
                                  : PredictCam(model, r.zoom, r.phi, r.theta, r.u, r.v, r.d);
     }
-    WriteRecords(args.out, in.records);
+    WriteFileAtomicWith(
+        args.out, [&](const std::string& tmp) { WriteRecords(tmp, in.records); }, existing);
     std::cerr << "predict: " << in.records.size() << " records -> " << args.out << "\n";
     return 0;
   }
@@ -49,7 +53,8 @@ int RunPredict(const PredictArgs& args) {
     }
     p.uv = uv;
   }
-  WritePixels(args.out, in.pixels);
+  WriteFileAtomicWith(
+      args.out, [&](const std::string& tmp) { WritePixels(tmp, in.pixels); }, existing);
   std::cerr << "predict: " << in.pixels.size() << " pixel rows -> " << args.out;
   if (behind) std::cerr << " (" << behind << " points behind the camera written as nan)";
   std::cerr << "\n";

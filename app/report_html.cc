@@ -3,9 +3,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
+
+#include "app/safe_write.h"
 
 namespace rtscalib::app {
 namespace {
@@ -295,8 +297,10 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
           << "</td><td class=num>" << px << "</td></tr>\n";
       };
       for (const json& h : report["history"]) {
-        row(h.value("run", std::string("?")), h.value("kinematics", std::string("?")),
-            h.value("effects", json::array()), h.value("final", json::object()));
+        const std::string status = h.value("status", std::string("complete"));
+        row(h.value("run", std::string("?")) + (status == "complete" ? "" : " (" + status + ")"),
+            h.value("kinematics", std::string("?")), h.value("effects", json::array()),
+            h.value("final", json::object()));
       }
       row(run + " (this run)", KinematicsName(r.model.kinematics), r.model.effects.Names(),
           report.value("final", json::object()));
@@ -380,16 +384,15 @@ void WriteReportHtml(const RunConfig& config, const PipelineResult& r, const jso
   const json history = report.value("history", json::array());
   const std::vector<Figure> figs = MakeFigures(r, history);
   const std::filesystem::path dir = std::filesystem::path(out.run_dir()) / "figures";
-  std::filesystem::create_directories(dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw WriteError(dir.string(), ec.message() + " (creating the folder)");
   for (const Figure& f : figs) {
     const std::vector<unsigned char> png = EncodePng(f.image);
-    std::ofstream file(dir / f.name, std::ios::binary);
-    if (!file) throw std::runtime_error("cannot write '" + (dir / f.name).string() + "'");
-    file.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    WriteFileAtomic((dir / f.name).string(),
+                    std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   }
-  std::ofstream html(out.RunFile("report.html"));
-  if (!html) throw std::runtime_error("cannot write '" + out.RunFile("report.html") + "'");
-  html << ReportHtml(config, r, report, figs);
+  out.Write("report.html", ReportHtml(config, r, report, figs));
 }
 
 }  // namespace rtscalib::app

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 
 #include "app/diagnosis_report.h"
 #include "libcalib/model/kinematics.h"
@@ -121,21 +122,67 @@ json StatsJson(const ErrorStats& s) {
 json HistoryJson(const OutputFolder& out) {
   json runs = json::array();
   for (const HistoryEntry& h : out.earlier()) {
-    std::ifstream in(h.dir + "/report.json");
-    if (!in) continue;
-    json r;
-    try {
-      in >> r;
-    } catch (const std::exception&) {
+    json entry = {{"run", h.name}, {"status", RunStateName(h.state)}};
+    if (!h.reason.empty()) entry["reason"] = h.reason;
+    // Only a complete run's numbers are results; a killed or failed run's
+    // report.json (if any) may be from a later stage than its model.
+    if (h.state != RunState::kComplete) {
+      runs.push_back(entry);
       continue;
     }
-    json entry = {{"run", h.name}};
+    std::ifstream in(h.dir + "/report.json");
+    json r;
+    try {
+      if (!in) throw std::runtime_error("no report.json");
+      in >> r;
+    } catch (const std::exception&) {
+      entry["status"] = RunStateName(RunState::kIncomplete);
+      entry["reason"] = "report.json missing or unreadable";
+      runs.push_back(entry);
+      continue;
+    }
     if (r.contains("model")) entry["kinematics"] = r["model"].value("kinematics", "");
     if (r.contains("model")) entry["effects"] = r["model"].value("effects", json::array());
     if (r.contains("final")) entry["final"] = r["final"];
     runs.push_back(entry);
   }
   return runs;
+}
+
+std::string HistoryText(const json& history) {
+  if (!history.is_array() || history.empty()) return "";
+  std::ostringstream o;
+  o << "\nEarlier runs in this output folder (history/), oldest first\n";
+  for (const json& h : history) {
+    o << "  " << h.value("run", std::string("?"));
+    const std::string status = h.value("status", std::string("complete"));
+    if (status != "complete") {
+      o << "  " << status;
+      if (h.contains("reason")) o << " (" << h.value("reason", std::string()) << ")";
+      o << ": not a result\n";
+      continue;
+    }
+    o << "  " << h.value("kinematics", std::string("?")) << ", effects: [";
+    std::string sep;
+    for (const json& e : h.value("effects", json::array())) {
+      o << sep << e.get<std::string>();
+      sep = ", ";
+    }
+    o << "]";
+    const json final = h.value("final", json::object());
+    for (const char* tool : {"edm", "cam"}) {
+      if (final.contains("records") && final["records"].contains(tool) &&
+          final["records"][tool].value("n", 0) > 0) {
+        o << "  " << tool << " rms "
+          << Fmt("%.3f", final["records"][tool].value("rms_m", 0.0) * 1e3) << " mm";
+      }
+    }
+    if (final.contains("pixels") && final["pixels"].value("n", 0) > 0) {
+      o << "  pixels rms " << Fmt("%.3f", final["pixels"].value("rms_px", 0.0)) << " px";
+    }
+    o << "\n";
+  }
+  return o.str();
 }
 
 json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFolder& out) {

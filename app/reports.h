@@ -17,7 +17,12 @@ std::string ReportText(const RunConfig& config, const PipelineResult& result);
 
 // Key figures of earlier runs, read back from their report.json (for the
 // ladder of errors across runs).
+// Every earlier entry has "run" and "status" (RunStateName; "reason" when not
+// complete); only complete runs carry "kinematics", "effects" and "final".
 nlohmann::json HistoryJson(const OutputFolder& out);
+// The history for report.txt: one line per earlier run, killed and failed
+// runs marked as such.
+std::string HistoryText(const nlohmann::json& history);
 
 nlohmann::json StatsJson(const ErrorStats& s);
 

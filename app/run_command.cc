@@ -1,5 +1,4 @@
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 
 #include "app/commands.h"
@@ -9,6 +8,7 @@
 #include "app/progress.h"
 #include "app/report_html.h"
 #include "app/reports.h"
+#include "app/safe_write.h"
 #include "libcalib/io/config.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
@@ -16,10 +16,55 @@
 namespace rtscalib::app {
 namespace {
 
-void WriteText(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write '" + path + "'");
-  out << text;
+// Everything a run writes, into its own history entry; then publishing.
+int RunInto(const RunArgs& args, RunConfig config, OutputFolder& out, Progress& progress) {
+  out.Write("config.yaml", DumpConfig(config));
+
+  if (args.diagnose) config.diagnose.enabled = true;
+  if (args.diagnose_auto) config.diagnose.auto_add = true;
+  PipelineResult result = RunPipeline(config, out.run_dir(), &progress);
+  RunDiagnosis(config, &result, &progress);
+
+  progress.Step("writing the model and the reports");
+  if (result.simulated) {
+    WriteFileAtomicWith(out.RunFile("records.csv"),
+                        [&](const std::string& tmp) { WriteRecords(tmp, result.obs.records); });
+    if (!result.obs.pixels.empty()) {
+      WriteFileAtomicWith(out.RunFile("pixels.csv"),
+                          [&](const std::string& tmp) { WritePixels(tmp, result.obs.pixels); });
+    }
+    if (result.truth) {
+      WriteFileAtomicWith(out.RunFile("truth.yaml"), [&](const std::string& tmp) {
+        WriteModelYaml(tmp, *result.truth, {{"what", "simulated truth"}});
+      });
+    }
+  }
+  ModelMetadata meta = {{"program", "rtscalib 0.1.0"},
+                        {"config", config.config_path},
+                        {"run", out.run().name},
+                        {"records", result.obs.records_source},
+                        {"pixels", result.obs.pixels_source}};
+  WriteFileAtomicWith(out.RunFile("model.yaml"),
+                      [&](const std::string& tmp) { WriteModelYaml(tmp, result.model, meta); });
+  const nlohmann::json report = ReportJson(config, result, out);
+  out.Write("report.json", report.dump(2) + "\n");
+  WriteReportHtml(config, result, report, out);
+  const std::string text = ReportText(config, result) +
+                           HistoryText(report.value("history", nlohmann::json::array())) + "\n" +
+                           DiagnosisText(result);
+  out.Write("report.txt", text);
+  out.MarkComplete();
+  const std::vector<std::string> kept = out.Publish();
+  progress.Done();
+  std::cout << (args.diagnose ? DiagnosisText(result) : text);
+  std::cout << "\nwritten: " << out.run_dir()
+            << "/{model.yaml, report.json, report.txt, report.html, figures/}\nshown at the top of "
+            << out.root() << " (symlinks through " << out.root() << "/latest)\n";
+  for (const std::string& f : kept) {
+    std::cout << "kept your file " << out.root() << "/figures/" << f << "; this run's " << f
+              << " is only in " << out.run_dir() << "/figures/\n";
+  }
+  return 0;
 }
 
 }  // namespace
@@ -32,42 +77,20 @@ int RunCalibration(const RunArgs& args) {
       throw std::runtime_error("--write-config: '" + args.write_config +
                                "' exists; rtscalib does not overwrite files you have");
     }
-    WriteText(args.write_config, DumpConfig(config));
+    WriteFileAtomic(args.write_config, DumpConfig(config), Existing::kKeep);
   }
   Progress progress(args.quiet);
   OutputFolder out(config.output_dir);
   progress.Note("output: " + out.root() + " (this run: history/" + out.run().name + ")");
-  WriteText(out.RunFile("config.yaml"), DumpConfig(config));
-
-  if (args.diagnose) config.diagnose.enabled = true;
-  if (args.diagnose_auto) config.diagnose.auto_add = true;
-  PipelineResult result = RunPipeline(config, out.run_dir(), &progress);
-  RunDiagnosis(config, &result, &progress);
-
-  progress.Step("writing the model and the reports");
-  if (result.simulated) {
-    WriteRecords(out.RunFile("records.csv"), result.obs.records);
-    if (!result.obs.pixels.empty()) WritePixels(out.RunFile("pixels.csv"), result.obs.pixels);
-    if (result.truth)
-      WriteModelYaml(out.RunFile("truth.yaml"), *result.truth, {{"what", "simulated truth"}});
+  try {
+    return RunInto(args, config, out, progress);
+  } catch (const std::exception& e) {
+    out.MarkFailed(e.what());
+    throw;
+  } catch (...) {
+    out.MarkFailed("an exception that is not a std::exception");
+    throw;
   }
-  ModelMetadata meta = {{"program", "rtscalib 0.1.0"},
-                        {"config", config.config_path},
-                        {"run", out.run().name},
-                        {"records", result.obs.records_source},
-                        {"pixels", result.obs.pixels_source}};
-  WriteModelYaml(out.RunFile("model.yaml"), result.model, meta);
-  const nlohmann::json report = ReportJson(config, result, out);
-  WriteText(out.RunFile("report.json"), report.dump(2));
-  WriteReportHtml(config, result, report, out);
-  const std::string text = ReportText(config, result) + "\n" + DiagnosisText(result);
-  WriteText(out.RunFile("report.txt"), text);
-  out.Publish({"model.yaml", "report.json", "report.txt", "report.html", "figures"});
-  progress.Done();
-  std::cout << (args.diagnose ? DiagnosisText(result) : text);
-  std::cout << "\nwritten: " << out.root()
-            << "/{model.yaml, report.json, report.txt, report.html, figures/}\n";
-  return 0;
 }
 
 }  // namespace rtscalib::app
