@@ -11,9 +11,9 @@ namespace rtscalib {
 namespace {
 
 constexpr double kArcsec = M_PI / (180.0 * 3600.0);
-// two_face.h: first order in c, i, v0; the neglected terms are ~c^2 < 1e-8 rad
-// for c < 100". The values below are <= 30" (c^2 ~ 2e-8 rad^2... i.e. ~2e-8
-// in the worst product of two 1.5e-4 rad terms); 0.01" = 4.8e-8 rad bounds it.
+// two_face.h: first order in c, i, v0; the neglected terms are products of
+// two of them. The values below are <= 30" = 1.5e-4 rad, so the products are
+// <= 2.1e-8 rad; 0.01" = 4.8e-8 rad bounds them with a factor 2 to spare.
 constexpr double kFirstOrder = 0.01 * kArcsec;
 
 // A simulated spherical truth like the diagnosis fixtures' (tests/diagnose):
