@@ -25,24 +25,24 @@ void WriteText(const std::string& path, const std::string& text) {
 }  // namespace
 
 int RunCalibration(const RunArgs& args) {
-  RunConfig config = LoadConfig(args.config);
+  RunSettings settings = LoadRunSettings(args.config);
+  RunConfig& config = settings.config;
   if (!args.output.empty()) config.output_dir = std::filesystem::absolute(args.output).string();
   if (!args.write_config.empty()) {
     if (std::filesystem::exists(args.write_config)) {
       throw std::runtime_error("--write-config: '" + args.write_config +
                                "' exists; rtscalib does not overwrite files you have");
     }
-    WriteText(args.write_config, DumpConfig(config));
+    WriteText(args.write_config, DumpRunSettings(settings));
   }
   Progress progress(args.quiet);
   OutputFolder out(config.output_dir);
   progress.Note("output: " + out.root() + " (this run: history/" + out.run().name + ")");
-  WriteText(out.RunFile("config.yaml"), DumpConfig(config));
+  WriteText(out.RunFile("config.yaml"), DumpRunSettings(settings));
 
   if (args.diagnose) config.diagnose.enabled = true;
   if (args.diagnose_auto) config.diagnose.auto_add = true;
-  PipelineResult result = RunPipeline(config, out.run_dir(), &progress);
-  RunDiagnosis(config, &result, &progress);
+  const PipelineResult result = RunPipeline(settings, out.run_dir(), &progress);
 
   progress.Step("writing the model and the reports");
   if (result.simulated) {
@@ -56,15 +56,15 @@ int RunCalibration(const RunArgs& args) {
                         {"run", out.run().name},
                         {"records", result.obs.records_source},
                         {"pixels", result.obs.pixels_source}};
-  WriteModelYaml(out.RunFile("model.yaml"), result.model, meta);
+  WriteModelYaml(out.RunFile("model.yaml"), result.calibration.model, meta);
   const nlohmann::json report = ReportJson(config, result, out);
   WriteText(out.RunFile("report.json"), report.dump(2));
   WriteReportHtml(config, result, report, out);
-  const std::string text = ReportText(config, result) + "\n" + DiagnosisText(result);
+  const std::string text = ReportText(config, result) + "\n" + DiagnosisText(result.calibration);
   WriteText(out.RunFile("report.txt"), text);
   out.Publish({"model.yaml", "report.json", "report.txt", "report.html", "figures"});
   progress.Done();
-  std::cout << (args.diagnose ? DiagnosisText(result) : text);
+  std::cout << (args.diagnose ? DiagnosisText(result.calibration) : text);
   std::cout << "\nwritten: " << out.root()
             << "/{model.yaml, report.json, report.txt, report.html, figures/}\n";
   return 0;
