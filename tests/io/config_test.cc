@@ -163,8 +163,8 @@ TEST(Config, UnknownKeyInsideRenderIsAnErrorEvenWithDataFiles) {
                                              "data: {records: records.csv}\n"
                                              "render:\n"
                                              "  jobs: 2\n"
-                                             "  jbos: 3\n");
-  EXPECT_EQ(e.key, "render.jbos");
+                                             "  jobz: 3\n");
+  EXPECT_EQ(e.key, "render.jobz");
   EXPECT_EQ(e.file, dir.Path("run.yaml"));
   EXPECT_EQ(e.line, 4);
   EXPECT_THAT(e.what(), HasSubstr("did you mean 'jobs'?"));
