@@ -5,8 +5,6 @@
 #include <iomanip>
 #include <sstream>
 
-#include "libcalib/diagnose/stepwise.h"
-
 namespace rtscalib::app {
 namespace {
 
@@ -105,52 +103,7 @@ json LadderJson(const std::vector<diagnose::LadderStep>& ladder) {
 
 }  // namespace
 
-void RunDiagnosis(const RunConfig& config, PipelineResult* r, Progress* progress) {
-  if (!config.diagnose.enabled) return;
-  // The calibration stands without its diagnosis: a failure here becomes a
-  // note in the reports, not a failed run.
-  try {
-    RunDiagnosisOrThrow(config, r, progress);
-  } catch (const std::exception& e) {
-    r->diagnosis.reset();
-    r->notes.push_back(std::string("diagnosis failed: ") + e.what());
-    progress->Note(r->notes.back());
-  }
-}
-
-void RunDiagnosisOrThrow(const RunConfig& config, PipelineResult* r, Progress* progress) {
-  diagnose::Settings s;
-  s.significance = config.diagnose.significance;
-  if (config.diagnose.auto_add) {
-    progress->Step("forward stepwise: adding significant effects one at a time");
-    diagnose::StepwiseResult sw =
-        diagnose::ForwardStepwise(r->obs, r->model, r->fit, r->fit_options, s);
-    for (size_t i = 1; i < sw.ladder.size(); ++i) {
-      progress->Note("added " + sw.ladder[i].added + ": " + sw.ladder[i].model_description);
-    }
-    progress->Note("stopped: " + sw.stop_reason);
-    r->ladder = sw.ladder;
-    r->ladder_stop = sw.stop_reason;
-    if (sw.ladder.size() > 1) {
-      r->notes.push_back(
-          "diagnose.auto: the stepwise search extended the model to " +
-          sw.ladder.back().model_description +
-          "; model.yaml, the final errors and the diagnosis are of that model, Tables 5-7 of the "
-          "configured one");
-    }
-    r->model = sw.model;
-    r->fit = sw.fit;
-    r->final_errors = ComputeFinalErrors(r->model, r->obs);
-    r->diagnosis = std::move(sw.diagnosis);
-  } else {
-    progress->Step("diagnosing the model (ranking the missing effects)");
-    r->diagnosis =
-        diagnose::Diagnose(r->obs, r->model, diagnose::ContextOf(r->fit_options, r->fit), s);
-  }
-  for (const std::string& v : r->diagnosis->verdict) progress->Note(v);
-}
-
-json DiagnosisJson(const PipelineResult& r) {
+json DiagnosisJson(const CalibrationResult& r) {
   if (!r.diagnosis) return json();
   const diagnose::Diagnosis& d = *r.diagnosis;
   json ranking = json::array();
@@ -199,7 +152,7 @@ json DiagnosisJson(const PipelineResult& r) {
   return j;
 }
 
-std::string DiagnosisText(const PipelineResult& r) {
+std::string DiagnosisText(const CalibrationResult& r) {
   if (!r.diagnosis) return "";
   const diagnose::Diagnosis& d = *r.diagnosis;
   std::ostringstream o;

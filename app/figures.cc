@@ -273,24 +273,25 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& re
 // Image-space residual arrows.
 
 Figure ImageArrows(int zoom, const PipelineResult& r) {
-  const CameraTool& cam = r.model.cams[zoom];
+  const CameraTool& cam = r.calibration.model.cams[zoom];
   struct Arrow {
     double u, v, du, dv;
     int n;
   };
   std::vector<Arrow> raw;
-  const double zmin = r.fit_options.min_zenith_rad, zmax = r.fit_options.max_zenith_rad;
+  const double zmin = r.calibration.fit_options.min_zenith_rad,
+               zmax = r.calibration.fit_options.max_zenith_rad;
   for (const PixelObservation& p : r.obs.pixels) {
     if (p.zoom != zoom || InCriticalRegion(p.theta, zmin, zmax)) continue;
     Eigen::Vector2d pred;
-    if (!PredictPixel(r.model, zoom, p.phi, p.theta, p.X, &pred)) continue;
+    if (!PredictPixel(r.calibration.model, zoom, p.phi, p.theta, p.X, &pred)) continue;
     raw.push_back({p.uv.x(), p.uv.y(), p.uv.x() - pred.x(), p.uv.y() - pred.y(), 1});
   }
   for (const Record& rec : r.obs.records) {
     if (rec.tool != Tool::kCam || rec.zoom != zoom || InCriticalRegion(rec.theta, zmin, zmax))
       continue;
     Eigen::Vector2d pred;
-    if (!PredictPixel(r.model, zoom, rec.phi, rec.theta, rec.x, &pred)) continue;
+    if (!PredictPixel(r.calibration.model, zoom, rec.phi, rec.theta, rec.x, &pred)) continue;
     raw.push_back({rec.u, rec.v, rec.u - pred.x(), rec.v - pred.y(), 1});
   }
   // Mean per image cell (16 x 12): the systematic part a person can read.
@@ -424,7 +425,7 @@ void HistogramPanel(cv::Mat& img, cv::Rect area, const Series& s) {
 }
 
 Figure Histograms(const PipelineResult& r) {
-  const diagnose::Diagnosis& d = *r.diagnosis;
+  const diagnose::Diagnosis& d = *r.calibration.diagnosis;
   Series edm{"EDM points (x, y, z)", "mm", {}, d.sigma[0] * 1e3};
   Series cam{"camera points (x, y, z)", "mm", {}, d.sigma[1] * 1e3};
   Series px{"image points (u, v)", "px", {}, d.sigma[2]};
@@ -588,8 +589,8 @@ std::vector<unsigned char> EncodePng(const cv::Mat& image) {
 
 std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   std::vector<Figure> figs;
-  if (!r.diagnosis) return figs;
-  const diagnose::Diagnosis& d = *r.diagnosis;
+  if (!r.calibration.diagnosis) return figs;
+  const diagnose::Diagnosis& d = *r.calibration.diagnosis;
   const std::string model = d.model_description;
   // Faces and zooms present.
   std::set<int> faces;
@@ -604,25 +605,25 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   }
   if (edm)
     figs.push_back(ErrorMap({"edm", "EDM points", "mm", 1e3, ObsGroup::kEdm, 0}, d.residuals, faces,
-                            r.fit_options, model));
+                            r.calibration.fit_options, model));
   for (int z : cam_zooms) {
     figs.push_back(
         ErrorMap({"cam_zoom" + std::to_string(z), "Camera points, zoom " + std::to_string(z), "mm",
                   1e3, ObsGroup::kCam, z},
-                 d.residuals, faces, r.fit_options, model));
+                 d.residuals, faces, r.calibration.fit_options, model));
   }
   for (int z : pixel_zooms) {
     figs.push_back(
         ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z),
                   "px", 1.0, ObsGroup::kPixel, z},
-                 d.residuals, faces, r.fit_options, model));
+                 d.residuals, faces, r.calibration.fit_options, model));
   }
 
   // This run's stepwise ladder.
-  if (r.ladder.size() > 1) {
+  if (r.calibration.ladder.size() > 1) {
     std::vector<Rung> rungs;
-    for (size_t i = 0; i < r.ladder.size(); ++i) {
-      const diagnose::LadderStep& s = r.ladder[i];
+    for (size_t i = 0; i < r.calibration.ladder.size(); ++i) {
+      const diagnose::LadderStep& s = r.calibration.ladder[i];
       rungs.push_back({"step " + std::to_string(i), s.added.empty() ? "(start)" : "+" + s.added,
                        s.rms.edm_n ? s.rms.edm_m * 1e3 : NAN, s.rms.cam_n ? s.rms.cam_m * 1e3 : NAN,
                        s.rms.pixels_n ? s.rms.pixels_px : NAN});
@@ -655,22 +656,28 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
       if (h.contains("effects")) effects = h["effects"].get<std::vector<std::string>>();
       add("run " + h.value("run", std::string("?")).substr(0, 3), effects, h["final"]);
     }
-    json final = {
-        {"records",
-         {{"edm", {{"rms_m", r.final_errors.edm.rms_m}, {"n", r.final_errors.edm.n}}},
-          {"cam", {{"rms_m", r.final_errors.cam.rms_m}, {"n", r.final_errors.cam.n}}}}},
-        {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
-    add("this run", r.model.effects.Names(), final);
+    json final = {{"records",
+                   {{"edm",
+                     {{"rms_m", r.calibration.final_errors.edm.rms_m},
+                      {"n", r.calibration.final_errors.edm.n}}},
+                    {"cam",
+                     {{"rms_m", r.calibration.final_errors.cam.rms_m},
+                      {"n", r.calibration.final_errors.cam.n}}}}},
+                  {"pixels",
+                   {{"rms_px", r.calibration.final_errors.pixels.rms_px},
+                    {"n", r.calibration.final_errors.pixels.n}}}};
+    add("this run", r.calibration.model.effects.Names(), final);
     figs.push_back(LadderFigure(
         rungs, "ladder_runs.png", "The ladder across runs (this output folder's history)",
         "Final error of every run kept in the output folder (all rows, SPEC 6 `final`); "
         "red: the effects added (+) or removed (-) relative to the run before."));
   }
   for (int z : cam_zooms) {
-    if (z < r.model.NumZooms()) figs.push_back(ImageArrows(z, r));
+    if (z < r.calibration.model.NumZooms()) figs.push_back(ImageArrows(z, r));
   }
   for (int z : pixel_zooms) {
-    if (z < r.model.NumZooms() && !cam_zooms.count(z)) figs.push_back(ImageArrows(z, r));
+    if (z < r.calibration.model.NumZooms() && !cam_zooms.count(z))
+      figs.push_back(ImageArrows(z, r));
   }
   figs.push_back(Histograms(r));
   return figs;

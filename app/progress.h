@@ -1,27 +1,30 @@
 // Progress lines for long work, on stderr so that stdout stays the report.
+// The calibration library reports through the same interface.
 #pragma once
 
 #include <chrono>
 #include <cstdio>
 #include <string>
 
+#include "libcalib/calibrate/progress.h"
+
 namespace rtscalib::app {
 
-class Progress {
+class Progress : public CalibrationProgress {
  public:
   explicit Progress(bool quiet) : quiet_(quiet) {}
   // Starts step `name`; the previous step (if any) is closed with its time.
-  void Step(const std::string& name) {
+  void Step(const std::string& name) override {
     Done();
     open_ = true;
     start_ = std::chrono::steady_clock::now();
     if (!quiet_) std::fprintf(stderr, "[rtscalib] %s ...\n", name.c_str());
     name_ = name;
   }
-  void Note(const std::string& text) const {
+  void Note(const std::string& text) override {
     if (!quiet_) std::fprintf(stderr, "[rtscalib]   %s\n", text.c_str());
   }
-  void Done() {
+  void Done() override {
     if (!open_) return;
     open_ = false;
     const double s =

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <map>
 
-#include "libcalib/io/yaml_reader.h"
 #include "libcalib/model/kinematics.h"
 
 #ifdef RTSCALIB_WITH_RENDER
@@ -13,35 +12,10 @@
 
 namespace rtscalib::app {
 
-RenderSettings ParseRenderSettings(const RunConfig& config) {
-  RenderSettings s;
-  if (config.render_yaml.empty()) return s;
-  const YamlDocument doc =
-      YamlDocument::Parse(config.render_yaml, config.config_path + " (section render)");
-  const YamlNode root = doc.Root();
-  s.enabled = true;
-  root.Read("enabled", &s.enabled);
-  root.Read("jobs", &s.jobs);
-  root.Read("supersample", &s.supersample);
-  root.Read("noise_sigma", &s.noise_sigma);
-  root.Read("blur_sigma", &s.blur_sigma);
-  root.Read("exposure", &s.exposure);
-  root.Read("family", &s.family);
-  doc.CheckAllKeysUsed();
-  auto check = [&](const char* key, bool ok, const char* expected) {
-    if (!ok) root.Require(key).Fail(expected);
-  };
-  check("jobs", s.jobs >= 1, "an integer >= 1");
-  check("supersample", s.supersample >= 1, "an integer >= 1");
-  check("noise_sigma", s.noise_sigma >= 0, "a number >= 0 (grey levels)");
-  check("blur_sigma", s.blur_sigma >= 0, "a number >= 0 (pixels)");
-  check("exposure", s.exposure > 0, "a number > 0");
-  return s;
-}
-
-RenderStageResult RenderAndDetect(const RenderSettings& settings, const InstrumentModel& truth,
-                                  const TargetScene& scene, const std::string& image_dir,
-                                  Observations* obs, Progress* progress) {
+RenderStageResult RenderAndDetect(const render::RenderSettings& settings,
+                                  const InstrumentModel& truth, const TargetScene& scene,
+                                  const std::string& image_dir, Observations* obs,
+                                  Progress* progress) {
   RenderStageResult out;
   out.image_dir = image_dir;
 #ifndef RTSCALIB_WITH_RENDER

@@ -8,25 +8,12 @@
 #include <string>
 
 #include "app/progress.h"
-#include "libcalib/io/config.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 #include "libcalib/model/targets.h"
+#include "render/settings.h"
 
 namespace rtscalib::app {
-
-// The config's `render` section (keys documented in docs/config.md).
-struct RenderSettings {
-  bool enabled = false;
-  int jobs = 2;  // worker processes
-  int supersample = 2;
-  double noise_sigma = 1.0;  // grey levels
-  double blur_sigma = 0.0;   // px
-  double exposure = 1.0;
-  std::string family = "tag36h11";
-};
-// Throws InputError naming the key (render.<key>) for unknown or bad keys.
-RenderSettings ParseRenderSettings(const RunConfig& config);
 
 struct RenderStageResult {
   bool ran = false;
@@ -42,8 +29,9 @@ struct RenderStageResult {
 // Renders every shot in obs->pixels (shot id, zoom, face, phi, theta) with the
 // truth's camera poses, detects the tags and replaces obs->pixels by the
 // detections. Without VTK in the build, returns ran = false with a note.
-RenderStageResult RenderAndDetect(const RenderSettings& settings, const InstrumentModel& truth,
-                                  const TargetScene& scene, const std::string& image_dir,
-                                  Observations* obs, Progress* progress);
+RenderStageResult RenderAndDetect(const render::RenderSettings& settings,
+                                  const InstrumentModel& truth, const TargetScene& scene,
+                                  const std::string& image_dir, Observations* obs,
+                                  Progress* progress);
 
 }  // namespace rtscalib::app

@@ -239,8 +239,8 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     << (r.simulated ? " &middot; simulated data" : "") << "</p>\n";
 
   // 1. Verdict.
-  if (r.diagnosis) {
-    const diagnose::Diagnosis& d = *r.diagnosis;
+  if (r.calibration.diagnosis) {
+    const diagnose::Diagnosis& d = *r.calibration.diagnosis;
     const diagnose::RankedEffect* next = d.Next();
     o << "<section class=\"verdict" << (next || !d.harmonics.unexplained.empty() ? "" : " ok")
       << "\" id=\"verdict\"><h2 style=\"border:none;margin-top:4px\">Verdict</h2>\n";
@@ -260,15 +260,15 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   // 2. The ladder.
   const bool has_history =
       report.contains("history") && report["history"].is_array() && !report["history"].empty();
-  if (!r.ladder.empty() || has_history) {
+  if (!r.calibration.ladder.empty() || has_history) {
     o << "<h2 id=\"ladder\">Watch the error fall</h2>\n";
-    if (!r.ladder.empty()) {
-      o << "<h3>This run: forward stepwise (" << Esc(r.ladder_stop)
+    if (!r.calibration.ladder.empty()) {
+      o << "<h3>This run: forward stepwise (" << Esc(r.calibration.ladder_stop)
         << ")</h3><table><tr><th>step</th><th>added</th>"
            "<th>model</th><th>EDM rms [mm]</th><th>camera rms [mm]</th><th>pixels rms "
            "[px]</th><th>BIC</th></tr>\n";
-      for (size_t i = 0; i < r.ladder.size(); ++i) {
-        const diagnose::LadderStep& s = r.ladder[i];
+      for (size_t i = 0; i < r.calibration.ladder.size(); ++i) {
+        const diagnose::LadderStep& s = r.calibration.ladder[i];
         o << "<tr><td class=num>" << i << "</td><td>" << Esc(s.added.empty() ? "(start)" : s.added)
           << "</td><td>" << Esc(s.model_description) << "</td>" << GroupCells(s.rms)
           << "<td class=num>" << Fmt("%.1f", s.bic) << "</td></tr>\n";
@@ -302,8 +302,8 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
             h.value("kinematics", std::string("?")), h.value("effects", json::array()),
             h.value("final", json::object()));
       }
-      row(run + " (this run)", KinematicsName(r.model.kinematics), r.model.effects.Names(),
-          report.value("final", json::object()));
+      row(run + " (this run)", KinematicsName(r.calibration.model.kinematics),
+          r.calibration.model.effects.Names(), report.value("final", json::object()));
       o << "</table>\n";
     }
     o << Figures(figs, "ladder");
@@ -313,8 +313,8 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   o << "<h2 id=\"maps\">Where the model fails</h2>\n" << Figures(figs, "maps");
 
   // 4. Tables.
-  if (r.diagnosis) {
-    const diagnose::Diagnosis& d = *r.diagnosis;
+  if (r.calibration.diagnosis) {
+    const diagnose::Diagnosis& d = *r.calibration.diagnosis;
     o << "<h2 id=\"ranking\">Which effect is missing</h2>\n" << RankingTable(d);
     o << "<h2 id=\"structure\">Structure outside the catalogue</h2>\n";
     if (d.harmonics.unexplained.empty()) {
@@ -325,11 +325,13 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
       o << "<p>Significant once every catalogue effect is allowed for; reported as what they are, "
            "not under an "
            "effect's name (error = amplitude &middot; sin(k x &minus; phase)):</p>\n"
-        << HarmonicTable(d.harmonics.unexplained, false, r.model.edm_cyclic_unit_length);
+        << HarmonicTable(d.harmonics.unexplained, false,
+                         r.calibration.model.edm_cyclic_unit_length);
     }
     if (!d.harmonics.before_catalogue.empty()) {
       o << "<h3>Harmonics in the residuals of this model</h3>\n"
-        << HarmonicTable(d.harmonics.before_catalogue, true, r.model.edm_cyclic_unit_length);
+        << HarmonicTable(d.harmonics.before_catalogue, true,
+                         r.calibration.model.edm_cyclic_unit_length);
     }
     o << "<h2 id=\"outliers\">Outliers (w-test)</h2>\n<p>" << d.outliers.flagged << " of "
       << d.outliers.tested
@@ -354,18 +356,20 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
       << Mm(s.std_m) << " mm</td><td class=num>" << Mm(s.rms_m) << " mm</td><td class=num>" << s.n
       << "</td></tr>\n";
   };
-  stats("EDM points", r.final_errors.edm);
-  stats("camera points", r.final_errors.cam);
-  if (r.final_errors.pixels.n > 0) {
-    o << "<tr><td>image points</td><td class=num>" << Fmt("%.4g", r.final_errors.pixels.mean_px)
-      << " px</td><td></td><td class=num>" << Fmt("%.4g", r.final_errors.pixels.rms_px)
-      << " px</td><td class=num>" << r.final_errors.pixels.n << "</td></tr>\n";
+  stats("EDM points", r.calibration.final_errors.edm);
+  stats("camera points", r.calibration.final_errors.cam);
+  if (r.calibration.final_errors.pixels.n > 0) {
+    o << "<tr><td>image points</td><td class=num>"
+      << Fmt("%.4g", r.calibration.final_errors.pixels.mean_px) << " px</td><td></td><td class=num>"
+      << Fmt("%.4g", r.calibration.final_errors.pixels.rms_px) << " px</td><td class=num>"
+      << r.calibration.final_errors.pixels.n << "</td></tr>\n";
   }
   o << "</table>\n<p class=small>Refinement "
-    << (r.fit.converged ? "converged" : "did NOT converge") << " in " << r.fit.iterations
-    << " iterations; fitted sigmas: EDM " << Mm(r.fit.sigma_edm_m) << " mm, camera "
-    << Mm(r.fit.sigma_cam_m) << " mm, pixels " << Fmt("%.3g", r.fit.sigma_pixel_px) << " px; "
-    << r.fit.excluded_critical << " rows in the critical regions excluded.</p>\n";
+    << (r.calibration.fit.converged ? "converged" : "did NOT converge") << " in "
+    << r.calibration.fit.iterations << " iterations; fitted sigmas: EDM "
+    << Mm(r.calibration.fit.sigma_edm_m) << " mm, camera " << Mm(r.calibration.fit.sigma_cam_m)
+    << " mm, pixels " << Fmt("%.3g", r.calibration.fit.sigma_pixel_px) << " px; "
+    << r.calibration.fit.excluded_critical << " rows in the critical regions excluded.</p>\n";
 
   o << "<h2 id=\"image\">Image residuals</h2>\n" << Figures(figs, "image");
   o << "<h2 id=\"histograms\">Residual distributions</h2>\n" << Figures(figs, "histograms");

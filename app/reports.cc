@@ -193,9 +193,9 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                {"records_source", r.obs.records_source},
                {"pixels_source", r.obs.pixels_source},
                {"simulated", r.simulated},
-               {"excluded_critical_region", r.fit.excluded_critical}};
-  if (r.extraction) {
-    const ExtractionResult& e = *r.extraction;
+               {"excluded_critical_region", r.calibration.fit.excluded_critical}};
+  if (r.calibration.extraction) {
+    const ExtractionResult& e = *r.calibration.extraction;
     json joints = json::array();
     for (const JointFeature& f : e.joints) {
       joints.push_back({{"joint", f.joint},
@@ -213,27 +213,30 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                        {"excluded_critical_region", e.excluded.critical_zenith},
                        {"notes", e.notes}};
   }
-  if (r.simplified) {
-    j["simplification"] = {{"model", ModelJson(*r.simplified)}, {"closed_form", r.closed_form}};
+  if (r.calibration.simplified) {
+    j["simplification"] = {{"model", ModelJson(*r.calibration.simplified)},
+                           {"closed_form", r.calibration.closed_form}};
   }
-  if (r.table4) {
-    j["table4"] = {
-        {"A",
-         {{"dh", ErrorsJson(r.table4->dh_a)}, {"simplified", ErrorsJson(r.table4->simplified_a)}}},
-        {"B",
-         {{"dh", ErrorsJson(r.table4->dh_b)}, {"simplified", ErrorsJson(r.table4->simplified_b)}}}};
+  if (r.calibration.table4) {
+    j["table4"] = {{"A",
+                    {{"dh", ErrorsJson(r.calibration.table4->dh_a)},
+                     {"simplified", ErrorsJson(r.calibration.table4->simplified_a)}}},
+                   {"B",
+                    {{"dh", ErrorsJson(r.calibration.table4->dh_b)},
+                     {"simplified", ErrorsJson(r.calibration.table4->simplified_b)}}}};
   }
-  j["table5"] = {{"reduced", ErrorsJson(r.table5.reduced)},
-                 {"cross", r.table5.has_cross ? ErrorsJson(r.table5.cross) : json()},
-                 {"full", ErrorsJson(r.table5.full)},
-                 {"reduced_rows", r.table5.reduced_rows},
-                 {"full_rows", r.table5.full_rows},
-                 {"scalarised_objective_full", ScalarisedObjective(r.table5.full.compound)}};
-  j["model"] = ModelJson(r.model);
-  j["fit"] = FitJson(r.fit);
-  j["fit"]["intrinsics_fitted"] = r.intrinsics_fitted;
-  if (r.faces) {
-    const FaceComparison& f = *r.faces;
+  j["table5"] = {
+      {"reduced", ErrorsJson(r.calibration.table5.reduced)},
+      {"cross", r.calibration.table5.has_cross ? ErrorsJson(r.calibration.table5.cross) : json()},
+      {"full", ErrorsJson(r.calibration.table5.full)},
+      {"reduced_rows", r.calibration.table5.reduced_rows},
+      {"full_rows", r.calibration.table5.full_rows},
+      {"scalarised_objective_full", ScalarisedObjective(r.calibration.table5.full.compound)}};
+  j["model"] = ModelJson(r.calibration.model);
+  j["fit"] = FitJson(r.calibration.fit);
+  j["fit"]["intrinsics_fitted"] = r.calibration.intrinsics_fitted;
+  if (r.calibration.faces) {
+    const FaceComparison& f = *r.calibration.faces;
     j["faces"] = {{"valid", f.valid},
                   {"note", f.note},
                   {"collimation_arcsec", f.collimation * kArcsec},
@@ -242,10 +245,13 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                   {"face1", ModelJson(f.face1)},
                   {"face2", ModelJson(f.face2)}};
   }
-  j["final"] = {
-      {"records", {{"edm", StatsJson(r.final_errors.edm)}, {"cam", StatsJson(r.final_errors.cam)}}},
-      {"pixels", {{"rms_px", r.final_errors.pixels.rms_px}, {"n", r.final_errors.pixels.n}}}};
-  j["diagnosis"] = DiagnosisJson(r);
+  j["final"] = {{"records",
+                 {{"edm", StatsJson(r.calibration.final_errors.edm)},
+                  {"cam", StatsJson(r.calibration.final_errors.cam)}}},
+                {"pixels",
+                 {{"rms_px", r.calibration.final_errors.pixels.rms_px},
+                  {"n", r.calibration.final_errors.pixels.n}}}};
+  j["diagnosis"] = DiagnosisJson(r.calibration);
   if (r.render.ran) {
     j["rendering"] = {{"shots", r.render.shots},
                       {"tags_expected", r.render.expected_tags},
@@ -299,20 +305,21 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   o << "data: " << r.obs.records.size() << " records (" << r.obs.records_source << "), "
     << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "")
     << "\n\n";
-  if (r.extraction) {
-    dh_table(r.extraction->model, "Table 1 - extracted DH parameters (Klug Sec. 3)");
+  if (r.calibration.extraction) {
+    dh_table(r.calibration.extraction->model, "Table 1 - extracted DH parameters (Klug Sec. 3)");
     o << "\n";
-    transforms(r.extraction->model,
+    transforms(r.calibration.extraction->model,
                "Table 2 - extracted base and tool transforms (Euler a, b, g: Eq. 83)");
     o << "\n";
   }
-  if (!r.closed_form.empty()) o << "Simplified model (Sec. 4.1):\n" << r.closed_form << "\n\n";
-  if (r.table4) {
+  if (!r.calibration.closed_form.empty())
+    o << "Simplified model (Sec. 4.1):\n" << r.calibration.closed_form << "\n\n";
+  if (r.calibration.table4) {
     o << "Table 4 - error of the extracted (DH) and the simplified model [m], mean +- std (Eq. "
          "92/93)\n";
     o << "  method  tool        e_DH                    e_simplified\n";
-    const ModelErrors* rows[4] = {&r.table4->dh_a, &r.table4->simplified_a, &r.table4->dh_b,
-                                  &r.table4->simplified_b};
+    const ModelErrors* rows[4] = {&r.calibration.table4->dh_a, &r.calibration.table4->simplified_a,
+                                  &r.calibration.table4->dh_b, &r.calibration.table4->simplified_b};
     for (int m = 0; m < 2; ++m) {
       const ModelErrors& dh = *rows[2 * m];
       const ModelErrors& si = *rows[2 * m + 1];
@@ -325,7 +332,7 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   }
   o << "Table 5 - refined model, method B [m]\n  tool        e_optimized             "
        "e_optimized,cross       e_optimized,full\n";
-  const Table5& t = r.table5;
+  const Table5& t = r.calibration.table5;
   auto row5 = [&](const char* name, const ErrorStats& a, const ErrorStats& b, const ErrorStats& c) {
     o << "  " << std::left << std::setw(10) << name << std::right << stats(a) << "   "
       << (t.has_cross ? stats(b) : std::string("       n/a         ")) << "   " << stats(c) << "\n";
@@ -335,32 +342,33 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   row5("compound", t.reduced.compound, t.cross.compound, t.full.compound);
   o << "  (reduced set: " << t.reduced_rows << " records; full set: " << t.full_rows
     << " records)\n\n";
-  if (r.model.kinematics == Kinematics::kDh) {
-    dh_table(r.model, "Table 6 - refined DH parameters");
+  if (r.calibration.model.kinematics == Kinematics::kDh) {
+    dh_table(r.calibration.model, "Table 6 - refined DH parameters");
     o << "\n";
   }
-  transforms(r.model, "Table 7 - refined base and tool transforms");
+  transforms(r.calibration.model, "Table 7 - refined base and tool transforms");
   o << "\n";
-  if (r.model.sigmas.valid) {
+  if (r.calibration.model.sigmas.valid) {
     o << "Intrinsics per zoom (fx, fy, cx, cy [px] +- sigma)\n";
-    for (int z = 0; z < r.model.NumZooms(); ++z) {
-      const auto& k = r.model.cams[z].intrinsics;
-      const auto& s = r.model.sigmas.intrinsics[z];
+    for (int z = 0; z < r.calibration.model.NumZooms(); ++z) {
+      const auto& k = r.calibration.model.cams[z].intrinsics;
+      const auto& s = r.calibration.model.sigmas.intrinsics[z];
       o << "  zoom " << z << ":";
       for (int i = 0; i < 4; ++i) o << "  " << Fmt("%.3f", k[i]) << " +- " << Fmt("%.3f", s[i]);
       o << "\n";
     }
     o << "\n";
   }
-  if (!r.model.effects.Empty()) {
+  if (!r.calibration.model.effects.Empty()) {
     o << "Effects (report units)\n";
-    for (Effect e : r.model.effects.List()) {
+    for (Effect e : r.calibration.model.effects.List()) {
       if (!IsKinematic(e)) {
         o << "  " << Info(e).name << " (per zoom, see model.yaml)\n";
         continue;
       }
       const EffectReportValue v =
-          ToReportUnits(e, r.model.EffectValue(e), r.model.sigmas.effect_cov[static_cast<int>(e)]);
+          ToReportUnits(e, r.calibration.model.EffectValue(e),
+                        r.calibration.model.sigmas.effect_cov[static_cast<int>(e)]);
       o << "  " << std::left << std::setw(16) << Info(e).name << std::right;
       for (int k = 0; k < v.num; ++k) {
         o << "  " << Info(e).param_names[k] << " = " << Fmt("%.4g", v.value[k]) << " +- "
@@ -370,13 +378,13 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     }
     o << "\n";
   }
-  if (r.faces && r.faces->valid) {
+  if (r.calibration.faces && r.calibration.faces->valid) {
     o << "Two-face check (one model per face)\n  collimation "
-      << Fmt("%.2f", r.faces->collimation * kArcsec) << "\"  tilting axis "
-      << Fmt("%.2f", r.faces->tilting_axis * kArcsec) << "\"  vertical index "
-      << Fmt("%.2f", r.faces->vertical_index * kArcsec) << "\"\n\n";
+      << Fmt("%.2f", r.calibration.faces->collimation * kArcsec) << "\"  tilting axis "
+      << Fmt("%.2f", r.calibration.faces->tilting_axis * kArcsec) << "\"  vertical index "
+      << Fmt("%.2f", r.calibration.faces->vertical_index * kArcsec) << "\"\n\n";
   }
-  const FinalErrors& f = r.final_errors;
+  const FinalErrors& f = r.calibration.final_errors;
   if (r.render.ran) {
     o << "Synthetic shots: " << r.render.shots << " rendered, " << r.render.found_tags << " of "
       << r.render.expected_tags << " visible tags detected (skipped: " << r.render.skipped_border
@@ -388,14 +396,14 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     << stats(f.cam) << " m (n=" << f.cam.n << ")";
   if (f.pixels.n > 0)
     o << ", pixels rms " << Fmt("%.3f", f.pixels.rms_px) << " px (n=" << f.pixels.n << ")";
-  o << "\nRefinement: " << (r.fit.converged ? "converged" : "NOT converged") << " in "
-    << r.fit.iterations << " iterations, " << Fmt("%.3f", r.fit.seconds)
-    << " s; excluded (critical region): " << r.fit.excluded_critical << "\n";
+  o << "\nRefinement: " << (r.calibration.fit.converged ? "converged" : "NOT converged") << " in "
+    << r.calibration.fit.iterations << " iterations, " << Fmt("%.3f", r.calibration.fit.seconds)
+    << " s; excluded (critical region): " << r.calibration.fit.excluded_critical << "\n";
   o << "Gauge freedoms held:\n";
-  for (const std::string& g : r.fit.fixed_gauges) o << "  - " << g << "\n";
-  if (!r.fit.strong_correlations.empty()) {
+  for (const std::string& g : r.calibration.fit.fixed_gauges) o << "  - " << g << "\n";
+  if (!r.calibration.fit.strong_correlations.empty()) {
     o << "Strongly correlated parameters (|rho| > 0.95):\n";
-    for (const auto& [pair, rho] : r.fit.strong_correlations)
+    for (const auto& [pair, rho] : r.calibration.fit.strong_correlations)
       o << "  " << pair << "  rho = " << Fmt("%+.3f", rho) << "\n";
   }
   for (const std::string& n : r.notes) o << "note: " << n << "\n";

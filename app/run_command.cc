@@ -17,13 +17,13 @@ namespace rtscalib::app {
 namespace {
 
 // Everything a run writes, into its own history entry; then publishing.
-int RunInto(const RunArgs& args, RunConfig config, OutputFolder& out, Progress& progress) {
-  out.Write("config.yaml", DumpConfig(config));
+int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progress& progress) {
+  RunConfig& config = settings.config;
+  out.Write("config.yaml", DumpRunSettings(settings));
 
   if (args.diagnose) config.diagnose.enabled = true;
   if (args.diagnose_auto) config.diagnose.auto_add = true;
-  PipelineResult result = RunPipeline(config, out.run_dir(), &progress);
-  RunDiagnosis(config, &result, &progress);
+  const PipelineResult result = RunPipeline(settings, out.run_dir(), &progress);
 
   progress.Step("writing the model and the reports");
   if (result.simulated) {
@@ -45,18 +45,18 @@ int RunInto(const RunArgs& args, RunConfig config, OutputFolder& out, Progress& 
                         {"records", result.obs.records_source},
                         {"pixels", result.obs.pixels_source}};
   WriteFileAtomicWith(out.RunFile("model.yaml"),
-                      [&](const std::string& tmp) { WriteModelYaml(tmp, result.model, meta); });
+                      [&](const std::string& tmp) { WriteModelYaml(tmp, result.calibration.model, meta); });
   const nlohmann::json report = ReportJson(config, result, out);
   out.Write("report.json", report.dump(2) + "\n");
   WriteReportHtml(config, result, report, out);
   const std::string text = ReportText(config, result) +
                            HistoryText(report.value("history", nlohmann::json::array())) + "\n" +
-                           DiagnosisText(result);
+                           DiagnosisText(result.calibration);
   out.Write("report.txt", text);
   out.MarkComplete();
   const std::vector<std::string> kept = out.Publish();
   progress.Done();
-  std::cout << (args.diagnose ? DiagnosisText(result) : text);
+  std::cout << (args.diagnose ? DiagnosisText(result.calibration) : text);
   std::cout << "\nwritten: " << out.run_dir()
             << "/{model.yaml, report.json, report.txt, report.html, figures/}\nshown at the top of "
             << out.root() << " (symlinks through " << out.root() << "/latest)\n";
@@ -70,20 +70,21 @@ int RunInto(const RunArgs& args, RunConfig config, OutputFolder& out, Progress& 
 }  // namespace
 
 int RunCalibration(const RunArgs& args) {
-  RunConfig config = LoadConfig(args.config);
+  RunSettings settings = LoadRunSettings(args.config);
+  RunConfig& config = settings.config;
   if (!args.output.empty()) config.output_dir = std::filesystem::absolute(args.output).string();
   if (!args.write_config.empty()) {
     if (std::filesystem::exists(args.write_config)) {
       throw std::runtime_error("--write-config: '" + args.write_config +
                                "' exists; rtscalib does not overwrite files you have");
     }
-    WriteFileAtomic(args.write_config, DumpConfig(config), Existing::kKeep);
+    WriteFileAtomic(args.write_config, DumpRunSettings(settings), Existing::kKeep);
   }
   Progress progress(args.quiet);
   OutputFolder out(config.output_dir);
   progress.Note("output: " + out.root() + " (this run: history/" + out.run().name + ")");
   try {
-    return RunInto(args, config, out, progress);
+    return RunInto(args, settings, out, progress);
   } catch (const std::exception& e) {
     out.MarkFailed(e.what());
     throw;

@@ -12,36 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "libcalib/fit/options.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 
 namespace rtscalib {
-
-enum class RobustLoss { kNone, kHuber, kCauchy };
-
-struct FitOptions {
-  double sigma_edm_m = 1e-5;      // a-priori sigma of an EDM point coordinate
-  double sigma_cam_m = 1e-5;      // a-priori sigma of a camera-record coordinate
-  double sigma_pixel_px = 0.5;    // a-priori sigma of a pixel coordinate
-  bool reestimate_sigmas = true;  // variance-component estimate per group
-  RobustLoss loss = RobustLoss::kNone;
-  double loss_scale = 3.0;  // in sigmas
-  int max_iterations = 200;
-  // Klug Eq. 98's |t| <= t_max, here a window of +- this around the start
-  // (extraction) value of every translation block. Klug used 1e-2 m around
-  // zero; with noisy records the extracted camera translation is itself only
-  // good to about (1 m ray) x (rotation error of the 1-px triplet, ~1e-2 rad),
-  // so the default window is 0.1 m. 0 disables the bounds.
-  double translation_bound_m = 0.1;
-  bool fit_intrinsics = false;
-  // Zenith limits outside of which rows are excluded (critical regions, SPEC 1).
-  double min_zenith_rad = 10.0 * M_PI / 180.0;
-  double max_zenith_rad = 135.0 * M_PI / 180.0;
-  int num_threads = 2;
-  bool compute_covariance = true;
-  bool verbose = false;
-  std::string Check() const;
-};
 
 struct FitSummary {
   bool converged = false;

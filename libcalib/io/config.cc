@@ -9,6 +9,8 @@
 #include "libcalib/io/errors.h"
 #include "libcalib/io/number_text.h"
 #include "libcalib/io/yaml_reader.h"
+#include "libcalib/model/effects.h"
+#include "libcalib/model/instrument.h"
 
 namespace rtscalib {
 namespace {
@@ -585,13 +587,15 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
 const char* FaceModeName(FaceMode m) { return NameOf(kFaceModeNames, m).c_str(); }
 const char* IntrinsicsModeName(IntrinsicsMode m) { return NameOf(kIntrinsicsNames, m).c_str(); }
 
-int PlanNumZooms(const AcquisitionPlan& plan) {
-  int max_zoom = -1;
-  for (int z : plan.zooms) max_zoom = std::max(max_zoom, z);
-  return max_zoom + 1;
+CalibrationOptions CalibrationOptionsOf(const RunConfig& config) {
+  CalibrationOptions options;
+  options.model = config.model;
+  options.fit = config.fit;
+  options.diagnose = config.diagnose;
+  return options;
 }
 
-RunConfig LoadConfig(const std::string& path) {
+RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& sections) {
   const YamlDocument doc = YamlDocument::Load(path);
   const YamlNode root = doc.Root();
   RunConfig config;
@@ -608,9 +612,8 @@ RunConfig LoadConfig(const std::string& path) {
     config.simulate.emplace();
     ReadSimulate(*simulate, config.model, &*config.simulate, &config.truth_from_paper);
   }
-  if (const std::optional<YamlNode> n = root.Find("render")) {
-    n->ConsumeAll();
-    config.render_yaml = n->Dump();
+  for (const ConfigSection& section : sections) {
+    if (const std::optional<YamlNode> n = root.Find(section.key)) section.read(*n);
   }
   if (const std::optional<YamlNode> n = root.Find("diagnose")) ReadDiagnose(*n, &config.diagnose);
   std::string output = "out";
@@ -631,7 +634,7 @@ RunConfig LoadConfig(const std::string& path) {
   return config;
 }
 
-std::string DumpConfig(const RunConfig& c) {
+std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sections) {
   YAML::Emitter e;
   e << YAML::BeginMap;
   if (!c.records_path.empty() || !c.pixels_path.empty()) {
@@ -687,8 +690,9 @@ std::string DumpConfig(const RunConfig& c) {
     e << YAML::Key << "simulate" << YAML::Value;
     EmitSimulate(e, *c.simulate, c.truth_from_paper);
   }
-  if (!c.render_yaml.empty()) {
-    e << YAML::Key << "render" << YAML::Value << YAML::Load(c.render_yaml);
+  for (const ConfigSection& section : sections) {
+    const YAML::Node node = section.dump();
+    if (!node.IsNull()) e << YAML::Key << section.key << YAML::Value << node;
   }
   e << YAML::Key << "diagnose" << YAML::Value << YAML::Flow << YAML::BeginMap;
   e << YAML::Key << "enabled" << YAML::Value << c.diagnose.enabled;

@@ -9,7 +9,6 @@
 
 #include <unistd.h>
 
-#include "app/diagnosis_report.h"
 #include "app/pipeline.h"
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/refine.h"
@@ -25,12 +24,14 @@ class Zoom3Demo : public ::testing::Test {
     GTEST_SKIP() << "built without the renderer";
 #endif
     unsetenv("DISPLAY");  // the demo must start its own X server
-    config_ = new RunConfig(LoadConfig(std::string(RTSCALIB_SOURCE_DIR) + "/configs/zoom3.yaml"));
+    settings_ =
+        new RunSettings(LoadRunSettings(std::string(RTSCALIB_SOURCE_DIR) + "/configs/zoom3.yaml"));
+    RunConfig& config = settings_->config;
     // Smaller than the demo, same scene: 2 shots per board, zooms 0 and 2.
-    config_->simulate->shots.shots_per_board = 2;
-    config_->simulate->plan.zooms = {0, 2};
-    config_->simulate->plan.grid_phi_steps = 8;
-    config_->simulate->plan.grid_theta_steps = 4;
+    config.simulate->shots.shots_per_board = 2;
+    config.simulate->plan.zooms = {0, 2};
+    config.simulate->plan.grid_phi_steps = 8;
+    config.simulate->plan.grid_theta_steps = 4;
     // One folder per process: ctest runs each test of this suite in its own
     // process, in parallel.
     work_ = std::filesystem::temp_directory_path() /
@@ -39,17 +40,17 @@ class Zoom3Demo : public ::testing::Test {
     std::filesystem::create_directories(work_);
     Progress progress(true);
     try {
-      result_ = new PipelineResult(RunPipeline(*config_, work_.string(), &progress));
+      // The diagnosis runs inside the calibration (config: diagnose enabled).
+      result_ = new PipelineResult(RunPipeline(*settings_, work_.string(), &progress));
     } catch (const std::exception& e) {
       error_ = e.what();
       return;
     }
-    RunDiagnosis(*config_, result_, &progress);
     // What the user does next: add the named effect with one config line.
-    with_effect_ = new InstrumentModel(result_->model);
+    with_effect_ = new InstrumentModel(result_->calibration.model);
     with_effect_->effects.Add(Effect::kHzEccentricity);
     with_effect_->sigmas = {};
-    Refine(result_->obs, result_->fit_options, with_effect_);
+    Refine(result_->obs, result_->calibration.fit_options, with_effect_);
   }
   void SetUp() override {
 #ifndef RTSCALIB_WITH_RENDER
@@ -60,10 +61,10 @@ class Zoom3Demo : public ::testing::Test {
   static void TearDownTestSuite() {
     delete with_effect_;
     delete result_;
-    delete config_;
+    delete settings_;
     std::filesystem::remove_all(work_);
   }
-  static RunConfig* config_;
+  static RunSettings* settings_;
   static PipelineResult* result_;
   static InstrumentModel* with_effect_;
   static std::string error_;
@@ -71,7 +72,7 @@ class Zoom3Demo : public ::testing::Test {
 };
 InstrumentModel* Zoom3Demo::with_effect_ = nullptr;
 std::string Zoom3Demo::error_;
-RunConfig* Zoom3Demo::config_ = nullptr;
+RunSettings* Zoom3Demo::settings_ = nullptr;
 PipelineResult* Zoom3Demo::result_ = nullptr;
 std::filesystem::path Zoom3Demo::work_;
 
@@ -90,11 +91,11 @@ TEST_F(Zoom3Demo, DetectionAccurate) {
 // calibrated from the rendered shots agree with the truth within 3 sigmas.
 TEST_F(Zoom3Demo, IntrinsicsWithinThreeSigma) {
   ASSERT_TRUE(result_->truth.has_value());
-  EXPECT_LT(result_->final_errors.pixels.rms_px, 0.5);
+  EXPECT_LT(result_->calibration.final_errors.pixels.rms_px, 0.5);
   const InstrumentModel& m = *with_effect_;
   EXPECT_LT(EvaluatePixels(m, result_->obs.pixels).rms_px, 0.1);
   ASSERT_TRUE(m.sigmas.valid);
-  for (int z : config_->simulate->plan.zooms) {
+  for (int z : settings_->config.simulate->plan.zooms) {
     const auto& truth = result_->truth->cams[z].intrinsics;
     // Principal point: within 3 sigmas.
     for (int i = 2; i < 4; ++i) {
@@ -123,8 +124,8 @@ TEST_F(Zoom3Demo, IntrinsicsWithinThreeSigma) {
 
 // The hidden effect of the demo is the first suggestion of the diagnosis.
 TEST_F(Zoom3Demo, DiagnosisNamesHiddenEffect) {
-  ASSERT_TRUE(result_->diagnosis.has_value());
-  const auto* next = result_->diagnosis->Next();
+  ASSERT_TRUE(result_->calibration.diagnosis.has_value());
+  const auto* next = result_->calibration.diagnosis->Next();
   ASSERT_NE(next, nullptr);
   EXPECT_EQ(next->name, "hz_eccentricity");
 }

@@ -103,7 +103,7 @@ InstrumentModel SphericalTruthWithAxisErrors() {
 TEST(JointFaces, SeparateFacesReproduceCollimationTiltingAxisAndVerticalIndex) {
   const InstrumentModel truth = SphericalTruthWithAxisErrors();
   const SimulatedData data = Simulate(RecordsAndPixels(truth, 8, 0.0, 0.0));
-  // The pipeline's path (app/pipeline.cc, faces: separate): extraction ->
+  // The calibration's path (libcalib/calibrate, faces: separate): extraction ->
   // joint dh fit -> one dh fit per face from it -> two-face check.
   InstrumentModel joint = ExtractDhModel(data.obs.records, ApiCameras(truth)).model;
   FitOptions fo;

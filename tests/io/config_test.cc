@@ -5,6 +5,7 @@
 
 #include <fstream>
 
+#include "render/settings.h"
 #include "tests/io/io_test_util.h"
 
 namespace rtscalib {
@@ -23,6 +24,18 @@ constexpr const char* kSimulateOnly = "simulate: {seed: 3}\n";
 InputError ConfigError(const TempDir& dir, const std::string& text) {
   const std::string path = dir.Write("run.yaml", text);
   return CatchInputError([&] { LoadConfig(path); });
+}
+
+// A config loaded as the rtscalib binary loads it: with the render module's
+// section (render/settings.h).
+RunConfig LoadWithRender(const std::string& path, render::RenderSettings* render) {
+  return LoadConfig(path, {render::RenderConfigSection(render)});
+}
+
+InputError ConfigErrorWithRender(const TempDir& dir, const std::string& text) {
+  const std::string path = dir.Write("run.yaml", text);
+  render::RenderSettings render;
+  return CatchInputError([&] { LoadWithRender(path, &render); });
 }
 
 // The first ```yaml block after `heading` in docs/config.md.
@@ -51,7 +64,6 @@ TEST(Config, SpecMinimalExampleResolvesPathsAgainstTheConfigFolder) {
             (std::vector<std::string>{"hz_eccentricity", "radial_distortion"}));
   EXPECT_EQ(c.model.edm_cyclic_unit_length, 1.5);
   EXPECT_FALSE(c.simulate.has_value());
-  EXPECT_TRUE(c.render_yaml.empty());
   EXPECT_TRUE(c.notes.empty());
   // Untouched sections keep the structs' defaults.
   EXPECT_EQ(c.fit.max_iterations, FitOptions().max_iterations);
@@ -64,7 +76,9 @@ TEST(Config, DocsFullExampleLoadsWithEveryKey) {
   TempDir dir;
   dir.Write("records.csv", "x\n");
   dir.Write("pixels.csv", "x\n");
-  const RunConfig c = LoadConfig(dir.Write("run.yaml", DocsExample("## Full example")));
+  render::RenderSettings render;
+  const RunConfig c =
+      LoadWithRender(dir.Write("run.yaml", DocsExample("## Full example")), &render);
   ASSERT_EQ(c.model.cameras.size(), 2u);
   EXPECT_EQ(c.model.cameras[1].intrinsics[0], 2000);
   EXPECT_EQ(c.model.cameras[1].distortion[0], -0.05);
@@ -93,7 +107,10 @@ TEST(Config, DocsFullExampleLoadsWithEveryKey) {
   EXPECT_NEAR(std::atan2(hz[1], hz[0]), 30 * M_PI / 180, 1e-12);
   EXPECT_NEAR(truth.EffectValue(Effect::kEdmScale)[0], 3e-6, 1e-20);
   EXPECT_NEAR(truth.base.Euler()[1], 0.0002, 1e-12);
-  EXPECT_THAT(c.render_yaml, HasSubstr("width: 640"));
+  EXPECT_TRUE(render.enabled);
+  EXPECT_EQ(render.jobs, 2);
+  EXPECT_EQ(render.supersample, 3);
+  EXPECT_EQ(render.blur_sigma, 0.5);
   // Data files win over the simulate section, and the log says so.
   ASSERT_EQ(c.notes.size(), 1u);
   EXPECT_THAT(c.notes[0], HasSubstr("simulate section is not used"));
@@ -128,12 +145,50 @@ TEST(Config, UnknownKeysEverywhereAreAllReported) {
   EXPECT_THAT(e.what(), HasSubstr("did you mean 'output'?"));
 }
 
-TEST(Config, RenderSectionIsKeptRawAndNotChecked) {
+// `render` belongs to the render module: without its reader it is an unknown
+// top-level key like any other.
+TEST(Config, RenderSectionWithoutItsReaderIsUnknown) {
   TempDir dir;
-  const RunConfig c = LoadConfig(dir.Write(
-      "run.yaml", std::string(kSimulateOnly) + "render: {anything: [1, 2], deep: {x: 1}}\n"));
-  EXPECT_THAT(c.render_yaml, HasSubstr("anything"));
-  EXPECT_THAT(c.render_yaml, HasSubstr("deep"));
+  const InputError e = ConfigError(dir, std::string(kSimulateOnly) + "render: {jobs: 2}\n");
+  EXPECT_EQ(e.key, "render");
+  EXPECT_EQ(e.line, 2);
+}
+
+// With its reader, a typo inside `render:` is an error with key path, file
+// and line, also when data files are given and nothing is rendered.
+TEST(Config, UnknownKeyInsideRenderIsAnErrorEvenWithDataFiles) {
+  TempDir dir;
+  dir.Write("records.csv", "x\n");
+  const InputError e = ConfigErrorWithRender(dir,
+                                             "data: {records: records.csv}\n"
+                                             "render:\n"
+                                             "  jobs: 2\n"
+                                             "  jobz: 3\n");
+  EXPECT_EQ(e.key, "render.jobz");
+  EXPECT_EQ(e.file, dir.Path("run.yaml"));
+  EXPECT_EQ(e.line, 4);
+  EXPECT_THAT(e.what(), HasSubstr("did you mean 'jobs'?"));
+}
+
+TEST(Config, RenderValuesAreCheckedWhereTheyAreRead) {
+  TempDir dir;
+  const InputError e = ConfigErrorWithRender(
+      dir, std::string(kSimulateOnly) + "render:\n  enabled: true\n  supersample: 0\n");
+  EXPECT_EQ(e.key, "render.supersample");
+  EXPECT_EQ(e.line, 4);
+  EXPECT_EQ(ConfigErrorWithRender(dir, std::string(kSimulateOnly) + "render: {exposure: 0}\n").key,
+            "render.exposure");
+  render::RenderSettings render;
+  LoadWithRender(dir.Write("run.yaml", std::string(kSimulateOnly) + "render: {jobs: 1}\n"),
+                 &render);
+  EXPECT_TRUE(render.enabled);  // a render section switches rendering on
+  EXPECT_EQ(render.jobs, 1);
+  EXPECT_EQ(render.noise_sigma, render::RenderSettings().noise_sigma);
+  render.exposure = -1;
+  EXPECT_THAT(render.Check(), HasSubstr("render.exposure"));
+  render::RenderSettings absent;
+  LoadWithRender(dir.Write("run.yaml", kSimulateOnly), &absent);
+  EXPECT_FALSE(absent.enabled);
 }
 
 TEST(Config, UnknownEffectListsValidNames) {
@@ -327,10 +382,12 @@ TEST(Config, DumpLoadsBackToTheSameConfig) {
   TempDir dir;
   dir.Write("records.csv", "x\n");
   dir.Write("pixels.csv", "x\n");
-  const RunConfig a = LoadConfig(dir.Write("run.yaml", DocsExample("## Full example")));
-  const std::string dump_a = DumpConfig(a);
-  const RunConfig b = LoadConfig(dir.Write("elsewhere/dump.yaml", dump_a));
-  const std::string dump_b = DumpConfig(b);
+  render::RenderSettings render_a, render_b;
+  const RunConfig a =
+      LoadWithRender(dir.Write("run.yaml", DocsExample("## Full example")), &render_a);
+  const std::string dump_a = DumpConfig(a, {render::RenderConfigSection(&render_a)});
+  const RunConfig b = LoadWithRender(dir.Write("elsewhere/dump.yaml", dump_a), &render_b);
+  const std::string dump_b = DumpConfig(b, {render::RenderConfigSection(&render_b)});
   EXPECT_EQ(b.records_path, a.records_path);
   EXPECT_EQ(b.pixels_path, a.pixels_path);
   EXPECT_EQ(b.output_dir, a.output_dir);
@@ -352,7 +409,10 @@ TEST(Config, DumpLoadsBackToTheSameConfig) {
   const auto cyclic_a = a.simulate->truth.EffectValue(Effect::kEdmCyclic);
   const auto cyclic_b = b.simulate->truth.EffectValue(Effect::kEdmCyclic);
   for (int i = 0; i < 2; ++i) EXPECT_NEAR(cyclic_b[i], cyclic_a[i], 1e-15 * std::abs(cyclic_a[i]));
-  EXPECT_EQ(b.render_yaml, a.render_yaml);
+  EXPECT_EQ(render_b.enabled, render_a.enabled);
+  EXPECT_EQ(render_b.supersample, render_a.supersample);
+  EXPECT_EQ(render_b.blur_sigma, render_a.blur_sigma);
+  EXPECT_EQ(render_b.family, render_a.family);
   EXPECT_EQ(b.diagnose.significance, a.diagnose.significance);
   EXPECT_EQ(b.truth_from_paper, a.truth_from_paper);
   EXPECT_EQ(b.simulate->targets.boards[0].ref_from_board.translation,

@@ -1,0 +1,385 @@
+#include "libcalib/calibrate/calibrate.h"
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+#include <utility>
+
+#include "libcalib/extract/intrinsics_from_rays.h"
+#include "libcalib/extract/simplify.h"
+#include "libcalib/fit/init_from_pixels.h"
+#include "libcalib/fit/start_models.h"
+#include "libcalib/fit/two_face.h"
+#include "libcalib/model/kinematics.h"
+
+namespace rtscalib {
+namespace {
+
+// Camera rows (or pixels) of a zoom span the image when their pixels cover at
+// least a quarter of its width and height: then the intrinsics are observable.
+bool CamDataSpanImage(const Observations& obs, const InstrumentModel& model, int zoom) {
+  if (zoom >= model.NumZooms()) return false;
+  double umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
+  auto add = [&](double u, double v) {
+    umin = std::min(umin, u);
+    umax = std::max(umax, u);
+    vmin = std::min(vmin, v);
+    vmax = std::max(vmax, v);
+  };
+  for (const Record& r : obs.records) {
+    if (r.tool == Tool::kCam && r.zoom == zoom) add(r.u, r.v);
+  }
+  for (const PixelObservation& p : obs.pixels) {
+    if (p.zoom == zoom) add(p.uv.x(), p.uv.y());
+  }
+  const CameraTool& c = model.cams[zoom];
+  return umax - umin > 0.25 * c.width && vmax - vmin > 0.25 * c.height;
+}
+
+std::set<int> ZoomsInData(const Observations& obs) {
+  std::set<int> z;
+  for (const Record& r : obs.records) {
+    if (r.tool == Tool::kCam) z.insert(r.zoom);
+  }
+  for (const PixelObservation& p : obs.pixels) z.insert(p.zoom);
+  return z;
+}
+
+Observations Subset(const Observations& obs, const std::vector<Record>& records, int face = 0) {
+  Observations out;
+  out.records_source = obs.records_source;
+  out.pixels_source = obs.pixels_source;
+  for (const Record& r : records) {
+    if (face == 0 || r.face == face) out.records.push_back(r);
+  }
+  for (const PixelObservation& p : obs.pixels) {
+    if (face == 0 || p.face == face) out.pixels.push_back(p);
+  }
+  return out;
+}
+
+// The classical two-face check (libcalib/fit/two_face.h) along the EDM ray,
+// or along the first zoom's optical axis when there are no EDM records.
+void ReadTwoFaceDifferences(const Observations& obs, FaceComparison* f) {
+  const bool edm = std::any_of(obs.records.begin(), obs.records.end(),
+                               [](const Record& r) { return r.tool == Tool::kEdm; });
+  const std::set<int> zooms = ZoomsInData(obs);
+  const int zoom = edm || zooms.empty() ? -1 : *zooms.begin();
+  const TwoFaceDifferences d = TwoFaceCheck(f->face1, f->face2, zoom);
+  f->collimation = d.collimation;
+  f->tilting_axis = d.tilting_axis;
+  f->vertical_index = d.vertical_index;
+  f->valid = true;
+  if (!edm)
+    f->note = "read along zoom " + std::to_string(zoom) + "'s optical axis (no EDM records)";
+}
+
+// Options of the start from pixels alone (and of a zoom's camera from pixels).
+InitFromPixelsOptions PixelStartOptions(const CalibrationOptions& options) {
+  InitFromPixelsOptions io;
+  io.kinematics = options.model.kinematics;
+  io.distortion = DistortionGroupsOf(options.model.effects);
+  io.cameras = options.model.cameras;
+  io.min_zenith_rad = options.fit.min_zenith_rad;
+  io.max_zenith_rad = options.fit.max_zenith_rad;
+  return io;
+}
+
+// Stage 1-2: extraction (Klug Sec. 3), with the retry on intrinsics from the
+// view rays, and simplification (Sec. 4.1).
+void ExtractAndSimplify(const Observations& obs, const CalibrationOptions& options,
+                        CalibrationProgress* progress, CalibrationResult* result) {
+  progress->Step("extracting the DH model (Klug Sec. 3)");
+  ExtractOptions eo;
+  eo.min_zenith_rad = options.fit.min_zenith_rad;
+  eo.max_zenith_rad = options.fit.max_zenith_rad;
+  try {
+    result->extraction = ExtractDhModel(obs.records, options.model.cameras, eo);
+  } catch (const ExtractionError& first) {
+    // Without Klug's pixel triplets (Eq. 67) and configured intrinsics the
+    // camera tools cannot be extracted as the paper does; intrinsics from
+    // the view rays (DLT) let the extraction use every camera row instead.
+    std::vector<CameraTool> cameras = options.model.cameras;
+    const std::set<int> zooms = ZoomsInData(obs);
+    bool estimated = false;
+    for (int z : zooms) {
+      if (z < static_cast<int>(cameras.size())) continue;
+      const auto est = EstimateIntrinsicsFromRays(obs.records, z);
+      if (!est) throw;
+      cameras.resize(z + 1, est->camera);
+      cameras[z] = est->camera;
+      result->notes.push_back("extraction: " + est->note);
+      progress->Note(est->note);
+      estimated = true;
+    }
+    if (!estimated) throw;
+    result->notes.push_back(std::string("extraction: first attempt failed (") + first.what() +
+                            "); retried with intrinsics from the view rays");
+    result->extraction = ExtractDhModel(obs.records, cameras, eo);
+  }
+  for (const std::string& n : result->extraction->notes)
+    result->notes.push_back("extraction: " + n);
+  progress->Step("simplifying (Klug Sec. 4.1)");
+  const SimplifiedModel simple = Simplify(result->extraction->model);
+  result->simplified = simple.model;
+  result->closed_form = "M_B,T(phi, theta) rotation (Eq. 90 form):\n" + simple.rotation.ToString();
+  if (simple.euler) result->closed_form += "\n= " + simple.euler->ToString() + "   (Eq. 91 form)";
+  for (const std::string& n : simple.notes) result->notes.push_back("simplification: " + n);
+}
+
+// Stage 3: the starting model: the extraction, or the pixels alone (OpenCV
+// per zoom, then the chain; libcalib/fit/init_from_pixels.h), in the
+// configured kinematics with the configured effects enabled.
+InstrumentModel StartModel(const Observations& obs, const CalibrationOptions& options,
+                           CalibrationProgress* progress, CalibrationResult* result) {
+  InstrumentModel start;
+  if (result->extraction) {
+    start = result->extraction->model;
+    // Zooms with pixels but no camera rows: their camera from the pixels.
+    std::set<int> pixel_zooms;
+    for (const PixelObservation& p : obs.pixels) pixel_zooms.insert(p.zoom);
+    for (int z : pixel_zooms) {
+      const auto& poses = result->extraction->camera_poses;
+      if (z < start.NumZooms() && z < static_cast<int>(poses.size()) && poses[z] > 0) continue;
+      progress->Step("zoom " + std::to_string(z) + ": camera from its pixels");
+      for (const std::string& n :
+           InitCameraFromPixels(obs.pixels, z, PixelStartOptions(options), &start)) {
+        result->notes.push_back("pixel start: " + n);
+      }
+    }
+    if (options.model.kinematics == Kinematics::kSpherical) start = SphericalFromDh(start);
+  } else {
+    progress->Step("starting from the pixels alone (OpenCV per zoom, then the chain)");
+    const InitFromPixelsResult init = InitFromPixels(obs.pixels, PixelStartOptions(options));
+    for (const std::string& n : init.notes) result->notes.push_back("pixel start: " + n);
+    start = init.model;
+  }
+  for (int z : ZoomsInData(obs)) {
+    if (z >= start.NumZooms()) {
+      throw std::invalid_argument("zoom " + std::to_string(z) +
+                                  " is in the data but the extraction found no camera rows for "
+                                  "it; add model.cameras or camera sweep rows for that zoom");
+    }
+  }
+  start.edm_cyclic_unit_length = options.model.edm_cyclic_unit_length;
+  EnableEffects(options.model.effects, &start);
+  for (Effect e : options.model.effects.List()) {
+    if (start.kinematics == Kinematics::kDh && Info(e).redundant_in_dh) {
+      result->notes.push_back(std::string(Info(e).name) +
+                              " is part of the dh model (links and tools) and is not fitted twice");
+    }
+  }
+  return start;
+}
+
+// The intrinsics decision: model.intrinsics fit -> always, fixed -> never,
+// auto -> when every zoom's camera data span the image.
+bool FitIntrinsics(const Observations& obs, const CalibrationOptions& options,
+                   const InstrumentModel& start) {
+  switch (options.model.intrinsics) {
+    case IntrinsicsMode::kFit:
+      return true;
+    case IntrinsicsMode::kFixed:
+      return false;
+    case IntrinsicsMode::kAuto:
+      break;
+  }
+  const std::set<int> zooms = ZoomsInData(obs);
+  bool span = true;
+  for (int z : zooms) span = span && CamDataSpanImage(obs, start, z);
+  return span && !zooms.empty();
+}
+
+// Stage 4: refinement (Sec. 4.3) on the reduced set, then on the full set
+// starting from it; Table 5 of both.
+void RefineConfigured(const Observations& obs, const std::vector<Record>& reduced,
+                      CalibrationProgress* progress, CalibrationResult* result) {
+  const FitOptions& fo = result->fit_options;
+  const Observations reduced_obs = Subset(obs, reduced);
+  const bool has_more = reduced.size() < obs.records.size();
+  if (has_more) {
+    progress->Step("refining on the reduced set (" + std::to_string(reduced.size()) + " records)");
+    FitOptions ro = fo;
+    // The sweeps alone never span the image: intrinsics stay as they are there.
+    ro.fit_intrinsics = fo.fit_intrinsics && CamDataSpanImage(reduced_obs, result->start, 0);
+    result->reduced.model = result->start;
+    result->reduced.fit = Refine(reduced_obs, ro, &result->reduced.model);
+  }
+  progress->Step("refining on the full set (" + std::to_string(obs.records.size()) + " records, " +
+                 std::to_string(obs.pixels.size()) + " pixels)");
+  Refinement& full = result->refined;
+  full.model = has_more ? result->reduced.model : result->start;
+  full.model.sigmas = {};
+  full.fit = Refine(obs, fo, &full.model);
+  if (!has_more) result->reduced = full;
+  progress->Note("converged: " + std::string(full.fit.converged ? "yes" : "no") + ", " +
+                 std::to_string(full.fit.iterations) + " iterations");
+
+  Table5& t5 = result->table5;
+  t5.reduced = EvaluateRecords(result->reduced.model, reduced, ErrorMethod::kB);
+  t5.full = EvaluateRecords(full.model, obs.records, ErrorMethod::kB);
+  t5.has_cross = has_more;
+  if (has_more) t5.cross = EvaluateRecords(result->reduced.model, obs.records, ErrorMethod::kB);
+  t5.reduced_rows = static_cast<int>(reduced.size());
+  t5.full_rows = static_cast<int>(obs.records.size());
+}
+
+// Stage 5: `faces: separate`: one model per face, started from the joint
+// refined model, and the two-face check.
+FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResult& result) {
+  FaceComparison fc;
+  fc.face1 = result.refined.model;
+  fc.face2 = result.refined.model;
+  const Observations o1 = Subset(obs, obs.records, 1), o2 = Subset(obs, obs.records, 2);
+  if ((o1.records.empty() && o1.pixels.empty()) || (o2.records.empty() && o2.pixels.empty())) {
+    fc.note = "faces: separate needs observations in both faces";
+  } else {
+    fc.fit1 = Refine(o1, result.fit_options, &fc.face1);
+    fc.fit2 = Refine(o2, result.fit_options, &fc.face2);
+    ReadTwoFaceDifferences(obs, &fc);
+  }
+  return fc;
+}
+
+// Stage 6: the diagnosis of the refined model; with diagnose.auto the
+// forward stepwise ladder first, whose last rung becomes the run's model.
+// Throws what the diagnosis throws.
+void DiagnoseModel(const Observations& obs, const CalibrationOptions& options,
+                   CalibrationProgress* progress, CalibrationResult* r) {
+  diagnose::Settings s;
+  s.significance = options.diagnose.significance;
+  if (options.diagnose.auto_add) {
+    progress->Step("forward stepwise: adding significant effects one at a time");
+    diagnose::StepwiseResult sw =
+        diagnose::ForwardStepwise(obs, r->refined.model, r->refined.fit, r->fit_options, s);
+    for (size_t i = 1; i < sw.ladder.size(); ++i) {
+      progress->Note("added " + sw.ladder[i].added + ": " + sw.ladder[i].model_description);
+    }
+    progress->Note("stopped: " + sw.stop_reason);
+    r->ladder = sw.ladder;
+    r->ladder_stop = sw.stop_reason;
+    if (r->LadderExtendedModel()) {
+      r->notes.push_back(
+          "diagnose.auto: the stepwise search extended the model to " +
+          sw.ladder.back().model_description +
+          "; model.yaml, Tables 6-7, the final errors and the diagnosis are of that model, "
+          "Tables 4-5 of the configured one");
+    }
+    r->model = sw.model;
+    r->fit = sw.fit;
+    r->diagnosis = std::move(sw.diagnosis);
+  } else {
+    progress->Step("diagnosing the model (ranking the missing effects)");
+    r->diagnosis =
+        diagnose::Diagnose(obs, r->model, diagnose::ContextOf(r->fit_options, r->fit), s);
+  }
+  for (const std::string& v : r->diagnosis->verdict) progress->Note(v);
+}
+
+}  // namespace
+
+std::string CalibrationOptions::Check() const {
+  const std::string fit_problem = fit.Check();
+  if (!fit_problem.empty()) return fit_problem;
+  if (!(model.edm_cyclic_unit_length > 0)) return "model.edm_cyclic.unit_length must be > 0";
+  for (size_t z = 0; z < model.cameras.size(); ++z) {
+    const CameraTool& c = model.cameras[z];
+    if (c.width <= 0 || c.height <= 0 || !(c.intrinsics[0] > 0) || !(c.intrinsics[1] > 0)) {
+      return "model.cameras[" + std::to_string(z) +
+             "] must have an image size > 0 and focal lengths > 0";
+    }
+  }
+  if (!(diagnose.significance > 0 && diagnose.significance < 1))
+    return "diagnose.significance must be in (0, 1)";
+  return "";
+}
+
+std::vector<Record> ReducedRecords(const std::vector<Record>& records,
+                                   const std::optional<ExtractionResult>& extraction) {
+  const bool labelled =
+      std::any_of(records.begin(), records.end(), [](const Record& r) { return !r.set.empty(); });
+  std::vector<Record> out;
+  if (labelled) {
+    for (const Record& r : records) {
+      if (r.set.rfind("sweep", 0) == 0) out.push_back(r);
+    }
+    return out;
+  }
+  if (!extraction) return records;
+  // Unlabelled: the poses of the two sweeps the extraction used.
+  std::set<std::pair<double, double>> poses;
+  for (const Sweep& s : extraction->sweeps) {
+    for (int i : s.rows) poses.insert({records[i].phi, records[i].theta});
+  }
+  for (const Record& r : records) {
+    double phi1 = r.phi, theta1 = r.theta;
+    if (r.face == 2) OtherFace(r.phi, r.theta, &phi1, &theta1);
+    if (poses.count({r.phi, r.theta}) || poses.count({phi1, theta1})) out.push_back(r);
+  }
+  return out;
+}
+
+FinalErrors ComputeFinalErrors(const InstrumentModel& model, const Observations& obs) {
+  FinalErrors f;
+  std::vector<double> edm, cam;
+  for (const RecordResidual& r : RecordResiduals(model, obs.records)) {
+    if (!r.valid) continue;
+    (obs.records[r.index].tool == Tool::kEdm ? edm : cam).push_back(r.distance);
+  }
+  f.edm = StatsOf(edm);
+  f.cam = StatsOf(cam);
+  f.pixels = EvaluatePixels(model, obs.pixels);
+  return f;
+}
+
+CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& options,
+                            CalibrationProgress* progress) {
+  SilentProgress silent;
+  if (progress == nullptr) progress = &silent;
+  const std::string problem = options.Check();
+  if (!problem.empty()) throw std::invalid_argument("calibration options: " + problem);
+
+  CalibrationResult result;
+  if (!obs.records.empty()) ExtractAndSimplify(obs, options, progress, &result);
+  result.start = StartModel(obs, options, progress, &result);
+
+  // Table 4: the extracted and simplified models on the reduced set.
+  const std::vector<Record> reduced = ReducedRecords(obs.records, result.extraction);
+  if (result.extraction) {
+    Table4 t;
+    t.dh_a = EvaluateRecords(result.extraction->model, reduced, ErrorMethod::kA);
+    t.dh_b = EvaluateRecords(result.extraction->model, reduced, ErrorMethod::kB);
+    t.simplified_a = EvaluateRecords(*result.simplified, reduced, ErrorMethod::kA);
+    t.simplified_b = EvaluateRecords(*result.simplified, reduced, ErrorMethod::kB);
+    result.table4 = t;
+  }
+
+  result.fit_options = options.fit;
+  result.fit_options.fit_intrinsics = FitIntrinsics(obs, options, result.start);
+  result.intrinsics_fitted = result.fit_options.fit_intrinsics;
+  RefineConfigured(obs, reduced, progress, &result);
+
+  if (options.model.faces == FaceMode::kSeparate) {
+    progress->Step("fitting one model per face");
+    result.faces = FitFacesSeparately(obs, result);
+  }
+
+  result.model = result.refined.model;
+  result.fit = result.refined.fit;
+  if (options.diagnose.enabled) {
+    // The calibration stands without its diagnosis: a failure here becomes
+    // a note, not a failed calibration.
+    try {
+      DiagnoseModel(obs, options, progress, &result);
+    } catch (const std::exception& e) {
+      result.diagnosis.reset();
+      result.notes.push_back(std::string("diagnosis failed: ") + e.what());
+      progress->Note(result.notes.back());
+    }
+  }
+  result.final_errors = ComputeFinalErrors(result.model, obs);
+  progress->Done();
+  return result;
+}
+
+}  // namespace rtscalib

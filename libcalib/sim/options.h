@@ -1,0 +1,68 @@
+// Options of the simulated instrument (libcalib/sim/simulator.h): the truth,
+// the acquisition plan of Klug Sec. 4, the noise and the shots of known
+// targets. Beside the simulator so that readers of these options (the config
+// loader in libcalib/io) need not include the simulator.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "libcalib/model/instrument.h"
+#include "libcalib/model/targets.h"
+
+namespace rtscalib {
+
+struct NoiseOptions {
+  double angle_rad = 0.0;     // sigma of phi and theta readings
+  double distance_m = 0.0;    // sigma of the EDM distance
+  double point_m = 0.0;       // sigma of each coordinate of a returned point
+  double pixel_px = 0.0;      // sigma of each pixel coordinate (pixels.csv)
+  std::string Check() const;  // empty if valid
+};
+
+struct AcquisitionPlan {
+  int sweep_points = 15;
+  std::vector<double> edm_distances{1.0, 2.0};
+  double cam_ray_length = 1.0;
+  double pixel_offset = 1.0;
+  bool sweeps = true;      // the paper's two joint sweeps ("sweep1", "sweep2")
+  int grid_phi_steps = 0;  // 0 = no grid
+  int grid_theta_steps = 0;
+  // Grid rows also use these distances and image points (fractions of the
+  // image size, e.g. 0.1 .. 0.9), so that held-out points differ in angle,
+  // distance and pixel.
+  std::vector<double> grid_edm_distances{1.0, 2.0, 5.0, 20.0};
+  std::vector<double> grid_cam_ray_lengths{1.0, 3.0};
+  int grid_pixels_per_axis = 3;  // n x n pixels over [0.1, 0.9] of the image
+  std::vector<int> faces{1};
+  std::vector<int> zooms{0};
+  std::string Check() const;
+};
+
+// Shots of known targets (simulator.cc, SimulatePixels): for every zoom and
+// face the instrument aims at the boards that suit that zoom (whole tags fit
+// the view >= 2.5 times across and the board spans >= 1/4 of it; the best
+// board when none does) from a stratified pattern of directions, so that the
+// images are full of tags and together cover the whole image. Shots showing
+// fewer than 8 corners are not taken.
+struct ShotPlan {
+  int shots_per_board = 4;       // per usable board, zoom and face
+  double fill = 0.7;             // fraction of the view (half extent) the pattern is sized by
+  double pointing_jitter = 0.3;  // jitter of each aim within its pattern cell (fraction of a cell)
+};
+
+struct SimulationOptions {
+  std::uint64_t seed = 1;
+  InstrumentModel truth;
+  NoiseOptions noise;
+  AcquisitionPlan plan;
+  TargetScene targets;  // empty = no pixel observations
+  ShotPlan shots;
+  std::string Check() const;
+};
+
+// Number of zoom levels a plan uses: the largest zoom + 1.
+int PlanNumZooms(const AcquisitionPlan& plan);
+
+}  // namespace rtscalib
