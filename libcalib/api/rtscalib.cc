@@ -286,6 +286,15 @@ Ray CalibratedInstrument::CameraRay(int zoom, double phi, double theta, double u
   return {r.head<3>(), r.tail<3>()};
 }
 
+Eigen::Vector3d CalibratedInstrument::CameraPoint(int zoom, double phi, double theta, double u,
+                                                  double v, double d) const {
+  CheckFinite({d}, "ray length d");
+  CameraRay(zoom, phi, theta, u, v);  // the checks; F_CAM itself is the model's
+  const Eigen::Vector3d x = PredictCam(model_, zoom, phi, theta, u, v, d);
+  CheckFiniteResult(x, "camera point");
+  return x;
+}
+
 Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
                                             const Eigen::Vector3d& x_ref) const {
   CheckFinite({phi, theta, x_ref[0], x_ref[1], x_ref[2]}, "readings phi, theta and point X, Y, Z");

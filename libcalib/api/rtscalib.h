@@ -16,6 +16,7 @@
 //   CameraRay(z, phi, theta, u, v): origin = camera centre, direction = unit ray
 //                                   through (u, v); origin + d direction =
 //                                   F_CAM (Klug Eq. 12, SPEC 2) = PredictCam
+//   CameraPoint(z, phi, theta, u, v, d) = PredictCam (F_CAM itself)
 //   Pixel(z, phi, theta, X)       = project(cam_from_ref X) (Klug Eq. 62) = PredictPixel
 // A prediction that the model cannot make throws PredictionError saying why
 // (no such zoom, pixel outside the image by more than kImageMargin, pixel or
@@ -118,6 +119,11 @@ class CalibratedInstrument {
   Eigen::Vector3d EdmPoint(double phi, double theta, double d) const;
   // The line of sight of pixel (u, v) of zoom level `zoom`.
   Ray CameraRay(int zoom, double phi, double theta, double u, double v) const;
+  // The point at ray length d [m] through pixel (u, v): F_CAM, what
+  // `rtscalib predict --records` writes for a cam row (= CameraRay(..).At(d)
+  // up to rounding).
+  Eigen::Vector3d CameraPoint(int zoom, double phi, double theta, double u, double v,
+                              double d) const;
   // The pixel at which zoom level `zoom` sees the reference-frame point x_ref.
   Eigen::Vector2d Pixel(int zoom, double phi, double theta, const Eigen::Vector3d& x_ref) const;
 
