@@ -334,9 +334,11 @@ Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
 
 namespace {
 
-// Step of coordinate i of a block: relative for values far from zero (1e-6
-// keeps the truncation error ~1e-12 relative and the rounding error of a
-// ~1e3 result at ~1e-10), absolute near zero and for rotations.
+// Step of one coordinate: 1e-6, relative to values beyond 1 (focal lengths,
+// principal points). Central differences then err by ~h^2 (truncation,
+// 1e-12 relative) plus eps |f| / h (rounding: 2e-7 px on a 1e3 px pixel,
+// against derivatives of ~1e3 px per radian): far below what a covariance
+// needs.
 double Step(Tangent tangent, double value) {
   if (tangent != Tangent::kEuclidean) return 1e-6;
   return 1e-6 * std::max(1.0, std::abs(value));
@@ -352,12 +354,12 @@ Uncertain<N> Propagate(
   const auto access = Accessors(model, &blocks, &unused);
   std::vector<int> index;  // parameter indices the prediction depends on
   std::vector<Eigen::Matrix<double, N, 1>> columns;
-  InstrumentModel moved = model;
+  InstrumentModel values = model;  // read-only copy: the accessors take a mutable model
   for (size_t b = 0; b < blocks.size(); ++b) {
     const int u = access[b].use;
     if (!(u == kShared || u == use)) continue;
     for (int i = 0; i < blocks[b].size; ++i) {
-      const double h = Step(access[b].tangent, access[b].data(moved)[i]);
+      const double h = Step(access[b].tangent, access[b].data(values)[i]);
       Eigen::Matrix<double, N, 1> f[2];
       for (int side = 0; side < 2; ++side) {
         double delta[camera::kNumDistortion] = {};  // the largest block

@@ -25,7 +25,7 @@ struct Files {
   std::string Model() const { return (dir / "model.yaml").string(); }
 };
 
-Files Setup(const std::string& name) {
+Files MakeFiles(const std::string& name) {
   Files f;
   f.dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "predict_bad_rows" / name;
   fs::remove_all(f.dir);
@@ -56,7 +56,7 @@ Record CamRow(int zoom, double u, double v) {
 int LineOf(int row) { return row + 2; }
 
 TEST(PredictBadRows, RecordsStopAtTheFirstBadRowNamingFileLineAndColumn) {
-  const Files f = Setup("records_stop");
+  const Files f = MakeFiles("records_stop");
   const std::string in = (f.dir / "in.csv").string();
   WriteRecords(in, {EdmRow(0.1), CamRow(0, 640, 480), EdmRow(0.2), CamRow(2, 640, 480),
                     CamRow(0, 2000, 480)});
@@ -91,7 +91,7 @@ TEST(PredictBadRows, RecordsStopAtTheFirstBadRowNamingFileLineAndColumn) {
 }
 
 TEST(PredictBadRows, PixelsBehindTheCameraStopTheCommand) {
-  const Files f = Setup("pixels_stop");
+  const Files f = MakeFiles("pixels_stop");
   const double phi = 0.3, theta = 1.2;
   std::vector<PixelObservation> rows(3);
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -135,7 +135,7 @@ TEST(PredictBadRows, PixelsBehindTheCameraStopTheCommand) {
 }
 
 TEST(PredictBadRows, SkipBadWritesTheRestAndListsTheFirstTwentyLines) {
-  const Files f = Setup("records_skip");
+  const Files f = MakeFiles("records_skip");
   std::vector<Record> rows;
   std::vector<int> bad_lines;
   for (int i = 0; i < 60; ++i) {

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The installed rtscalib package as a user sees it (ctest: install_consumer).
-#   run_consumer.sh CMAKE BUILD_DIR CONSUMER_SRC WORK_DIR CXX
+#   run_consumer.sh CMAKE BUILD_DIR CONSUMER_SRC WORK_DIR CXX [FLAGS]
+# FLAGS: compiler and linker flags the build's libraries need in a consumer
+# (the sanitizers of RTSCALIB_SANITIZE); empty otherwise.
 # 1. `cmake --install BUILD_DIR --prefix WORK_DIR/prefix`
 # 2. configure and build tests/install/consumer with -DCMAKE_PREFIX_PATH=prefix
 # 3. run it on a model.yaml written here (the ideal spherical instrument of
@@ -12,7 +14,7 @@
 #    - the installed `rtscalib predict` on the same readings.
 # Tolerance 1e-9 (m, px): the ideal formulas and the model differ by rounding only.
 set -euo pipefail
-cmake_bin=$1 build=$2 consumer_src=$3 work=$4 cxx=$5
+cmake_bin=$1 build=$2 consumer_src=$3 work=$4 cxx=$5 flags=${6:-}
 rm -rf "$work"
 mkdir -p "$work"
 prefix=$work/prefix
@@ -29,7 +31,8 @@ fi
 gen=()
 if command -v ninja > /dev/null; then gen=(-G Ninja); fi
 "$cmake_bin" -S "$consumer_src" -B "$work/build" "${gen[@]}" -DCMAKE_BUILD_TYPE=Release \
-  -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_PREFIX_PATH="$prefix" > "$work/configure.log"
+  -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_FLAGS="$flags" \
+  -DCMAKE_EXE_LINKER_FLAGS="$flags" > "$work/configure.log"
 "$cmake_bin" --build "$work/build" > "$work/build.log"
 
 cat > "$work/model.yaml" <<'YAML'
