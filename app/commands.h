@@ -23,7 +23,8 @@ struct PredictArgs {
   std::string records;
   std::string pixels;
   std::string out;
-  bool force = false;  // allow replacing an existing --out file
+  bool force = false;     // allow replacing an existing --out file
+  bool skip_bad = false;  // leave out rows the model cannot predict (listed on stderr)
 };
 int RunPredict(const PredictArgs& args);
 

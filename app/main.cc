@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   pred->add_option("--pixels", predict.pixels, "pixels.csv whose u, v are predicted");
   pred->add_option("--out", predict.out, "output CSV")->required();
   pred->add_flag("--force", predict.force, "replace --out if it exists");
+  pred->add_flag("--skip-bad", predict.skip_bad,
+                 "leave out rows the model cannot predict and list them (default: stop at the "
+                 "first, naming its line)");
 
   rtscalib::app::RunArgs diag;
   CLI::App* dg = app.add_subcommand(

@@ -1,16 +1,84 @@
 #include <filesystem>
 #include <iostream>
+#include <vector>
 
 #include "app/commands.h"
 #include "app/safe_write.h"
+#include "libcalib/api/rtscalib.h"
+#include "libcalib/io/errors.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
-#include "libcalib/model/kinematics.h"
 
 namespace rtscalib::app {
 
+namespace {
+
+// How many skipped rows --skip-bad names on stderr; the count is always given.
+constexpr size_t kNamedSkippedRows = 20;
+
+// A row the model cannot predict, as an error naming file, line and the
+// columns that made it so.
+InputError RowError(const std::string& file, int line, const PredictionError& e, bool pixels) {
+  switch (e.failure) {
+    case PredictionFailure::kNoSuchZoom:
+      return InputError::Cell(file, line, "zoom", e.expected, e.got);
+    case PredictionFailure::kOutsideImage:
+      // A records row's u, v are input; a pixels row's u, v are the projection of X, Y, Z.
+      return InputError::File(file, line, pixels ? "columns X, Y, Z" : "columns u, v", e.expected,
+                              e.got);
+    case PredictionFailure::kUntrustedPixel:
+      return InputError::File(file, line, "columns u, v", e.expected, e.got);
+    case PredictionFailure::kBehindCamera:
+    case PredictionFailure::kUntrustedPoint:
+      return InputError::File(file, line, "columns X, Y, Z", e.expected, e.got);
+    case PredictionFailure::kNonFinite:
+      break;
+  }
+  return InputError::File(file, line, "row", e.expected, e.got);
+}
+
+// Collects the rows that cannot be predicted: the first one stops the command
+// unless --skip-bad, which keeps going and reports them at the end.
+class BadRows {
+ public:
+  BadRows(std::string file, bool skip, bool pixels)
+      : file_(std::move(file)), skip_(skip), pixels_(pixels) {}
+
+  // Throws without --skip-bad; otherwise the row is left out.
+  void Add(int line, const PredictionError& e) {
+    InputError error = RowError(file_, line, e, pixels_);
+    if (!skip_) {
+      std::cerr << "predict: (--skip-bad writes the other rows and lists the skipped ones)\n";
+      throw error;
+    }
+    errors_.push_back(std::move(error));
+  }
+
+  void Report(size_t total) const {
+    if (errors_.empty()) return;
+    std::cerr << "predict: skipped " << errors_.size() << " of " << total
+              << " rows the model cannot predict";
+    if (errors_.size() > kNamedSkippedRows) std::cerr << " (the first " << kNamedSkippedRows << ")";
+    std::cerr << ":\n";
+    for (size_t i = 0; i < errors_.size() && i < kNamedSkippedRows; ++i) {
+      std::cerr << "  " << errors_[i].what() << "\n";
+    }
+  }
+
+ private:
+  std::string file_;
+  bool skip_;
+  bool pixels_;
+  std::vector<InputError> errors_;
+};
+
+}  // namespace
+
 // SPEC 5: writes IN's rows with x, y, z (records) or u, v (pixels) replaced by
-// the model's prediction.
+// the model's prediction. A row the model cannot predict (libcalib/api/rtscalib.h:
+// no such zoom, pixel outside the image, point behind the camera, non-finite
+// result) is an error naming its file and line; with --skip-bad it is left out
+// of OUT and listed on stderr.
 int RunPredict(const PredictArgs& args) {
   if (args.records.empty() == args.pixels.empty()) {
     throw std::invalid_argument("predict: give exactly one of --records or --pixels");
@@ -21,43 +89,43 @@ int RunPredict(const PredictArgs& args) {
   }
   // kKeep also covers a file that appears while predicting.
   const Existing existing = args.force ? Existing::kReplace : Existing::kKeep;
-  const InstrumentModel model = ReadModelYaml(args.model);
+  const CalibratedInstrument instrument = CalibratedInstrument::Load(args.model);
   if (!args.records.empty()) {
     RecordsFile in = ReadRecords(args.records);
+    BadRows bad(args.records, args.skip_bad, false);
+    std::vector<Record> out;
+    out.reserve(in.records.size());
     for (Record& r : in.records) {
-      if (r.tool == Tool::kCam && r.zoom >= model.NumZooms()) {
-        throw std::invalid_argument(
-            args.records + ":" + std::to_string(r.line) + ": column 'zoom': the model has " +
-            std::to_string(model.NumZooms()) + " zoom level(s), got " + std::to_string(r.zoom));
+      try {
+        r.x = r.tool == Tool::kEdm ? instrument.EdmPoint(r.phi, r.theta, r.d)
+                                   : instrument.CameraPoint(r.zoom, r.phi, r.theta, r.u, r.v, r.d);
+        out.push_back(r);
+      } catch (const PredictionError& e) {
+        bad.Add(r.line, e);
       }
-      r.x = r.tool == Tool::kEdm ? PredictEdm(model, r.phi, r.theta, r.d)
-                                 : PredictCam(model, r.zoom, r.phi, r.theta, r.u, r.v, r.d);
     }
     WriteFileAtomicWith(
-        args.out, [&](const std::string& tmp) { WriteRecords(tmp, in.records); }, existing);
-    std::cerr << "predict: " << in.records.size() << " records -> " << args.out << "\n";
+        args.out, [&](const std::string& tmp) { WriteRecords(tmp, out); }, existing);
+    bad.Report(in.records.size());
+    std::cerr << "predict: " << out.size() << " records -> " << args.out << "\n";
     return 0;
   }
   PixelsFile in = ReadPixels(args.pixels);
-  int behind = 0;
+  BadRows bad(args.pixels, args.skip_bad, true);
+  std::vector<PixelObservation> out;
+  out.reserve(in.pixels.size());
   for (PixelObservation& p : in.pixels) {
-    if (p.zoom >= model.NumZooms()) {
-      throw std::invalid_argument(
-          args.pixels + ":" + std::to_string(p.line) + ": column 'zoom': the model has " +
-          std::to_string(model.NumZooms()) + " zoom level(s), got " + std::to_string(p.zoom));
+    try {
+      p.uv = instrument.Pixel(p.zoom, p.phi, p.theta, p.X);
+      out.push_back(p);
+    } catch (const PredictionError& e) {
+      bad.Add(p.line, e);
     }
-    Eigen::Vector2d uv;
-    if (!PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &uv)) {
-      ++behind;
-      uv.setConstant(std::numeric_limits<double>::quiet_NaN());
-    }
-    p.uv = uv;
   }
   WriteFileAtomicWith(
-      args.out, [&](const std::string& tmp) { WritePixels(tmp, in.pixels); }, existing);
-  std::cerr << "predict: " << in.pixels.size() << " pixel rows -> " << args.out;
-  if (behind) std::cerr << " (" << behind << " points behind the camera written as nan)";
-  std::cerr << "\n";
+      args.out, [&](const std::string& tmp) { WritePixels(tmp, out); }, existing);
+  bad.Report(in.pixels.size());
+  std::cerr << "predict: " << out.size() << " pixel rows -> " << args.out << "\n";
   return 0;
 }
 

@@ -1,0 +1,436 @@
+#include "libcalib/api/rtscalib.h"
+
+#include <ceres/manifold.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+
+#include "libcalib/camera/opencv_model.h"
+#include "libcalib/fit/manifolds.h"
+#include "libcalib/io/model_io.h"
+#include "libcalib/model/kinematics.h"
+
+namespace rtscalib {
+
+namespace {
+
+std::string Num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return buf;
+}
+
+std::string Point(const Eigen::Vector3d& x) {
+  return "(" + Num(x[0]) + ", " + Num(x[1]) + ", " + Num(x[2]) + ")";
+}
+
+void CheckFinite(std::initializer_list<double> values, const char* what) {
+  for (double v : values) {
+    if (!std::isfinite(v)) {
+      throw PredictionError(PredictionFailure::kNonFinite, std::string("finite ") + what,
+                            "NaN or infinity");
+    }
+  }
+}
+
+template <typename Derived>
+void CheckFiniteResult(const Eigen::MatrixBase<Derived>& v, const char* what) {
+  if (!v.allFinite()) {
+    throw PredictionError(PredictionFailure::kNonFinite, std::string("a finite ") + what,
+                          "NaN or infinity from the model");
+  }
+}
+
+// The block kinds of the fit's parameterisation (libcalib/fit/refine.cc).
+enum class Tangent { kEuclidean, kQuaternion, kNoRoll };
+
+// Which predictions a block influences: -2 shared by all, -1 EDM only, z >= 0
+// zoom z's camera only.
+constexpr int kShared = -2;
+constexpr int kEdmOnly = -1;
+
+struct BlockAccess {
+  Tangent tangent;
+  int use;
+  std::function<double*(InstrumentModel&)> data;
+};
+
+// Block accessors, built alongside blocks_ (same order).
+std::vector<BlockAccess> Accessors(const InstrumentModel& m, std::vector<ParameterBlock>* blocks,
+                                   Eigen::VectorXd* sigma2) {
+  std::vector<BlockAccess> out;
+  std::vector<double> var;
+  int offset = 0;
+  const ModelSigmas& s = m.sigmas;
+  auto add = [&](const std::string& name, int size, const std::string& unit, Tangent tangent,
+                 int use, std::function<double*(InstrumentModel&)> data, const double* sigmas) {
+    blocks->push_back({name, offset, size, unit});
+    out.push_back({tangent, use, std::move(data)});
+    for (int i = 0; i < size; ++i) var.push_back(sigmas ? sigmas[i] * sigmas[i] : 0.0);
+    offset += size;
+  };
+  const bool v = s.valid;
+  add(
+      "base.rotation", 3, "rad (half angle)", Tangent::kQuaternion, kShared,
+      [](InstrumentModel& x) { return x.base.q.data(); }, v ? s.base.rotation.data() : nullptr);
+  add(
+      "base.t", 3, "m", Tangent::kEuclidean, kShared,
+      [](InstrumentModel& x) { return x.base.t.data(); }, v ? s.base.t.data() : nullptr);
+  if (m.kinematics == Kinematics::kDh) {
+    for (int k = 0; k < 2; ++k) {
+      add(
+          "link" + std::to_string(k + 1), 4, "m, rad, rad, m", Tangent::kEuclidean, kShared,
+          [k](InstrumentModel& x) { return x.links[k].p.data(); }, v ? s.links[k].data() : nullptr);
+    }
+  }
+  add(
+      "edm.rotation", 2, "rad", Tangent::kNoRoll, kEdmOnly,
+      [](InstrumentModel& x) { return x.edm.q.data(); }, v ? s.edm.rotation.data() : nullptr);
+  add(
+      "edm.t", 3, "m", Tangent::kEuclidean, kEdmOnly,
+      [](InstrumentModel& x) { return x.edm.t.data(); }, v ? s.edm.t.data() : nullptr);
+  for (Effect e : m.effects.List()) {
+    if (!IsKinematic(e)) continue;
+    const int n = Info(e).num_params;
+    // The effect's own 2x2 covariance (row major); the constructor adds its
+    // off-diagonal, the one correlation model.yaml stores.
+    const std::array<double, 4>& cov = s.effect_cov[static_cast<int>(e)];
+    const double sd[2] = {std::sqrt(cov[0]), std::sqrt(cov[3])};
+    add(
+        Info(e).name, n, "SI (rad, m, 1)", Tangent::kEuclidean, kShared,
+        [e](InstrumentModel& x) { return x.EffectValue(e).data(); }, v ? sd : nullptr);
+  }
+  for (int z = 0; z < m.NumZooms(); ++z) {
+    const std::string c = "cam[" + std::to_string(z) + "]";
+    const bool vz = v && z < static_cast<int>(s.cam_tools.size());
+    add(
+        c + ".rotation", 3, "rad (half angle)", Tangent::kQuaternion, z,
+        [z](InstrumentModel& x) { return x.cams[z].flange_from_cam.q.data(); },
+        vz ? s.cam_tools[z].rotation.data() : nullptr);
+    add(
+        c + ".t", 3, "m", Tangent::kEuclidean, z,
+        [z](InstrumentModel& x) { return x.cams[z].flange_from_cam.t.data(); },
+        vz ? s.cam_tools[z].t.data() : nullptr);
+    add(
+        c + ".intrinsics", camera::kNumIntrinsics, "px", Tangent::kEuclidean, z,
+        [z](InstrumentModel& x) { return x.cams[z].intrinsics.data(); },
+        vz ? s.intrinsics[z].data() : nullptr);
+    add(
+        c + ".distortion", camera::kNumDistortion, "1 (OpenCV order)", Tangent::kEuclidean, z,
+        [z](InstrumentModel& x) { return x.cams[z].distortion.data(); },
+        vz ? s.distortion[z].data() : nullptr);
+  }
+  *sigma2 = Eigen::Map<const Eigen::VectorXd>(var.data(), static_cast<int>(var.size()));
+  return out;
+}
+
+// Moves one block by `delta` in the fit's tangent coordinates.
+void PlusBlock(const BlockAccess& a, int size, const double* delta, InstrumentModel* m) {
+  double* p = a.data(*m);
+  switch (a.tangent) {
+    case Tangent::kEuclidean:
+      for (int i = 0; i < size; ++i) p[i] += delta[i];
+      return;
+    case Tangent::kQuaternion: {
+      const double q[4] = {p[0], p[1], p[2], p[3]};
+      ceres::EigenQuaternionManifold().Plus(q, delta, p);
+      return;
+    }
+    case Tangent::kNoRoll: {
+      const double q[4] = {p[0], p[1], p[2], p[3]};
+      QuaternionNoRollManifold().Plus(q, delta, p);
+      return;
+    }
+  }
+}
+
+bool RawRay(const InstrumentModel& m, int zoom, double phi, double theta, double u, double v,
+            Eigen::Matrix<double, 6, 1>* out) {
+  const CameraTool& cam = m.cams[zoom];
+  const double pixel[2] = {u, v};
+  double ray[3];
+  if (!camera::PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pixel, ray)) return false;
+  const Rigid3 ref_from_cam = RefFromCam(m, zoom, phi, theta);
+  out->head<3>() = ref_from_cam.translation;
+  out->tail<3>() = ref_from_cam.rotation * Eigen::Vector3d(ray[0], ray[1], ray[2]);
+  return true;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+
+CalibratedInstrument CalibratedInstrument::Load(const std::string& model_yaml) {
+  return CalibratedInstrument(ReadModelYaml(model_yaml));
+}
+
+CalibratedInstrument::CalibratedInstrument(InstrumentModel model) : model_(std::move(model)) {
+  Eigen::VectorXd var;
+  Accessors(model_, &blocks_, &var);
+  covariance_ = var.asDiagonal();
+  for (const Effect e : model_.effects.List()) {
+    if (!IsKinematic(e) || Info(e).num_params < 2 || !model_.sigmas.valid) continue;
+    const ParameterBlock& b = Block(Info(e).name);
+    const std::array<double, 4>& cov = model_.sigmas.effect_cov[static_cast<int>(e)];
+    covariance_(b.offset, b.offset + 1) = cov[1];
+    covariance_(b.offset + 1, b.offset) = cov[2];
+  }
+  has_covariance_ = model_.sigmas.valid;
+}
+
+int CalibratedInstrument::NumParameters() const {
+  return blocks_.empty() ? 0 : blocks_.back().offset + blocks_.back().size;
+}
+
+const ParameterBlock& CalibratedInstrument::Block(const std::string& name) const {
+  for (const ParameterBlock& b : blocks_) {
+    if (b.name == name) return b;
+  }
+  throw std::out_of_range("the model has no parameter block '" + name + "'");
+}
+
+void CalibratedInstrument::SetParameterCovariance(const Eigen::MatrixXd& covariance) {
+  const int n = NumParameters();
+  if (covariance.rows() != n || covariance.cols() != n) {
+    throw std::invalid_argument("parameter covariance must be " + std::to_string(n) + "x" +
+                                std::to_string(n) + ", got " + std::to_string(covariance.rows()) +
+                                "x" + std::to_string(covariance.cols()));
+  }
+  if (!covariance.allFinite()) {
+    throw std::invalid_argument("parameter covariance has NaN or infinite entries");
+  }
+  if ((covariance - covariance.transpose()).cwiseAbs().maxCoeff() >
+      1e-12 * covariance.cwiseAbs().maxCoeff()) {
+    throw std::invalid_argument("parameter covariance is not symmetric");
+  }
+  covariance_ = covariance;
+  has_covariance_ = true;
+}
+
+InstrumentModel CalibratedInstrument::Plus(const Eigen::VectorXd& delta) const {
+  if (delta.size() != NumParameters()) {
+    throw std::invalid_argument("Plus: delta has " + std::to_string(delta.size()) +
+                                " values, the parameter vector " + std::to_string(NumParameters()));
+  }
+  Eigen::VectorXd unused;
+  std::vector<ParameterBlock> blocks;
+  const auto access = Accessors(model_, &blocks, &unused);
+  InstrumentModel out = model_;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    PlusBlock(access[b], blocks[b].size, delta.data() + blocks[b].offset, &out);
+  }
+  return out;
+}
+
+void CalibratedInstrument::CheckZoom(int zoom) const {
+  if (zoom < 0 || zoom >= NumZooms()) {
+    throw PredictionError(
+        PredictionFailure::kNoSuchZoom,
+        NumZooms() == 0 ? std::string("no camera rows (the model has no camera)")
+                        : "a zoom level of the model (0.." + std::to_string(NumZooms() - 1) + ")",
+        std::to_string(zoom));
+  }
+}
+
+int CalibratedInstrument::ImageWidth(int zoom) const {
+  CheckZoom(zoom);
+  return model_.cams[zoom].width;
+}
+
+int CalibratedInstrument::ImageHeight(int zoom) const {
+  CheckZoom(zoom);
+  return model_.cams[zoom].height;
+}
+
+namespace {
+
+void CheckInImage(const CameraTool& cam, int zoom, double u, double v, const char* what) {
+  // Pixel centres run from 0 to width - 1; the image's border is half a pixel out.
+  const double mu = kImageMargin * cam.width, mv = kImageMargin * cam.height;
+  const double u0 = -0.5 - mu, u1 = cam.width - 0.5 + mu;
+  const double v0 = -0.5 - mv, v1 = cam.height - 0.5 + mv;
+  if (!(u >= u0 && u <= u1 && v >= v0 && v <= v1)) {
+    throw PredictionError(PredictionFailure::kOutsideImage,
+                          std::string(what) + " within zoom " + std::to_string(zoom) + "'s " +
+                              std::to_string(cam.width) + "x" + std::to_string(cam.height) +
+                              " image and " + Num(100 * kImageMargin) + "% beyond (u in [" +
+                              Num(u0) + ", " + Num(u1) + "], v in [" + Num(v0) + ", " + Num(v1) +
+                              "])",
+                          "(" + Num(u) + ", " + Num(v) + ")");
+  }
+}
+
+}  // namespace
+
+Eigen::Vector3d CalibratedInstrument::EdmPoint(double phi, double theta, double d) const {
+  CheckFinite({phi, theta, d}, "readings phi, theta, d");
+  const Eigen::Vector3d x = PredictEdm(model_, phi, theta, d);
+  CheckFiniteResult(x, "EDM point");
+  return x;
+}
+
+Ray CalibratedInstrument::CameraRay(int zoom, double phi, double theta, double u, double v) const {
+  CheckFinite({phi, theta, u, v}, "readings phi, theta and pixel u, v");
+  CheckZoom(zoom);
+  CheckInImage(model_.cams[zoom], zoom, u, v, "a pixel");
+  Eigen::Matrix<double, 6, 1> r;
+  if (!RawRay(model_, zoom, phi, theta, u, v, &r)) {
+    throw PredictionError(PredictionFailure::kUntrustedPixel,
+                          "a pixel zoom " + std::to_string(zoom) +
+                              "'s distortion can undistort (inside its trusted region)",
+                          "(" + Num(u) + ", " + Num(v) + ")");
+  }
+  CheckFiniteResult(r, "camera ray");
+  return {r.head<3>(), r.tail<3>()};
+}
+
+Eigen::Vector3d CalibratedInstrument::CameraPoint(int zoom, double phi, double theta, double u,
+                                                  double v, double d) const {
+  CheckFinite({d}, "ray length d");
+  CameraRay(zoom, phi, theta, u, v);  // the checks; F_CAM itself is the model's
+  const Eigen::Vector3d x = PredictCam(model_, zoom, phi, theta, u, v, d);
+  CheckFiniteResult(x, "camera point");
+  return x;
+}
+
+Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
+                                            const Eigen::Vector3d& x_ref) const {
+  CheckFinite({phi, theta, x_ref[0], x_ref[1], x_ref[2]}, "readings phi, theta and point X, Y, Z");
+  CheckZoom(zoom);
+  const CameraTool& cam = model_.cams[zoom];
+  const Eigen::Vector3d x_cam = RefFromCam(model_, zoom, phi, theta).Inverse() * x_ref;
+  if (!(x_cam.z() > 0)) {
+    throw PredictionError(PredictionFailure::kBehindCamera,
+                          "a point in front of zoom " + std::to_string(zoom) + "'s camera",
+                          Point(x_ref) + ", at depth " + Num(x_cam.z()) + " m");
+  }
+  // Beyond the trusted radius the distortion folds the image back: the
+  // projection would be a pixel where the point is not seen.
+  const double r = x_cam.head<2>().norm() / x_cam.z();
+  const double r_max = camera::MaxTrustedRadius(cam.distortion.data());
+  if (!(r < r_max)) {
+    throw PredictionError(PredictionFailure::kUntrustedPoint,
+                          "a point inside zoom " + std::to_string(zoom) +
+                              "'s trusted field of view (tan of the off-axis angle < " +
+                              Num(r_max) + ")",
+                          Point(x_ref) + " at " + Num(r));
+  }
+  Eigen::Vector2d uv;
+  if (!PredictPixel(model_, zoom, phi, theta, x_ref, &uv)) {
+    throw PredictionError(PredictionFailure::kBehindCamera,
+                          "a point in front of zoom " + std::to_string(zoom) + "'s camera",
+                          Point(x_ref));
+  }
+  CheckFiniteResult(uv, "pixel");
+  CheckInImage(cam, zoom, uv[0], uv[1], "a projection");
+  return uv;
+}
+
+// ---------------------------------------------------------------------------
+// Uncertainty: J by central differences in the tangent coordinates, over the
+// blocks the prediction depends on; P restricted to them.
+
+namespace {
+
+// Step of one coordinate: 1e-6, relative to values beyond 1 (focal lengths,
+// principal points). Central differences then err by ~h^2 (truncation,
+// 1e-12 relative) plus eps |f| / h (rounding: 2e-7 px on a 1e3 px pixel,
+// against derivatives of ~1e3 px per radian): far below what a covariance
+// needs.
+double Step(Tangent tangent, double value) {
+  if (tangent != Tangent::kEuclidean) return 1e-6;
+  return 1e-6 * std::max(1.0, std::abs(value));
+}
+
+template <int N>
+Uncertain<N> Propagate(
+    const InstrumentModel& model, const Eigen::MatrixXd& covariance, int use,
+    const Eigen::Matrix<double, N, 1>& value,
+    const std::function<bool(const InstrumentModel&, Eigen::Matrix<double, N, 1>*)>& evaluate) {
+  std::vector<ParameterBlock> blocks;
+  Eigen::VectorXd unused;
+  const auto access = Accessors(model, &blocks, &unused);
+  std::vector<int> index;  // parameter indices the prediction depends on
+  std::vector<Eigen::Matrix<double, N, 1>> columns;
+  InstrumentModel values = model;  // read-only copy: the accessors take a mutable model
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    const int u = access[b].use;
+    if (!(u == kShared || u == use)) continue;
+    for (int i = 0; i < blocks[b].size; ++i) {
+      const double h = Step(access[b].tangent, access[b].data(values)[i]);
+      Eigen::Matrix<double, N, 1> f[2];
+      for (int side = 0; side < 2; ++side) {
+        double delta[camera::kNumDistortion] = {};  // the largest block
+        delta[i] = side == 0 ? h : -h;
+        InstrumentModel m = model;
+        PlusBlock(access[b], blocks[b].size, delta, &m);
+        if (!evaluate(m, &f[side])) {
+          throw PredictionError(PredictionFailure::kNonFinite,
+                                "a prediction that stays defined when the model moves by its "
+                                "finite-difference step",
+                                "a failure when '" + blocks[b].name + "' moved");
+        }
+      }
+      index.push_back(blocks[b].offset + i);
+      columns.push_back((f[0] - f[1]) / (2 * h));
+    }
+  }
+  const int n = static_cast<int>(index.size());
+  Eigen::Matrix<double, N, Eigen::Dynamic> J(N, n);
+  Eigen::MatrixXd P(n, n);
+  for (int a = 0; a < n; ++a) {
+    J.col(a) = columns[a];
+    for (int c = 0; c < n; ++c) P(a, c) = covariance(index[a], index[c]);
+  }
+  Uncertain<N> out;
+  out.value = value;
+  out.covariance = J * P * J.transpose();
+  return out;
+}
+
+void RequireCovariance(bool has) {
+  if (!has) {
+    throw std::logic_error(
+        "the model has no uncertainties (model.yaml `uncertainties: false`); set a parameter "
+        "covariance first");
+  }
+}
+
+}  // namespace
+
+Uncertain<3> CalibratedInstrument::EdmPointWithUncertainty(double phi, double theta,
+                                                           double d) const {
+  RequireCovariance(has_covariance_);
+  const Eigen::Vector3d x = EdmPoint(phi, theta, d);
+  return Propagate<3>(model_, covariance_, kEdmOnly, x,
+                      [&](const InstrumentModel& m, Eigen::Vector3d* out) {
+                        *out = PredictEdm(m, phi, theta, d);
+                        return out->allFinite();
+                      });
+}
+
+Uncertain<6> CalibratedInstrument::CameraRayWithUncertainty(int zoom, double phi, double theta,
+                                                            double u, double v) const {
+  RequireCovariance(has_covariance_);
+  const Ray r = CameraRay(zoom, phi, theta, u, v);
+  Eigen::Matrix<double, 6, 1> value;
+  value << r.origin, r.direction;
+  return Propagate<6>(model_, covariance_, zoom, value,
+                      [&](const InstrumentModel& m, Eigen::Matrix<double, 6, 1>* out) {
+                        return RawRay(m, zoom, phi, theta, u, v, out) && out->allFinite();
+                      });
+}
+
+Uncertain<2> CalibratedInstrument::PixelWithUncertainty(int zoom, double phi, double theta,
+                                                        const Eigen::Vector3d& x_ref) const {
+  RequireCovariance(has_covariance_);
+  const Eigen::Vector2d uv = Pixel(zoom, phi, theta, x_ref);
+  return Propagate<2>(model_, covariance_, zoom, uv,
+                      [&](const InstrumentModel& m, Eigen::Vector2d* out) {
+                        return PredictPixel(m, zoom, phi, theta, x_ref, out) && out->allFinite();
+                      });
+}
+
+}  // namespace rtscalib
