@@ -19,7 +19,7 @@
 
 struct apriltag_family;  // libapriltag's apriltag_family_t
 
-namespace rtscalib::render {
+namespace rtscalib::detect {
 
 struct TagFamilyDeleter {
   void operator()(apriltag_family* family) const;
@@ -50,4 +50,4 @@ TagFamilyInfo GetTagFamilyInfo(const std::string& name);
 cv::Mat TagCodeImage(const std::string& family, int id);
 cv::Mat TagCodeImage(apriltag_family* family, int id);
 
-}  // namespace rtscalib::render
+}  // namespace rtscalib::detect

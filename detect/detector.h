@@ -32,7 +32,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace rtscalib::render {
+namespace rtscalib::detect {
 
 struct DetectorOptions {
   std::vector<std::string> families = {"tag36h11"};
@@ -86,4 +86,4 @@ class TagDetector {
 bool RefineTagCorners(const cv::Mat& gray, int width_at_border, const DetectorOptions& options,
                       std::array<Eigen::Vector2d, 4>* corners);
 
-}  // namespace rtscalib::render
+}  // namespace rtscalib::detect

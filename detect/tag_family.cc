@@ -1,4 +1,4 @@
-#include "render/tag_family.h"
+#include "detect/tag_family.h"
 
 #include <apriltag.h>
 #include <tag16h5.h>
@@ -13,7 +13,7 @@
 
 #include <stdexcept>
 
-namespace rtscalib::render {
+namespace rtscalib::detect {
 namespace {
 
 struct FamilyEntry {
@@ -101,4 +101,4 @@ cv::Mat TagCodeImage(apriltag_family* f, int id) {
   return out;
 }
 
-}  // namespace rtscalib::render
+}  // namespace rtscalib::detect
