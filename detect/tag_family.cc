@@ -68,6 +68,16 @@ const std::vector<std::string>& KnownTagFamilies() {
   return names;
 }
 
+std::map<std::string, int> FamilyCodeCounts() {
+  std::map<std::string, int> out;
+  for (const FamilyEntry& e : kFamilies) {
+    apriltag_family_t* f = e.create();
+    out[e.name] = static_cast<int>(f->ncodes);
+    e.destroy(f);
+  }
+  return out;
+}
+
 TagFamilyPtr CreateTagFamily(const std::string& name) {
   return TagFamilyPtr(FamilyOrThrow(name).create());
 }
