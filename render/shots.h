@@ -25,11 +25,11 @@
 #include <string>
 #include <vector>
 
+#include "detect/detector.h"
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 #include "libcalib/model/targets.h"
-#include "detect/detector.h"
 #include "render/headless.h"
 #include "render/scene_renderer.h"
 #include "render/tag_matching.h"

@@ -5,8 +5,8 @@
 #include <map>
 #include <utility>
 
-#include "libcalib/camera/opencv_model.h"
 #include "detect/tag_family.h"
+#include "libcalib/camera/opencv_model.h"
 #include "render/tag_texture.h"
 
 namespace rtscalib::render {

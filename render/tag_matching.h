@@ -23,10 +23,10 @@
 #include <string>
 #include <vector>
 
+#include "detect/detector.h"
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/targets.h"
-#include "detect/detector.h"
 
 namespace rtscalib::render {
 

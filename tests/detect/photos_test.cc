@@ -14,6 +14,7 @@
 #include <set>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "detect/tag_family.h"
 #include "libcalib/io/csv.h"
@@ -95,19 +96,25 @@ TEST(DetectPhotosTest, BoardWithoutPoseGivesItsCornersWithEmptyXyz) {
   const Scene s = MakeScene(dir);
   ASSERT_TRUE(cv::imwrite(dir.Path("p1.png"), MakePhoto(s, 460, 620)));
   dir.Write("shots.csv",
-            "# two photos of one scene, the second a TIFF copy\n"
+            "# three photos of one scene: 16-bit PNG, 16-bit TIFF, 8-bit colour JPEG\n"
             "image,face,zoom,phi,theta\n"
             "p1.png,1,0,0.5,1.5\n"
-            "p2.tif,2,0,3.6,4.7\n");
-  ASSERT_TRUE(
-      cv::imwrite(dir.Path("p2.tif"), cv::imread(dir.Path("p1.png"), cv::IMREAD_UNCHANGED)));
+            "p2.tif,2,0,3.6,4.7\n"
+            "p3.jpg,1,0,0.7,1.4\n");
+  const cv::Mat png = cv::imread(dir.Path("p1.png"), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(png.type(), CV_16UC1);
+  ASSERT_TRUE(cv::imwrite(dir.Path("p2.tif"), png));
+  cv::Mat grey8, colour;
+  png.convertTo(grey8, CV_8U, 1.0 / 256);
+  cv::cvtColor(grey8, colour, cv::COLOR_GRAY2BGR);
+  ASSERT_TRUE(cv::imwrite(dir.Path("p3.jpg"), colour, {cv::IMWRITE_JPEG_QUALITY, 95}));
   const ShotsFile shots = ReadShots(dir.Path("shots.csv"));
   for (int jobs : {1, 2}) {
     PhotoDetectionOptions options;
     options.jobs = jobs;
     options.progress = false;
     const PhotoDetectionResult result = DetectPhotos(shots, s.targets, options);
-    ASSERT_EQ(result.photos.size(), 2u);
+    ASSERT_EQ(result.photos.size(), 3u);
     EXPECT_TRUE(result.warnings.empty());
     const std::string out = dir.Path("pixels.csv");
     WriteDetectedPixels(out, shots, s.targets, result);
@@ -144,12 +151,15 @@ TEST(DetectPhotosTest, BoardWithoutPoseGivesItsCornersWithEmptyXyz) {
       seen[shot].insert({target, corner});
       EXPECT_EQ(t.Integer(row, "width"), 460);
       EXPECT_EQ(t.Integer(row, "height"), 620);
-      EXPECT_EQ(t.Integer(row, "face"), shot == "p1" ? 1 : 2);
+      EXPECT_EQ(t.Integer(row, "face"), shot == "p2" ? 2 : 1);
       const auto it = exact.find({target, corner});
       ASSERT_NE(it, exact.end()) << "unexpected tag " << target << " corner " << corner;
       const Eigen::Vector2d uv(t.Number(row, "u"), t.Number(row, "v"));
-      // Tolerance: see tests/detect/detector_test.cc (kCornerTolPx).
-      EXPECT_LT((uv - it->second).norm(), 0.05) << "tag " << target << " corner " << corner;
+      // Tolerance: see tests/detect/detector_test.cc (kCornerTolPx); JPEG's
+      // 8 x 8 block quantisation at quality 95 moves edges by a few hundredths
+      // of a pixel more (measured up to ~0.03 px).
+      EXPECT_LT((uv - it->second).norm(), shot == "p3" ? 0.1 : 0.05)
+          << shot << " tag " << target << " corner " << corner;
       if (target < 20) {
         EXPECT_TRUE(t.Empty(row, "X") && t.Empty(row, "Y") && t.Empty(row, "Z"));
       } else {
@@ -164,15 +174,17 @@ TEST(DetectPhotosTest, BoardWithoutPoseGivesItsCornersWithEmptyXyz) {
     for (const auto& [key, uv] : exact) all.insert(key);
     EXPECT_EQ(seen["p1"], all);
     EXPECT_EQ(seen["p2"], all);
+    EXPECT_EQ(seen["p3"], all);
 
     const CsvTable summary = CsvTable::Read(
         out + ".summary.csv",
         {{"shot", "width", "height", "tags_found", "tags_of_boards", "bit_depth", "shift_rms_px"},
          {}});
-    ASSERT_EQ(summary.NumRows(), 2);
+    ASSERT_EQ(summary.NumRows(), 3);
     EXPECT_EQ(summary.Integer(0, "width"), 460);
     EXPECT_EQ(summary.Integer(0, "height"), 620);
     EXPECT_EQ(summary.Integer(0, "bit_depth"), 16);
+    EXPECT_EQ(summary.Integer(2, "bit_depth"), 8);
     EXPECT_EQ(summary.Integer(0, "tags_found"), static_cast<long long>(all.size() / 4));
     EXPECT_EQ(summary.Integer(0, "tags_of_boards"), 18);
     // Refined vs libapriltag corners on a sharp photo: ~0.1-0.3 px, never a
@@ -190,7 +202,7 @@ TEST(DetectPhotosTest, BoardWithoutPoseGivesItsCornersWithEmptyXyz) {
     }
     posed.close();
     const PixelsFile pixels = ReadPixels(dir.Path("posed.csv"));
-    EXPECT_EQ(pixels.pixels.size(), 2u * 4 * 6);
+    EXPECT_EQ(pixels.pixels.size(), 3u * 4 * 6);
     ASSERT_EQ(pixels.notes.size(), 1u);
     EXPECT_THAT(pixels.notes[0], HasSubstr("height, width"));
   }
