@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "detect/photo_image.h"
 #include "tests/detect/synthetic_photo.h"
@@ -35,6 +37,9 @@ struct View {
   double px_per, py_per;
 };
 
+// Largest corner error seen by ExpectExactCorners in this process [px].
+double g_max_error_px = 0;
+
 // Detects the one tag of `photo` (converted by ToGray8) and checks its id,
 // refinement and corners against the exact ones.
 void ExpectExactCorners(const cv::Mat& photo, const std::string& family, int id,
@@ -49,6 +54,7 @@ void ExpectExactCorners(const cv::Mat& photo, const std::string& family, int id,
   EXPECT_EQ(d.family, family) << what;
   EXPECT_TRUE(d.refined) << what;
   for (int k = 0; k < 4; ++k) {
+    g_max_error_px = std::max(g_max_error_px, (d.corners[k] - exact[k]).norm());
     EXPECT_LT((d.corners[k] - exact[k]).norm(), kCornerTolPx)
         << what << " corner " << k << ": detected " << d.corners[k].transpose() << ", exact "
         << exact[k].transpose();
@@ -59,6 +65,7 @@ void ExpectExactCorners(const cv::Mat& photo, const std::string& family, int id,
 }
 
 TEST(DetectorConventionTest, CornersAndOrderOnSynthesizedPhotos) {
+  g_max_error_px = 0;
   const int id = 7;
   // The tag's quad is the plane square [0, 8]^2 (one plane unit = one bit of
   // tag36h11); sizes from 4.5 to 11 px per bit, quarter turns (the order
@@ -92,9 +99,11 @@ TEST(DetectorConventionTest, CornersAndOrderOnSynthesizedPhotos) {
         ToPixels(coverage, CV_16UC3, cv::Scalar(9000, 3000, 2000), cv::Scalar(40000, 60000, 61000)),
         "tag36h11", id, exact, what + " 16-bit colour");
   }
+  std::printf("tag36h11, 8 views x 4 formats: max corner error %.4f px\n", g_max_error_px);
 }
 
 TEST(DetectorConventionTest, OtherFamilies) {
+  g_max_error_px = 0;
   for (const std::string family : {"tag25h9", "tag16h5", "tagStandard41h12"}) {
     const TagFamilyInfo info = GetTagFamilyInfo(family);
     const double w = info.width_at_border;
@@ -108,6 +117,7 @@ TEST(DetectorConventionTest, OtherFamilies) {
     ExpectExactCorners(ToPixels(coverage, CV_8UC1, cv::Scalar(20), cv::Scalar(235)), family, 3,
                        exact, family);
   }
+  std::printf("other families: max corner error %.4f px\n", g_max_error_px);
 }
 
 TEST(DetectorTest, TinyTagsAreNotRefined) {
