@@ -37,4 +37,16 @@ struct ExportArgs {
 };
 int RunExport(const ExportArgs& args);
 
+// `rtscalib detect` (app/detect_command.cc): photos of shots.csv -> pixels.csv.
+struct DetectArgs {
+  std::string shots;
+  std::string targets;
+  std::string out;
+  int jobs = 1;
+  bool keep_unrefined = false;
+  bool force = false;  // allow replacing existing output files
+  bool quiet = false;
+};
+int RunDetect(const DetectArgs& args);
+
 }  // namespace rtscalib::app

@@ -47,11 +47,24 @@ int main(int argc, char** argv) {
   ex->add_option("--out", exp.out, "output folder (default: the model's folder + /export/)");
   ex->add_flag("--force", exp.force, "replace files that exist");
 
+  rtscalib::app::DetectArgs detect;
+  CLI::App* det = app.add_subcommand(
+      "detect", "detect the AprilTags of targets.yaml's boards in the photos of shots.csv");
+  det->add_option("--shots", detect.shots, "shots.csv: one photo per row (SPEC 7)")->required();
+  det->add_option("--targets", detect.targets, "targets.yaml: the boards")->required();
+  det->add_option("--out", detect.out, "pixels.csv to write (and <out>.summary.csv)")->required();
+  det->add_option("--jobs", detect.jobs, "detection threads")->check(CLI::PositiveNumber);
+  det->add_flag("--keep-unrefined", detect.keep_unrefined,
+                "keep tags whose sub-pixel refinement failed (libapriltag's corners)");
+  det->add_flag("--force", detect.force, "replace --out if it exists");
+  det->add_flag("--quiet", detect.quiet, "no progress lines on stderr");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (pred->parsed()) return rtscalib::app::RunPredict(predict);
     if (dg->parsed()) return rtscalib::app::RunDiagnose(diag);
     if (ex->parsed()) return rtscalib::app::RunExport(exp);
+    if (det->parsed()) return rtscalib::app::RunDetect(detect);
     if (run.config.empty()) {
       std::cerr << app.help();
       return 2;

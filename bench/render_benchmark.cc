@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <memory>
 
-#include "render/detector.h"
+#include "detect/detector.h"
 #include "render/headless.h"
 #include "render/scene_renderer.h"
 #include "render/shots.h"
@@ -79,10 +79,10 @@ void BM_Detect(benchmark::State& state) {
   Fixture f;
   SceneRenderer renderer(f.scene);
   const cv::Mat img = renderer.Render(f.pose, f.cam);
-  DetectorOptions options;
+  detect::DetectorOptions options;
   options.threads = static_cast<int>(state.range(0));
   options.refine_corners = state.range(1) != 0;
-  TagDetector detector(options);
+  detect::TagDetector detector(options);
   size_t found = 0;
   for (auto _ : state) found = detector.Detect(img).size();
   state.counters["tags"] = static_cast<double>(found);

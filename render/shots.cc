@@ -433,7 +433,7 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
   }
   if (const std::string m = CheckShots(shots); !m.empty())
     throw std::invalid_argument("shots: " + m);
-  DetectorOptions dopt = options.detector;
+  detect::DetectorOptions dopt = options.detector;
   dopt.families.clear();
   for (const TagBoard& b : scene.boards) {
     if (std::find(dopt.families.begin(), dopt.families.end(), b.family) == dopt.families.end()) {
@@ -452,7 +452,7 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
   Progress progress("detect", n, options.progress);
   auto work = [&]() {
     try {
-      TagDetector detector(dopt);
+      detect::TagDetector detector(dopt);
       for (int i = next++; i < n; i = next++) {
         {
           std::lock_guard<std::mutex> lock(mutex);
@@ -468,7 +468,7 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
                                    std::to_string(s.cam.width) + "x" +
                                    std::to_string(s.cam.height));
         }
-        const std::vector<TagDetection> dets = detector.Detect(img);
+        const std::vector<detect::TagDetection> dets = detector.Detect(img);
         const std::vector<ExpectedTag> expected =
             ExpectTags(scene, s.ref_from_cam, s.cam, options.visibility);
         ShotStats& stats = result.stats[i];

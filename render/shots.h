@@ -25,11 +25,11 @@
 #include <string>
 #include <vector>
 
+#include "detect/detector.h"
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 #include "libcalib/model/targets.h"
-#include "render/detector.h"
 #include "render/headless.h"
 #include "render/scene_renderer.h"
 #include "render/tag_matching.h"
@@ -87,10 +87,10 @@ std::string ExactTableName(int shard, int num_shards);
 void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& out_dir);
 
 struct DetectShotsOptions {
-  DetectorOptions detector;  // families default to the scene's families
+  detect::DetectorOptions detector;  // families default to the scene's families
   MatchOptions match;
   VisibilityOptions visibility;
-  int jobs = 1;  // detection threads (one TagDetector each)
+  int jobs = 1;  // detection threads (one detect::TagDetector each)
   bool progress = true;
 
   std::string Check() const;  // empty when valid

@@ -5,8 +5,8 @@
 #include <map>
 #include <utility>
 
+#include "detect/tag_family.h"
 #include "libcalib/camera/opencv_model.h"
-#include "render/tag_family.h"
 #include "render/tag_texture.h"
 
 namespace rtscalib::render {
@@ -84,7 +84,7 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
   std::vector<ExpectedTag> out;
   for (int bi = 0; bi < static_cast<int>(scene.boards.size()); ++bi) {
     const TagBoard& board = scene.boards[bi];
-    const int wab = GetTagFamilyInfo(board.family).width_at_border;
+    const int wab = detect::GetTagFamilyInfo(board.family).width_at_border;
     // The printed side faces the board's -z (targets.h).
     const Eigen::Vector3d printed_normal = -board.ref_from_board.rotation.col(2);
     const bool facing = (centre - board.ref_from_board.translation).dot(printed_normal) > 0;
@@ -181,7 +181,7 @@ void ShotStats::Add(const ShotStats& o) {
   max_error_px = std::max(max_error_px, o.max_error_px);
 }
 
-std::vector<MatchedTag> MatchDetections(const std::vector<TagDetection>& detections,
+std::vector<MatchedTag> MatchDetections(const std::vector<detect::TagDetection>& detections,
                                         const std::vector<ExpectedTag>& expected,
                                         const MatchOptions& options, ShotStats* stats) {
   const std::string shot = stats->shot;
@@ -214,7 +214,7 @@ std::vector<MatchedTag> MatchDetections(const std::vector<TagDetection>& detecti
   std::vector<bool> seen(expected.size(), false);
   std::vector<MatchedTag> out;
   double sum_sq = 0;
-  for (const TagDetection& det : detections) {
+  for (const detect::TagDetection& det : detections) {
     const auto it = index.find({det.family, det.id});
     if (it == index.end()) {
       ++stats->unknown;

@@ -23,10 +23,10 @@
 #include <string>
 #include <vector>
 
+#include "detect/detector.h"
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/targets.h"
-#include "render/detector.h"
 
 namespace rtscalib::render {
 
@@ -108,7 +108,7 @@ struct MatchedTag {
 
 // Matches one image's detections to its expected tags. `stats` is reset
 // (keeping its `shot`) and filled.
-std::vector<MatchedTag> MatchDetections(const std::vector<TagDetection>& detections,
+std::vector<MatchedTag> MatchDetections(const std::vector<detect::TagDetection>& detections,
                                         const std::vector<ExpectedTag>& expected,
                                         const MatchOptions& options, ShotStats* stats);
 

@@ -6,7 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "render/tag_family.h"
+#include "detect/tag_family.h"
 
 namespace rtscalib::render {
 namespace {
@@ -72,7 +72,7 @@ Eigen::Vector2d TagTexture::TexelFromBoard(double x, double y) const {
 }
 
 BoardRect PrintedArea(const TagBoard& board, double margin) {
-  const TagFamilyInfo info = GetTagFamilyInfo(board.family);
+  const detect::TagFamilyInfo info = detect::GetTagFamilyInfo(board.family);
   const double bit = board.tag_size / info.width_at_border;
   const double m = margin < 0 ? bit : margin;
   const double off = info.border_offset() * bit;
@@ -89,8 +89,8 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
   if (board.rows < 1 || board.cols < 1 || !(board.tag_size > 0) || board.spacing < 0) {
     throw std::invalid_argument("TagBoard: expected rows, cols >= 1, tag_size > 0, spacing >= 0");
   }
-  const TagFamilyPtr family = CreateTagFamily(board.family);
-  const TagFamilyInfo info = GetTagFamilyInfo(board.family);
+  const detect::TagFamilyPtr family = detect::CreateTagFamily(board.family);
+  const detect::TagFamilyInfo info = detect::GetTagFamilyInfo(board.family);
   if (board.first_id < 0 || board.first_id + board.NumTags() > info.num_codes) {
     throw std::invalid_argument("TagBoard: ids " + std::to_string(board.first_id) + ".." +
                                 std::to_string(board.first_id + board.NumTags() - 1) +
@@ -144,7 +144,7 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
   const int step = (code_bits + gap_bits) * ppb;
   for (int i = 0; i < board.NumTags(); ++i) {
     const int r = i / board.cols, c = i % board.cols;
-    cv::Mat code = TagCodeImage(family.get(), board.first_id + i);
+    cv::Mat code = detect::TagCodeImage(family.get(), board.first_id + i);
     cv::Mat levels;
     cv::Mat lut(1, 256, CV_8UC1, cv::Scalar(options.white));
     lut.at<uint8_t>(0) = options.black;

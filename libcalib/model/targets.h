@@ -7,8 +7,13 @@
 // printed side looks along +z). Tag (r, c)'s black square has edge `tag_size`
 // and its top-left corner at ((tag_size + spacing) * c, (tag_size + spacing) * r).
 // Corner order of one tag follows libapriltag's detection order (see
-// render/detector.cc): corner 0 = bottom-left, 1 = bottom-right, 2 = top-right,
+// detect/detector.h): corner 0 = bottom-left, 1 = bottom-right, 2 = top-right,
 // 3 = top-left, as seen in an upright image of the printed tag.
+//
+// `ref_from_board` is the board's pose when `pose_known` (surveyed, or the
+// simulation's truth). A board of a real instrument's targets.yaml without a
+// `pose` has `pose_known = false` (SPEC 7): its pose is to be estimated and
+// `ref_from_board` is only a placeholder (identity) until then.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,8 +33,11 @@ struct TagBoard {
   double tag_size = 0.08;  // edge of the black square [m]
   double spacing = 0.02;   // white gap between neighbouring tags [m]
   Rigid3 ref_from_board;
+  bool pose_known = true;
 
   int NumTags() const { return rows * cols; }
+  int LastId() const { return first_id + NumTags() - 1; }
+  bool HasId(int id) const { return id >= first_id && id <= LastId(); }
   // The four corners of tag `index` (0 .. NumTags-1) in the board frame.
   std::array<Eigen::Vector3d, 4> CornersInBoard(int index) const {
     const int r = index / cols, c = index % cols;

@@ -1,7 +1,8 @@
 // Rendered-and-detected corners against exact projections. The renderer's own
 // geometry is tested in scene_renderer_test.cc, the exact projections in
-// tests/camera.
-#include "render/detector.h"
+// tests/camera, the detector on images synthesized without the renderer in
+// tests/detect.
+#include "detect/detector.h"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,9 @@
 namespace rtscalib::render {
 namespace {
 
+using detect::DetectorOptions;
+using detect::TagDetection;
+using detect::TagDetector;
 using testing::AimAt;
 using testing::EnsureDisplay;
 using testing::FrontBoard;
@@ -172,31 +176,6 @@ TEST(DetectorTest, OtherFamilies) {
     Accumulate(detections, scene, pose, cam, &errors);
     EXPECT_LE(errors.Rms(), 0.1) << family;
   }
-}
-
-TEST(DetectorTest, TinyTagsAreNotRefined) {
-  // A synthetic 20 px tag36h11 (2.5 px bits) is below min_bit_pixels = 3.
-  cv::Mat img(100, 100, CV_8UC1, cv::Scalar(200));
-  std::array<Eigen::Vector2d, 4> corners = {Eigen::Vector2d(40, 60), Eigen::Vector2d(60, 60),
-                                            Eigen::Vector2d(60, 40), Eigen::Vector2d(40, 40)};
-  const auto before = corners;
-  DetectorOptions options;
-  options.min_bit_pixels = 3.0;
-  EXPECT_FALSE(RefineTagCorners(img, 8, options, &corners));
-  EXPECT_EQ(corners, before);
-}
-
-TEST(DetectorTest, OptionsAreChecked) {
-  DetectorOptions o;
-  EXPECT_EQ(o.Check(), "");
-  o.families = {"tag42h42"};
-  EXPECT_NE(o.Check(), "");
-  EXPECT_THROW(TagDetector{o}, std::invalid_argument);
-  o = DetectorOptions();
-  o.threads = 0;
-  EXPECT_NE(o.Check(), "");
-  TagDetector detector;
-  EXPECT_THROW(detector.Detect(cv::Mat(10, 10, CV_8UC3)), std::invalid_argument);
 }
 
 }  // namespace

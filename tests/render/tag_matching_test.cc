@@ -11,6 +11,8 @@
 namespace rtscalib::render {
 namespace {
 
+using detect::TagDetection;
+using detect::TagDetector;
 using testing::AimAt;
 using testing::EnsureDisplay;
 using testing::FrontBoard;

@@ -5,10 +5,14 @@
 
 #include <cmath>
 
-#include "render/tag_family.h"
+#include "detect/tag_family.h"
 
 namespace rtscalib::render {
 namespace {
+
+using detect::GetTagFamilyInfo;
+using detect::TagCodeImage;
+using detect::TagFamilyInfo;
 
 // The texel at continuous texel coordinates just inside/outside a point.
 uint8_t TexelAt(const TagTexture& tex, const Eigen::Vector2d& t, double dx, double dy) {

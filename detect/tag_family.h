@@ -11,6 +11,7 @@
 // data bits lie outside the quad.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,7 +20,7 @@
 
 struct apriltag_family;  // libapriltag's apriltag_family_t
 
-namespace rtscalib::render {
+namespace rtscalib::detect {
 
 struct TagFamilyDeleter {
   void operator()(apriltag_family* family) const;
@@ -28,6 +29,8 @@ using TagFamilyPtr = std::unique_ptr<apriltag_family, TagFamilyDeleter>;
 
 // The names accepted by CreateTagFamily, e.g. "tag36h11".
 const std::vector<std::string>& KnownTagFamilies();
+// Every known family's number of codes (ids 0 .. n-1), e.g. for ReadTargets.
+std::map<std::string, int> FamilyCodeCounts();
 
 // Creates a family by name. Throws std::invalid_argument naming the known
 // families when `name` is not one of them.
@@ -50,4 +53,4 @@ TagFamilyInfo GetTagFamilyInfo(const std::string& name);
 cv::Mat TagCodeImage(const std::string& family, int id);
 cv::Mat TagCodeImage(apriltag_family* family, int id);
 
-}  // namespace rtscalib::render
+}  // namespace rtscalib::detect

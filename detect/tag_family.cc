@@ -1,4 +1,4 @@
-#include "render/tag_family.h"
+#include "detect/tag_family.h"
 
 #include <apriltag.h>
 #include <tag16h5.h>
@@ -13,7 +13,7 @@
 
 #include <stdexcept>
 
-namespace rtscalib::render {
+namespace rtscalib::detect {
 namespace {
 
 struct FamilyEntry {
@@ -68,6 +68,16 @@ const std::vector<std::string>& KnownTagFamilies() {
   return names;
 }
 
+std::map<std::string, int> FamilyCodeCounts() {
+  std::map<std::string, int> out;
+  for (const FamilyEntry& e : kFamilies) {
+    apriltag_family_t* f = e.create();
+    out[e.name] = static_cast<int>(f->ncodes);
+    e.destroy(f);
+  }
+  return out;
+}
+
 TagFamilyPtr CreateTagFamily(const std::string& name) {
   return TagFamilyPtr(FamilyOrThrow(name).create());
 }
@@ -101,4 +111,4 @@ cv::Mat TagCodeImage(apriltag_family* f, int id) {
   return out;
 }
 
-}  // namespace rtscalib::render
+}  // namespace rtscalib::detect

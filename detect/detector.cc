@@ -1,4 +1,4 @@
-#include "render/detector.h"
+#include "detect/detector.h"
 
 #include <apriltag.h>
 
@@ -8,9 +8,9 @@
 #include <map>
 #include <stdexcept>
 
-#include "render/tag_family.h"
+#include "detect/tag_family.h"
 
-namespace rtscalib::render {
+namespace rtscalib::detect {
 namespace {
 
 // One edge in its own frame: p(t) = origin + t dir + s(t) normal with
@@ -294,4 +294,4 @@ std::vector<TagDetection> TagDetector::Detect(const cv::Mat& gray) {
   return out;
 }
 
-}  // namespace rtscalib::render
+}  // namespace rtscalib::detect

@@ -18,8 +18,9 @@
 // Corner order is TargetCorner's (targets.h): 0 bottom-left, 1 bottom-right,
 // 2 top-right, 3 top-left of the upright tag. This is libapriltag's order of
 // apriltag_detection::p (tag coordinates (-1, 1), (1, 1), (1, -1), (-1, -1)
-// with tag y pointing down the printed tag), checked by
-// tests/render/detector_test.cc. Pixel convention: OpenCV's, (0, 0) is the
+// with tag y pointing down the printed tag), checked on photos synthesized
+// from the bit patterns alone (tests/detect/detector_test.cc) and on renders
+// (tests/render/detector_test.cc). Pixel convention: OpenCV's, (0, 0) is the
 // centre of the top-left pixel (libapriltag's own corners are shifted by half a
 // pixel; only our refined corners are returned when refinement succeeds).
 #pragma once
@@ -32,7 +33,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace rtscalib::render {
+namespace rtscalib::detect {
 
 struct DetectorOptions {
   std::vector<std::string> families = {"tag36h11"};
@@ -86,4 +87,4 @@ class TagDetector {
 bool RefineTagCorners(const cv::Mat& gray, int width_at_border, const DetectorOptions& options,
                       std::array<Eigen::Vector2d, 4>* corners);
 
-}  // namespace rtscalib::render
+}  // namespace rtscalib::detect

@@ -1,4 +1,4 @@
-#include "render/tag_family.h"
+#include "detect/tag_family.h"
 
 #include <apriltag/apriltag.h>
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace rtscalib::render {
+namespace rtscalib::detect {
 namespace {
 
 TEST(TagFamily, KnownFamiliesCanBeCreated) {
@@ -158,4 +158,4 @@ TEST(TagFamily, LibapriltagDetectsTheCodeImageUprightWithSpecCornerOrder) {
 }
 
 }  // namespace
-}  // namespace rtscalib::render
+}  // namespace rtscalib::detect

@@ -1,0 +1,269 @@
+#include "detect/photos.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <map>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+
+#include <opencv2/core.hpp>
+
+#include "detect/photo_image.h"
+#include "libcalib/io/csv.h"
+#include "libcalib/io/errors.h"
+#include "libcalib/io/number_text.h"
+
+namespace rtscalib::detect {
+namespace {
+
+std::string Where(const ShotsFile& shots, int i) {
+  return shots.path + ":" + std::to_string(shots.shots[i].line) + ": image " + shots.shots[i].image;
+}
+
+// Keeps the detections of board tags (family and id of a board), in id order.
+void KeepBoardTags(const std::vector<TagDetection>& detections, const TargetScene& targets,
+                   bool keep_unrefined, PhotoDetection* photo) {
+  std::map<int, int> count;  // id -> detections of a board tag
+  std::vector<std::pair<const TagDetection*, int>> on_board;
+  for (const TagDetection& d : detections) {
+    int board = -1;
+    for (size_t b = 0; b < targets.boards.size(); ++b) {
+      if (targets.boards[b].family == d.family && targets.boards[b].HasId(d.id)) {
+        board = static_cast<int>(b);
+      }
+    }
+    if (board < 0) {
+      ++photo->not_on_boards;
+      continue;
+    }
+    ++count[d.id];
+    on_board.emplace_back(&d, board);
+  }
+  double sum_sq = 0;
+  for (const auto& [d, board] : on_board) {
+    if (count[d->id] > 1) {
+      ++photo->duplicates;
+      continue;
+    }
+    if (!d->refined) {
+      ++photo->unrefined;
+      if (!keep_unrefined) continue;
+    }
+    photo->tags.push_back({board, d->id, d->corners, d->refined});
+    if (d->refined) {
+      for (int k = 0; k < 4; ++k) {
+        const double shift = (d->corners[k] - d->apriltag_corners[k]).norm();
+        sum_sq += shift * shift;
+        photo->shift_max_px = std::max(photo->shift_max_px, shift);
+        ++photo->refined_corners;
+      }
+    }
+  }
+  if (photo->refined_corners > 0) photo->shift_rms_px = std::sqrt(sum_sq / photo->refined_corners);
+  std::sort(photo->tags.begin(), photo->tags.end(),
+            [](const DetectedTag& a, const DetectedTag& b) { return a.id < b.id; });
+}
+
+// Limits OpenCV's thread pool for the lifetime of the object.
+class CvThreads {
+ public:
+  explicit CvThreads(int n) : previous_(cv::getNumThreads()) { cv::setNumThreads(n); }
+  ~CvThreads() { cv::setNumThreads(previous_); }
+
+ private:
+  int previous_;
+};
+
+}  // namespace
+
+std::string PhotoDetectionOptions::Check() const {
+  if (jobs < 1) return "jobs: expected >= 1, got " + std::to_string(jobs);
+  DetectorOptions d = detector;
+  d.families = {"tag36h11"};  // replaced by the boards' families
+  if (const std::string msg = d.Check(); !msg.empty()) return "detector." + msg;
+  return "";
+}
+
+PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& targets,
+                                  const PhotoDetectionOptions& options) {
+  if (const std::string msg = options.Check(); !msg.empty()) {
+    throw std::invalid_argument("PhotoDetectionOptions: " + msg);
+  }
+  if (targets.boards.empty()) throw std::invalid_argument("DetectPhotos: no boards");
+  DetectorOptions detector_options = options.detector;
+  detector_options.families.clear();
+  int tags_of_boards = 0;
+  for (const TagBoard& b : targets.boards) {
+    tags_of_boards += b.NumTags();
+    if (std::find(detector_options.families.begin(), detector_options.families.end(), b.family) ==
+        detector_options.families.end()) {
+      detector_options.families.push_back(b.family);
+    }
+  }
+
+  const int n = static_cast<int>(shots.shots.size());
+  PhotoDetectionResult result;
+  result.photos.resize(n);
+  std::vector<char> done(n, 0);  // one byte per photo: threads write distinct elements
+  const auto start = std::chrono::steady_clock::now();
+
+  std::atomic<int> next{0}, finished{0};
+  std::atomic<bool> stop{false};
+  std::mutex mutex;  // guards size_of_zoom, first_error*
+  std::map<int, std::pair<int, int>> size_of_zoom;
+  int first_error_index = n;
+  std::exception_ptr first_error;
+
+  auto work = [&] {
+    TagDetector detector(detector_options);
+    while (!stop) {
+      const int i = next++;
+      if (i >= n) break;
+      const PhotoShot& shot = shots.shots[i];
+      try {
+        Photo image;
+        try {
+          image = LoadPhoto(shot.image_path);
+        } catch (const std::runtime_error&) {
+          throw InputError::Cell(shots.path, shot.line, "image",
+                                 "an image OpenCV can read (PNG, JPEG or TIFF; 8 or 16 bit; grey "
+                                 "or colour)",
+                                 shot.image_path);
+        }
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          const auto [it, inserted] =
+              size_of_zoom.emplace(shot.zoom, std::make_pair(image.width, image.height));
+          if (!inserted && it->second != std::make_pair(image.width, image.height)) stop = true;
+        }
+        PhotoDetection& photo = result.photos[i];
+        photo.width = image.width;
+        photo.height = image.height;
+        photo.channels = image.channels;
+        photo.bit_depth = image.bit_depth;
+        photo.tags_of_boards = tags_of_boards;
+        KeepBoardTags(detector.Detect(image.gray), targets, options.keep_unrefined, &photo);
+        done[i] = 1;
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (i < first_error_index) {
+          first_error_index = i;
+          first_error = std::current_exception();
+        }
+        stop = true;
+      }
+      ++finished;
+    }
+  };
+  {
+    const CvThreads cv_threads(options.jobs > 1 ? 1 : cv::getNumThreads());
+    std::vector<std::thread> pool;
+    for (int t = 0; t < std::min(options.jobs, std::max(1, n)); ++t) pool.emplace_back(work);
+    // Progress on long runs: a line every 5 s once a run has lasted 5 s.
+    auto last = start;
+    while (finished < n && !stop) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      const auto now = std::chrono::steady_clock::now();
+      if (options.progress && now - last >= std::chrono::seconds(5)) {
+        last = now;
+        const double s = std::chrono::duration<double>(now - start).count();
+        std::fprintf(stderr, "[detect] %d/%d images, %.1f images/s\n", finished.load(), n,
+                     finished / s);
+      }
+    }
+    for (std::thread& t : pool) t.join();
+  }
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // Image sizes within a zoom, checked in shots.csv order so that the message
+  // names the first photo of the zoom and the first that differs.
+  std::map<int, int> first_of_zoom;
+  for (int i = 0; i < n; ++i) {
+    if (!done[i]) continue;
+    const PhotoDetection& p = result.photos[i];
+    const auto [it, inserted] = first_of_zoom.emplace(shots.shots[i].zoom, i);
+    const PhotoDetection& q = result.photos[it->second];
+    if (!inserted && (p.width != q.width || p.height != q.height)) {
+      const PhotoShot& ref = shots.shots[it->second];
+      throw InputError::Cell(shots.path, shots.shots[i].line, "image",
+                             "an image of " + std::to_string(q.width) + "x" +
+                                 std::to_string(q.height) + " px like every photo of zoom " +
+                                 std::to_string(ref.zoom) + " (line " + std::to_string(ref.line) +
+                                 ", " + ref.image_path + ")",
+                             shots.shots[i].image_path + ": " + std::to_string(p.width) + "x" +
+                                 std::to_string(p.height) + " px");
+    }
+  }
+  if (first_error) std::rethrow_exception(first_error);
+
+  for (int i = 0; i < n; ++i) {
+    if (result.photos[i].tags.empty()) {
+      const PhotoDetection& p = result.photos[i];
+      std::string why = "no tag of the boards found";
+      if (p.unrefined + p.not_on_boards + p.duplicates > 0) {
+        why += " (dropped: " + std::to_string(p.unrefined) + " unrefined, " +
+               std::to_string(p.not_on_boards) + " not on a board, " +
+               std::to_string(p.duplicates) + " duplicated)";
+      }
+      result.warnings.push_back(Where(shots, i) + ": " + why);
+    }
+  }
+  return result;
+}
+
+void WriteDetectedPixels(const std::string& path, const ShotsFile& shots,
+                         const TargetScene& targets, const PhotoDetectionResult& result) {
+  CsvWriter w(path, {"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u",
+                     "v", "width", "height"});
+  for (size_t i = 0; i < shots.shots.size(); ++i) {
+    const PhotoShot& s = shots.shots[i];
+    const PhotoDetection& p = result.photos[i];
+    for (const DetectedTag& tag : p.tags) {
+      const TagBoard& board = targets.boards[tag.board];
+      const std::array<Eigen::Vector3d, 4> corners = board.CornersInBoard(tag.id - board.first_id);
+      for (int k = 0; k < 4; ++k) {
+        std::string x, y, z;
+        if (board.pose_known) {
+          const Eigen::Vector3d X = board.ref_from_board * corners[k];
+          x = FormatDouble(X.x());
+          y = FormatDouble(X.y());
+          z = FormatDouble(X.z());
+        }
+        w.Row({std::to_string(s.face), std::to_string(s.zoom), FormatDouble(s.phi),
+               FormatDouble(s.theta), s.shot, std::to_string(tag.id), std::to_string(k), x, y, z,
+               FormatDouble(tag.uv[k].x()), FormatDouble(tag.uv[k].y()), std::to_string(p.width),
+               std::to_string(p.height)});
+      }
+    }
+  }
+  w.Close();
+}
+
+void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
+                           const PhotoDetectionResult& result) {
+  CsvWriter w(path, {"line", "shot", "image", "face", "zoom", "width", "height", "channels",
+                     "bit_depth", "tags_found", "tags_of_boards", "corners", "refined_corners",
+                     "unrefined", "not_on_boards", "duplicates", "shift_rms_px", "shift_max_px"});
+  for (size_t i = 0; i < shots.shots.size(); ++i) {
+    const PhotoShot& s = shots.shots[i];
+    const PhotoDetection& p = result.photos[i];
+    char rms[32], max[32];
+    std::snprintf(rms, sizeof rms, "%.4f", p.shift_rms_px);
+    std::snprintf(max, sizeof max, "%.4f", p.shift_max_px);
+    w.Row({std::to_string(s.line), s.shot, s.image, std::to_string(s.face), std::to_string(s.zoom),
+           std::to_string(p.width), std::to_string(p.height), std::to_string(p.channels),
+           std::to_string(p.bit_depth), std::to_string(p.tags.size()),
+           std::to_string(p.tags_of_boards), std::to_string(4 * p.tags.size()),
+           std::to_string(p.refined_corners), std::to_string(p.unrefined),
+           std::to_string(p.not_on_boards), std::to_string(p.duplicates), rms, max});
+  }
+  w.Close();
+}
+
+}  // namespace rtscalib::detect

@@ -1,0 +1,96 @@
+// A real instrument's photos -> detected tag corners (SPEC 7, `rtscalib detect`).
+//
+// Every photo of shots.csv is read (photo_image.h: any of PNG/JPEG/TIFF, 8 or
+// 16 bit, grey or colour, converted to 8-bit grey), searched for tags of the
+// families of targets.yaml, and a detection is kept only when its family and
+// id belong to one of the boards: what is kept never depends on a model or on
+// where a tag "should" be, so partial boards, occlusions and any pose are
+// fine. Per photo, also:
+//   * a detection whose sub-pixel refinement failed (too small, blurred,
+//     cut by the image edge) is dropped and counted, unless keep_unrefined
+//     (libapriltag's own corners are ~0.1-0.2 px off);
+//   * a tag detected twice in one photo (two printed copies) is dropped
+//     entirely and counted: neither copy can be told from the other;
+//   * the detector's own check: the shift between our refined corners and
+//     libapriltag's (RMS and max). Both estimate the same corner, so a large
+//     shift means one of them went wrong (a smudge on an edge, heavy blur);
+//     typically 0.1-0.3 px;
+//   * a photo in which no tag was found is a warning naming its line and file.
+// Image sizes are read from the images (never guessed); a photo whose size
+// differs from the first photo of the same zoom is an InputError naming both.
+//
+// Parallelism: `jobs` threads pull photos from one shared counter, each with
+// its own TagDetector (libapriltag with `detector.threads` workers, 1 by
+// default). OpenCV's own thread pool is limited to one thread while jobs > 1,
+// so that the detection threads do not compete with it for the cores. Results
+// do not depend on jobs (they are stored by photo and written in shots.csv
+// order).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "detect/detector.h"
+#include "libcalib/io/shots.h"
+#include "libcalib/model/targets.h"
+
+namespace rtscalib::detect {
+
+struct PhotoDetectionOptions {
+  DetectorOptions detector;  // `families` is replaced by the boards' families
+  int jobs = 1;              // detection threads
+  bool keep_unrefined = false;
+  bool progress = true;  // images/s lines on stderr during long runs
+
+  std::string Check() const;  // empty when valid
+};
+
+struct DetectedTag {
+  int board = 0;                      // index in TargetScene::boards
+  int id = 0;                         // tag id = pixels.csv `target`
+  std::array<Eigen::Vector2d, 4> uv;  // TargetCorner order, OpenCV pixels
+  bool refined = true;
+};
+
+struct PhotoDetection {
+  int width = 0, height = 0;        // the image's size [px]
+  int channels = 0, bit_depth = 0;  // of the file
+  int tags_of_boards = 0;           // all tags of all boards
+  std::vector<DetectedTag> tags;    // kept, by id
+  int unrefined = 0;      // board tags whose refinement failed (dropped unless keep_unrefined)
+  int not_on_boards = 0;  // detections of families/ids of no board (dropped)
+  int duplicates = 0;     // detections of a tag seen twice in this photo (dropped)
+  // Refined vs libapriltag corners over the kept refined tags [px].
+  double shift_rms_px = 0, shift_max_px = 0;
+  int refined_corners = 0;
+};
+
+struct PhotoDetectionResult {
+  std::vector<PhotoDetection> photos;  // one per shot, shots.csv order
+  std::vector<std::string> warnings;   // "shots.csv:7: image a.png: no tag of the boards found"
+  double seconds = 0;                  // wall time
+};
+
+// Detects every photo of `shots`. Throws InputError (naming shots.csv's line
+// and the image) for unreadable images and for image sizes that differ within
+// a zoom level, std::invalid_argument for invalid options.
+PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& targets,
+                                  const PhotoDetectionOptions& options);
+
+// pixels.csv (SPEC 3) of the kept tags: face, zoom, phi, theta, shot, target,
+// corner, X, Y, Z, u, v, width, height; X, Y, Z are the corner in the
+// reference frame for boards with a known pose and empty otherwise (SPEC 7);
+// width, height are the image size (an extra column for readers of SPEC 3).
+// Rows in shots.csv order, then by tag id, corners 0..3.
+void WriteDetectedPixels(const std::string& path, const ShotsFile& shots,
+                         const TargetScene& targets, const PhotoDetectionResult& result);
+
+// One row per photo: line, shot, image, face, zoom, width, height, channels,
+// bit_depth, tags_found, tags_of_boards, corners, refined_corners, unrefined,
+// not_on_boards, duplicates, shift_rms_px, shift_max_px.
+void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
+                           const PhotoDetectionResult& result);
+
+}  // namespace rtscalib::detect

@@ -1,0 +1,56 @@
+#include "libcalib/io/shots.h"
+
+#include <filesystem>
+#include <limits>
+#include <map>
+
+#include "libcalib/io/csv.h"
+#include "libcalib/io/errors.h"
+#include "libcalib/io/number_text.h"
+
+namespace rtscalib {
+
+ShotsFile ReadShots(const std::string& path) {
+  const CsvTable t = CsvTable::Read(path, {{"face", "zoom", "phi", "theta", "image"}, {"shot"}});
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  ShotsFile out;
+  out.path = path;
+  out.notes = t.notes();
+  std::map<std::string, int> line_of_shot;
+  for (int row = 0; row < t.NumRows(); ++row) {
+    PhotoShot s;
+    s.line = t.Line(row);
+    const std::optional<long long> face = ParseInteger(t.Text(row, "face"));
+    if (!face || (*face != 1 && *face != 2)) t.Fail(row, "face", "1 or 2");
+    s.face = static_cast<int>(*face);
+    const std::optional<long long> zoom = ParseInteger(t.Text(row, "zoom"));
+    if (!zoom || *zoom < 0 || *zoom > std::numeric_limits<int>::max()) {
+      t.Fail(row, "zoom", "a zoom level (integer >= 0)");
+    }
+    s.zoom = static_cast<int>(*zoom);
+    s.phi = t.Number(row, "phi");
+    s.theta = t.Number(row, "theta");
+    s.image = t.Text(row, "image");
+    if (s.image.empty()) t.Fail(row, "image", "an image file (relative to the CSV's folder)");
+    const std::filesystem::path image(s.image);
+    s.image_path = (image.is_absolute() ? image : folder / image).lexically_normal().string();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(s.image_path, ec)) {
+      throw InputError::Cell(path, s.line, "image", "an existing image file", s.image_path);
+    }
+    s.shot = t.Text(row, "shot");
+    if (s.shot.empty()) s.shot = image.stem().string();
+    if (s.shot.empty()) t.Fail(row, "image", "an image file name with a stem (the shot id)");
+    const auto [it, inserted] = line_of_shot.emplace(s.shot, s.line);
+    if (!inserted) {
+      throw InputError::Cell(path, s.line, t.Has("shot") ? "shot" : "image",
+                             "a shot id not used before (line " + std::to_string(it->second) +
+                                 " has it; without a `shot` column the id is the image's stem)",
+                             s.shot);
+    }
+    out.shots.push_back(std::move(s));
+  }
+  return out;
+}
+
+}  // namespace rtscalib

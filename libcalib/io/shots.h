@@ -1,0 +1,38 @@
+// shots.csv (SPEC 7): the photos of a real instrument, one per row.
+//
+// Columns (header required, any order, `#` comments; csv.h has the syntax):
+//   face         1 or 2
+//   zoom         zoom level, integer >= 0
+//   phi, theta   control angles of the photo [rad], finite
+//   image        the image file, relative to the CSV's folder (absolute paths
+//                are taken as they are); the file must exist
+//   shot         optional shot id; default: the image file's stem
+// Shot ids must be unique (they key the photo's pixels in pixels.csv). Every
+// violation is an InputError naming file, line and column; a missing image
+// names the line and the path that was tried.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace rtscalib {
+
+struct PhotoShot {
+  int face = 1;
+  int zoom = 0;
+  double phi = 0, theta = 0;  // [rad]
+  std::string image;          // as written in the CSV
+  std::string image_path;     // resolved against the CSV's folder
+  std::string shot;           // unique id
+  int line = 0;               // 1-based line in the CSV
+};
+
+struct ShotsFile {
+  std::string path;
+  std::vector<PhotoShot> shots;
+  std::vector<std::string> notes;  // e.g. ignored extra columns
+};
+
+ShotsFile ReadShots(const std::string& path);
+
+}  // namespace rtscalib

@@ -1,0 +1,38 @@
+// targets.yaml (SPEC 7): the AprilTag boards seen in a real instrument's photos.
+//
+//   boards:
+//     - {family: tag36h11, first_id: 0, rows: 6, cols: 8, tag_size: 0.06, spacing: 0.015}
+//     - {family: tag36h11, first_id: 48, rows: 6, cols: 8, tag_size: 0.06, spacing: 0.015,
+//        pose: {euler: [a, b, g], t: [x, y, z]}}   # surveyed ref_from_board
+//
+// Per board: family (a tag family name), first_id (integer >= 0), rows and
+// cols (integers >= 1), tag_size (> 0 [m], the detection quad's edge, for
+// tag36h11 the outer edge of the black border), spacing (>= 0 [m], the gap
+// between neighbouring quads) and an optional pose: ref_from_board with
+// R = Rz(g) Ry(b) Rx(a) [rad] (SPEC 1, paper Eq. 83) and t [m]. A board
+// without a pose gets TagBoard::pose_known = false. Board layout and corner
+// order: libcalib/model/targets.h.
+//
+// Tag ids are the `target` column of pixels.csv, so the id ranges
+// [first_id, first_id + rows cols) of all boards must not overlap (whatever
+// their families). Unknown keys, missing keys and bad values are InputErrors
+// naming the file, the key path (`boards[1].tag_size`) and its line.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "libcalib/model/targets.h"
+
+namespace rtscalib {
+
+// `family_codes`, when given, maps the tag families the caller can detect to
+// their number of codes: other families are errors, and so are ids beyond a
+// family's last code. (libcalib knows no tag family; detect/ does.)
+TargetScene ReadTargets(const std::string& path,
+                        const std::map<std::string, int>* family_codes = nullptr);
+// The same for YAML text; messages name it `name`.
+TargetScene ParseTargets(const std::string& text, const std::string& name,
+                         const std::map<std::string, int>* family_codes = nullptr);
+
+}  // namespace rtscalib

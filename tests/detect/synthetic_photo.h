@@ -1,0 +1,177 @@
+// Photos of AprilTags synthesized with OpenCV alone (no renderer), exact to
+// the SPEC 2 pixel convention: pixel (i, j) is the area [i - 1/2, i + 1/2] x
+// [j - 1/2, j + 1/2] of the continuous image plane, its centre (i, j). A
+// pixel's value is the mean of the printed pattern over that area (exact
+// where the pixel lies in one code bit, 64 x 64 samples where it straddles
+// an edge: see RenderCoverage).
+//
+// The printed plane is mapped to the image by a homography `image_from_plane`
+// (continuous coordinates on both sides); the plane holds code images of tags
+// (tag_family.h: code bit (x, y) covers [x, x+1) x [y, y+1) of the code
+// image, row 0 = top of the upright tag) on white paper.
+#pragma once
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "detect/tag_family.h"
+#include "libcalib/model/targets.h"
+
+namespace rtscalib::detect::testing {
+
+// One tag printed on the plane: its detection quad is the square
+// [x0, x0 + size] x [y0, y0 + size] (plane units, y down the upright tag).
+struct PrintedTag {
+  cv::Mat code;  // TagCodeImage
+  int width_at_border = 0, border_offset = 0;
+  double x0 = 0, y0 = 0, size = 1;
+};
+
+inline PrintedTag PrintTag(const std::string& family, int id, double x0, double y0, double size) {
+  const TagFamilyInfo info = GetTagFamilyInfo(family);
+  return {TagCodeImage(family, id), info.width_at_border, info.border_offset(), x0, y0, size};
+}
+
+// Every tag of `board` with its quad in board coordinates [m] (targets.h).
+inline std::vector<PrintedTag> PrintBoard(const TagBoard& board) {
+  std::vector<PrintedTag> tags;
+  for (int i = 0; i < board.NumTags(); ++i) {
+    const Eigen::Vector3d top_left = board.CornersInBoard(i)[3];
+    tags.push_back(
+        PrintTag(board.family, board.first_id + i, top_left.x(), top_left.y(), board.tag_size));
+  }
+  return tags;
+}
+
+// The code bit under plane point p: which tag (-1 = plain paper) and which
+// bit of its code image, and the printed value there (0 = ink, 1 = paper).
+struct Cell {
+  int tag = -1, bx = 0, by = 0;
+  double value = 1.0;
+  bool operator==(const Cell& o) const { return tag == o.tag && bx == o.bx && by == o.by; }
+};
+
+// Only the tags listed in `candidates` (all when empty) are looked at.
+inline Cell CellAt(const std::vector<PrintedTag>& tags, const Eigen::Vector2d& p,
+                   const std::vector<int>& candidates = {}) {
+  const int n = static_cast<int>(candidates.empty() ? tags.size() : candidates.size());
+  for (int k = 0; k < n; ++k) {
+    const int i = candidates.empty() ? k : candidates[k];
+    const PrintedTag& t = tags[i];
+    const double bit = t.size / t.width_at_border;
+    const double bx = (p.x() - t.x0) / bit + t.border_offset;
+    const double by = (p.y() - t.y0) / bit + t.border_offset;
+    if (bx < 0 || by < 0 || bx >= t.code.cols || by >= t.code.rows) continue;
+    const int x = static_cast<int>(bx), y = static_cast<int>(by);
+    return {i, x, y, t.code.at<uint8_t>(y, x) / 255.0};
+  }
+  return {};
+}
+
+// The exact image position of a plane point (SPEC 2 pixels).
+inline Eigen::Vector2d Project(const Eigen::Matrix3d& image_from_plane, const Eigen::Vector2d& p) {
+  return (image_from_plane * p.homogeneous()).hnormalized();
+}
+
+// The quad corners of `t` in TargetCorner order: 0 bottom-left, 1
+// bottom-right, 2 top-right, 3 top-left of the upright tag (SPEC 7).
+inline std::array<Eigen::Vector2d, 4> QuadCorners(const PrintedTag& t) {
+  return {Eigen::Vector2d(t.x0, t.y0 + t.size), Eigen::Vector2d(t.x0 + t.size, t.y0 + t.size),
+          Eigen::Vector2d(t.x0 + t.size, t.y0), Eigen::Vector2d(t.x0, t.y0)};
+}
+
+// A CV_64FC1 image of coverage values (0 = ink, 1 = paper). A pixel whose
+// four corners map into one code bit (or all onto plain paper) lies wholly in
+// it: a pixel's preimage under a homography is a convex quadrilateral and a
+// bit is a convex square. Any other pixel is the mean of 64 x 64 samples
+// mapped back to the plane: the area error is below 1/128 px per pixel even
+// for an edge parallel to the sample grid (the worst case, where every row
+// errs alike), 0.008 px of edge position.
+inline cv::Mat RenderCoverage(const std::vector<PrintedTag>& tags,
+                              const Eigen::Matrix3d& image_from_plane, int width, int height) {
+  constexpr int kSamples = 64;
+  const Eigen::Matrix3d plane_from_image = image_from_plane.inverse();
+  // Cells at pixel corners: corner (i, j) is the image point (i - 1/2, j - 1/2).
+  std::vector<Cell> corners((width + 1) * (height + 1));
+  for (int j = 0; j <= height; ++j) {
+    for (int i = 0; i <= width; ++i) {
+      corners[j * (width + 1) + i] =
+          CellAt(tags, Project(plane_from_image, Eigen::Vector2d(i - 0.5, j - 0.5)));
+    }
+  }
+  cv::Mat out(height, width, CV_64FC1);
+  for (int j = 0; j < height; ++j) {
+    for (int i = 0; i < width; ++i) {
+      const Cell& c = corners[j * (width + 1) + i];
+      if (c == corners[j * (width + 1) + i + 1] && c == corners[(j + 1) * (width + 1) + i] &&
+          c == corners[(j + 1) * (width + 1) + i + 1]) {
+        out.at<double>(j, i) = c.value;
+        continue;
+      }
+      // The tags at the pixel's corners: code images are at least one white
+      // bit apart and their outer ring is white for the families used here,
+      // so no other tag can change the pixel's value.
+      std::vector<int> candidates;
+      for (const int k : {j * (width + 1) + i, j * (width + 1) + i + 1, (j + 1) * (width + 1) + i,
+                          (j + 1) * (width + 1) + i + 1}) {
+        const int tag = corners[k].tag;
+        if (tag >= 0 && std::find(candidates.begin(), candidates.end(), tag) == candidates.end()) {
+          candidates.push_back(tag);
+        }
+      }
+      double sum = 0;
+      for (int b = 0; b < kSamples; ++b) {
+        for (int a = 0; a < kSamples; ++a) {
+          const Eigen::Vector2d q(i - 0.5 + (a + 0.5) / kSamples, j - 0.5 + (b + 0.5) / kSamples);
+          sum += CellAt(tags, Project(plane_from_image, q), candidates).value;
+        }
+      }
+      out.at<double>(j, i) = sum / (kSamples * kSamples);
+    }
+  }
+  return out;
+}
+
+// Coverage -> pixel values: ink + (paper - ink) coverage, rounded, in `type`
+// (CV_8UC1, CV_16UC1, CV_8UC3 with per-channel levels...). `ink` and `paper`
+// give one level per channel.
+inline cv::Mat ToPixels(const cv::Mat& coverage, int type, const cv::Scalar& ink,
+                        const cv::Scalar& paper) {
+  const int channels = CV_MAT_CN(type);
+  std::vector<cv::Mat> planes;
+  for (int c = 0; c < channels; ++c) {
+    cv::Mat plane;
+    coverage.convertTo(plane, CV_MAKETYPE(CV_MAT_DEPTH(type), 1), paper[c] - ink[c], ink[c]);
+    planes.push_back(plane);
+  }
+  cv::Mat out;
+  cv::merge(planes, out);
+  return out;
+}
+
+// A homography: the plane square [0, size]^2 centred on `centre`, `scale`
+// pixels per plane unit, turned by `angle` (image rotation, radians) with a
+// perspective tilt (px_per, py_per: the bottom row of the matrix).
+inline Eigen::Matrix3d MakeHomography(double size, const Eigen::Vector2d& centre, double scale,
+                                      double angle, double px_per = 0, double py_per = 0) {
+  Eigen::Matrix3d to_origin = Eigen::Matrix3d::Identity();
+  to_origin(0, 2) = to_origin(1, 2) = -size / 2;
+  Eigen::Matrix3d perspective = Eigen::Matrix3d::Identity();
+  perspective(2, 0) = px_per;
+  perspective(2, 1) = py_per;
+  Eigen::Matrix3d rotate = Eigen::Matrix3d::Identity();
+  rotate.topLeftCorner<2, 2>() << std::cos(angle), -std::sin(angle), std::sin(angle),
+      std::cos(angle);
+  rotate.topLeftCorner<2, 2>() *= scale;
+  Eigen::Matrix3d to_centre = Eigen::Matrix3d::Identity();
+  to_centre(0, 2) = centre.x();
+  to_centre(1, 2) = centre.y();
+  return to_centre * rotate * perspective * to_origin;
+}
+
+}  // namespace rtscalib::detect::testing

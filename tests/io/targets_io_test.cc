@@ -1,0 +1,173 @@
+#include "libcalib/io/targets_io.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include "tests/io/io_test_util.h"
+
+namespace rtscalib {
+namespace {
+
+using ::testing::HasSubstr;
+using testing_io::CatchInputError;
+using testing_io::TempDir;
+
+constexpr const char* kName = "targets.yaml";
+
+InputError TargetsError(const std::string& text,
+                        const std::map<std::string, int>* family_codes = nullptr) {
+  return CatchInputError([&] { ParseTargets(text, kName, family_codes); });
+}
+
+// Checks key path, line and the message's form "targets.yaml:L:C: key 'K'".
+void ExpectKeyError(const InputError& e, const std::string& key, int line,
+                    const std::string& expected_part, const std::string& got) {
+  EXPECT_EQ(e.file, kName);
+  EXPECT_EQ(e.key, key);
+  EXPECT_EQ(e.line, line);
+  EXPECT_THAT(e.expected, HasSubstr(expected_part));
+  EXPECT_EQ(e.got, got);
+  EXPECT_THAT(e.what(), HasSubstr(std::string(kName) + ":" + std::to_string(line)));
+  EXPECT_THAT(e.what(), HasSubstr("key '" + key + "'"));
+}
+
+constexpr const char* kTwoBoards =
+    "boards:\n"
+    "  - {family: tag36h11, first_id: 0, rows: 6, cols: 8, tag_size: 0.06, spacing: 0.015}\n"
+    "  - family: tag25h9\n"
+    "    first_id: 48\n"
+    "    rows: 2\n"
+    "    cols: 3\n"
+    "    tag_size: 0.1\n"
+    "    spacing: 0.02\n"
+    "    pose: {euler: [0.1, -0.2, 0.3], t: [1, 2, 3]}\n";
+
+TEST(Targets, ReadsBoardsWithAndWithoutPose) {
+  TempDir dir;
+  const TargetScene scene = ReadTargets(dir.Write("targets.yaml", kTwoBoards));
+  ASSERT_EQ(scene.boards.size(), 2u);
+  const TagBoard& a = scene.boards[0];
+  EXPECT_EQ(a.family, "tag36h11");
+  EXPECT_EQ(a.first_id, 0);
+  EXPECT_EQ(a.rows, 6);
+  EXPECT_EQ(a.cols, 8);
+  EXPECT_EQ(a.tag_size, 0.06);
+  EXPECT_EQ(a.spacing, 0.015);
+  EXPECT_FALSE(a.pose_known);
+  const TagBoard& b = scene.boards[1];
+  EXPECT_EQ(b.family, "tag25h9");
+  EXPECT_EQ(b.first_id, 48);
+  EXPECT_EQ(b.LastId(), 53);
+  EXPECT_TRUE(b.pose_known);
+  // R = Rz(g) Ry(b) Rx(a) (SPEC 1), built independently of RotationFromEuler.
+  const Eigen::Matrix3d r = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  // Round-off of a few products of unit-size numbers.
+  EXPECT_LT((b.ref_from_board.rotation - r).norm(), 1e-14);
+  EXPECT_EQ(b.ref_from_board.translation, Eigen::Vector3d(1, 2, 3));
+}
+
+TEST(Targets, UnknownKeysNameTheirPath) {
+  InputError e = TargetsError(
+      "boards:\n"
+      "  - {family: tag36h11, first_id: 0, rows: 6, cols: 8, tag_sise: 0.06, spacing: 0.01}\n");
+  ExpectKeyError(e, "boards[0].tag_sise", 2, "tag_size", "tag_sise");
+  EXPECT_THAT(e.expected, HasSubstr("did you mean 'tag_size'"));
+  e = TargetsError(
+      "boards:\n"
+      "  - {family: tag36h11, first_id: 0, rows: 6, cols: 8, tag_size: 0.06, spacing: 0.01,\n"
+      "     pose: {euler: [0, 0, 0], t: [0, 0, 0], scale: 1}}\n");
+  ExpectKeyError(e, "boards[0].pose.scale", 3, "euler", "scale");
+  e = TargetsError("boards: []\nboard: {}\n");
+  ExpectKeyError(e, "board", 2, "boards", "board");
+}
+
+TEST(Targets, MissingKeysAndEmptyListsAreErrors) {
+  InputError e = TargetsError("targets: 1\n");
+  EXPECT_EQ(e.key, "boards");
+  e = TargetsError("boards: []\n");
+  ExpectKeyError(e, "boards", 1, "a list of at least one board", "[]");
+  e = TargetsError("boards:\n  - {family: tag36h11, first_id: 0, rows: 6, cols: 8, spacing: 0}\n");
+  EXPECT_EQ(e.key, "boards[0].tag_size");
+  EXPECT_THAT(e.expected, HasSubstr("required"));
+  e = TargetsError(
+      "boards:\n"
+      "  - {family: tag36h11, first_id: 0, rows: 6, cols: 8, tag_size: 1, spacing: 0,\n"
+      "     pose: {euler: [0, 0, 0]}}\n");
+  EXPECT_EQ(e.key, "boards[0].pose.t");
+  e = TargetsError("boards:\n  - tag36h11\n");
+  ExpectKeyError(e, "boards[0]", 2, "a board (a mapping)", "tag36h11");
+}
+
+TEST(Targets, BadValuesNameKeyExpectedAndGot) {
+  const std::string head = "boards:\n  - {family: tag36h11, ";
+  struct Case {
+    std::string fields, key, expected, got;
+  };
+  const std::vector<Case> cases = {
+      {"first_id: -1, rows: 1, cols: 1, tag_size: 1, spacing: 0", "boards[0].first_id",
+       "a tag id >= 0", "-1"},
+      {"first_id: 0, rows: 0, cols: 1, tag_size: 1, spacing: 0", "boards[0].rows",
+       "a number of rows >= 1", "0"},
+      {"first_id: 0, rows: 1, cols: 2.5, tag_size: 1, spacing: 0", "boards[0].cols", "an integer",
+       "2.5"},
+      {"first_id: 0, rows: 1, cols: 0, tag_size: 1, spacing: 0", "boards[0].cols",
+       "a number of columns >= 1", "0"},
+      {"first_id: 0, rows: 1, cols: 1, tag_size: 0, spacing: 0", "boards[0].tag_size",
+       "a tag size > 0 [m]", "0"},
+      {"first_id: 0, rows: 1, cols: 1, tag_size: 1, spacing: -0.1", "boards[0].spacing",
+       "a spacing >= 0 [m]", "-0.1"},
+      {"first_id: 0, rows: 1, cols: 1, tag_size: 1, spacing: 0, pose: [1]", "boards[0].pose",
+       "a pose {euler: [a, b, g], t: [x, y, z]}", "[1]"},
+      {"first_id: 0, rows: 1, cols: 1, tag_size: 1, spacing: 0, pose: {euler: [0, 0], t: [0, 0, "
+       "0]}",
+       "boards[0].pose.euler", "a list of 3 numbers", "[0, 0]"},
+      {"first_id: 0, rows: 1, cols: 1, tag_size: 1, spacing: 0, pose: {euler: [0, 0, 0], t: [0, "
+       "0, .nan]}",
+       "boards[0].pose.t[2]", "a finite number", ".nan"},
+  };
+  for (const Case& c : cases) {
+    const InputError e = TargetsError(head + c.fields + "}\n");
+    ExpectKeyError(e, c.key, 2, c.expected, c.got);
+  }
+}
+
+TEST(Targets, OverlappingIdRangesNameBothBoards) {
+  const InputError e = TargetsError(
+      "boards:\n"
+      "  - {family: tag36h11, first_id: 0, rows: 6, cols: 8, tag_size: 0.06, spacing: 0.015}\n"
+      "  - {family: tag16h5, first_id: 10, rows: 6, cols: 8, tag_size: 0.06, spacing: 0.015}\n");
+  ExpectKeyError(e, "boards[1].first_id", 3, "boards[0] at line 2 has ids 0..47", "10");
+  EXPECT_THAT(e.expected, HasSubstr("this board 10..57"));
+}
+
+TEST(Targets, FamiliesAndIdsAreCheckedAgainstTheDetectableFamilies) {
+  const std::map<std::string, int> codes = {{"tag36h11", 587}, {"tag16h5", 30}};
+  EXPECT_NO_THROW(ParseTargets(
+      "boards: [{family: tag16h5, first_id: 24, rows: 2, cols: 3, tag_size: 1, spacing: 0}]\n",
+      kName, &codes));
+  InputError e = TargetsError(
+      "boards: [{family: tag36h12, first_id: 0, rows: 1, cols: 1, tag_size: 1, spacing: 0}]\n",
+      &codes);
+  ExpectKeyError(e, "boards[0].family", 1, "one of tag16h5, tag36h11", "tag36h12");
+  EXPECT_THAT(e.expected, HasSubstr("did you mean 'tag36h11'"));
+  e = TargetsError(
+      "boards: [{family: tag16h5, first_id: 25, rows: 2, cols: 3, tag_size: 1, spacing: 0}]\n",
+      &codes);
+  ExpectKeyError(e, "boards[0].first_id", 1,
+                 "<= 30 (the codes of tag16h5; this board needs ids 25..30)", "25");
+}
+
+TEST(Targets, UnreadableOrInvalidYamlIsAnError) {
+  InputError e = CatchInputError([] { ReadTargets("/nonexistent/targets.yaml"); });
+  EXPECT_EQ(e.subject, "cannot open file");
+  e = TargetsError("boards: [\n");
+  EXPECT_EQ(e.subject, "YAML syntax");
+}
+
+}  // namespace
+}  // namespace rtscalib
