@@ -210,31 +210,9 @@ std::vector<ceres::ResidualBlockId> AddResiduals(const Observations& obs,
   std::vector<ceres::ResidualBlockId> residual_ids;
   for (const ClusteredGroup& cg : groups) {
     const ObservationGroup& g = cg.group;
-    std::unique_ptr<ceres::CostFunction> cost;
     std::vector<double*> blocks;
-    const double inv_sigma = 1.0 / lin->sigma[static_cast<int>(g.kind)];
-    if (g.kind == ObsGroup::kPixel) {
-      auto* f = new ShotResidual;
-      f->layout = LayoutFor(work, g.zoom);
-      f->phi = g.phi;
-      f->theta = g.theta;
-      f->inv_sigma = inv_sigma;
-      for (int i : g.indices) f->points.push_back({obs.pixels[i].X, obs.pixels[i].uv});
-      blocks = f->layout.blocks;
-      cost.reset(MakeCost(f, 2 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout)));
-    } else {
-      auto* f = new RecordGroupResidual;
-      f->layout = LayoutFor(work, g.zoom);
-      f->edm = g.kind == ObsGroup::kEdm;
-      f->phi = g.phi;
-      f->theta = g.theta;
-      for (int i : g.indices) {
-        const Record& r = obs.records[i];
-        f->rows.push_back({r.u, r.v, r.d, r.x, inv_sigma});
-      }
-      blocks = f->layout.blocks;
-      cost.reset(MakeCost(f, 3 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout)));
-    }
+    std::unique_ptr<ceres::CostFunction> cost(
+        MakeGroupCost(obs, g, 1.0 / lin->sigma[static_cast<int>(g.kind)], param, work, &blocks));
     std::vector<double> test(cost->num_residuals());
     if (!cost->Evaluate(blocks.data(), test.data(), nullptr)) {
       ++lin->not_evaluable;

@@ -274,4 +274,30 @@ std::vector<ObservationGroup> GroupObservations(const Observations& obs, const U
   return groups;
 }
 
+ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGroup& g,
+                                   double inv_sigma, const Parameterization& param,
+                                   InstrumentModel* model, std::vector<double*>* blocks) {
+  if (g.kind == ObsGroup::kPixel) {
+    auto* f = new ShotResidual;
+    f->layout = LayoutFor(model, g.zoom);
+    f->phi = g.phi;
+    f->theta = g.theta;
+    f->inv_sigma = inv_sigma;
+    for (int i : g.indices) f->points.push_back({obs.pixels[i].X, obs.pixels[i].uv});
+    *blocks = f->layout.blocks;
+    return MakeCost(f, 2 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
+  }
+  auto* f = new RecordGroupResidual;
+  f->layout = LayoutFor(model, g.zoom);
+  f->edm = g.kind == ObsGroup::kEdm;
+  f->phi = g.phi;
+  f->theta = g.theta;
+  for (int i : g.indices) {
+    const Record& r = obs.records[i];
+    f->rows.push_back({r.u, r.v, r.d, r.x, inv_sigma});
+  }
+  *blocks = f->layout.blocks;
+  return MakeCost(f, 3 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
+}
+
 }  // namespace rtscalib

@@ -36,6 +36,7 @@
 #include "libcalib/model/observations.h"
 
 namespace ceres {
+class CostFunction;
 class Problem;
 }  // namespace ceres
 
@@ -134,5 +135,12 @@ struct ObservationGroup {
 };
 std::vector<ObservationGroup> GroupObservations(const Observations& obs, const UsedRows& rows,
                                                 bool one_per_observation);
+
+// The residual block of one group (cost_functions.h), whitened by
+// `inv_sigma`, its jets sized to the blocks `param` leaves free; `blocks`
+// receives the parameter blocks in the cost's order. The caller owns the cost.
+ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGroup& group,
+                                   double inv_sigma, const Parameterization& param,
+                                   InstrumentModel* model, std::vector<double*>* blocks);
 
 }  // namespace rtscalib

@@ -241,30 +241,8 @@ std::unique_ptr<ceres::Problem> BuildProblem(const Observations& obs,
   refs->clear();
   for (const ObservationGroup& g : groups) {
     const double inv_sigma = 1.0 / sigma[static_cast<int>(g.kind)];
-    ceres::CostFunction* cost = nullptr;
     std::vector<double*> blocks;
-    if (g.kind == ObsGroup::kPixel) {
-      auto* f = new ShotResidual;
-      f->layout = LayoutFor(m, g.zoom);
-      f->phi = g.phi;
-      f->theta = g.theta;
-      f->inv_sigma = inv_sigma;
-      for (int i : g.indices) f->points.push_back({obs.pixels[i].X, obs.pixels[i].uv});
-      blocks = f->layout.blocks;
-      cost = MakeCost(f, 2 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
-    } else {
-      auto* f = new RecordGroupResidual;
-      f->layout = LayoutFor(m, g.zoom);
-      f->edm = g.kind == ObsGroup::kEdm;
-      f->phi = g.phi;
-      f->theta = g.theta;
-      for (int i : g.indices) {
-        const Record& r = obs.records[i];
-        f->rows.push_back({r.u, r.v, r.d, r.x, inv_sigma});
-      }
-      blocks = f->layout.blocks;
-      cost = MakeCost(f, 3 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
-    }
+    ceres::CostFunction* cost = MakeGroupCost(obs, g, inv_sigma, param, m, &blocks);
     refs->push_back(
         {problem->AddResidualBlock(cost, MakeLoss(options), blocks), g.kind, g.indices});
   }
