@@ -114,66 +114,70 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
   auto need_edm = [&] {
     if (!c.has_edm) out.push_back("EDM records (tool edm in records.csv)");
   };
-  switch (e) {
-    case Effect::kCollimation:
-    case Effect::kTiltingAxis:
-      need_steep();
-      need_faces();
-      break;
-    case Effect::kVerticalIndex:
-      need_faces();
-      break;
-    case Effect::kHzEccentricity:
-    case Effect::kHzScale:
-      need_turn();
-      break;
-    case Effect::kAxisWobble:
-      need_turn();
-      need_steep();
-      break;
-    case Effect::kVEccentricity:
-    case Effect::kVScale:
-      need_wide_zenith();
-      need_faces();
-      break;
-    case Effect::kEdmOffset:
-      need_edm();
-      break;
-    case Effect::kEdmScale:
-      need_edm();
-      if (c.has_edm && (c.max_edm_m < rules.distance_ratio * c.min_edm_m ||
-                        c.max_edm_m < rules.long_distance_m)) {
-        out.push_back("longer EDM distances (more than " + Num(rules.distance_ratio) +
-                      " times the shortest and " + Num(rules.long_distance_m) +
-                      " m or more; the data span " + Num(c.min_edm_m) + " to " + Num(c.max_edm_m) +
-                      " m)");
-      }
-      break;
-    case Effect::kEdmCyclic: {
-      need_edm();
-      const double u = model.edm_cyclic_unit_length;
-      if (c.has_edm &&
-          (c.distinct_edm < 6 || c.finest_edm_step_m > u / 4 || c.max_edm_m - c.min_edm_m < u)) {
-        out.push_back("EDM distances spaced finer than U/4 = " + Num(u / 4) +
-                      " m over at least one unit length U = " + Num(u) + " m (the data have " +
-                      std::to_string(c.distinct_edm) + " distinct distances)");
-      }
-      break;
+  auto need_long_distances = [&] {
+    if (c.has_edm &&
+        (c.max_edm_m < rules.distance_ratio * c.min_edm_m || c.max_edm_m < rules.long_distance_m)) {
+      out.push_back("longer EDM distances (more than " + Num(rules.distance_ratio) +
+                    " times the shortest and " + Num(rules.long_distance_m) +
+                    " m or more; the data span " + Num(c.min_edm_m) + " to " + Num(c.max_edm_m) +
+                    " m)");
     }
-    default: {  // distortion groups
-      if (!c.has_cam) {
-        out.push_back(
-            "camera observations (pixels.csv, or cam rows spread over the image in records.csv)");
+  };
+  auto need_fine_distances = [&] {
+    const double u = model.edm_cyclic_unit_length;
+    if (c.has_edm &&
+        (c.distinct_edm < 6 || c.finest_edm_step_m > u / 4 || c.max_edm_m - c.min_edm_m < u)) {
+      out.push_back("EDM distances spaced finer than U/4 = " + Num(u / 4) +
+                    " m over at least one unit length U = " + Num(u) + " m (the data have " +
+                    std::to_string(c.distinct_edm) + " distinct distances)");
+    }
+  };
+  auto need_image_corners = [&] {
+    if (!c.has_cam) {
+      out.push_back(
+          "camera observations (pixels.csv, or cam rows spread over the image in records.csv)");
+      return;
+    }
+    for (size_t z = 0; z < c.corner_fraction.size(); ++z) {
+      if (c.corner_fraction[z] > 0 && c.corner_fraction[z] < rules.corner_fraction) {
+        out.push_back("points near the image corners at zoom " + std::to_string(z) +
+                      " (the farthest reaches " + Num(100 * c.corner_fraction[z]) +
+                      "% of the half-diagonal)");
+      }
+    }
+  };
+  // What data each effect needs is a column of the catalogue (effects.h); the
+  // advice is given in DataNeed order.
+  for (int bit = 0; bit < kNumDataNeeds; ++bit) {
+    const auto need = static_cast<DataNeed>(1u << bit);
+    if (!(Info(e).needs & need)) continue;
+    switch (need) {
+      case kNeedNone:
         break;
-      }
-      for (size_t z = 0; z < c.corner_fraction.size(); ++z) {
-        if (c.corner_fraction[z] > 0 && c.corner_fraction[z] < rules.corner_fraction) {
-          out.push_back("points near the image corners at zoom " + std::to_string(z) +
-                        " (the farthest reaches " + Num(100 * c.corner_fraction[z]) +
-                        "% of the half-diagonal)");
-        }
-      }
-      break;
+      case kNeedFullTurn:
+        need_turn();
+        break;
+      case kNeedSteepSights:
+        need_steep();
+        break;
+      case kNeedWideZenith:
+        need_wide_zenith();
+        break;
+      case kNeedBothFaces:
+        need_faces();
+        break;
+      case kNeedEdm:
+        need_edm();
+        break;
+      case kNeedLongDistances:
+        need_long_distances();
+        break;
+      case kNeedFineDistances:
+        need_fine_distances();
+        break;
+      case kNeedImageCorners:
+        need_image_corners();
+        break;
     }
   }
   return out;

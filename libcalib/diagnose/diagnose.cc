@@ -148,7 +148,7 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   std::vector<Effect> candidates, contained;
   for (const EffectInfo& info : EffectCatalogue()) {
     if (model.effects.Has(info.effect)) continue;
-    if (model.kinematics == Kinematics::kDh && info.redundant_in_dh) {
+    if (ContainedInKinematics(model.kinematics, info.effect)) {
       contained.push_back(info.effect);
     } else {
       candidates.push_back(info.effect);

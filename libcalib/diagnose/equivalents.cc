@@ -1,8 +1,10 @@
 #include "libcalib/diagnose/equivalents.h"
 
 #include <cmath>
+#include <vector>
 
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/fit/parameterization.h"
 #include "libcalib/fit/start_models.h"
 #include "libcalib/sim/simulator.h"
 
@@ -28,8 +30,11 @@ EquivalentTerms EquivalentSurveyingTerms(const InstrumentModel& dh, const FitOpt
   obs.records_source = "dh model predictions";
 
   InstrumentModel sph = SphericalFromDh(dh);
-  const Effect terms[4] = {Effect::kCollimation, Effect::kTiltingAxis, Effect::kVerticalIndex,
-                           Effect::kEdmOffset};
+  // The terms dh contains (SPEC 4), fitted as spherical effects.
+  std::vector<Effect> terms;
+  for (const EffectInfo& info : EffectCatalogue()) {
+    if (ContainedInKinematics(Kinematics::kDh, info.effect)) terms.push_back(info.effect);
+  }
   for (Effect e : terms) {
     sph.effects.Add(e);
     sph.EffectValue(e) = {0.0, 0.0};

@@ -9,12 +9,12 @@
 //   base       = d r / d (free parameters of the fit)      tangent space of each block
 //   extra      = [d r / d (effect e's parameters)]_e  [d r / d (probe p's coefficients)]_p
 //
-// (a) uses the cost functions of the refinement (libcalib/fit/cost_functions.h)
-// with the same free/frozen decisions as Refine (libcalib/fit/refine.cc,
-// `Parameterization`): dh holds link1.d, link1.gamma_offset, link2 and the EDM
-// roll; spherical holds the EDM rotation and t_z; intrinsics are free only when
-// the fit fitted them; distortion coefficients of enabled groups are free.
-// If that class changes, `FreeBlocks` in linearization.cc must follow.
+// (a) and (b) use the cost functions, the observation groups and the
+// `Parameterization` of the refinement (libcalib/fit/parameterization.h): the
+// candidates are enabled in a copy of the model, the fit's parameterisation of
+// that copy decides every block, and the columns that belong to a candidate
+// effect (its own block, or its coefficients in a zoom's distortion block) go
+// to `extra`, all others to `base`. Nothing is decided here.
 //
 // (c) A probe is a generic error of one reading (phi, theta or d) that is a
 // harmonic of one variable on the rows of one face:
@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "libcalib/diagnose/statistics.h"
+#include "libcalib/fit/parameterization.h"
 #include "libcalib/fit/refine.h"
 #include "libcalib/model/effects.h"
 #include "libcalib/model/instrument.h"
@@ -37,7 +38,7 @@
 
 namespace rtscalib::diagnose {
 
-enum class ObsGroup { kEdm = 0, kCam = 1, kPixel = 2 };
+using ObsGroup = rtscalib::ObsGroup;  // the refinement's residual groups
 const char* GroupName(ObsGroup g);
 
 enum class Reading { kPhi, kTheta, kDistance };

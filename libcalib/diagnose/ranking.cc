@@ -18,9 +18,6 @@ void Finish(GroupRms* g) {
   g->pixels_px = g->pixels_n > 0 ? std::sqrt(g->pixels_ss / g->pixels_n) : 0.0;
 }
 
-const char* const kDistortionNames[camera::kNumDistortion] = {
-    "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "taux", "tauy"};
-
 std::array<double, 4> Cov2(const Eigen::MatrixXd& c) {
   std::array<double, 4> out{};
   if (c.rows() >= 1) out[0] = c(0, 0);
@@ -114,226 +111,260 @@ std::string ConfigLine(const InstrumentModel& model, Effect e) {
   return line + "]";
 }
 
-Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
-  const Linearization& lin = *in.lin;
-  const Reduced& red = *in.red;
-  const Projector& nu = *in.nuisance;
-  const int n = lin.NumRows();
-  const double log_n = std::log(std::max(n, 2));
-  Ranking out;
-  out.num_rows = n;
-  out.current = RmsOfWhitened(lin, lin.r);
+namespace {
 
+// The candidate effects' column blocks of the linearisation.
+std::vector<const ColumnBlock*> EffectBlocks(const Linearization& lin) {
   std::vector<const ColumnBlock*> effects;
-  int num_effect_cols = 0;
   for (const ColumnBlock& b : lin.blocks) {
-    if (!b.is_effect) continue;
-    effects.push_back(&b);
-    num_effect_cols = std::max(num_effect_cols, b.first + b.size);
+    if (b.is_effect) effects.push_back(&b);
   }
-  auto observable = [&](const ColumnBlock& b) {
-    for (int j = b.first; j < b.first + b.size; ++j) {
-      if (red.column_norm[j] > 0) return true;
+  return effects;
+}
+
+// Whether the data see the effect at all (any column not identically zero).
+bool Observable(const ColumnBlock& b, const Reduced& red) {
+  for (int j = b.first; j < b.first + b.size; ++j) {
+    if (red.column_norm[j] > 0) return true;
+  }
+  return false;
+}
+
+// The largest fraction of a column the model's parameters cannot absorb.
+double Kept(const ColumnBlock& b, const Reduced& red) {
+  double k = 0;
+  for (int j = b.first; j < b.first + b.size; ++j) k = std::max(k, red.kept_fraction[j]);
+  return k;
+}
+
+// Normal matrices of [model parameters, candidate columns], for the
+// correlations of an effect with the model and for what absorbs a redundant one.
+struct Normals {
+  Eigen::MatrixXd nbb, nbx, nxx, nbb_inv;
+  int pb = 0;
+  Normals(const Linearization& lin, const std::vector<const ColumnBlock*>& effects) {
+    int num_effect_cols = 0;
+    for (const ColumnBlock* b : effects)
+      num_effect_cols = std::max(num_effect_cols, b->first + b->size);
+    const Eigen::MatrixXd jx = lin.extra.leftCols(num_effect_cols);
+    nbb = lin.base.transpose() * lin.base;
+    nbx = lin.base.transpose() * jx;
+    nxx = jx.transpose() * jx;
+    pb = static_cast<int>(nbb.rows());
+    nbb_inv = PseudoInverseSpd(nbb, 1e-14);
+  }
+};
+
+// Which model parameters absorb a redundant effect: the largest terms of its
+// columns' least-squares expansion in the model's columns.
+std::string AbsorbedBy(const ColumnBlock& b, const Normals& n, const Linearization& lin,
+                       const Reduced& red) {
+  const Eigen::MatrixXd coef = n.nbb_inv * n.nbx.middleCols(b.first, b.size);
+  std::vector<std::pair<double, int>> share;
+  for (int j = 0; j < n.pb; ++j) {
+    double s2 = 0;
+    for (int k = 0; k < b.size; ++k) {
+      const double norm = red.column_norm[b.first + k];
+      if (norm > 0) s2 = std::max(s2, std::abs(coef(j, k)) * std::sqrt(n.nbb(j, j)) / norm);
     }
-    return false;
-  };
-  auto kept = [&](const ColumnBlock& b) {
-    double k = 0;
-    for (int j = b.first; j < b.first + b.size; ++j) k = std::max(k, red.kept_fraction[j]);
-    return k;
-  };
-  for (const ColumnBlock* b : effects) {
-    if (observable(*b) && kept(*b) >= o.redundant_fraction) ++out.tested;
+    share.push_back({s2, j});
   }
-  out.level = o.significance / std::max(out.tested, 1);
+  std::sort(share.rbegin(), share.rend());
+  std::string names;
+  for (size_t i = 0; i < share.size() && i < 3 && share[i].first > 0.1; ++i) {
+    names += (i ? ", " : "") + lin.base_names[share[i].second];
+  }
+  return names.empty() ? std::string("several parameters") : names;
+}
 
-  // Normal matrices of [model parameters, candidate columns] for correlations.
-  const Eigen::MatrixXd jx = lin.extra.leftCols(num_effect_cols);
-  const Eigen::MatrixXd nbb = lin.base.transpose() * lin.base;
-  const Eigen::MatrixXd nbx = lin.base.transpose() * jx;
-  const Eigen::MatrixXd nxx = jx.transpose() * jx;
-  const int pb = static_cast<int>(nbb.rows());
-
-  // Which model parameters absorb a redundant effect: the largest terms of
-  // its columns' least-squares expansion in the model's columns.
-  const Eigen::MatrixXd nbb_inv = PseudoInverseSpd(nbb, 1e-14);
-  auto AbsorbedBy = [&](const ColumnBlock& b) {
-    const Eigen::MatrixXd coef = nbb_inv * nbx.middleCols(b.first, b.size);
-    std::vector<std::pair<double, int>> share;
+// The model parameter most correlated with the effect once it is added
+// (covariance of the augmented normal matrix): sets r->rho, r->correlated_with.
+void StrongestCorrelation(const ColumnBlock& b, const Normals& n, const Linearization& lin,
+                          RankedEffect* r) {
+  const int k = b.size, pb = n.pb;
+  Eigen::MatrixXd aug(pb + k, pb + k);
+  aug.topLeftCorner(pb, pb) = n.nbb;
+  aug.topRightCorner(pb, k) = n.nbx.middleCols(b.first, k);
+  aug.bottomLeftCorner(k, pb) = n.nbx.middleCols(b.first, k).transpose();
+  aug.bottomRightCorner(k, k) = n.nxx.block(b.first, b.first, k, k);
+  const Eigen::MatrixXd c = PseudoInverseSpd(aug, 1e-14);
+  for (int i = pb; i < pb + k; ++i) {
     for (int j = 0; j < pb; ++j) {
-      double s2 = 0;
-      for (int k = 0; k < b.size; ++k) {
-        const double norm = red.column_norm[b.first + k];
-        if (norm > 0) s2 = std::max(s2, std::abs(coef(j, k)) * std::sqrt(nbb(j, j)) / norm);
-      }
-      share.push_back({s2, j});
-    }
-    std::sort(share.rbegin(), share.rend());
-    std::string names;
-    for (size_t i = 0; i < share.size() && i < 3 && share[i].first > 0.1; ++i) {
-      names += (i ? ", " : "") + lin.base_names[share[i].second];
-    }
-    return names.empty() ? std::string("several parameters") : names;
-  };
-
-  const Eigen::VectorXd y = nu.Apply(red.r);
-  const int dof = red.base.rank() + nu.rank();
-  for (const ColumnBlock* b : effects) {
-    RankedEffect r;
-    r.effect = b->effect;
-    r.name = b->name;
-    r.num_params = b->size;
-    r.before = out.current;
-    r.after = out.current;
-    r.after_source = "linearised";
-    r.config_line = ConfigLine(*in.model, b->effect);
-    r.needs = WhatWouldHelp(b->effect, *in.coverage, *in.model);
-    r.observable = observable(*b);
-    r.redundant = r.observable && kept(*b) < o.redundant_fraction;
-    if (!r.observable || r.redundant) {
-      r.identifiable = false;
-      r.delta_bic = r.num_params * log_n;
-      r.note =
-          !r.observable
-              ? "the data do not see this effect at all"
-              : "the model's parameters absorb this effect (to first order): " + AbsorbedBy(*b) +
-                    "; it cannot be told apart from them with these data";
-      out.entries.push_back(r);
-      continue;
-    }
-    const Eigen::MatrixXd t_e = red.extra.middleCols(b->first, b->size);
-    const ColumnTest t = TestColumns(y, nu.Apply(t_e), red.cluster, lin.num_clusters, dof);
-    r.num_params = t.rank;
-    r.delta_rss = t.delta_rss;
-    r.delta_bic = GroupLogRatio(lin, y, y - t.fitted) + t.rank * log_n;
-    r.wald = t.wald;
-    r.p_value = t.p_value;
-    const ColumnTest plain =
-        TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.base.rank());
-    r.after = RmsOfWhitened(lin, red.r - plain.fitted);
-
-    // r regressed on its own derivative gives minus the Gauss-Newton step.
-    if (IsKinematic(b->effect)) {
-      for (int k = 0; k < b->size && k < 2; ++k) r.si[k] = -t.beta[k];
-      r.si_cov = Cov2(t.cov);
-      r.value = ToReportUnits(b->effect, r.si, r.si_cov);
-    } else {
-      for (int k = 0; k < b->size; ++k) {
-        const auto [zoom, index] = b->distortion[k];
-        r.distortion.push_back({zoom, kDistortionNames[index], index,
-                                in.model->cams[zoom].distortion[index] - t.beta[k],
-                                std::sqrt(std::max(t.cov(k, k), 0.0))});
+      const double d = std::sqrt(c(i, i) * c(j, j));
+      if (!(d > 0)) continue;
+      const double rho = c(i, j) / d;
+      if (std::abs(rho) > std::abs(r->rho)) {
+        r->rho = rho;
+        r->correlated_with = lin.base_names[j];
       }
     }
-
-    // Correlations with the model's parameters when e is added.
-    {
-      const int k = b->size;
-      Eigen::MatrixXd aug(pb + k, pb + k);
-      aug.topLeftCorner(pb, pb) = nbb;
-      aug.topRightCorner(pb, k) = nbx.middleCols(b->first, k);
-      aug.bottomLeftCorner(k, pb) = nbx.middleCols(b->first, k).transpose();
-      aug.bottomRightCorner(k, k) = nxx.block(b->first, b->first, k, k);
-      const Eigen::MatrixXd c = PseudoInverseSpd(aug, 1e-14);
-      for (int i = pb; i < pb + k; ++i) {
-        for (int j = 0; j < pb; ++j) {
-          const double d = std::sqrt(c(i, i) * c(j, j));
-          if (!(d > 0)) continue;
-          const double rho = c(i, j) / d;
-          if (std::abs(rho) > std::abs(r.rho)) {
-            r.rho = rho;
-            r.correlated_with = lin.base_names[j];
-          }
-        }
-      }
-    }
-    r.identifiable = std::abs(r.rho) <= o.identifiable_rho;
-    // Statistical significance alone is not enough on exact data, where the
-    // fitted noise is round-off and a 1e-11 arcsec term is "significant":
-    // the effect must also lower the rms by more than the numerical floor.
-    const double floor = r.before.MainUnit() == std::string("px") ? kPixelFloor : kPointFloorM;
-    r.significant = t.rank > 0 && t.p_value < out.level && r.delta_bic < 0 &&
-                    r.before.Main() - r.after.Main() > floor;
-    if (!r.identifiable) {
-      char buf[160];
-      std::snprintf(buf, sizeof(buf), "strongly correlated with %s (rho %+.3f)",
-                    r.correlated_with.c_str(), r.rho);
-      r.note = buf;
-    }
-    out.entries.push_back(r);
   }
+}
 
-  // Terms the kinematics contain (dh): redundant, with their value read off the model.
-  for (Effect e : in.contained) {
-    RankedEffect r;
-    r.effect = e;
-    r.name = Info(e).name;
-    r.num_params = Info(e).num_params;
-    r.before = r.after = out.current;
-    r.after_source = "model";
-    r.redundant = true;
+// What the ranking needs of every effect, computed once.
+struct Context {
+  const RankingInput& in;
+  const RankingOptions& o;
+  const Linearization& lin;
+  const Reduced& red;
+  const Projector& nu;
+  Normals normals;
+  Eigen::VectorXd y;  // residual with the unexplained harmonics projected out
+  int dof = 0;
+  double log_n = 0;
+  double level = 0;
+  GroupRms current;
+};
+
+// One candidate effect scored: the test conditional on the unexplained
+// harmonics (delta BIC, Wald, p), its linear estimate in report units, the
+// rms after, its strongest correlation; or why it cannot be tested.
+RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
+  const Linearization& lin = cx.lin;
+  const Reduced& red = cx.red;
+  RankedEffect r;
+  r.effect = b.effect;
+  r.name = b.name;
+  r.num_params = b.size;
+  r.before = cx.current;
+  r.after = cx.current;
+  r.after_source = "linearised";
+  r.config_line = ConfigLine(*cx.in.model, b.effect);
+  r.needs = WhatWouldHelp(b.effect, *cx.in.coverage, *cx.in.model);
+  r.observable = Observable(b, red);
+  r.redundant = r.observable && Kept(b, red) < cx.o.redundant_fraction;
+  if (!r.observable || r.redundant) {
     r.identifiable = false;
-    r.delta_bic = r.num_params * log_n;
-    r.config_line = ConfigLine(*in.model, e);
-    r.note = "contained in the dh model (links and tools); not fitted twice";
-    r.needs = {"model.kinematics: spherical, to estimate it as a term of its own"};
-    if (in.equivalents && in.equivalents->valid) {
-      r.has_equivalent = true;
-      r.si = in.equivalents->value[static_cast<int>(e)];
-      r.equivalent = ToReportUnits(e, r.si, {0, 0, 0, 0});
+    r.delta_bic = r.num_params * cx.log_n;
+    r.note = !r.observable ? "the data do not see this effect at all"
+                           : "the model's parameters absorb this effect (to first order): " +
+                                 AbsorbedBy(b, cx.normals, lin, red) +
+                                 "; it cannot be told apart from them with these data";
+    return r;
+  }
+  const Eigen::MatrixXd t_e = red.extra.middleCols(b.first, b.size);
+  const ColumnTest t = TestColumns(cx.y, cx.nu.Apply(t_e), red.cluster, lin.num_clusters, cx.dof);
+  r.num_params = t.rank;
+  r.delta_rss = t.delta_rss;
+  r.delta_bic = GroupLogRatio(lin, cx.y, cx.y - t.fitted) + t.rank * cx.log_n;
+  r.wald = t.wald;
+  r.p_value = t.p_value;
+  const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.base.rank());
+  r.after = RmsOfWhitened(lin, red.r - plain.fitted);
+
+  // r regressed on its own derivative gives minus the Gauss-Newton step.
+  if (IsKinematic(b.effect)) {
+    for (int k = 0; k < b.size && k < 2; ++k) r.si[k] = -t.beta[k];
+    r.si_cov = Cov2(t.cov);
+    r.value = ToReportUnits(b.effect, r.si, r.si_cov);
+  } else {
+    for (int k = 0; k < b.size; ++k) {
+      const auto [zoom, index] = b.distortion[k];
+      r.distortion.push_back({zoom, kDistortionCoefficientNames[index], index,
+                              cx.in.model->cams[zoom].distortion[index] - t.beta[k],
+                              std::sqrt(std::max(t.cov(k, k), 0.0))});
     }
-    out.entries.push_back(r);
   }
 
-  std::stable_sort(out.entries.begin(), out.entries.end(),
-                   [](const RankedEffect& a, const RankedEffect& b) {
-                     if (a.significant != b.significant) return a.significant;
-                     return a.delta_bic < b.delta_bic;
-                   });
+  StrongestCorrelation(b, cx.normals, lin, &r);
+  r.identifiable = std::abs(r.rho) <= cx.o.identifiable_rho;
+  // Statistical significance alone is not enough on exact data, where the
+  // fitted noise is round-off and a 1e-11 arcsec term is "significant":
+  // the effect must also lower the rms by more than the numerical floor.
+  const double floor = r.before.MainUnit() == std::string("px") ? kPixelFloor : kPointFloorM;
+  r.significant = t.rank > 0 && t.p_value < cx.level && r.delta_bic < 0 &&
+                  r.before.Main() - r.after.Main() > floor;
+  if (!r.identifiable) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "strongly correlated with %s (rho %+.3f)",
+                  r.correlated_with.c_str(), r.rho);
+    r.note = buf;
+  }
+  return r;
+}
 
-  // Aliases among the best significant effects.
-  auto block_of = [&](Effect e) -> const ColumnBlock* {
-    for (const ColumnBlock* b : effects) {
-      if (b->effect == e) return b;
-    }
-    return nullptr;
-  };
-  for (size_t i = 0; i < out.entries.size() && i < 3; ++i) {
-    RankedEffect& r = out.entries[i];
+// Terms the kinematics contain (dh): redundant, with their value read off
+// the model (equivalents.h) instead of a test.
+RankedEffect ContainedEntry(Effect e, const Context& cx) {
+  RankedEffect r;
+  r.effect = e;
+  r.name = Info(e).name;
+  r.num_params = Info(e).num_params;
+  r.before = r.after = cx.current;
+  r.after_source = "model";
+  r.redundant = true;
+  r.identifiable = false;
+  r.delta_bic = r.num_params * cx.log_n;
+  r.config_line = ConfigLine(*cx.in.model, e);
+  r.note = "contained in the dh model (links and tools); not fitted twice";
+  r.needs = {"model.kinematics: spherical, to estimate it as a term of its own"};
+  if (cx.in.equivalents && cx.in.equivalents->valid) {
+    r.has_equivalent = true;
+    r.si = cx.in.equivalents->value[static_cast<int>(e)];
+    r.equivalent = ToReportUnits(e, r.si, {0, 0, 0, 0});
+  }
+  return r;
+}
+
+const ColumnBlock* BlockOf(Effect e, const std::vector<const ColumnBlock*>& effects) {
+  for (const ColumnBlock* b : effects) {
+    if (b->effect == e) return b;
+  }
+  return nullptr;
+}
+
+// Aliases among the best three significant effects: another significant
+// effect, added first, leaves this one insignificant (the data cannot tell
+// them apart).
+void FindAliases(const std::vector<const ColumnBlock*>& effects, const Context& cx, Ranking* out) {
+  const Reduced& red = cx.red;
+  for (size_t i = 0; i < out->entries.size() && i < 3; ++i) {
+    RankedEffect& r = out->entries[i];
     if (!r.significant) break;
-    const ColumnBlock* be = block_of(r.effect);
-    for (const RankedEffect& o : out.entries) {
+    const ColumnBlock* be = BlockOf(r.effect, effects);
+    for (const RankedEffect& o : out->entries) {
       if (!o.significant || o.effect == r.effect) continue;
-      const ColumnBlock* bo = block_of(o.effect);
-      Projector p = nu;
+      const ColumnBlock* bo = BlockOf(o.effect, effects);
+      Projector p = cx.nu;
       p.Add(red.extra.middleCols(bo->first, bo->size));
       const ColumnTest t =
           TestColumns(p.Apply(red.r), p.Apply(red.extra.middleCols(be->first, be->size)),
-                      red.cluster, lin.num_clusters, red.base.rank() + p.rank());
-      if (!(t.rank > 0 && t.p_value < out.level)) r.aliases.push_back(o.name);
+                      red.cluster, cx.lin.num_clusters, red.base.rank() + p.rank());
+      if (!(t.rank > 0 && t.p_value < out->level)) r.aliases.push_back(o.name);
     }
   }
+}
 
-  // What stays significant once the best effect is in.
-  if (!out.entries.empty() && out.entries.front().significant) {
-    const ColumnBlock* best = block_of(out.entries.front().effect);
-    Projector p = nu;
-    p.Add(red.extra.middleCols(best->first, best->size));
-    const Eigen::VectorXd yb = p.Apply(red.r);
-    for (size_t i = 1; i < out.entries.size(); ++i) {
-      const RankedEffect& o = out.entries[i];
-      if (!o.significant) continue;
-      const ColumnBlock* bo = block_of(o.effect);
-      const ColumnTest t = TestColumns(yb, p.Apply(red.extra.middleCols(bo->first, bo->size)),
-                                       red.cluster, lin.num_clusters, red.base.rank() + p.rank());
-      if (t.rank > 0 && t.p_value < out.level) out.also_after_best.push_back(o.name);
-    }
+// Significant effects that stay significant once the best one is added
+// (what the next rungs of the ladder will likely add).
+void AlsoAfterBest(const std::vector<const ColumnBlock*>& effects, const Context& cx,
+                   Ranking* out) {
+  if (out->entries.empty() || !out->entries.front().significant) return;
+  const Reduced& red = cx.red;
+  const ColumnBlock* best = BlockOf(out->entries.front().effect, effects);
+  Projector p = cx.nu;
+  p.Add(red.extra.middleCols(best->first, best->size));
+  const Eigen::VectorXd yb = p.Apply(red.r);
+  for (size_t i = 1; i < out->entries.size(); ++i) {
+    const RankedEffect& o = out->entries[i];
+    if (!o.significant) continue;
+    const ColumnBlock* bo = BlockOf(o.effect, effects);
+    const ColumnTest t = TestColumns(yb, p.Apply(red.extra.middleCols(bo->first, bo->size)),
+                                     red.cluster, cx.lin.num_clusters, red.base.rank() + p.rank());
+    if (t.rank > 0 && t.p_value < out->level) out->also_after_best.push_back(o.name);
   }
+}
 
-  // Confirm the best significant effects with a refinement (warm start).
+// The linear prediction is first order: the best `refine_top` significant
+// effects are confirmed by a real refinement (warm start at the linear
+// estimate, the linearisation's weights held), whose rms and values replace
+// the linear ones when it does at least as well.
+void ConfirmByRefinement(const Context& cx, Ranking* out) {
+  const RankingInput& in = cx.in;
+  const Linearization& lin = cx.lin;
   int refined = 0;
-  for (RankedEffect& r : out.entries) {
-    if (refined >= o.refine_top || !r.significant) break;
+  for (RankedEffect& r : out->entries) {
+    if (refined >= cx.o.refine_top || !r.significant) break;
     ++refined;
     InstrumentModel m = *in.model;
     m.effects.Add(r.effect);
@@ -377,6 +408,47 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
       }
     }
   }
+}
+
+}  // namespace
+
+Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
+  const Linearization& lin = *in.lin;
+  const Reduced& red = *in.red;
+  const int n = lin.NumRows();
+  Ranking out;
+  out.num_rows = n;
+  out.current = RmsOfWhitened(lin, lin.r);
+
+  const std::vector<const ColumnBlock*> effects = EffectBlocks(lin);
+  // The family-wise level is shared by the effects that can be tested.
+  for (const ColumnBlock* b : effects) {
+    if (Observable(*b, red) && Kept(*b, red) >= o.redundant_fraction) ++out.tested;
+  }
+  out.level = o.significance / std::max(out.tested, 1);
+
+  const Context cx{in,
+                   o,
+                   lin,
+                   red,
+                   *in.nuisance,
+                   Normals(lin, effects),
+                   in.nuisance->Apply(red.r),
+                   red.base.rank() + in.nuisance->rank(),
+                   std::log(std::max(n, 2)),
+                   out.level,
+                   out.current};
+  for (const ColumnBlock* b : effects) out.entries.push_back(ScoreEffect(*b, cx));
+  for (Effect e : in.contained) out.entries.push_back(ContainedEntry(e, cx));
+
+  std::stable_sort(out.entries.begin(), out.entries.end(),
+                   [](const RankedEffect& a, const RankedEffect& b) {
+                     if (a.significant != b.significant) return a.significant;
+                     return a.delta_bic < b.delta_bic;
+                   });
+  FindAliases(effects, cx, &out);
+  AlsoAfterBest(effects, cx, &out);
+  ConfirmByRefinement(cx, &out);
   for (RankedEffect& r : out.entries) {
     r.rms_before = r.before.Main();
     r.rms_after = r.after.Main();

@@ -96,6 +96,12 @@ std::string InitFromPixelsOptions::Check() const {
   return "";
 }
 
+// camera::DistortionGroups is the camera layer's own closed set of OpenCV
+// groups (it does not know the effect catalogue); this is the one mapping,
+// checked against the catalogue's coefficients in tests/fit/joint_init_test.cc.
+static_assert(kNumEffects - kNumKinematicEffects == 5,
+              "a distortion group was added to the effect catalogue: map it here and in "
+              "camera::DistortionGroups");
 camera::DistortionGroups DistortionGroupsOf(const EffectSet& effects) {
   camera::DistortionGroups g;
   g.radial = effects.Has(Effect::kRadialDistortion);

@@ -15,6 +15,7 @@
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/cost_functions.h"
 #include "libcalib/fit/manifolds.h"
+#include "libcalib/fit/parameterization.h"
 
 namespace rtscalib {
 
@@ -33,182 +34,18 @@ std::string FitOptions::Check() const {
 
 namespace {
 
-enum class Group { kEdm = 0, kCam = 1, kPixel = 2 };
-
 // Residuals x parameters above which the solver uses the sparse normal
 // equations instead of dense QR (docs/refinement.md, "Speed").
 constexpr double kDenseQrLimit = 4e6;
 
-struct BlockInfo {
-  std::string name;
-  int size = 0;
-  bool is_quaternion = false;
-};
-
-// The one place that turns the model's flags into free or frozen parameters,
-// manifolds and bounds (STYLE: ParameterizeCameras). Decided from the model
-// and the options alone, before any residual exists, so that the cost
-// functions can size their jets to the free parameters.
-// NOTE: libcalib/diagnose/linearization.cc (FreeBlocks) mirrors these
-// decisions, adding the candidate effects' columns; change both together
-// (a shared header is the planned clean-up, see the diagnostics issue note).
-class Parameterization {
- public:
-  using Kind = BlockKind;
-  struct Decision {
-    Kind kind = Kind::kFree;
-    std::string name;
-    int size = 0;
-    std::vector<int> frozen;               // kSubset
-    const double* bound_centre = nullptr;  // translations: Klug Eq. 98 window centre
-  };
-
-  Parameterization(InstrumentModel* model, const InstrumentModel& start, const FitOptions& o,
-                   FitSummary* summary)
-      : options_(o) {
-    InstrumentModel& m = *model;
-    const bool dh = m.kinematics == Kinematics::kDh;
-    Set(m.base.q.data(), {Kind::kQuaternion, "base.rotation", 4});
-    Set(m.base.t.data(), {Kind::kFree, "base.t", 3, {}, start.base.t.data()});
-    if (dh) {
-      Set(m.links[0].p.data(), {Kind::kSubset, "link1", 4, {kDhD, kDhGamma}});
-      Set(m.links[1].p.data(), {Kind::kConstant, "link2", 4});
-      summary->fixed_gauges.push_back(
-          "link1.d and link1.gamma_offset held at their start values (equivalent to base "
-          "translation along and rotation about axis 1)");
-      summary->fixed_gauges.push_back(
-          "link2 {d, gamma_offset, alpha, a} held (the EDM and camera tool transforms absorb "
-          "them)");
-      Set(m.edm.q.data(), {Kind::kNoRoll, "edm.rotation", 4});
-      summary->fixed_gauges.push_back(
-          "EDM roll about its ray held at the extraction's convention (Klug Eq. 79)");
-      Set(m.edm.t.data(), {Kind::kFree, "edm.t", 3, {}, start.edm.t.data()});
-    } else {
-      // Spherical: the EDM ray is the line of sight; its offset along the ray
-      // is edm_offset's job.
-      Set(m.edm.q.data(), {Kind::kConstant, "edm.rotation", 4});
-      Set(m.edm.t.data(), {Kind::kSubset, "edm.t", 3, {2}});
-      summary->fixed_gauges.push_back(
-          "spherical: EDM rotation is the line of sight (held); EDM t_z held (edm_offset models "
-          "it)");
-    }
-    std::vector<int> frozen_distortion;
-    {
-      std::vector<bool> free_idx(camera::kNumDistortion, false);
-      for (Effect e : m.effects.List()) {
-        if (IsDistortion(e)) {
-          for (int i : Info(e).distortion_indices) free_idx[i] = true;
-        }
-      }
-      for (int i = 0; i < camera::kNumDistortion; ++i) {
-        if (!free_idx[i]) frozen_distortion.push_back(i);
-      }
-    }
-    for (int z = 0; z < m.NumZooms(); ++z) {
-      CameraTool& cam = m.cams[z];
-      const std::string zs = "cam[" + std::to_string(z) + "]";
-      Set(cam.flange_from_cam.q.data(), {Kind::kQuaternion, zs + ".rotation", 4});
-      Set(cam.flange_from_cam.t.data(),
-          {Kind::kFree, zs + ".t", 3, {}, start.cams[z].flange_from_cam.t.data()});
-      Set(cam.intrinsics.data(),
-          {o.fit_intrinsics ? Kind::kFree : Kind::kConstant, zs + ".intrinsics", 4});
-      Set(cam.distortion.data(),
-          {Kind::kSubset, zs + ".distortion", camera::kNumDistortion, frozen_distortion});
-    }
-    for (Effect e : m.effects.List()) {
-      if (IsKinematic(e))
-        Set(m.EffectValue(e).data(), {Kind::kFree, Info(e).name, Info(e).num_params});
-    }
-  }
-
-  // Number of parameters in the non-constant blocks of a layout.
-  int ActiveSize(const BlockLayout& layout) const {
-    int n = 0;
-    for (size_t i = 0; i < layout.blocks.size(); ++i) {
-      if (!IsConstant(layout.blocks[i])) n += layout.sizes[i];
-    }
-    return n;
-  }
-
-  bool IsConstant(const double* p) const {
-    auto it = decisions_.find(p);
-    return it != decisions_.end() && it->second.kind == Kind::kConstant;
-  }
-
-  // `with_bounds`: set Klug Eq. 98's translation windows as hard bounds.
-  void Apply(ceres::Problem* problem, bool with_bounds) const {
-    for (const auto& [cp, d] : decisions_) {
-      double* p = const_cast<double*>(cp);
-      if (!problem->HasParameterBlock(p)) continue;
-      ParameterizeBlock(problem, p, d.kind, d.size, d.frozen);
-      // Klug Eq. 98: |t| <= t_max, applied as a window around the start value
-      // (the extraction is good to a fraction of it), so that a station far
-      // from the origin stays admissible.
-      if (with_bounds && d.bound_centre && options_.translation_bound_m > 0) {
-        for (int i = 0; i < d.size; ++i) {
-          problem->SetParameterLowerBound(p, i, d.bound_centre[i] - options_.translation_bound_m);
-          problem->SetParameterUpperBound(p, i, d.bound_centre[i] + options_.translation_bound_m);
-        }
-      }
-    }
-  }
-
-  // Names of translations that left their Eq. 98 window (empty if none).
-  std::vector<std::string> OutsideBounds() const {
-    std::vector<std::string> out;
-    if (options_.translation_bound_m <= 0) return out;
-    for (const auto& [p, d] : decisions_) {
-      if (!d.bound_centre) continue;
-      for (int i = 0; i < d.size; ++i) {
-        if (std::abs(p[i] - d.bound_centre[i]) > options_.translation_bound_m) {
-          out.push_back(d.name);
-          break;
-        }
-      }
-    }
-    return out;
-  }
-
-  // Named free blocks present in the problem (for covariance and reports).
-  std::map<const double*, BlockInfo> FreeBlocks(const ceres::Problem& problem) const {
-    std::map<const double*, BlockInfo> out;
-    for (const auto& [p, d] : decisions_) {
-      if (d.kind == Kind::kConstant || !problem.HasParameterBlock(p)) continue;
-      if (d.kind == Kind::kSubset && static_cast<int>(d.frozen.size()) == d.size) continue;
-      out[p] = {d.name, d.size, d.kind == Kind::kQuaternion || d.kind == Kind::kNoRoll};
-    }
-    return out;
-  }
-
- private:
-  void Set(const double* p, Decision d) {
-    if (d.kind == Kind::kSubset && static_cast<int>(d.frozen.size()) == d.size) {
-      d.kind = Kind::kConstant;
-    }
-    decisions_[p] = std::move(d);
-  }
-
-  const FitOptions& options_;
-  std::map<const double*, Decision> decisions_;
-};
+// The free blocks by address, named (covariance and correlation names); the
+// address order is the covariance's column order.
+using NamedBlocks = std::map<const double*, std::string>;
 
 struct ResidualRef {
   ceres::ResidualBlockId id;
-  Group group;
+  ObsGroup group;
   std::vector<int> indices;  // into records or pixels
-};
-
-// Observations that share a pointing and a tool (or a shot) form one group.
-struct RecordGroup {
-  bool edm;
-  int zoom;
-  double phi, theta;
-  std::vector<int> indices;
-};
-struct ShotGroup {
-  int zoom;
-  double phi, theta;
-  std::vector<int> indices;
 };
 
 // Covariance of `blocks` in their tangent spaces: the pseudo-inverse of
@@ -259,10 +96,10 @@ bool TangentCovariance(ceres::Problem* problem, const std::vector<const double*>
   return true;
 }
 
-void FillSigmas(ceres::Problem* problem, const std::map<const double*, BlockInfo>& blocks,
-                InstrumentModel* model, FitSummary* summary, int num_threads) {
+void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentModel* model,
+                FitSummary* summary, int num_threads) {
   std::vector<const double*> free_blocks;
-  for (const auto& [p, info] : blocks) {
+  for (const auto& [p, name] : blocks) {
     if (!problem->IsParameterBlockConstant(const_cast<double*>(p))) free_blocks.push_back(p);
   }
   // Joint tangent-space covariance of all free blocks.
@@ -286,9 +123,9 @@ void FillSigmas(ceres::Problem* problem, const std::map<const double*, BlockInfo
   // Parameter names in tangent order (for the correlation list).
   std::vector<std::string> names(n);
   for (size_t b = 0; b < free_blocks.size(); ++b) {
-    const BlockInfo& info = blocks.at(free_blocks[b]);
+    const std::string& name = blocks.at(free_blocks[b]);
     const int ts = problem->ParameterBlockTangentSize(free_blocks[b]);
-    for (int i = 0; i < ts; ++i) names[offsets[b] + i] = info.name + "[" + std::to_string(i) + "]";
+    for (int i = 0; i < ts; ++i) names[offsets[b] + i] = name + "[" + std::to_string(i) + "]";
   }
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {
@@ -369,6 +206,150 @@ void FillSigmas(ceres::Problem* problem, const std::map<const double*, BlockInfo
   }
 }
 
+// Effects that the kinematics already contain are never fitted twice
+// (ContainedInKinematics); they are removed from the model and named.
+void RemoveEffectsTheKinematicsContain(InstrumentModel* m, FitSummary* summary) {
+  for (Effect e : RemoveContainedEffects(m)) {
+    summary->message +=
+        std::string(" ") + Info(e).name + " is redundant with the dh model (not fitted);";
+  }
+}
+
+ceres::LossFunction* MakeLoss(const FitOptions& options) {
+  switch (options.loss) {
+    case RobustLoss::kHuber:
+      return new ceres::HuberLoss(options.loss_scale);
+    case RobustLoss::kCauchy:
+      return new ceres::CauchyLoss(options.loss_scale);
+    case RobustLoss::kNone:
+      return nullptr;
+  }
+  return nullptr;
+}
+
+// One residual block per observation group, each whitened by its group's
+// current sigma, parameterised by `param`; fills `refs` for the variance
+// components and the robust-loss report.
+std::unique_ptr<ceres::Problem> BuildProblem(const Observations& obs,
+                                             const std::vector<ObservationGroup>& groups,
+                                             const Parameterization& param, const double sigma[3],
+                                             const FitOptions& options, bool with_bounds,
+                                             InstrumentModel* m, std::vector<ResidualRef>* refs) {
+  ceres::Problem::Options popt;
+  popt.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  auto problem = std::make_unique<ceres::Problem>(popt);
+  refs->clear();
+  for (const ObservationGroup& g : groups) {
+    const double inv_sigma = 1.0 / sigma[static_cast<int>(g.kind)];
+    std::vector<double*> blocks;
+    ceres::CostFunction* cost = MakeGroupCost(obs, g, inv_sigma, param, m, &blocks);
+    refs->push_back(
+        {problem->AddResidualBlock(cost, MakeLoss(options), blocks), g.kind, g.indices});
+  }
+  param.Apply(problem.get(), with_bounds);
+  return problem;
+}
+
+ceres::Solver::Options SolverOptions(const ceres::Problem& problem, const FitOptions& options) {
+  ceres::Solver::Options sopt;
+  // Dense QR is the most accurate, but costs ~2 m n^2 per iteration (m
+  // residuals, n parameters): 10 s for 7 zooms x 100 shots x 100 corners.
+  // The normal equations from the block-sparse Jacobian cost ~m k^2 (k ~ 40
+  // parameters per residual block) and are well conditioned here thanks to
+  // Ceres's Jacobi scaling; they take over for large problems.
+  sopt.linear_solver_type =
+      static_cast<double>(problem.NumResiduals()) * problem.NumParameters() > kDenseQrLimit
+          ? ceres::SPARSE_NORMAL_CHOLESKY
+          : ceres::DENSE_QR;
+  sopt.max_num_iterations = options.max_iterations;
+  sopt.num_threads = options.num_threads;
+  // Tight enough that exact data are fitted to round-off (the 1e-9 m
+  // held-out test), loose enough not to spin on round-off noise.
+  sopt.function_tolerance = 1e-10;
+  sopt.gradient_tolerance = 1e-14;
+  sopt.parameter_tolerance = 1e-10;
+  // The start (extraction) is close: begin near Gauss-Newton instead of
+  // growing the trust region from Ceres's default 1e4 over many iterations
+  // along the weakly determined directions (camera roll from 1-px rows).
+  sopt.initial_trust_region_radius = 1e10;
+  sopt.minimizer_progress_to_stdout = options.verbose;
+  return sopt;
+}
+
+// Variance-component estimate per group: s0^2 = sum r^2 / redundancy,
+// redundancy approximated by n_g * (1 - n_params / n_obs). Updates `sigma`;
+// returns whether any sigma moved by more than 5 % (another round is needed).
+bool ReestimateSigmas(ceres::Problem* problem, const std::vector<ResidualRef>& refs,
+                      double sigma[3]) {
+  double sum2[3] = {0, 0, 0};
+  int count[3] = {0, 0, 0};
+  for (const ResidualRef& ref : refs) {
+    double cost = 0;
+    problem->EvaluateResidualBlock(ref.id, false, &cost, nullptr, nullptr);
+    sum2[static_cast<int>(ref.group)] += 2.0 * cost;
+    count[static_cast<int>(ref.group)] +=
+        (ref.group == ObsGroup::kPixel ? 2 : 3) * static_cast<int>(ref.indices.size());
+  }
+  const int n_obs = count[0] + count[1] + count[2];
+  const double redundancy =
+      std::max(0.05, 1.0 - double(problem->NumParameters()) / std::max(n_obs, 1));
+  bool changed = false;
+  for (int g = 0; g < 3; ++g) {
+    if (count[g] == 0) continue;
+    const double f = std::sqrt(sum2[g] / (count[g] * redundancy));
+    // Never shrink below a floor that would make exact data ill-posed.
+    const double floor = g == 2 ? 1e-9 : 1e-15;
+    const double next = std::max(sigma[g] * f, floor);
+    if (std::abs(next / sigma[g] - 1.0) > 0.05) changed = true;
+    sigma[g] = next;
+  }
+  return changed;
+}
+
+// Robust loss: the observations whose whitened residual exceeds the loss
+// scale (reported as down-weighted, file:line of the group's first row).
+std::vector<std::string> Downweighted(ceres::Problem* problem, const std::vector<ResidualRef>& refs,
+                                      const Observations& obs, const FitOptions& options) {
+  std::vector<std::string> out;
+  for (const ResidualRef& ref : refs) {
+    double cost = 0;
+    problem->EvaluateResidualBlock(ref.id, false, &cost, nullptr, nullptr);
+    if (std::sqrt(2.0 * cost) > options.loss_scale) {
+      out.push_back((ref.group == ObsGroup::kPixel ? obs.pixels_source : obs.records_source) + ":" +
+                    std::to_string(ref.group == ObsGroup::kPixel
+                                       ? obs.pixels[ref.indices[0]].line
+                                       : obs.records[ref.indices[0]].line));
+    }
+  }
+  return out;
+}
+
+// The solver's outcome and the final sigmas, into the summary.
+void Summarize(const ceres::Solver::Summary& solver_summary, const ceres::Problem& problem,
+               const double sigma[3], const FitOptions& options, FitSummary* summary) {
+  summary->converged = solver_summary.termination_type == ceres::CONVERGENCE ||
+                       solver_summary.termination_type == ceres::USER_SUCCESS;
+  summary->iterations = static_cast<int>(solver_summary.iterations.size());
+  summary->final_cost = solver_summary.final_cost;
+  summary->num_residuals = problem.NumResiduals();
+  summary->num_parameters = problem.NumParameters();
+  summary->sigma_edm_m = sigma[0];
+  summary->sigma_cam_m = sigma[1];
+  summary->sigma_pixel_px = sigma[2];
+  summary->sigma0_records = sigma[0] / options.sigma_edm_m;
+  summary->sigma0_pixels = sigma[2] / options.sigma_pixel_px;
+  summary->message += " " + solver_summary.message;
+}
+
+// The free blocks present in `problem`, named, for the covariance.
+NamedBlocks FreeBlocks(const Parameterization& param, const ceres::Problem& problem) {
+  NamedBlocks out;
+  for (const BlockDecision& d : param.Blocks()) {
+    if (d.kind != BlockKind::kConstant && problem.HasParameterBlock(d.block)) out[d.block] = d.name;
+  }
+  return out;
+}
+
 }  // namespace
 
 FitSummary Refine(const Observations& obs, const FitOptions& options, InstrumentModel* model) {
@@ -377,83 +358,17 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   const auto t0 = std::chrono::steady_clock::now();
   FitSummary summary;
   InstrumentModel& m = *model;
+  RemoveEffectsTheKinematicsContain(&m, &summary);
 
-  // Effects that the dh kinematics already contains are never fitted twice.
-  if (m.kinematics == Kinematics::kDh) {
-    for (Effect e : m.effects.List()) {
-      if (Info(e).redundant_in_dh) {
-        m.effects.Remove(e);
-        summary.message +=
-            std::string(" ") + Info(e).name + " is redundant with the dh model (not fitted);";
-      }
-    }
-  }
-
-  std::vector<int> records;
-  for (size_t i = 0; i < obs.records.size(); ++i) {
-    const Record& r = obs.records[i];
-    if (InCriticalRegion(r.theta, options.min_zenith_rad, options.max_zenith_rad)) {
-      ++summary.excluded_critical;
-      continue;
-    }
-    if (r.tool == Tool::kCam && r.zoom >= m.NumZooms()) {
-      throw std::invalid_argument(obs.records_source + ":" + std::to_string(r.line) + ": zoom " +
-                                  std::to_string(r.zoom) + " has no camera in the model");
-    }
-    records.push_back(static_cast<int>(i));
-  }
-  std::vector<int> pixels;
-  for (size_t i = 0; i < obs.pixels.size(); ++i) {
-    const PixelObservation& p = obs.pixels[i];
-    if (InCriticalRegion(p.theta, options.min_zenith_rad, options.max_zenith_rad)) {
-      ++summary.excluded_critical;
-      continue;
-    }
-    if (p.zoom >= m.NumZooms()) {
-      throw std::invalid_argument(obs.pixels_source + ":" + std::to_string(p.line) + ": zoom " +
-                                  std::to_string(p.zoom) + " has no camera in the model");
-    }
-    pixels.push_back(static_cast<int>(i));
-  }
-  if (records.empty() && pixels.empty()) {
+  const UsedRows rows = SelectRows(obs, options, m.NumZooms(), UnknownZoom::kThrow);
+  summary.excluded_critical = rows.excluded_critical;
+  if (rows.records.empty() && rows.pixels.empty()) {
     throw std::invalid_argument(
         "nothing to fit: every observation is in the critical region or none was given");
   }
-
-  // Group observations by pointing and tool (records) and by shot (pixels);
-  // with a robust loss every observation is its own group.
-  const bool singletons = options.loss != RobustLoss::kNone;
-  std::vector<RecordGroup> record_groups;
-  {
-    std::map<std::tuple<bool, int, double, double>, int> index;
-    for (int i : records) {
-      const Record& r = obs.records[i];
-      const bool edm = r.tool == Tool::kEdm;
-      const auto key = std::make_tuple(edm, edm ? -1 : r.zoom, r.phi, r.theta);
-      auto it = index.find(key);
-      if (singletons || it == index.end()) {
-        index[key] = static_cast<int>(record_groups.size());
-        record_groups.push_back({edm, edm ? -1 : r.zoom, r.phi, r.theta, {i}});
-      } else {
-        record_groups[it->second].indices.push_back(i);
-      }
-    }
-  }
-  std::vector<ShotGroup> shot_groups;
-  {
-    std::map<std::tuple<std::string, int, double, double>, int> index;
-    for (int i : pixels) {
-      const PixelObservation& p = obs.pixels[i];
-      const auto key = std::make_tuple(p.shot, p.zoom, p.phi, p.theta);
-      auto it = index.find(key);
-      if (singletons || it == index.end()) {
-        index[key] = static_cast<int>(shot_groups.size());
-        shot_groups.push_back({p.zoom, p.phi, p.theta, {i}});
-      } else {
-        shot_groups[it->second].indices.push_back(i);
-      }
-    }
-  }
+  // With a robust loss every observation is its own group (the loss acts per block).
+  const std::vector<ObservationGroup> groups =
+      GroupObservations(obs, rows, options.loss != RobustLoss::kNone);
 
   double sigma[3] = {options.sigma_edm_m, options.sigma_cam_m, options.sigma_pixel_px};
   const int rounds = options.reestimate_sigmas ? 4 : 1;
@@ -461,7 +376,8 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   std::vector<ResidualRef> refs;
   std::unique_ptr<ceres::Problem> problem;
   const InstrumentModel start = m;
-  const Parameterization param(&m, start, options, &summary);
+  const Parameterization param(&m, options);
+  summary.fixed_gauges = param.FixedGauges();
   // Klug Eq. 98's translation bounds: Ceres's projected steps stall on this
   // problem even when no bound is active, so the bounds are imposed as hard
   // constraints only when an unconstrained solution leaves its window (then
@@ -469,73 +385,8 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   bool with_bounds = false;
   for (int round = 0; round < rounds; ++round) {
     // Each round warm-starts from the previous one; bounds stay around `start`.
-    ceres::Problem::Options popt;
-    popt.manifold_ownership = ceres::TAKE_OWNERSHIP;
-    problem = std::make_unique<ceres::Problem>(popt);
-    refs.clear();
-    auto loss = [&]() -> ceres::LossFunction* {
-      switch (options.loss) {
-        case RobustLoss::kHuber:
-          return new ceres::HuberLoss(options.loss_scale);
-        case RobustLoss::kCauchy:
-          return new ceres::CauchyLoss(options.loss_scale);
-        default:
-          return nullptr;
-      }
-    };
-    for (const RecordGroup& g : record_groups) {
-      const Group group = g.edm ? Group::kEdm : Group::kCam;
-      auto* f = new RecordGroupResidual;
-      f->layout = LayoutFor(&m, g.zoom);
-      f->edm = g.edm;
-      f->phi = g.phi;
-      f->theta = g.theta;
-      for (int i : g.indices) {
-        const Record& r = obs.records[i];
-        f->rows.push_back({r.u, r.v, r.d, r.x, 1.0 / sigma[static_cast<int>(group)]});
-      }
-      const std::vector<double*> blocks = f->layout.blocks;
-      ceres::CostFunction* cost =
-          MakeCost(f, 3 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
-      refs.push_back({problem->AddResidualBlock(cost, loss(), blocks), group, g.indices});
-    }
-    for (const ShotGroup& g : shot_groups) {
-      auto* f = new ShotResidual;
-      f->layout = LayoutFor(&m, g.zoom);
-      f->phi = g.phi;
-      f->theta = g.theta;
-      f->inv_sigma = 1.0 / sigma[2];
-      for (int i : g.indices) f->points.push_back({obs.pixels[i].X, obs.pixels[i].uv});
-      const std::vector<double*> blocks = f->layout.blocks;
-      ceres::CostFunction* cost =
-          MakeCost(f, 2 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
-      refs.push_back({problem->AddResidualBlock(cost, loss(), blocks), Group::kPixel, g.indices});
-    }
-    param.Apply(problem.get(), with_bounds);
-
-    ceres::Solver::Options sopt;
-    // Dense QR is the most accurate, but costs ~2 m n^2 per iteration (m
-    // residuals, n parameters): 10 s for 7 zooms x 100 shots x 100 corners.
-    // The normal equations from the block-sparse Jacobian cost ~m k^2 (k ~ 40
-    // parameters per residual block) and are well conditioned here thanks to
-    // Ceres's Jacobi scaling; they take over for large problems.
-    sopt.linear_solver_type =
-        static_cast<double>(problem->NumResiduals()) * problem->NumParameters() > kDenseQrLimit
-            ? ceres::SPARSE_NORMAL_CHOLESKY
-            : ceres::DENSE_QR;
-    sopt.max_num_iterations = options.max_iterations;
-    sopt.num_threads = options.num_threads;
-    // Tight enough that exact data are fitted to round-off (the 1e-9 m
-    // held-out test), loose enough not to spin on round-off noise.
-    sopt.function_tolerance = 1e-10;
-    sopt.gradient_tolerance = 1e-14;
-    sopt.parameter_tolerance = 1e-10;
-    // The start (extraction) is close: begin near Gauss-Newton instead of
-    // growing the trust region from Ceres's default 1e4 over many iterations
-    // along the weakly determined directions (camera roll from 1-px rows).
-    sopt.initial_trust_region_radius = 1e10;
-    sopt.minimizer_progress_to_stdout = options.verbose;
-    ceres::Solve(sopt, problem.get(), &solver_summary);
+    problem = BuildProblem(obs, groups, param, sigma, options, with_bounds, &m, &refs);
+    ceres::Solve(SolverOptions(*problem, options), problem.get(), &solver_summary);
     if (round == 0) summary.initial_cost = solver_summary.initial_cost;
     if (!with_bounds) {
       const std::vector<std::string> outside = param.OutsideBounds();
@@ -553,62 +404,16 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
         continue;
       }
     }
-
     if (!options.reestimate_sigmas) break;
-    // Variance-component estimate per group: s0^2 = sum r^2 / redundancy,
-    // redundancy approximated by n_g * (1 - n_params / n_obs).
-    double sum2[3] = {0, 0, 0};
-    int count[3] = {0, 0, 0};
-    for (const ResidualRef& ref : refs) {
-      double cost = 0;
-      problem->EvaluateResidualBlock(ref.id, false, &cost, nullptr, nullptr);
-      sum2[static_cast<int>(ref.group)] += 2.0 * cost;
-      count[static_cast<int>(ref.group)] +=
-          (ref.group == Group::kPixel ? 2 : 3) * static_cast<int>(ref.indices.size());
-    }
-    const int n_obs = count[0] + count[1] + count[2];
-    const double redundancy =
-        std::max(0.05, 1.0 - double(problem->NumParameters()) / std::max(n_obs, 1));
-    bool changed = false;
-    for (int g = 0; g < 3; ++g) {
-      if (count[g] == 0) continue;
-      const double f = std::sqrt(sum2[g] / (count[g] * redundancy));
-      // Never shrink below a floor that would make exact data ill-posed.
-      const double floor = g == 2 ? 1e-9 : 1e-15;
-      const double next = std::max(sigma[g] * f, floor);
-      if (std::abs(next / sigma[g] - 1.0) > 0.05) changed = true;
-      sigma[g] = next;
-    }
-    if (!changed) break;
+    if (!ReestimateSigmas(problem.get(), refs, sigma)) break;
   }
 
-  summary.converged = solver_summary.termination_type == ceres::CONVERGENCE ||
-                      solver_summary.termination_type == ceres::USER_SUCCESS;
-  summary.iterations = static_cast<int>(solver_summary.iterations.size());
-  summary.final_cost = solver_summary.final_cost;
-  summary.num_residuals = problem->NumResiduals();
-  summary.num_parameters = problem->NumParameters();
-  summary.sigma_edm_m = sigma[0];
-  summary.sigma_cam_m = sigma[1];
-  summary.sigma_pixel_px = sigma[2];
-  summary.sigma0_records = sigma[0] / options.sigma_edm_m;
-  summary.sigma0_pixels = sigma[2] / options.sigma_pixel_px;
-  summary.message += " " + solver_summary.message;
-
+  Summarize(solver_summary, *problem, sigma, options, &summary);
   if (options.loss != RobustLoss::kNone) {
-    for (const ResidualRef& ref : refs) {
-      double cost = 0;
-      problem->EvaluateResidualBlock(ref.id, false, &cost, nullptr, nullptr);
-      if (std::sqrt(2.0 * cost) > options.loss_scale) {
-        summary.downweighted.push_back(
-            (ref.group == Group::kPixel ? obs.pixels_source : obs.records_source) + ":" +
-            std::to_string(ref.group == Group::kPixel ? obs.pixels[ref.indices[0]].line
-                                                      : obs.records[ref.indices[0]].line));
-      }
-    }
+    summary.downweighted = Downweighted(problem.get(), refs, obs, options);
   }
   if (options.compute_covariance) {
-    FillSigmas(problem.get(), param.FreeBlocks(*problem), &m, &summary, options.num_threads);
+    FillSigmas(problem.get(), FreeBlocks(param, *problem), &m, &summary, options.num_threads);
   }
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;

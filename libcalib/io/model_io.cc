@@ -15,10 +15,6 @@ namespace {
 
 constexpr const char* kFormat = "rtscalib-model";
 constexpr int kVersion = 1;
-const char* const kIntrinsicNames[camera::kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
-const char* const kDistortionNames[camera::kNumDistortion] = {
-    "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "taux", "tauy"};
-const char* const kDhNames[4] = {"d", "gamma_offset", "alpha", "a"};
 
 // Derived values (Euler angles, report units) must match their parameter
 // blocks to this relative tolerance; %.17g text and the trigonometry between
@@ -101,14 +97,14 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
   e << YAML::Key << "flange_from_cam" << YAML::Value;
   EmitPose(e, cam.flange_from_cam, s.valid ? &s.cam_tools[zoom] : nullptr);
   e << YAML::Key << "intrinsics" << YAML::Value;
-  EmitNamed(e, kIntrinsicNames, cam.intrinsics.data(), camera::kNumIntrinsics);
+  EmitNamed(e, kIntrinsicsParamNames, cam.intrinsics.data(), camera::kNumIntrinsics);
   e << YAML::Key << "distortion" << YAML::Value;
-  EmitNamed(e, kDistortionNames, cam.distortion.data(), camera::kNumDistortion);
+  EmitNamed(e, kDistortionCoefficientNames, cam.distortion.data(), camera::kNumDistortion);
   if (s.valid) {
     e << YAML::Key << "intrinsics_sigma" << YAML::Value;
-    EmitNamed(e, kIntrinsicNames, s.intrinsics[zoom].data(), camera::kNumIntrinsics);
+    EmitNamed(e, kIntrinsicsParamNames, s.intrinsics[zoom].data(), camera::kNumIntrinsics);
     e << YAML::Key << "distortion_sigma" << YAML::Value;
-    EmitNamed(e, kDistortionNames, s.distortion[zoom].data(), camera::kNumDistortion);
+    EmitNamed(e, kDistortionCoefficientNames, s.distortion[zoom].data(), camera::kNumDistortion);
   }
   e << YAML::EndMap;
 }
@@ -225,11 +221,11 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
     for (int i = 0; i < 2; ++i) {
       e << YAML::Flow << YAML::BeginMap;
       for (int k = 0; k < 4; ++k) {
-        e << YAML::Key << kDhNames[k] << YAML::Value << Num(model.links[i].p[k]);
+        e << YAML::Key << kDhParamNames[k] << YAML::Value << Num(model.links[i].p[k]);
       }
       if (s.valid) {
         e << YAML::Key << "sigma" << YAML::Value;
-        EmitNamed(e, kDhNames, s.links[i].data(), 4);
+        EmitNamed(e, kDhParamNames, s.links[i].data(), 4);
       }
       e << YAML::EndMap;
     }
@@ -282,9 +278,9 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
     const std::vector<YamlNode> items = links.Items();
     if (items.size() != 2) links.Fail("2 DH links");
     for (int i = 0; i < 2; ++i) {
-      ReadNamedInto(items[i], kDhNames, model.links[i].p.data(), 4);
+      ReadNamedInto(items[i], kDhParamNames, model.links[i].p.data(), 4);
       if (with_sigma) {
-        ReadNamedInto(items[i].Require("sigma"), kDhNames, s.links[i].data(), 4, true);
+        ReadNamedInto(items[i].Require("sigma"), kDhParamNames, s.links[i].data(), 4, true);
       }
     }
   }
@@ -306,18 +302,18 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
     }
     PoseSigma tool_sigma;
     cam.flange_from_cam = ReadPose(item.Require("flange_from_cam"), with_sigma, &tool_sigma);
-    ReadNamedInto(item.Require("intrinsics"), kIntrinsicNames, cam.intrinsics.data(),
+    ReadNamedInto(item.Require("intrinsics"), kIntrinsicsParamNames, cam.intrinsics.data(),
                   camera::kNumIntrinsics);
-    ReadNamedInto(item.Require("distortion"), kDistortionNames, cam.distortion.data(),
+    ReadNamedInto(item.Require("distortion"), kDistortionCoefficientNames, cam.distortion.data(),
                   camera::kNumDistortion);
     if (with_sigma) {
       s.cam_tools.push_back(tool_sigma);
       s.intrinsics.emplace_back();
-      ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicNames, s.intrinsics.back().data(),
+      ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicsParamNames, s.intrinsics.back().data(),
                     camera::kNumIntrinsics, true);
       s.distortion.emplace_back();
-      ReadNamedInto(item.Require("distortion_sigma"), kDistortionNames, s.distortion.back().data(),
-                    camera::kNumDistortion, true);
+      ReadNamedInto(item.Require("distortion_sigma"), kDistortionCoefficientNames,
+                    s.distortion.back().data(), camera::kNumDistortion, true);
     }
     model.cams.push_back(cam);
   }

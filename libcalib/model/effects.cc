@@ -10,189 +10,36 @@ constexpr double kArcsecPerRad = 180.0 * 3600.0 / M_PI;
 constexpr double kDegPerRad = 180.0 / M_PI;
 
 std::vector<EffectInfo> MakeCatalogue() {
-  using K = EffectKind;
-  return {
-      {Effect::kCollimation,
-       "collimation",
-       K::kAxis,
-       1,
-       {"c", ""},
-       {"arcsec", ""},
-       "line of sight turned by c about the telescope's y axis (after the tilt about the trunnion "
-       "axis)",
-       "dHz = +c/sin(z) face 1, -c/sin(z) face 2",
-       true,
-       {}},
-      {Effect::kTiltingAxis,
-       "tilting_axis",
-       K::kAxis,
-       1,
-       {"i", ""},
-       {"arcsec", ""},
-       "trunnion axis turned by i about the alidade's y axis (before the tilt)",
-       "dHz = +i*cot(z) face 1, opposite face 2",
-       true,
-       {}},
-      {Effect::kVerticalIndex,
-       "vertical_index",
-       K::kAngle,
-       1,
-       {"v0", ""},
-       {"arcsec", ""},
-       "theta* = theta + v0",
-       "constant dz, flips sign with face",
-       true,
-       {}},
-      {Effect::kHzEccentricity,
-       "hz_eccentricity",
-       K::kAngle,
-       2,
-       {"e", "phi_e"},
-       {"arcsec", "deg"},
-       "phi* = phi + e*sin(phi - phi_e)",
-       "once per turn in phi",
-       false,
-       {}},
-      {Effect::kVEccentricity,
-       "v_eccentricity",
-       K::kAngle,
-       2,
-       {"e", "theta_e"},
-       {"arcsec", "deg"},
-       "theta* = theta + e*sin(theta - theta_e)",
-       "once per turn in theta",
-       false,
-       {}},
-      {Effect::kHzScale,
-       "hz_scale",
-       K::kAngle,
-       1,
-       {"s", ""},
-       {"ppm", ""},
-       "phi* = phi + s*phi",
-       "grows with phi",
-       false,
-       {}},
-      {Effect::kVScale,
-       "v_scale",
-       K::kAngle,
-       1,
-       {"s", ""},
-       {"ppm", ""},
-       "theta* = theta + s*theta",
-       "grows with theta",
-       false,
-       {}},
-      {Effect::kAxisWobble,
-       "axis_wobble",
-       K::kAxis,
-       2,
-       {"w", "phi_w"},
-       {"arcsec", "deg"},
-       "vertical axis tilted by Rx(w cos(phi-phi_w)) Ry(w sin(phi-phi_w)) before the phi rotation",
-       "once per turn tilt",
-       false,
-       {}},
-      {Effect::kEdmOffset,
-       "edm_offset",
-       K::kEdm,
-       1,
-       {"k0", ""},
-       {"mm", ""},
-       "d* = d + k0",
-       "constant along the ray",
-       true,
-       {}},
-      {Effect::kEdmScale,
-       "edm_scale",
-       K::kEdm,
-       1,
-       {"m", ""},
-       {"ppm", ""},
-       "d* = d (1 + m)",
-       "grows with d",
-       false,
-       {}},
-      {Effect::kEdmCyclic,
-       "edm_cyclic",
-       K::kEdm,
-       2,
-       {"A", "psi"},
-       {"mm", "deg"},
-       "d* = d + A sin(2 pi d / U + psi), U configured",
-       "periodic in d",
-       false,
-       {}},
-      {Effect::kRadialDistortion,
-       "radial_distortion",
-       K::kDistortion,
-       0,
-       {"", ""},
-       {"", ""},
-       "OpenCV k1 k2 k3",
-       "radial in the image",
-       false,
-       {0, 1, 4}},
-      {Effect::kTangentialDistortion,
-       "tangential_distortion",
-       K::kDistortion,
-       0,
-       {"", ""},
-       {"", ""},
-       "OpenCV p1 p2",
-       "decentring",
-       false,
-       {2, 3}},
-      {Effect::kRationalDistortion,
-       "rational_distortion",
-       K::kDistortion,
-       0,
-       {"", ""},
-       {"", ""},
-       "OpenCV k4 k5 k6",
-       "wide-angle radial",
-       false,
-       {5, 6, 7}},
-      {Effect::kThinPrism,
-       "thin_prism",
-       K::kDistortion,
-       0,
-       {"", ""},
-       {"", ""},
-       "OpenCV s1..s4",
-       "thin prism",
-       false,
-       {8, 9, 10, 11}},
-      {Effect::kSensorTilt,
-       "sensor_tilt",
-       K::kDistortion,
-       0,
-       {"", ""},
-       {"", ""},
-       "OpenCV taux tauy",
-       "sensor tilt (Scheimpflug)",
-       false,
-       {12, 13}},
-  };
-}
-
-// Scale from SI to report units for a one-parameter effect or for the
-// amplitude of a polar pair.
-double ReportScale(Effect e) {
-  switch (e) {
-    case Effect::kHzScale:
-    case Effect::kVScale:
-    case Effect::kEdmScale:
-      return 1e6;
-    case Effect::kEdmOffset:
-    case Effect::kEdmCyclic:
-      return 1e3;
-    default:
-      return kArcsecPerRad;
+  std::vector<EffectInfo> out;
+  for (const EffectRow& r : kEffectRows) {
+    EffectInfo info{r.effect,
+                    r.name,
+                    r.kind,
+                    r.num_params,
+                    r.param_names,
+                    r.report_units,
+                    r.definition,
+                    r.signature,
+                    r.redundant_in_dh,
+                    r.needs,
+                    {}};
+    for (const DistortionCoefficient& c : kDistortionCoefficients) {
+      if (c.group == r.effect) info.distortion_indices.push_back(c.index);
+    }
+    out.push_back(std::move(info));
   }
+  return out;
 }
 
 }  // namespace
+
+double ReportScale(Effect e) {
+  const std::string_view unit = Info(e).report_units[0];
+  if (unit == "ppm") return 1e6;
+  if (unit == "mm") return 1e3;
+  // arcsec, and distortion groups (which have no report value of their own).
+  return kArcsecPerRad;
+}
 
 const std::vector<EffectInfo>& EffectCatalogue() {
   static const std::vector<EffectInfo> catalogue = MakeCatalogue();

@@ -1,58 +1,237 @@
 // The physical-effects catalogue (SPEC section 4, docs/effects.md).
 //
 // An effect is an optional, named model component with physical units. This
-// header is the one place that knows every effect: its name, its parameter
-// count and order, the conversion from SI (radians, metres, ratios) to report
-// units, and whether it is a kinematic, EDM or camera (distortion) effect.
-// The fit switches effects on and off only through `EffectSet`.
+// header is the one place that knows every effect: `RTSCALIB_EFFECT_LIST`
+// below is the one list from which the `Effect` enum, `kNumEffects`,
+// `kNumKinematicEffects`, the catalogue rows (name, parameter count and order,
+// report units and with them the SI -> report scale, kind, redundancy in `dh`,
+// the data that determine it) and the distortion groups' coefficients are all
+// derived. The fit switches effects on and off only through `EffectSet`; the
+// formulas live in libcalib/model/kinematics.h (kinematic effects) and
+// libcalib/camera/opencv_model.h (distortion groups).
 //
 // Parameterisation (chosen so that every effect is linear in its parameters at
 // zero and well conditioned when the effect is absent):
-//   collimation      [c]                     rad
-//   tilting_axis     [i]                     rad
-//   vertical_index   [v0]                    rad
-//   hz_eccentricity  [e cos(phi_e), e sin(phi_e)]      rad; e sin(phi - phi_e) = p0 sin(phi) - p1
-//   cos(phi) v_eccentricity   [e cos(theta_e), e sin(theta_e)]  rad; same form in theta hz_scale
-//   [s]                     ratio v_scale          [s]                     ratio axis_wobble [w
-//   cos(phi_w), w sin(phi_w)]      rad edm_offset       [k0]                    m edm_scale [m]
-//   ratio edm_cyclic       [A cos(psi), A sin(psi)]           m; A sin(2 pi d/U + psi) = p0 sin(.)
-//   + p1 cos(.) distortion groups: indices into OpenCV's 14 coefficients, per zoom.
+//   collimation      [c]                                rad
+//   tilting_axis     [i]                                rad
+//   vertical_index   [v0]                               rad
+//   hz_eccentricity  [e cos(phi_e), e sin(phi_e)]       rad
+//                    e sin(phi - phi_e) = p0 sin(phi) - p1 cos(phi)
+//   v_eccentricity   [e cos(theta_e), e sin(theta_e)]   rad; same form in theta
+//   hz_scale         [s]                                ratio
+//   v_scale          [s]                                ratio
+//   axis_wobble      [w cos(phi_w), w sin(phi_w)]       rad
+//   edm_offset       [k0]                               m
+//   edm_scale        [m]                                ratio
+//   edm_cyclic       [A cos(psi), A sin(psi)]           m
+//                    A sin(2 pi d/U + psi) = p0 sin(.) + p1 cos(.)
+//   distortion groups: coefficients of OpenCV's 14, per zoom
+//                    (RTSCALIB_DISTORTION_COEFFICIENTS).
 #pragma once
 
 #include <array>
 #include <bitset>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "libcalib/camera/opencv_model.h"
+
 namespace rtscalib {
 
-enum class Effect : int {
-  kCollimation = 0,
-  kTiltingAxis,
-  kVerticalIndex,
-  kHzEccentricity,
-  kVEccentricity,
-  kHzScale,
-  kVScale,
-  kAxisWobble,
-  kEdmOffset,
-  kEdmScale,
-  kEdmCyclic,
-  kRadialDistortion,
-  kTangentialDistortion,
-  kRationalDistortion,
-  kThinPrism,
-  kSensorTilt,
+// What data determine an effect (the diagnosis's advice when they are
+// missing, libcalib/diagnose/coverage.cc). Bits, reported in this order.
+enum DataNeed : unsigned {
+  kNeedNone = 0,
+  kNeedFullTurn = 1u << 0,       // pointings all around the horizon
+  kNeedSteepSights = 1u << 1,    // zenith angles near the zenith or nadir
+  kNeedWideZenith = 1u << 2,     // a wide range of zenith angles
+  kNeedBothFaces = 1u << 3,      // face 2 readings of the same pointings
+  kNeedEdm = 1u << 4,            // EDM records
+  kNeedLongDistances = 1u << 5,  // EDM distances over a wide ratio
+  kNeedFineDistances = 1u << 6,  // EDM distances finer than the cyclic unit
+  kNeedImageCorners = 1u << 7,   // camera observations reaching the image corners
 };
-constexpr int kNumEffects = 16;
-// Effects with a parameter block of their own (the rest live in the per-zoom
-// distortion block).
-constexpr int kNumKinematicEffects = 11;
-constexpr int kMaxEffectParams = 2;
+constexpr int kNumDataNeeds = 8;
+
+// clang-format off
+// THE effect list. One row per effect, kinematic and EDM effects first:
+//   X(enumerator, name, kind, num_params, param_names {p0, p1}, report_units {u0, u1},
+//     redundant_in_dh, needs, definition, signature)
+// Report units are "arcsec", "ppm" or "mm" for the (amplitude) parameter and
+// "deg" for a phase; they also fix the SI -> report scale (`ReportScale`).
+#define RTSCALIB_EFFECT_LIST(X)                                                                    \
+  X(kCollimation, "collimation", kAxis, 1, "c", "", "arcsec", "", true,                            \
+    kNeedSteepSights | kNeedBothFaces,                                                             \
+    "line of sight turned by c about the telescope's y axis (after the tilt about the trunnion "   \
+    "axis)",                                                                                       \
+    "dHz = +c/sin(z) face 1, -c/sin(z) face 2")                                                    \
+  X(kTiltingAxis, "tilting_axis", kAxis, 1, "i", "", "arcsec", "", true,                           \
+    kNeedSteepSights | kNeedBothFaces,                                                             \
+    "trunnion axis turned by i about the alidade's y axis (before the tilt)",                      \
+    "dHz = +i*cot(z) face 1, opposite face 2")                                                     \
+  X(kVerticalIndex, "vertical_index", kAngle, 1, "v0", "", "arcsec", "", true, kNeedBothFaces,     \
+    "theta* = theta + v0", "constant dz, flips sign with face")                                    \
+  X(kHzEccentricity, "hz_eccentricity", kAngle, 2, "e", "phi_e", "arcsec", "deg", false,           \
+    kNeedFullTurn, "phi* = phi + e*sin(phi - phi_e)", "once per turn in phi")                      \
+  X(kVEccentricity, "v_eccentricity", kAngle, 2, "e", "theta_e", "arcsec", "deg", false,           \
+    kNeedWideZenith | kNeedBothFaces, "theta* = theta + e*sin(theta - theta_e)",                   \
+    "once per turn in theta")                                                                      \
+  X(kHzScale, "hz_scale", kAngle, 1, "s", "", "ppm", "", false, kNeedFullTurn,                     \
+    "phi* = phi + s*phi", "grows with phi")                                                        \
+  X(kVScale, "v_scale", kAngle, 1, "s", "", "ppm", "", false, kNeedWideZenith | kNeedBothFaces,    \
+    "theta* = theta + s*theta", "grows with theta")                                                \
+  X(kAxisWobble, "axis_wobble", kAxis, 2, "w", "phi_w", "arcsec", "deg", false,                    \
+    kNeedFullTurn | kNeedSteepSights,                                                              \
+    "vertical axis tilted by Rx(w cos(phi-phi_w)) Ry(w sin(phi-phi_w)) before the phi rotation",   \
+    "once per turn tilt")                                                                          \
+  X(kEdmOffset, "edm_offset", kEdm, 1, "k0", "", "mm", "", true, kNeedEdm, "d* = d + k0",          \
+    "constant along the ray")                                                                      \
+  X(kEdmScale, "edm_scale", kEdm, 1, "m", "", "ppm", "", false, kNeedEdm | kNeedLongDistances,     \
+    "d* = d (1 + m)", "grows with d")                                                              \
+  X(kEdmCyclic, "edm_cyclic", kEdm, 2, "A", "psi", "mm", "deg", false,                             \
+    kNeedEdm | kNeedFineDistances, "d* = d + A sin(2 pi d / U + psi), U configured",               \
+    "periodic in d")                                                                               \
+  X(kRadialDistortion, "radial_distortion", kDistortion, 0, "", "", "", "", false,                 \
+    kNeedImageCorners, "OpenCV k1 k2 k3", "radial in the image")                                   \
+  X(kTangentialDistortion, "tangential_distortion", kDistortion, 0, "", "", "", "", false,         \
+    kNeedImageCorners, "OpenCV p1 p2", "decentring")                                               \
+  X(kRationalDistortion, "rational_distortion", kDistortion, 0, "", "", "", "", false,             \
+    kNeedImageCorners, "OpenCV k4 k5 k6", "wide-angle radial")                                     \
+  X(kThinPrism, "thin_prism", kDistortion, 0, "", "", "", "", false, kNeedImageCorners,            \
+    "OpenCV s1..s4", "thin prism")                                                                 \
+  X(kSensorTilt, "sensor_tilt", kDistortion, 0, "", "", "", "", false, kNeedImageCorners,          \
+    "OpenCV taux tauy", "sensor tilt (Scheimpflug)")
+
+// OpenCV's 14 distortion coefficients, in camera::DistortionIndex order, each
+// with the effect (distortion group) that owns it: X(name, camera index, group).
+#define RTSCALIB_DISTORTION_COEFFICIENTS(X)                                                        \
+  X("k1", camera::kK1, kRadialDistortion)                                                          \
+  X("k2", camera::kK2, kRadialDistortion)                                                          \
+  X("p1", camera::kP1, kTangentialDistortion)                                                      \
+  X("p2", camera::kP2, kTangentialDistortion)                                                      \
+  X("k3", camera::kK3, kRadialDistortion)                                                          \
+  X("k4", camera::kK4, kRationalDistortion)                                                        \
+  X("k5", camera::kK5, kRationalDistortion)                                                        \
+  X("k6", camera::kK6, kRationalDistortion)                                                        \
+  X("s1", camera::kS1, kThinPrism)                                                                 \
+  X("s2", camera::kS2, kThinPrism)                                                                 \
+  X("s3", camera::kS3, kThinPrism)                                                                 \
+  X("s4", camera::kS4, kThinPrism)                                                                 \
+  X("taux", camera::kTauX, kSensorTilt)                                                            \
+  X("tauy", camera::kTauY, kSensorTilt)
+// clang-format on
+
+enum class Effect : int {
+#define RTSCALIB_EFFECT_ENUMERATOR(id, ...) id,
+  RTSCALIB_EFFECT_LIST(RTSCALIB_EFFECT_ENUMERATOR)
+#undef RTSCALIB_EFFECT_ENUMERATOR
+};
 
 enum class EffectKind { kAngle, kAxis, kEdm, kDistortion };
+
+// The list as a constexpr table (compile-time checks below; EffectInfo adds
+// the derived distortion coefficients at run time).
+struct EffectRow {
+  Effect effect;
+  const char* name;
+  EffectKind kind;
+  int num_params;
+  std::array<const char*, 2> param_names;
+  std::array<const char*, 2> report_units;
+  bool redundant_in_dh;
+  unsigned needs;  // DataNeed bits
+  const char* definition;
+  const char* signature;
+};
+inline constexpr EffectRow kEffectRows[] = {
+#define RTSCALIB_EFFECT_ROW(id, name, kind, n, p0, p1, u0, u1, dh, needs, def, sig) \
+  {Effect::id, name, EffectKind::kind, n, {p0, p1}, {u0, u1}, dh, needs, def, sig},
+    RTSCALIB_EFFECT_LIST(RTSCALIB_EFFECT_ROW)
+#undef RTSCALIB_EFFECT_ROW
+};
+constexpr int kNumEffects = static_cast<int>(std::size(kEffectRows));
+
+struct DistortionCoefficient {
+  const char* name;
+  int index;     // camera::DistortionIndex
+  Effect group;  // the distortion effect that owns it
+};
+inline constexpr DistortionCoefficient kDistortionCoefficients[] = {
+#define RTSCALIB_DISTORTION_ROW(name, index, group) {name, index, Effect::group},
+    RTSCALIB_DISTORTION_COEFFICIENTS(RTSCALIB_DISTORTION_ROW)
+#undef RTSCALIB_DISTORTION_ROW
+};
+
+// The coefficients' names ("k1" ... "tauy"), in camera::DistortionIndex order.
+inline constexpr const char* kDistortionCoefficientNames[] = {
+#define RTSCALIB_DISTORTION_NAME(name, index, group) name,
+    RTSCALIB_DISTORTION_COEFFICIENTS(RTSCALIB_DISTORTION_NAME)
+#undef RTSCALIB_DISTORTION_NAME
+};
+
+namespace effects_internal {
+constexpr int CountKinematic() {
+  int n = 0;
+  for (const EffectRow& r : kEffectRows) n += r.kind != EffectKind::kDistortion;
+  return n;
+}
+constexpr bool Same(const char* a, const char* b) {
+  while (*a && *a == *b) ++a, ++b;
+  return *a == *b;
+}
+// Rows in enum order, kinematic effects first, parameter counts and report
+// units consistent with the kind.
+constexpr bool RowsConsistent() {
+  bool distortion_seen = false;
+  for (int i = 0; i < static_cast<int>(std::size(kEffectRows)); ++i) {
+    const EffectRow& r = kEffectRows[i];
+    if (static_cast<int>(r.effect) != i) return false;
+    const bool distortion = r.kind == EffectKind::kDistortion;
+    if (distortion_seen && !distortion) return false;
+    distortion_seen = distortion_seen || distortion;
+    if (distortion != (r.num_params == 0)) return false;
+    if (!distortion && !Same(r.report_units[0], "arcsec") && !Same(r.report_units[0], "ppm") &&
+        !Same(r.report_units[0], "mm"))
+      return false;
+    if (r.num_params == 2 && !Same(r.report_units[1], "deg")) return false;
+    if (r.needs == kNeedNone || r.needs >= (1u << kNumDataNeeds)) return false;
+  }
+  return true;
+}
+constexpr bool CoefficientsConsistent() {
+  for (int i = 0; i < static_cast<int>(std::size(kDistortionCoefficients)); ++i) {
+    const DistortionCoefficient& c = kDistortionCoefficients[i];
+    if (c.index != i) return false;
+    if (kEffectRows[static_cast<int>(c.group)].kind != EffectKind::kDistortion) return false;
+  }
+  // Every distortion group owns at least one coefficient.
+  for (const EffectRow& r : kEffectRows) {
+    if (r.kind != EffectKind::kDistortion) continue;
+    bool owns = false;
+    for (const DistortionCoefficient& c : kDistortionCoefficients)
+      owns = owns || c.group == r.effect;
+    if (!owns) return false;
+  }
+  return true;
+}
+}  // namespace effects_internal
+
+// Effects with a parameter block of their own (the rest live in the per-zoom
+// distortion block).
+constexpr int kNumKinematicEffects = effects_internal::CountKinematic();
+constexpr int kMaxEffectParams = 2;
+
+static_assert(effects_internal::RowsConsistent(),
+              "RTSCALIB_EFFECT_LIST: rows out of enum order, a distortion group before a "
+              "kinematic effect, or parameter count / report units / needs not matching the kind");
+static_assert(static_cast<int>(std::size(kDistortionCoefficients)) == camera::kNumDistortion,
+              "RTSCALIB_DISTORTION_COEFFICIENTS must name all of OpenCV's coefficients");
+static_assert(effects_internal::CoefficientsConsistent(),
+              "RTSCALIB_DISTORTION_COEFFICIENTS: out of camera::DistortionIndex order, owned by a "
+              "kinematic effect, or a distortion group owning no coefficient");
 
 struct EffectInfo {
   Effect effect;
@@ -66,8 +245,9 @@ struct EffectInfo {
   // True when, in the `dh` kinematics, the DH links and free tool transforms
   // already contain this effect (SPEC section 4).
   bool redundant_in_dh;
-  // Distortion coefficients this group owns (indices into k1 k2 p1 p2 k3 k4 k5
-  // k6 s1 s2 s3 s4 taux tauy); empty for kinematic effects.
+  unsigned needs;  // DataNeed bits
+  // Distortion coefficients this group owns (indices into
+  // kDistortionCoefficients); empty for kinematic effects.
   std::vector<int> distortion_indices;
 };
 
@@ -76,6 +256,12 @@ const EffectInfo& Info(Effect e);
 std::optional<Effect> EffectFromName(std::string_view name);
 inline bool IsKinematic(Effect e) { return static_cast<int>(e) < kNumKinematicEffects; }
 inline bool IsDistortion(Effect e) { return !IsKinematic(e); }
+
+// The distortion group (effect) that owns coefficient `index`.
+inline Effect DistortionGroupOf(int index) { return kDistortionCoefficients[index].group; }
+// Scale from SI to report units of an effect's (amplitude) parameter: 206265
+// arcsec/rad, 1e6 ppm, 1e3 mm/m, from its first report unit.
+double ReportScale(Effect e);
 
 // Parameters of one effect in report units (arcsec, mm, ppm, degrees), polar
 // pairs converted to amplitude and phase.

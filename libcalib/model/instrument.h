@@ -41,9 +41,14 @@ struct PoseBlock {
 };
 
 enum DhIndex { kDhD = 0, kDhGamma = 1, kDhAlpha = 2, kDhA = 3 };
+// Parameter names (model.yaml keys, column names of the fit) in DhIndex order.
+inline constexpr const char* kDhParamNames[] = {"d", "gamma_offset", "alpha", "a"};
 struct DhLink {
   std::array<double, 4> p{0, 0, 0, 0};  // d, gamma_offset, alpha, a
 };
+
+// Intrinsics names in storage order fx, fy, cx, cy (model.yaml keys, column names).
+inline constexpr const char* kIntrinsicsParamNames[camera::kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
 
 struct CameraTool {
   PoseBlock flange_from_cam;

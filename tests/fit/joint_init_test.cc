@@ -33,6 +33,18 @@ double MaxCamDifference(const InstrumentModel& a, const InstrumentModel& b, int 
   return worst;
 }
 
+// The camera layer's OpenCV groups free exactly the coefficients the effect
+// catalogue gives each distortion group.
+TEST(DistortionGroupsOf, FreesTheCataloguesCoefficients) {
+  for (const EffectInfo& info : EffectCatalogue()) {
+    if (!IsDistortion(info.effect)) continue;
+    EffectSet one;
+    one.Add(info.effect);
+    EXPECT_EQ(DistortionGroupsOf(one).FreeCoefficients(), info.distortion_indices) << info.name;
+  }
+  EXPECT_TRUE(DistortionGroupsOf(EffectSet()).FreeCoefficients().empty());
+}
+
 TEST(DhFromSpherical, PredictsLikeTheSphericalModel) {
   InstrumentModel s = IdealModel(Kinematics::kSpherical, 2, CameraTool{});
   s.base = PoseBlock::FromRigid(Rigid3::FromEuler({0.01, -0.02, 1.3}, {1.0, -2.0, 0.4}));

@@ -1,0 +1,303 @@
+#include "libcalib/fit/parameterization.h"
+
+#include <ceres/problem.h>
+
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <tuple>
+
+#include "libcalib/eval/error_measures.h"
+
+namespace rtscalib {
+
+bool ContainedInKinematics(Kinematics kinematics, Effect e) {
+  return kinematics == Kinematics::kDh && Info(e).redundant_in_dh;
+}
+
+std::vector<Effect> RemoveContainedEffects(InstrumentModel* model) {
+  std::vector<Effect> removed;
+  for (Effect e : model->effects.List()) {
+    if (ContainedInKinematics(model->kinematics, e)) {
+      model->effects.Remove(e);
+      removed.push_back(e);
+    }
+  }
+  return removed;
+}
+
+namespace {
+
+// Names of the columns of translations and rotations.
+const char* const kAxes[] = {"x", "y", "z"};
+
+BlockDecision Decision(double* p, BlockKind kind, const std::string& name, int size,
+                       std::vector<int> frozen = {}) {
+  BlockDecision d;
+  d.block = p;
+  d.kind = kind;
+  d.name = name;
+  d.size = size;
+  d.frozen = std::move(frozen);
+  return d;
+}
+
+FreeColumn Column(const std::string& name, std::optional<Effect> effect, int index) {
+  FreeColumn c;
+  c.name = name;
+  c.effect = effect;
+  c.index = index;
+  return c;
+}
+
+// A rotation block: its tangent columns are rotations about the local axes.
+BlockDecision Rotation(double* q, const std::string& name, BlockKind kind) {
+  BlockDecision d = Decision(q, kind, name + ".rotation", 4);
+  const int tangent = kind == BlockKind::kQuaternion ? 3 : kind == BlockKind::kNoRoll ? 2 : 0;
+  for (int i = 0; i < tangent; ++i) {
+    d.columns.push_back(Column(name + ".rotation[" + kAxes[i] + "]", std::nullopt, i));
+  }
+  return d;
+}
+
+// A Euclidean block (free, held or a subset): one column per ambient index
+// that is not held, named `prefix + names[i] + suffix`.
+BlockDecision Euclidean(double* p, const std::string& name, BlockKind kind, int size,
+                        std::vector<int> frozen, const std::string& prefix,
+                        const char* const* names, const std::string& suffix) {
+  BlockDecision d = Decision(p, kind, name, size, std::move(frozen));
+  if (kind == BlockKind::kConstant) return d;
+  for (int i = 0; i < size; ++i) {
+    bool held = false;
+    for (int f : d.frozen) held = held || f == i;
+    if (!held) d.columns.push_back(Column(prefix + names[i] + suffix, std::nullopt, i));
+  }
+  return d;
+}
+
+// A translation: free (or a subset), with Klug Eq. 98's window around its
+// value at decision time.
+BlockDecision Translation(double* t, const std::string& name, std::vector<int> frozen) {
+  const BlockKind kind = frozen.empty() ? BlockKind::kFree : BlockKind::kSubset;
+  BlockDecision d = Euclidean(t, name + ".t", kind, 3, std::move(frozen), name + ".t[", kAxes, "]");
+  // Refine bounded only fully free translations (the spherical EDM's t_z is
+  // held, its x, y need no window).
+  if (kind == BlockKind::kFree) d.bound_centre.assign(t, t + 3);
+  return d;
+}
+
+}  // namespace
+
+Parameterization::Parameterization(InstrumentModel* model, const FitOptions& options)
+    : translation_bound_m_(options.translation_bound_m) {
+  InstrumentModel& m = *model;
+  const bool dh = m.kinematics == Kinematics::kDh;
+  Add(Rotation(m.base.q.data(), "base", BlockKind::kQuaternion));
+  Add(Translation(m.base.t.data(), "base", {}));
+  if (dh) {
+    Add(Euclidean(m.links[0].p.data(), "link1", BlockKind::kSubset, 4, {kDhD, kDhGamma}, "link1.",
+                  kDhParamNames, ""));
+    Add(Euclidean(m.links[1].p.data(), "link2", BlockKind::kConstant, 4, {}, "", kDhParamNames,
+                  ""));
+    fixed_gauges_.push_back(
+        "link1.d and link1.gamma_offset held at their start values (equivalent to base "
+        "translation along and rotation about axis 1)");
+    fixed_gauges_.push_back(
+        "link2 {d, gamma_offset, alpha, a} held (the EDM and camera tool transforms absorb them)");
+    Add(Rotation(m.edm.q.data(), "edm", BlockKind::kNoRoll));
+    fixed_gauges_.push_back(
+        "EDM roll about its ray held at the extraction's convention (Klug Eq. 79)");
+    Add(Translation(m.edm.t.data(), "edm", {}));
+  } else {
+    // Spherical: the EDM ray is the line of sight; its offset along the ray
+    // is edm_offset's job.
+    Add(Rotation(m.edm.q.data(), "edm", BlockKind::kConstant));
+    Add(Translation(m.edm.t.data(), "edm", {2}));
+    fixed_gauges_.push_back(
+        "spherical: EDM rotation is the line of sight (held); EDM t_z held (edm_offset models it)");
+  }
+
+  // Distortion coefficients are free exactly when an enabled group owns them.
+  std::vector<int> frozen_distortion;
+  for (int i = 0; i < camera::kNumDistortion; ++i) {
+    if (!m.effects.Has(DistortionGroupOf(i))) frozen_distortion.push_back(i);
+  }
+  for (int z = 0; z < m.NumZooms(); ++z) {
+    CameraTool& cam = m.cams[z];
+    const std::string zs = "cam[" + std::to_string(z) + "]";
+    auto per_zoom = [z](BlockDecision d) {
+      for (FreeColumn& c : d.columns) c.zoom = z;
+      return d;
+    };
+    Add(per_zoom(Rotation(cam.flange_from_cam.q.data(), zs, BlockKind::kQuaternion)));
+    Add(per_zoom(Translation(cam.flange_from_cam.t.data(), zs, {})));
+    Add(per_zoom(Euclidean(cam.intrinsics.data(), zs + ".intrinsics",
+                           options.fit_intrinsics ? BlockKind::kFree : BlockKind::kConstant,
+                           camera::kNumIntrinsics, {}, zs + ".", kIntrinsicsParamNames, "")));
+    BlockDecision dist = per_zoom(Euclidean(
+        cam.distortion.data(), zs + ".distortion", BlockKind::kSubset, camera::kNumDistortion,
+        frozen_distortion, zs + ".", kDistortionCoefficientNames, ""));
+    for (FreeColumn& c : dist.columns) c.effect = DistortionGroupOf(c.index);
+    Add(std::move(dist));
+  }
+  for (Effect e : m.effects.List()) {
+    if (!IsKinematic(e)) continue;
+    const EffectInfo& info = Info(e);
+    BlockDecision d =
+        Decision(m.EffectValue(e).data(), BlockKind::kFree, info.name, info.num_params);
+    for (int k = 0; k < info.num_params; ++k) {
+      d.columns.push_back(Column(std::string(info.name) + "[" + std::to_string(k) + "]", e, k));
+    }
+    Add(std::move(d));
+  }
+}
+
+void Parameterization::Add(BlockDecision d) {
+  if (d.kind == BlockKind::kSubset && static_cast<int>(d.frozen.size()) == d.size) {
+    d.kind = BlockKind::kConstant;
+  }
+  if (d.kind == BlockKind::kConstant) d.columns.clear();
+  blocks_.push_back(std::move(d));
+}
+
+const BlockDecision* Parameterization::Find(const double* block) const {
+  for (const BlockDecision& d : blocks_) {
+    if (d.block == block) return &d;
+  }
+  return nullptr;
+}
+
+int Parameterization::ActiveSize(const BlockLayout& layout) const {
+  int n = 0;
+  for (size_t i = 0; i < layout.blocks.size(); ++i) {
+    const BlockDecision* d = Find(layout.blocks[i]);
+    if (!d || d->kind != BlockKind::kConstant) n += layout.sizes[i];
+  }
+  return n;
+}
+
+std::vector<const BlockDecision*> Parameterization::Apply(ceres::Problem* problem,
+                                                          bool with_bounds) const {
+  std::vector<const BlockDecision*> free;
+  for (const BlockDecision& d : blocks_) {
+    if (!problem->HasParameterBlock(d.block)) continue;
+    ParameterizeBlock(problem, d.block, d.kind, d.size, d.frozen);
+    // Klug Eq. 98: |t| <= t_max, applied as a window around the start value
+    // (the extraction is good to a fraction of it), so that a station far
+    // from the origin stays admissible.
+    if (with_bounds && !d.bound_centre.empty() && translation_bound_m_ > 0) {
+      for (int i = 0; i < d.size; ++i) {
+        problem->SetParameterLowerBound(d.block, i, d.bound_centre[i] - translation_bound_m_);
+        problem->SetParameterUpperBound(d.block, i, d.bound_centre[i] + translation_bound_m_);
+      }
+    }
+    if (d.kind != BlockKind::kConstant) free.push_back(&d);
+  }
+  return free;
+}
+
+std::vector<std::string> Parameterization::OutsideBounds() const {
+  std::vector<std::string> out;
+  if (translation_bound_m_ <= 0) return out;
+  for (const BlockDecision& d : blocks_) {
+    for (size_t i = 0; i < d.bound_centre.size(); ++i) {
+      if (std::abs(d.block[i] - d.bound_centre[i]) > translation_bound_m_) {
+        out.push_back(d.name);
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+UsedRows SelectRows(const Observations& obs, const FitOptions& options, int num_zooms,
+                    UnknownZoom unknown_zoom) {
+  UsedRows rows;
+  // Returns whether the row's zoom has a camera; throws for kThrow.
+  auto known = [&](int zoom, const std::string& source, int line) {
+    if (zoom >= 0 && zoom < num_zooms) return true;
+    if (unknown_zoom == UnknownZoom::kSkip) return false;
+    throw std::invalid_argument(source + ":" + std::to_string(line) + ": zoom " +
+                                std::to_string(zoom) + " has no camera in the model");
+  };
+  for (size_t i = 0; i < obs.records.size(); ++i) {
+    const Record& r = obs.records[i];
+    if (InCriticalRegion(r.theta, options.min_zenith_rad, options.max_zenith_rad)) {
+      ++rows.excluded_critical;
+      continue;
+    }
+    if (r.tool == Tool::kCam && !known(r.zoom, obs.records_source, r.line)) continue;
+    rows.records.push_back(static_cast<int>(i));
+  }
+  for (size_t i = 0; i < obs.pixels.size(); ++i) {
+    const PixelObservation& p = obs.pixels[i];
+    if (InCriticalRegion(p.theta, options.min_zenith_rad, options.max_zenith_rad)) {
+      ++rows.excluded_critical;
+      continue;
+    }
+    if (!known(p.zoom, obs.pixels_source, p.line)) continue;
+    rows.pixels.push_back(static_cast<int>(i));
+  }
+  return rows;
+}
+
+std::vector<ObservationGroup> GroupObservations(const Observations& obs, const UsedRows& rows,
+                                                bool one_per_observation) {
+  std::vector<ObservationGroup> groups;
+  std::map<std::tuple<bool, int, double, double>, int> record_index;
+  for (int i : rows.records) {
+    const Record& r = obs.records[i];
+    const bool edm = r.tool == Tool::kEdm;
+    const int zoom = edm ? -1 : r.zoom;
+    const auto key = std::make_tuple(edm, zoom, r.phi, r.theta);
+    auto it = record_index.find(key);
+    if (one_per_observation || it == record_index.end()) {
+      record_index[key] = static_cast<int>(groups.size());
+      groups.push_back(
+          {edm ? ObsGroup::kEdm : ObsGroup::kCam, zoom, r.phi, r.theta, r.face, {i}, ""});
+    } else {
+      groups[it->second].indices.push_back(i);
+    }
+  }
+  std::map<std::tuple<std::string, int, double, double>, int> shot_index;
+  for (int i : rows.pixels) {
+    const PixelObservation& p = obs.pixels[i];
+    const auto key = std::make_tuple(p.shot, p.zoom, p.phi, p.theta);
+    auto it = shot_index.find(key);
+    if (one_per_observation || it == shot_index.end()) {
+      shot_index[key] = static_cast<int>(groups.size());
+      groups.push_back({ObsGroup::kPixel, p.zoom, p.phi, p.theta, p.face, {i}, p.shot});
+    } else {
+      groups[it->second].indices.push_back(i);
+    }
+  }
+  return groups;
+}
+
+ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGroup& g,
+                                   double inv_sigma, const Parameterization& param,
+                                   InstrumentModel* model, std::vector<double*>* blocks) {
+  if (g.kind == ObsGroup::kPixel) {
+    auto* f = new ShotResidual;
+    f->layout = LayoutFor(model, g.zoom);
+    f->phi = g.phi;
+    f->theta = g.theta;
+    f->inv_sigma = inv_sigma;
+    for (int i : g.indices) f->points.push_back({obs.pixels[i].X, obs.pixels[i].uv});
+    *blocks = f->layout.blocks;
+    return MakeCost(f, 2 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
+  }
+  auto* f = new RecordGroupResidual;
+  f->layout = LayoutFor(model, g.zoom);
+  f->edm = g.kind == ObsGroup::kEdm;
+  f->phi = g.phi;
+  f->theta = g.theta;
+  for (int i : g.indices) {
+    const Record& r = obs.records[i];
+    f->rows.push_back({r.u, r.v, r.d, r.x, inv_sigma});
+  }
+  *blocks = f->layout.blocks;
+  return MakeCost(f, 3 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
+}
+
+}  // namespace rtscalib
