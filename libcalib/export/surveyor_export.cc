@@ -17,7 +17,6 @@ constexpr const char* kNotAvailable = "sigma not available";
 bool UsableSigma(double s) { return std::isfinite(s) && s > 0.0; }
 
 // Report-unit scale of a one-parameter effect (value per SI unit).
-double ReportScale(Effect e) { return ToReportUnits(e, {1.0, 0.0}, {0, 0, 0, 0}).value[0]; }
 
 // The four terms a dh model holds in its links and tools.
 constexpr Effect kDhTerms[4] = {Effect::kCollimation, Effect::kTiltingAxis, Effect::kVerticalIndex,
