@@ -402,7 +402,6 @@ Start PoseShots(const Init& init, const std::vector<Shot>& shots) {
 // Jacobians (autodiff through the templated ProjectToPixel).
 
 // Reprojection residuals of one shot, ProjectToPixel(cam_from_ref * X) - uv
-// (as internal::ProjectWithTilt, cost_functions.h)
 // [px], two per point (u, v), over the parameter blocks
 //   intrinsics(4)  distortion(14)  cam_from_ref_q(4)  cam_from_ref_t(3)
 // (opencv_model.h order; the rotation a unit quaternion in Eigen order
@@ -415,11 +414,13 @@ struct ShotReprojection {
                   const T* cam_from_ref_t, T* residuals) const {
     const RigidT<T> cam_from_ref = PoseFromBlocks(cam_from_ref_q, cam_from_ref_t);
     // ProjectToPixel with its tilt matrix, which depends on the distortion
-    // block only, formed once per shot instead of once per point.
+    // block only, formed once per shot instead of once per point
+    // (internal::ProjectWithTilt, cost_functions.h; the same formula).
     T tilt[9];
     camera::TiltMatrix(distortion[camera::kTauX], distortion[camera::kTauY], tilt);
     for (size_t i = 0; i < shot->X.size(); ++i) {
-      const Vec3<T> x_cam = cam_from_ref * shot->X[i].cast<T>();
+      // Jet times double: the reference point carries no derivative.
+      const Vec3<T> x_cam = cam_from_ref.R * shot->X[i] + cam_from_ref.t;
       T pixel[2];
       // Behind the camera: the evaluation fails and Ceres rejects the step.
       if (!internal::ProjectWithTilt(intrinsics, distortion, tilt, x_cam.data(), pixel)) {
@@ -435,8 +436,8 @@ struct ShotReprojection {
 constexpr int kQuaternionSize = 4;
 constexpr int kTranslationSize = 3;
 
-// The one place a shot's cost function is made (the refinement and the
-// final per-shot RMS both evaluate it).
+// The one place a shot's cost function is made (the final per-shot RMS
+// evaluates the same functor in double).
 ceres::CostFunction* MakeShotCost(const Shot& shot) {
   return new ceres::AutoDiffCostFunction<ShotReprojection, ceres::DYNAMIC, kNumIntrinsics,
                                          kNumDistortion, kQuaternionSize, kTranslationSize>(
