@@ -468,13 +468,16 @@ struct State {
 };
 
 // Ceres's tolerances are relative; CalibrateViewsOptions::rms_tolerance_px is
-// an absolute RMS [px]. Stops once `in_a_row` accepted steps in a row have
-// each improved sqrt(mean(du^2 + dv^2)) by less.
+// an absolute RMS [px]. Stops (converged) once `in_a_row` accepted steps in a
+// row have each improved sqrt(mean(du^2 + dv^2)) by less, and gives up (not
+// converged) once no damping up to 1e16 (trust region radius 1e-16) gives
+// descent, where Ceres would go on to its own limit of 1e-32.
 class RmsTolerance : public ceres::IterationCallback {
  public:
   RmsTolerance(int num_points, double tolerance_px, int in_a_row)
       : num_points_(num_points), tolerance_px_(tolerance_px), in_a_row_(in_a_row) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (s.trust_region_radius < 1e-16) return ceres::SOLVER_ABORT;
     if (s.iteration == 0 || !s.step_is_successful) return ceres::SOLVER_CONTINUE;
     // Ceres's cost is half the sum of squared residuals.
     const double before = std::sqrt(2.0 * (s.cost + s.cost_change) / num_points_);
