@@ -477,6 +477,7 @@ class RmsTolerance : public ceres::IterationCallback {
   RmsTolerance(int num_points, double tolerance_px, int in_a_row)
       : num_points_(num_points), tolerance_px_(tolerance_px), in_a_row_(in_a_row) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    trust_region_radius_ = s.trust_region_radius;
     if (s.trust_region_radius < 1e-16) return ceres::SOLVER_ABORT;
     if (s.iteration == 0 || !s.step_is_successful) return ceres::SOLVER_CONTINUE;
     // Ceres's cost is half the sum of squared residuals.
@@ -486,12 +487,14 @@ class RmsTolerance : public ceres::IterationCallback {
     return small_steps_ >= in_a_row_ ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
                                      : ceres::SOLVER_CONTINUE;
   }
+  double trust_region_radius() const { return trust_region_radius_; }
 
  private:
   int num_points_;
   double tolerance_px_;
   int in_a_row_;
   int small_steps_ = 0;
+  double trust_region_radius_ = 0;
 };
 
 // Converged: Ceres met a tolerance or the RMS criterion within
@@ -500,7 +503,6 @@ class RmsTolerance : public ceres::IterationCallback {
 void Refine(const std::vector<Shot>& shots, const std::vector<int>& free,
             const CalibrateViewsOptions& options, int num_points, State* s, int* iterations,
             bool* converged) {
-  const bool rational = options.distortion.rational;
   ceres::Problem problem;
   for (size_t k = 0; k < shots.size(); ++k) {
     State::Pose& pose = s->cam_from_ref[k];
@@ -519,18 +521,11 @@ void Refine(const std::vector<Shot>& shots, const std::vector<int>& free,
   ParameterizeBlock(&problem, s->distortion.data(), distortion_kind, kNumDistortion, frozen);
 
   ceres::Solver::Options so;
-  // With the rational group, k1..k3 and k4..k6 are nearly redundant over an
-  // image (smallest singular value of the scaled camera Jacobian ~7e-9 in
-  // the tests' scene, cond(J) ~4e8): the normal equations, which Ceres's
-  // Schur solvers factor, square that beyond double precision (radial +
-  // rational stalls at 3e-12 px with k1 4e-6 off), so the orthogonal dense
-  // QR of the Jacobi-scaled Jacobian is used. Without it the Schur
-  // complement over the camera block is as accurate and 10-50x faster.
-  so.linear_solver_type = rational ? ceres::DENSE_QR : ceres::DENSE_SCHUR;
   // OpenCV's start is close: begin near Gauss-Newton (failed steps shrink
   // the region fast). The damping must be able to fall below sigma_min^2
-  // ~4e-17 of that scaled Jacobian; Ceres's default largest radius (1e16)
-  // would hold it above and turn Gauss-Newton into a creep along k1..k6.
+  // ~4e-17 of the scaled Jacobian of the rational model (below); Ceres's
+  // default largest radius (1e16) would hold it above and turn Gauss-Newton
+  // into a creep along k1..k6.
   so.initial_trust_region_radius = 1e16;
   so.max_trust_region_radius = 1e30;
   so.max_num_iterations = options.max_iterations;
@@ -540,15 +535,45 @@ void Refine(const std::vector<Shot>& shots, const std::vector<int>& free,
   so.parameter_tolerance = 1e-13;
   so.gradient_tolerance = 0.0;
   so.logging_type = ceres::SILENT;
-  // With the rational group, the first step that no longer improves the
-  // RMS has reached the RMS floor but not the solution along k1..k6 (k1 still
-  // ~3e-7 off, ~1e-13 px in the tests' scene); the full Gauss-Newton step
-  // after it settles that direction, so two small steps in a row are needed.
-  RmsTolerance rms_tolerance(num_points, options.rms_tolerance_px, rational ? 2 : 1);
-  so.callbacks.push_back(&rms_tolerance);
+  // The Schur complement over the camera block (the normal equations after
+  // eliminating each shot's pose) is fast and, without the rational group,
+  // as accurate as an orthogonal solve.
+  so.linear_solver_type = ceres::DENSE_SCHUR;
+  const bool rational = options.distortion.rational;
+  // With the rational group, k1..k3 and k4..k6 are nearly redundant over an
+  // image (smallest singular value of the scaled camera Jacobian ~7e-9 in
+  // the tests' scene, cond(J) ~4e8): the normal equations square that beyond
+  // double precision, and Schur steps stall at ~3e-12 px with k1 ~4e-6 off.
+  // They only take the RMS down to where its improvements fall below
+  // kSchurHandoverPx, far above the rounding floor (~1e-13 px) so that the
+  // trust region still sees the cost decrease of the steps that follow;
+  // the dense QR of the Jacobi-scaled Jacobian, an orthogonal solve,
+  // finishes from there.
+  constexpr double kSchurHandoverPx = 1e-6;
+  RmsTolerance schur_tolerance(
+      num_points,
+      rational ? std::max(kSchurHandoverPx, options.rms_tolerance_px) : options.rms_tolerance_px,
+      1);
+  so.callbacks = {&schur_tolerance};
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   *iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  if (rational && *iterations < options.max_iterations) {
+    // The first QR step that no longer improves the RMS has reached the RMS
+    // floor but not yet settled k1..k6 (k1 ~3e-7 off, ~1e-13 px in the
+    // tests' scene); the full Gauss-Newton step after it has, so two small
+    // steps in a row are required.
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = options.max_iterations - *iterations;
+    // Continue with the damping the Schur steps ended with: restarting at
+    // 1e16 would creep along k1..k6 again.
+    so.initial_trust_region_radius =
+        std::max(so.initial_trust_region_radius, schur_tolerance.trust_region_radius());
+    RmsTolerance qr_tolerance(num_points, options.rms_tolerance_px, 2);
+    so.callbacks = {&qr_tolerance};
+    ceres::Solve(so, &problem, &summary);
+    *iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+  }
   *converged = summary.termination_type == ceres::CONVERGENCE ||
                summary.termination_type == ceres::USER_SUCCESS;
 }

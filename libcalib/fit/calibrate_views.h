@@ -25,9 +25,10 @@
 //      most shots, then with the lowest RMS, is kept.
 //   4. Ceres's Levenberg-Marquardt refines intrinsics, the enabled
 //      distortion groups and every shot's pose in double precision, with
-//      autodiff through the project's own ProjectToPixel and a dense QR solve
-//      (each shot's rotation a unit quaternion on its manifold, the disabled
-//      coefficients held at zero by a subset manifold). OpenCV works in float
+//      autodiff through the project's own ProjectToPixel (each shot's
+//      rotation a unit quaternion on its manifold, the disabled coefficients
+//      held at zero by a subset manifold); dense Schur solves, finished by
+//      dense QR ones with the nearly redundant rational group. OpenCV works in float
 //      object/image points, which limits it to ~1e-5 px; the result here is
 //      consistent with opencv_model.h to rounding.
 //
