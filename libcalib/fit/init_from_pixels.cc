@@ -68,13 +68,13 @@ std::map<int, std::vector<PixelObservation>> ByZoom(const std::vector<PixelObser
   return out;
 }
 
-camera::CalibrateViewsOptions ViewsOptions(const InitFromPixelsOptions& o) {
-  camera::CalibrateViewsOptions v;
+CalibrateViewsOptions ViewsOptions(const InitFromPixelsOptions& o) {
+  CalibrateViewsOptions v;
   v.distortion = o.distortion;
   return v;
 }
 
-std::string Describe(const camera::ViewsCalibration& v) {
+std::string Describe(const ViewsCalibration& v) {
   std::ostringstream s;
   s << "zoom " << v.zoom << ": OpenCV start from " << v.shots.size() << " shots, " << v.num_points
     << " points, rms " << v.rms_px << " px, fx " << v.intrinsics[0] << " fy " << v.intrinsics[1]
@@ -96,14 +96,14 @@ std::string InitFromPixelsOptions::Check() const {
   return "";
 }
 
-// camera::DistortionGroups is the camera layer's own closed set of OpenCV
-// groups (it does not know the effect catalogue); this is the one mapping,
+// DistortionGroups (calibrate_views.h) is CalibrateViews' own closed set of
+// OpenCV groups (it does not know the effect catalogue); this is the one mapping,
 // checked against the catalogue's coefficients in tests/fit/joint_init_test.cc.
 static_assert(kNumEffects - kNumKinematicEffects == 5,
               "a distortion group was added to the effect catalogue: map it here and in "
-              "camera::DistortionGroups");
-camera::DistortionGroups DistortionGroupsOf(const EffectSet& effects) {
-  camera::DistortionGroups g;
+              "DistortionGroups");
+DistortionGroups DistortionGroupsOf(const EffectSet& effects) {
+  DistortionGroups g;
   g.radial = effects.Has(Effect::kRadialDistortion);
   g.tangential = effects.Has(Effect::kTangentialDistortion);
   g.rational = effects.Has(Effect::kRationalDistortion);
@@ -161,14 +161,12 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
   std::vector<PosedShot> shots;
   for (const auto& [zoom, obs] : zooms) {
     CameraTool cam = SizeFor(options, zoom, obs, &result.notes);
-    camera::ViewsCalibration v =
-        camera::CalibrateViews(obs, cam.width, cam.height, ViewsOptions(options));
+    ViewsCalibration v = CalibrateViews(obs, cam.width, cam.height, ViewsOptions(options));
     result.notes.push_back(Describe(v));
     cam.intrinsics = v.intrinsics;
     cam.distortion = v.distortion;
     m.cams[zoom] = cam;
-    for (const camera::ShotPose& s : v.shots)
-      shots.push_back({zoom, s.phi, s.theta, s.ref_from_cam});
+    for (const ShotPose& s : v.shots) shots.push_back({zoom, s.phi, s.theta, s.ref_from_cam});
     result.views[zoom] = std::move(v);
   }
   for (int z = 0; z < num_zooms; ++z) {
@@ -288,14 +286,14 @@ std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation
                                 " has no pixel observations outside the critical region");
   }
   CameraTool cam = SizeFor(options, zoom, it->second, &notes);
-  const camera::ViewsCalibration v =
-      camera::CalibrateViews(it->second, cam.width, cam.height, ViewsOptions(options));
+  const ViewsCalibration v =
+      CalibrateViews(it->second, cam.width, cam.height, ViewsOptions(options));
   notes.push_back(Describe(v));
   cam.intrinsics = v.intrinsics;
   cam.distortion = v.distortion;
   Eigen::Matrix3d rot_sum = Eigen::Matrix3d::Zero();
   Eigen::Vector3d t_sum = Eigen::Vector3d::Zero();
-  for (const camera::ShotPose& s : v.shots) {
+  for (const ShotPose& s : v.shots) {
     const Rigid3 flange_from_cam = RefFromFlange(*model, s.phi, s.theta).Inverse() * s.ref_from_cam;
     rot_sum += flange_from_cam.rotation;
     t_sum += flange_from_cam.translation;

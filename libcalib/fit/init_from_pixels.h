@@ -3,7 +3,8 @@
 //
 // Pixels only (no records.csv):
 //   1. per zoom level, intrinsics, the enabled distortion groups and every
-//      shot's pose ref_from_cam from OpenCV (libcalib/camera/calibrate_views.h);
+//      shot's pose ref_from_cam from OpenCV (calibrate_views.h: an OpenCV start refined with
+//      Ceres);
 //   2. the chain: a `spherical` model (SPEC 4 without effects)
 //        ref_from_cam(phi, theta) = B * A(phi, theta) * C_z,
 //        A(phi, theta) = Rz(-phi) Rx(-theta)                       (SPEC 1, Klug Eq. 90)
@@ -27,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "libcalib/camera/calibrate_views.h"
+#include "libcalib/fit/calibrate_views.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 
@@ -36,7 +37,7 @@ namespace rtscalib {
 struct InitFromPixelsOptions {
   Kinematics kinematics = Kinematics::kDh;
   // Distortion groups estimated per zoom (from model.effects); the others 0.
-  camera::DistortionGroups distortion;
+  DistortionGroups distortion;
   // Image sizes (and nothing else) per zoom from the config's model.cameras;
   // a zoom without an entry gets the size from its pixels' extent (a note says so).
   std::vector<CameraTool> cameras;
@@ -49,7 +50,7 @@ struct InitFromPixelsOptions {
 struct InitFromPixelsResult {
   InstrumentModel model;  // no effects enabled; the caller adds them
   // Per zoom (index = zoom); zooms without pixels have zoom = -1.
-  std::vector<camera::ViewsCalibration> views;
+  std::vector<ViewsCalibration> views;
   // How far the shot poses are from the fitted chain: RMS rotation [rad] and
   // RMS position [m] over the shots (OpenCV's pose noise plus model error).
   double chain_rms_rad = 0, chain_rms_m = 0;
@@ -77,6 +78,6 @@ std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation
                                               InstrumentModel* model);
 
 // Distortion groups enabled in an effect set.
-camera::DistortionGroups DistortionGroupsOf(const EffectSet& effects);
+DistortionGroups DistortionGroupsOf(const EffectSet& effects);
 
 }  // namespace rtscalib

@@ -68,7 +68,7 @@ TEST(InitFromPixels, NoiseFreePixelsOnlyStartThenJointFitIsExact) {
   ASSERT_GT(data.obs.pixels.size(), 500u);
   InitFromPixelsOptions io;
   io.kinematics = Kinematics::kDh;
-  io.distortion = camera::DistortionGroups{};
+  io.distortion = DistortionGroups{};
   io.distortion.radial = false;
   for (const CameraTool& c : truth.cams) {
     CameraTool size;

@@ -1,4 +1,8 @@
-#include "libcalib/camera/calibrate_views.h"
+#include "libcalib/fit/calibrate_views.h"
+
+#include <ceres/autodiff_cost_function.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -11,13 +15,25 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace rtscalib::camera {
+#include "libcalib/fit/cost_functions.h"
+#include "libcalib/fit/manifolds.h"
+#include "libcalib/model/kinematics.h"
+
+namespace rtscalib {
 namespace {
 
-using Matrix = Eigen::MatrixXd;
-using Vector = Eigen::VectorXd;
-using Matrix6 = Eigen::Matrix<double, 6, 6>;
-using Vector6 = Eigen::Matrix<double, 6, 1>;
+using camera::kK1;
+using camera::kK2;
+using camera::kK3;
+using camera::kK4;
+using camera::kK5;
+using camera::kK6;
+using camera::kNumDistortion;
+using camera::kNumIntrinsics;
+using camera::kP1;
+using camera::kP2;
+using camera::kS1;
+using camera::kS4;
 
 struct Shot {
   std::string id;
@@ -362,8 +378,8 @@ Start PoseShots(const Init& init, const std::vector<Shot>& shots) {
       for (size_t i = 0; i < shot.X.size() && ok; ++i) {
         const Eigen::Vector3d Xc = cam_from_ref * shot.X[i];
         double px[2];
-        ok = ProjectToPixel(init.intrinsics.data(), init.distortion.data(), Xc.data(), px);
-        shot_sum += (Eigen::Vector2d(px[0], px[1]) - shot.uv[i]).squaredNorm();
+        ok = camera::ProjectToPixel(init.intrinsics.data(), init.distortion.data(), Xc.data(), px);
+        if (ok) shot_sum += (Eigen::Vector2d(px[0], px[1]) - shot.uv[i]).squaredNorm();
       }
     }
     if (!ok) {
@@ -381,292 +397,186 @@ Start PoseShots(const Init& init, const std::vector<Shot>& shots) {
 }
 
 // ---------------------------------------------------------------------------
-// Joint refinement: Levenberg-Marquardt over [intrinsics, free distortion
-// coefficients] and every shot's cam_from_ref, with exact Jacobians (forward
-// mode through the templated ProjectToPixel) and an orthogonal solve. Both
-// matter for the rational model, whose k1..k3 and k4..k6 are nearly redundant
-// over an image: central differences or normal equations stall Gauss-Newton
-// in that valley.
+// Step 4: joint refinement of intrinsics, free distortion coefficients and
+// every shot's cam_from_ref by Ceres's Levenberg-Marquardt, with exact
+// Jacobians (autodiff through the templated ProjectToPixel).
 
-constexpr int kMaxCamera = kNumIntrinsics + kNumDistortion;
-constexpr int kNumDual = kMaxCamera + 6;
+// Reprojection residuals of one shot, ProjectToPixel(cam_from_ref * X) - uv
+// [px], two per point (u, v), over the parameter blocks
+//   intrinsics(4)  distortion(14)  cam_from_ref_q(4)  cam_from_ref_t(3)
+// (opencv_model.h order; the rotation a unit quaternion in Eigen order
+// x y z w; the translation in metres).
+struct ShotReprojection {
+  const Shot* shot = nullptr;
 
-// Minimal forward-mode dual number: value `a`, gradient `v`; just the
-// operations ProjectToPixel needs.
-struct Dual {
-  using Grad = Eigen::Matrix<double, kNumDual, 1>;
-  double a = 0;
-  Grad v = Grad::Zero();
-  Dual() = default;
-  explicit Dual(double value) : a(value) {}
-  Dual(double value, const Grad& grad) : a(value), v(grad) {}
-  static Dual Variable(double value, int k) {
-    Dual d(value);
-    d.v[k] = 1;
-    return d;
+  template <typename T>
+  bool operator()(const T* intrinsics, const T* distortion, const T* cam_from_ref_q,
+                  const T* cam_from_ref_t, T* residuals) const {
+    const RigidT<T> cam_from_ref = PoseFromBlocks(cam_from_ref_q, cam_from_ref_t);
+    // ProjectToPixel with its tilt matrix, which depends on the distortion
+    // block only, formed once per shot instead of once per point
+    // (internal::ProjectWithTilt, cost_functions.h; the same formula).
+    T tilt[9];
+    camera::TiltMatrix(distortion[camera::kTauX], distortion[camera::kTauY], tilt);
+    for (size_t i = 0; i < shot->X.size(); ++i) {
+      // Jet times double: the reference point carries no derivative.
+      const Vec3<T> x_cam = cam_from_ref.R * shot->X[i] + cam_from_ref.t;
+      T pixel[2];
+      // Behind the camera: the evaluation fails and Ceres rejects the step.
+      if (!internal::ProjectWithTilt(intrinsics, distortion, tilt, x_cam.data(), pixel)) {
+        return false;
+      }
+      residuals[2 * i + 0] = pixel[0] - T(shot->uv[i].x());
+      residuals[2 * i + 1] = pixel[1] - T(shot->uv[i].y());
+    }
+    return true;
   }
 };
-inline Dual operator+(const Dual& x, const Dual& y) { return {x.a + y.a, x.v + y.v}; }
-inline Dual operator-(const Dual& x, const Dual& y) { return {x.a - y.a, x.v - y.v}; }
-inline Dual operator-(const Dual& x) { return {-x.a, -x.v}; }
-inline Dual operator*(const Dual& x, const Dual& y) { return {x.a * y.a, y.a * x.v + x.a * y.v}; }
-inline Dual operator/(const Dual& x, const Dual& y) {
-  const double q = x.a / y.a;
-  return {q, (x.v - q * y.v) / y.a};
+
+constexpr int kQuaternionSize = 4;
+constexpr int kTranslationSize = 3;
+
+// The one place a shot's cost function is made (the final per-shot RMS
+// evaluates the same functor in double).
+ceres::CostFunction* MakeShotCost(const Shot& shot) {
+  return new ceres::AutoDiffCostFunction<ShotReprojection, ceres::DYNAMIC, kNumIntrinsics,
+                                         kNumDistortion, kQuaternionSize, kTranslationSize>(
+      new ShotReprojection{&shot}, 2 * static_cast<int>(shot.X.size()));
 }
-inline Dual& operator+=(Dual& x, const Dual& y) { return x = x + y; }
-inline Dual& operator-=(Dual& x, const Dual& y) { return x = x - y; }
-inline bool operator>(const Dual& x, const Dual& y) { return x.a > y.a; }
-inline bool operator<(const Dual& x, const Dual& y) { return x.a < y.a; }
-inline Dual sin(const Dual& x) { return {std::sin(x.a), std::cos(x.a) * x.v}; }
-inline Dual cos(const Dual& x) { return {std::cos(x.a), -std::sin(x.a) * x.v}; }
 
-struct Problem {
-  const std::vector<Shot>* shots;
-  std::vector<int> free;  // free distortion indices
-  int NumCamera() const { return kNumIntrinsics + static_cast<int>(free.size()); }
-};
-
+// The refinement's parameter blocks; Ceres optimises this memory.
 struct State {
+  struct Pose {
+    std::array<double, kQuaternionSize> q{};   // cam_from_ref rotation, x y z w
+    std::array<double, kTranslationSize> t{};  // cam_from_ref translation [m]
+  };
   std::array<double, kNumIntrinsics> intrinsics{};
   std::array<double, kNumDistortion> distortion{};
-  std::vector<Rigid3> cam_from_ref;
+  std::vector<Pose> cam_from_ref;  // per shot
+
+  static Pose ToBlocks(const Rigid3& cam_from_ref) {
+    Pose p;
+    Eigen::Map<Eigen::Quaterniond>(p.q.data()) = Eigen::Quaterniond(cam_from_ref.rotation);
+    Eigen::Map<Eigen::Quaterniond>(p.q.data()).normalize();
+    Eigen::Map<Eigen::Vector3d>(p.t.data()) = cam_from_ref.translation;
+    return p;
+  }
+  Rigid3 CamFromRef(size_t k) const {
+    const RigidT<double> pose = PoseFromBlocks(cam_from_ref[k].q.data(), cam_from_ref[k].t.data());
+    return {pose.R, pose.t};
+  }
 };
 
-double CameraParam(const Problem& pb, const State& s, int j) {
-  return j < kNumIntrinsics ? s.intrinsics[j] : s.distortion[pb.free[j - kNumIntrinsics]];
-}
-double& CameraParam(const Problem& pb, State* s, int j) {
-  return j < kNumIntrinsics ? s->intrinsics[j] : s->distortion[pb.free[j - kNumIntrinsics]];
-}
-
-Eigen::Matrix3d ExpRotation(const Eigen::Vector3d& w) {
-  const double angle = w.norm();
-  if (angle == 0.0) return Eigen::Matrix3d::Identity();
-  return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
-}
-
-// Pose increment [w, dt]: R <- Exp(w) R, t <- t + dt, so that a camera point
-// y = R X + t moves by w x (R X) + dt.
-Rigid3 Perturb(const Rigid3& pose, const Vector6& delta) {
-  return {ExpRotation(delta.head<3>()) * pose.rotation, pose.translation + delta.tail<3>()};
-}
-
-bool Residual(const State& s, const Rigid3& cam_from_ref, const Eigen::Vector3d& X,
-              const Eigen::Vector2d& uv, Eigen::Vector2d* r) {
-  const Eigen::Vector3d Xc = cam_from_ref * X;
-  double px[2];
-  if (!ProjectToPixel(s.intrinsics.data(), s.distortion.data(), Xc.data(), px)) return false;
-  *r = Eigen::Vector2d(px[0], px[1]) - uv;
-  return true;
-}
-
-// Sum of squared residuals; false if a point is behind its camera.
-bool Cost(const Problem& pb, const State& s, double* cost) {
-  *cost = 0;
-  for (size_t k = 0; k < pb.shots->size(); ++k) {
-    const Shot& shot = (*pb.shots)[k];
-    for (size_t i = 0; i < shot.X.size(); ++i) {
-      Eigen::Vector2d r;
-      if (!Residual(s, s.cam_from_ref[k], shot.X[i], shot.uv[i], &r)) return false;
-      *cost += r.squaredNorm();
-    }
+// Ceres's tolerances are relative; CalibrateViewsOptions::rms_tolerance_px is
+// an absolute RMS [px]. Stops (converged) once `in_a_row` accepted steps in a
+// row have each improved sqrt(mean(du^2 + dv^2)) by less, and gives up (not
+// converged) once no damping up to 1e16 (trust region radius 1e-16) gives
+// descent, where Ceres would go on to its own limit of 1e-32.
+class RmsTolerance : public ceres::IterationCallback {
+ public:
+  RmsTolerance(int num_points, double tolerance_px, int in_a_row)
+      : num_points_(num_points), tolerance_px_(tolerance_px), in_a_row_(in_a_row) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    trust_region_radius_ = s.trust_region_radius;
+    if (s.trust_region_radius < 1e-16) return ceres::SOLVER_ABORT;
+    if (s.iteration == 0 || !s.step_is_successful) return ceres::SOLVER_CONTINUE;
+    // Ceres's cost is half the sum of squared residuals.
+    const double before = std::sqrt(2.0 * (s.cost + s.cost_change) / num_points_);
+    const double after = std::sqrt(2.0 * s.cost / num_points_);
+    small_steps_ = before - after < tolerance_px_ ? small_steps_ + 1 : 0;
+    return small_steps_ >= in_a_row_ ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
+                                     : ceres::SOLVER_CONTINUE;
   }
-  return true;
-}
+  double trust_region_radius() const { return trust_region_radius_; }
 
-// Jacobians and residuals of every shot, kept as rows (not normal
-// equations): the solve below works on J itself.
-struct Linearization {
-  std::vector<Matrix> Jc;  // 2n x camera, per shot
-  std::vector<Matrix> Jp;  // 2n x 6, per shot
-  std::vector<Vector> r;   // 2n, per shot
+ private:
+  int num_points_;
+  double tolerance_px_;
+  int in_a_row_;
+  int small_steps_ = 0;
+  double trust_region_radius_ = 0;
 };
 
-bool Linearize(const Problem& pb, const State& s, Linearization* lin) {
-  const int nc = pb.NumCamera();
-  const size_t ns = pb.shots->size();
-  lin->Jc.resize(ns);
-  lin->Jp.resize(ns);
-  lin->r.resize(ns);
-  // Camera parameters as dual numbers: gradient slots 0..nc-1; slots
-  // kMaxCamera..kMaxCamera+5 are the pose increment [w, dt].
-  Dual intrinsics[kNumIntrinsics], dist[kNumDistortion];
-  for (int j = 0; j < kNumIntrinsics; ++j) intrinsics[j] = Dual::Variable(s.intrinsics[j], j);
-  for (int i = 0; i < kNumDistortion; ++i) dist[i] = Dual(s.distortion[i]);
-  for (size_t f = 0; f < pb.free.size(); ++f) {
-    dist[pb.free[f]] =
-        Dual::Variable(s.distortion[pb.free[f]], kNumIntrinsics + static_cast<int>(f));
+// Converged: Ceres met a tolerance or the RMS criterion within
+// options.max_iterations (not converged: no step gave descent, or the
+// iteration limit).
+void Refine(const std::vector<Shot>& shots, const std::vector<int>& free,
+            const CalibrateViewsOptions& options, int num_points, State* s, int* iterations,
+            bool* converged) {
+  ceres::Problem problem;
+  for (size_t k = 0; k < shots.size(); ++k) {
+    State::Pose& pose = s->cam_from_ref[k];
+    problem.AddResidualBlock(MakeShotCost(shots[k]), nullptr, s->intrinsics.data(),
+                             s->distortion.data(), pose.q.data(), pose.t.data());
+    ParameterizeBlock(&problem, pose.q.data(), BlockKind::kQuaternion, kQuaternionSize, {});
   }
-  for (size_t k = 0; k < ns; ++k) {
-    const Shot& shot = (*pb.shots)[k];
-    const Rigid3& pose = s.cam_from_ref[k];
-    const int rows = 2 * static_cast<int>(shot.X.size());
-    lin->Jc[k].resize(rows, nc);
-    lin->Jp[k].resize(rows, 6);
-    lin->r[k].resize(rows);
-    for (size_t i = 0; i < shot.X.size(); ++i) {
-      const Eigen::Vector3d rx = pose.rotation * shot.X[i];
-      const Eigen::Vector3d y = rx + pose.translation;
-      Dual Xc[3];
-      for (int a = 0; a < 3; ++a) {
-        Xc[a] = Dual(y[a]);
-        Xc[a].v[kMaxCamera + 3 + a] = 1;  // d y / d dt
-      }
-      // d y / d w = -[R X]_x, column j = e_j x (R X).
-      Xc[1].v[kMaxCamera + 0] = -rx[2];
-      Xc[2].v[kMaxCamera + 0] = rx[1];
-      Xc[0].v[kMaxCamera + 1] = rx[2];
-      Xc[2].v[kMaxCamera + 1] = -rx[0];
-      Xc[0].v[kMaxCamera + 2] = -rx[1];
-      Xc[1].v[kMaxCamera + 2] = rx[0];
-      Dual px[2];
-      if (!ProjectToPixel(intrinsics, dist, Xc, px)) return false;
-      for (int row = 0; row < 2; ++row) {
-        const int at = 2 * static_cast<int>(i) + row;
-        lin->r[k][at] = px[row].a - shot.uv[i][row];
-        lin->Jc[k].row(at) = px[row].v.head(nc).transpose();
-        lin->Jp[k].row(at) = px[row].v.segment<6>(kMaxCamera).transpose();
-      }
-    }
+  // Disabled distortion groups stay exactly zero.
+  std::vector<int> frozen;
+  for (int i = 0; i < kNumDistortion; ++i) {
+    if (std::find(free.begin(), free.end(), i) == free.end()) frozen.push_back(i);
   }
-  return true;
+  const BlockKind distortion_kind = free.empty()     ? BlockKind::kConstant
+                                    : frozen.empty() ? BlockKind::kFree
+                                                     : BlockKind::kSubset;
+  ParameterizeBlock(&problem, s->distortion.data(), distortion_kind, kNumDistortion, frozen);
+
+  ceres::Solver::Options so;
+  // OpenCV's start is close: begin near Gauss-Newton (failed steps shrink
+  // the region fast). The damping must be able to fall below sigma_min^2
+  // ~4e-17 of the scaled Jacobian of the rational model (below); Ceres's
+  // default largest radius (1e16) would hold it above and turn Gauss-Newton
+  // into a creep along k1..k6.
+  so.initial_trust_region_radius = 1e16;
+  so.max_trust_region_radius = 1e30;
+  so.max_num_iterations = options.max_iterations;
+  // Exact data reach ~1e-13 px; these only stop the solver once steps are
+  // at rounding level (RmsTolerance usually stops it first).
+  so.function_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-13;
+  so.gradient_tolerance = 0.0;
+  so.logging_type = ceres::SILENT;
+  // The Schur complement over the camera block (the normal equations after
+  // eliminating each shot's pose) is fast and, without the rational group,
+  // as accurate as an orthogonal solve.
+  so.linear_solver_type = ceres::DENSE_SCHUR;
+  const bool rational = options.distortion.rational;
+  // With the rational group, k1..k3 and k4..k6 are nearly redundant over an
+  // image (smallest singular value of the scaled camera Jacobian ~7e-9 in
+  // the tests' scene, cond(J) ~4e8): the normal equations square that beyond
+  // double precision, and Schur steps stall at ~3e-12 px with k1 ~4e-6 off.
+  // They only take the RMS down to where its improvements fall below
+  // kSchurHandoverPx, far above the rounding floor (~1e-13 px) so that the
+  // trust region still sees the cost decrease of the steps that follow;
+  // the dense QR of the Jacobi-scaled Jacobian, an orthogonal solve,
+  // finishes from there.
+  constexpr double kSchurHandoverPx = 1e-6;
+  RmsTolerance schur_tolerance(
+      num_points,
+      rational ? std::max(kSchurHandoverPx, options.rms_tolerance_px) : options.rms_tolerance_px,
+      1);
+  so.callbacks = {&schur_tolerance};
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  *iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  if (rational && *iterations < options.max_iterations) {
+    // The first QR step that no longer improves the RMS has reached the RMS
+    // floor but not yet settled k1..k6 (k1 ~3e-7 off, ~1e-13 px in the
+    // tests' scene); the full Gauss-Newton step after it has, so two small
+    // steps in a row are required.
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = options.max_iterations - *iterations;
+    // Continue with the damping the Schur steps ended with: restarting at
+    // 1e16 would creep along k1..k6 again.
+    so.initial_trust_region_radius =
+        std::max(so.initial_trust_region_radius, schur_tolerance.trust_region_radius());
+    RmsTolerance qr_tolerance(num_points, options.rms_tolerance_px, 2);
+    so.callbacks = {&qr_tolerance};
+    ceres::Solve(so, &problem, &summary);
+    *iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+  }
+  *converged = summary.termination_type == ceres::CONVERGENCE ||
+               summary.termination_type == ceres::USER_SUCCESS;
 }
-
-// Damped Gauss-Newton step min |J d + r|^2 + lambda |d|^2 in Jacobi-scaled
-// variables (unit column norms, so pixels, metres, radians and coefficients
-// of r^12 are comparable; Marquardt's diag(J^T J) damping becomes lambda I).
-// Solved with orthogonal factorisations, never normal equations: the
-// rational model's near-redundant columns make cond(J) ~1e8, and J^T J would
-// square that beyond double precision. Each shot's pose columns are
-// eliminated by a QR of that block (a square-root Schur complement); the
-// stacked camera rows are solved by a column-pivoted QR.
-bool SolveStep(const Linearization& lin, double lambda, Vector* dc, std::vector<Vector6>* dp) {
-  const size_t ns = lin.Jc.size();
-  const int nc = static_cast<int>(lin.Jc.front().cols());
-  const double sqrt_lambda = std::sqrt(lambda);
-  auto scale_of = [](double norm) { return norm > 0 ? 1.0 / norm : 1.0; };
-  Vector col_sq = Vector::Zero(nc);
-  int reduced_rows = nc;
-  for (size_t k = 0; k < ns; ++k) {
-    col_sq += lin.Jc[k].colwise().squaredNorm().transpose();
-    reduced_rows += static_cast<int>(lin.Jc[k].rows());
-  }
-  Vector sc(nc);
-  for (int j = 0; j < nc; ++j) sc[j] = scale_of(std::sqrt(col_sq[j]));
-
-  Matrix reduced = Matrix::Zero(reduced_rows, nc + 1);  // [camera columns | rhs]
-  std::vector<Eigen::Matrix<double, 6, 6>> R(ns);
-  std::vector<Matrix> top(ns);  // first 6 rows of Q^T [Jc | -r] per shot
-  std::vector<Vector6> sp(ns);
-  int at = 0;
-  for (size_t k = 0; k < ns; ++k) {
-    const int rows = static_cast<int>(lin.Jp[k].rows());
-    for (int j = 0; j < 6; ++j) sp[k][j] = scale_of(lin.Jp[k].col(j).norm());
-    Matrix A(rows + 6, 6);
-    A.topRows(rows) = lin.Jp[k] * sp[k].asDiagonal();
-    A.bottomRows(6) = sqrt_lambda * Matrix6::Identity();
-    Matrix M = Matrix::Zero(rows + 6, nc + 1);
-    M.topLeftCorner(rows, nc) = lin.Jc[k] * sc.asDiagonal();
-    M.topRightCorner(rows, 1) = -lin.r[k];
-    const Eigen::HouseholderQR<Matrix> qr(A);
-    M.applyOnTheLeft(qr.householderQ().adjoint());
-    R[k] = qr.matrixQR().topLeftCorner<6, 6>().triangularView<Eigen::Upper>();
-    if (!(R[k].diagonal().array().abs() > 0).all()) return false;
-    top[k] = M.topRows(6);
-    reduced.middleRows(at, rows) = M.bottomRows(rows);
-    at += rows;
-  }
-  reduced.block(at, 0, nc, nc) = sqrt_lambda * Matrix::Identity(nc, nc);
-  const Eigen::ColPivHouseholderQR<Matrix> qr(reduced.leftCols(nc));
-  const Vector dc_scaled = qr.solve(reduced.col(nc));
-  if (!dc_scaled.allFinite()) return false;
-  *dc = sc.asDiagonal() * dc_scaled;
-  dp->resize(ns);
-  for (size_t k = 0; k < ns; ++k) {
-    const Vector6 rhs = top[k].col(nc) - top[k].leftCols(nc) * dc_scaled;
-    const Vector6 dp_scaled = R[k].triangularView<Eigen::Upper>().solve(rhs);
-    (*dp)[k] = sp[k].asDiagonal() * dp_scaled;
-    if (!(*dp)[k].allFinite()) return false;
-  }
-  return true;
-}
-
-State ApplyStep(const Problem& pb, const State& s, const Vector& dc,
-                const std::vector<Vector6>& dp) {
-  State out = s;
-  for (int j = 0; j < pb.NumCamera(); ++j) CameraParam(pb, &out, j) += dc[j];
-  for (size_t k = 0; k < dp.size(); ++k) out.cam_from_ref[k] = Perturb(s.cam_from_ref[k], dp[k]);
-  return out;
-}
-
-bool StepIsNegligible(const Problem& pb, const State& s, const Vector& dc,
-                      const std::vector<Vector6>& dp) {
-  constexpr double kTol = 1e-13;
-  for (int j = 0; j < pb.NumCamera(); ++j) {
-    if (std::abs(dc[j]) > kTol * (1.0 + std::abs(CameraParam(pb, s, j)))) return false;
-  }
-  for (size_t k = 0; k < dp.size(); ++k) {
-    const double t_scale = 1.0 + s.cam_from_ref[k].translation.norm();
-    if (dp[k].head<3>().norm() > kTol || dp[k].tail<3>().norm() > kTol * t_scale) return false;
-  }
-  return true;
-}
-
-// Stops when a step is negligible, when an accepted step improves the RMS by
-// less than `rms_tolerance_px` (or the cost by a relative 1e-14), or when no
-// damping gives descent (not converged).
-void Refine(const Problem& pb, int max_iterations, double rms_tolerance_px, int num_points,
-            State* s, int* iterations, bool* converged) {
-  *iterations = 0;
-  *converged = false;
-  double cost;
-  if (!Cost(pb, *s, &cost)) return;
-  double lambda = 1e-4;
-  Linearization lin;
-  bool rebuild = true;
-  for (int it = 0; it < max_iterations; ++it) {
-    *iterations = it + 1;
-    if (cost == 0.0) {
-      *converged = true;
-      return;
-    }
-    if (rebuild && !Linearize(pb, *s, &lin)) return;
-    Vector dc;
-    std::vector<Vector6> dp;
-    if (!SolveStep(lin, lambda, &dc, &dp)) {
-      lambda *= 10;
-      rebuild = false;
-      continue;
-    }
-    if (StepIsNegligible(pb, *s, dc, dp)) {
-      *converged = true;
-      return;
-    }
-    const State candidate = ApplyStep(pb, *s, dc, dp);
-    double new_cost;
-    if (Cost(pb, candidate, &new_cost) && new_cost < cost) {
-      const double decrease = (cost - new_cost) / cost;
-      const double rms_decrease = std::sqrt(cost / num_points) - std::sqrt(new_cost / num_points);
-      *s = candidate;
-      cost = new_cost;
-      // No practical floor: the orthogonal solve stays accurate as lambda -> 0,
-      // and a floor above sigma_min^2 (~1e-17 for the rational model, scaled)
-      // would turn Gauss-Newton into slow gradient steps along that direction.
-      lambda = std::max(lambda / 10, 1e-30);
-      rebuild = true;
-      if (decrease < 1e-14 || rms_decrease < rms_tolerance_px) {
-        *converged = true;
-        return;
-      }
-    } else {
-      lambda *= 10;
-      rebuild = false;
-      if (lambda > 1e16) return;  // no descent at any damping: stuck
-    }
-  }
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------------------
@@ -777,10 +687,6 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   out.init_note = best.init.note + failures;
   out.opencv_rms_px = best.rms_px;
   for (const ExcludedShot& e : best.failed) out.excluded.push_back(e);
-  State state;
-  state.intrinsics = best.init.intrinsics;
-  state.distortion = best.init.distortion;
-  state.cam_from_ref = best.cam_from_ref;
   {
     std::vector<Shot> posed;
     for (int k : best.posed) posed.push_back(std::move(shots[k]));
@@ -788,56 +694,59 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   }
   require_shots("with a pose");
 
-  Problem problem;
-  problem.shots = &shots;
-  problem.free = options.distortion.FreeCoefficients();
-  // Disabled groups are exactly zero, whatever the initialisation did.
-  for (int i = 0; i < kNumDistortion; ++i) {
-    if (std::find(problem.free.begin(), problem.free.end(), i) == problem.free.end()) {
-      state.distortion[i] = 0.0;
-    }
-  }
+  const std::vector<int> free = options.distortion.FreeCoefficients();
+  const int num_camera = kNumIntrinsics + static_cast<int>(free.size());
   int num_points = 0;
   for (const Shot& shot : shots) num_points += static_cast<int>(shot.X.size());
-  const int unknowns = problem.NumCamera() + 6 * static_cast<int>(shots.size());
+  const int unknowns = num_camera + 6 * static_cast<int>(shots.size());
   if (2 * num_points <= unknowns) {
     std::ostringstream msg;
     msg << "CalibrateViews (zoom " << out.zoom << "): " << num_points << " points give "
-        << 2 * num_points << " equations for " << unknowns << " unknowns (" << problem.NumCamera()
+        << 2 * num_points << " equations for " << unknowns << " unknowns (" << num_camera
         << " camera parameters with distortion " << options.distortion.Names()
         << ", 6 per shot for " << shots.size() << " shots); more points are needed";
     throw std::invalid_argument(msg.str());
   }
 
   // Step 4.
-  Refine(problem, options.max_iterations, options.rms_tolerance_px, num_points, &state,
-         &out.iterations, &out.converged);
+  State state;
+  state.intrinsics = best.init.intrinsics;
+  // Disabled groups are exactly zero, whatever the initialisation did.
+  for (int i : free) state.distortion[i] = best.init.distortion[i];
+  for (const Rigid3& cam_from_ref : best.cam_from_ref) {
+    state.cam_from_ref.push_back(State::ToBlocks(cam_from_ref));
+  }
+  Refine(shots, free, options, num_points, &state, &out.iterations, &out.converged);
 
   out.intrinsics = state.intrinsics;
   out.distortion = state.distortion;
   out.num_points = num_points;
-  out.max_trusted_radius = MaxTrustedRadius(state.distortion.data());
+  out.max_trusted_radius = camera::MaxTrustedRadius(state.distortion.data());
   double total = 0;
   for (size_t k = 0; k < shots.size(); ++k) {
     const Shot& shot = shots[k];
+    const Rigid3 cam_from_ref = state.CamFromRef(k);
     ShotPose pose;
     pose.shot = shot.id;
     pose.face = shot.face;
     pose.phi = shot.phi;
     pose.theta = shot.theta;
-    pose.ref_from_cam = state.cam_from_ref[k].Inverse();
+    pose.ref_from_cam = cam_from_ref.Inverse();
     pose.num_points = static_cast<int>(shot.X.size());
+    std::vector<double> r(2 * shot.X.size());
+    if (!ShotReprojection{&shot}(state.intrinsics.data(), state.distortion.data(),
+                                 state.cam_from_ref[k].q.data(), state.cam_from_ref[k].t.data(),
+                                 r.data())) {
+      throw std::runtime_error("CalibrateViews: refinement put a point of shot '" + shot.id +
+                               "' behind the camera");
+    }
     double sum = 0;
-    for (size_t i = 0; i < shot.X.size(); ++i) {
-      Eigen::Vector2d r;
-      if (!Residual(state, state.cam_from_ref[k], shot.X[i], shot.uv[i], &r)) {
-        throw std::runtime_error("CalibrateViews: refinement put a point of shot '" + shot.id +
-                                 "' behind the camera");
-      }
-      sum += r.squaredNorm();
-      const Eigen::Vector3d Xc = state.cam_from_ref[k] * shot.X[i];
-      if (Xc.head<2>().norm() / Xc.z() >= out.max_trusted_radius)
+    for (double v : r) sum += v * v;
+    for (const Eigen::Vector3d& X : shot.X) {
+      const Eigen::Vector3d x_cam = cam_from_ref * X;
+      if (x_cam.head<2>().norm() / x_cam.z() >= out.max_trusted_radius) {
         ++out.points_beyond_trusted_radius;
+      }
     }
     pose.rms_px = std::sqrt(sum / pose.num_points);
     total += sum;
@@ -847,4 +756,4 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   return out;
 }
 
-}  // namespace rtscalib::camera
+}  // namespace rtscalib

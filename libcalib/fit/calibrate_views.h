@@ -1,6 +1,6 @@
 // Camera calibration from pixels alone, for one zoom level: the starting
-// point for the joint refinement (libcalib/fit), which later ties each shot's
-// camera pose to the instrument's kinematics.
+// point for the joint refinement (init_from_pixels.h, refine.h), which later
+// ties each shot's camera pose to the instrument's kinematics.
 //
 // Input: PixelObservations (SPEC 3, pixels.csv) of known 3D points in the
 // reference frame, grouped by `shot` (one image each), and the image size.
@@ -23,11 +23,14 @@
 //   3. cv::solvePnP (SQPnP, then iterative) on all of a shot's points gives
 //      the shot's pose for each of those starts; the start that poses the
 //      most shots, then with the lowest RMS, is kept.
-//   4. A Levenberg-Marquardt refinement in double precision of intrinsics,
-//      enabled distortion groups and all shot poses, with the project's own
-//      ProjectToPixel (OpenCV works in float object/image points, which limits
-//      it to ~1e-5 px; the result here is consistent with opencv_model.h to
-//      rounding).
+//   4. Ceres's Levenberg-Marquardt refines intrinsics, the enabled
+//      distortion groups and every shot's pose in double precision, with
+//      autodiff through the project's own ProjectToPixel (each shot's
+//      rotation a unit quaternion on its manifold, the disabled coefficients
+//      held at zero by a subset manifold); dense Schur solves, finished by
+//      dense QR ones with the nearly redundant rational group. OpenCV works in float
+//      object/image points, which limits it to ~1e-5 px; the result here is
+//      consistent with opencv_model.h to rounding.
 //
 // Valid input: all observations of one zoom level; every shot one image (the
 // same face, zoom, phi, theta on each row). Shots with fewer than
@@ -45,7 +48,7 @@
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/observations.h"
 
-namespace rtscalib::camera {
+namespace rtscalib {
 
 // Which OpenCV distortion groups are estimated (SPEC 4 names); the others are
 // held at zero.
@@ -56,7 +59,7 @@ struct DistortionGroups {
   bool thin_prism = false;   // thin_prism: s1 s2 s3 s4
   bool sensor_tilt = false;  // sensor_tilt: taux tauy
 
-  // Indices (DistortionIndex) of the free coefficients, ascending.
+  // Indices (camera::DistortionIndex) of the free coefficients, ascending.
   std::vector<int> FreeCoefficients() const;
   std::string Names() const;  // e.g. "radial+tangential", "none"
 };
@@ -67,7 +70,7 @@ struct CalibrateViewsOptions {
   int min_points_per_shot = 4;      // fewer: the shot is excluded (>= 4)
   int min_points_per_plane = 8;     // planar subsets used by OpenCV's initialisation (>= 4)
   double plane_tolerance_m = 1e-3;  // distance within which points count as coplanar [m]
-  int max_iterations = 100;         // Levenberg-Marquardt iterations of step 4
+  int max_iterations = 100;         // Levenberg-Marquardt steps of step 4 (accepted or not)
   // Step 4 has converged when an iteration improves the RMS by less than this
   // [px] (far below any detector's noise; exact data reach ~1e-13 px).
   double rms_tolerance_px = 1e-10;
@@ -93,16 +96,16 @@ struct ExcludedShot {
 struct ViewsCalibration {
   int zoom = 0;
   int width = 0, height = 0;
-  std::array<double, kNumIntrinsics> intrinsics{};  // fx fy cx cy [px]
-  std::array<double, kNumDistortion> distortion{};  // OpenCV order
-  std::vector<ShotPose> shots;                      // usable shots, in order of first appearance
-  std::vector<ExcludedShot> excluded;               // shots left out, with the reason
-  int num_points = 0;                               // observations used
-  double rms_px = 0;                                // sqrt(mean(du^2 + dv^2)) over the used points
-  double opencv_rms_px = 0;                         // the same after step 3 (OpenCV's estimate)
-  std::string init_note;   // how step 2 went (e.g. the radial-only fallback)
-  int iterations = 0;      // of step 4
-  bool converged = false;  // step 4 met its tolerance within max_iterations
+  std::array<double, camera::kNumIntrinsics> intrinsics{};  // fx fy cx cy [px]
+  std::array<double, camera::kNumDistortion> distortion{};  // OpenCV order
+  std::vector<ShotPose> shots;         // usable shots, in order of first appearance
+  std::vector<ExcludedShot> excluded;  // shots left out, with the reason
+  int num_points = 0;                  // observations used
+  double rms_px = 0;                   // sqrt(mean(du^2 + dv^2)) over the used points
+  double opencv_rms_px = 0;            // the same after step 3 (OpenCV's estimate)
+  std::string init_note;               // how step 2 went (e.g. the radial-only fallback)
+  int iterations = 0;                  // of step 4
+  bool converged = false;              // step 4 met its tolerance within max_iterations
   // MaxTrustedRadius of the result and how many used points lie beyond it
   // (their pixels cannot be back-projected; > 0 means the distortion model
   // folds inside the data and should be questioned).
@@ -113,4 +116,4 @@ struct ViewsCalibration {
 ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int width, int height,
                                 const CalibrateViewsOptions& options = {});
 
-}  // namespace rtscalib::camera
+}  // namespace rtscalib

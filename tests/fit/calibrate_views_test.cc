@@ -1,4 +1,4 @@
-#include "libcalib/camera/calibrate_views.h"
+#include "libcalib/fit/calibrate_views.h"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,27 @@
 
 #include "libcalib/model/targets.h"
 
-namespace rtscalib::camera {
+namespace rtscalib {
 namespace {
+
+using camera::kK1;
+using camera::kK2;
+using camera::kK3;
+using camera::kK4;
+using camera::kK5;
+using camera::kK6;
+using camera::kNumDistortion;
+using camera::kNumIntrinsics;
+using camera::kP1;
+using camera::kP2;
+using camera::kS1;
+using camera::kS2;
+using camera::kS3;
+using camera::kS4;
+using camera::kTauX;
+using camera::kTauY;
+using camera::PixelToRay;
+using camera::ProjectToPixel;
 
 // Exact-projection tests: pixels are ProjectToPixel of known corners, so the
 // refinement must reach the truth up to rounding and conditioning. Tolerances:
@@ -443,4 +462,4 @@ TEST(CalibrateViews, NoPlanarSubsetIsAnError) {
 }
 
 }  // namespace
-}  // namespace rtscalib::camera
+}  // namespace rtscalib
