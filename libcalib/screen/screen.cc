@@ -142,7 +142,8 @@ void CheckAngles(const std::string& file, const std::vector<RowView>& rows, Scre
                out);
   if (!phi_wrapped.empty()) {
     out->warnings.push_back(file + ": phi beyond 2 pi on " + std::to_string(phi_wrapped.size()) +
-                            " of " + std::to_string(rows.size()) + " rows (lines " +
+                            " of " + std::to_string(rows.size()) + " rows (line" +
+                            (phi_wrapped.size() == 1 ? " " : "s ") +
                             JoinInts(phi_wrapped, kListedLines) +
                             "): readings of one turn are in [0, 2 pi) (SPEC 1); check that these "
                             "angles are radians");
