@@ -16,6 +16,9 @@ constexpr double kTwoPi = 2.0 * M_PI;
 constexpr size_t kListedLines = 5;
 // Angles in degrees or gon reach at most 360 or 400.
 constexpr double kFullCircleDeg = 360.0, kFullCircleGon = 400.0;
+// u and v are called swapped when at least this many rows and 1/20 of a
+// zoom's rows leave the image.
+constexpr size_t kMinSwappedRows = 3, kSwappedFractionInverse = 20;
 // Millimetres read as metres: every coordinate and distance 1000 times too large.
 constexpr double kMmPerM = 1000.0;
 
@@ -173,17 +176,20 @@ void CheckPixels(const std::string& file, const std::vector<RowView>& rows,
     const std::string zoom = std::to_string(z);
     const std::string source =
         "(model.cameras[" + zoom + "]: " + std::to_string(w) + " x " + std::to_string(h) + " px)";
-    const bool u_fits = AllFit(us, w, margin), v_fits = AllFit(vs, h, margin);
-    const bool swapped =
-        !(u_fits && v_fits) && w != h && AllFit(us, h, margin) && AllFit(vs, w, margin);
     Offenders u_out, v_out;
     for (const RowView& r : rows) {
       if (!r.has_pixel || r.zoom != static_cast<int>(z)) continue;
       if (!AllFit({r.u}, w, margin)) u_out.Add(r.line, Num(r.u));
       if (!AllFit({r.v}, h, margin)) v_out.Add(r.line, Num(r.v));
     }
+    // Swapped pixels spread over the image leave it on many rows (a quarter
+    // of a 4:3 image); one or two rows outside are mistakes of their own.
+    const size_t outside = std::max(u_out.lines.size(), v_out.lines.size());
+    const bool swapped = outside >= kMinSwappedRows &&
+                         outside * kSwappedFractionInverse >= us.size() && w != h &&
+                         AllFit(us, h, margin) && AllFit(vs, w, margin);
     if (swapped) {
-      const bool v_bad = !v_fits;
+      const bool v_bad = !v_out.Empty();
       (v_bad ? v_out : u_out)
           .Report(
               file, v_bad ? "v" : "u",

@@ -9,7 +9,8 @@
 //     theta > pi (a face-2 reading): SPEC 1's faces;
 //   - pixels outside their zoom's image (model.cameras) by more than
 //     ScreenOptions::pixel_margin_px, or u and v swapped (every u fits the
-//     height while v exceeds the height and fits the width);
+//     height and every v the width, while at least 3 rows and 1/20 of the
+//     zoom's rows leave the image);
 //   - record points farther from the other points than their distances d
 //     allow (|x - m| > 2 (d + sqrt(3) d_max) + 1 m, m the coordinate-wise
 //     median of the points: every point lies within d of the instrument, so

@@ -262,6 +262,35 @@ TEST_F(ScreenTest, ZoomFarBeyondTheData) {
   }
 }
 
+TEST_F(ScreenTest, PixelsFileIsScreenedLikeRecords) {
+  PixelObservation p;
+  p.line = 2;
+  p.face = 2;
+  p.phi = 1.0;
+  p.theta = 1.2;  // face 2 written the face-1 way
+  p.X = {1.0, 2.0, 0.5};
+  p.uv = {640, 1100};  // below the 960 px image by more than 50 px; one row is not "swapped"
+  obs.pixels = {p};
+  p.line = 3;
+  p.face = 1;
+  p.zoom = 40;
+  p.uv = {640, 480};
+  obs.pixels.push_back(p);
+  const ScreenFindings f = FindDataMistakes(obs, truth.cams, options);
+  EXPECT_THAT(
+      Messages(f),
+      ElementsAre(
+          "pixels.csv:3: column 'zoom': expected a zoom level below 10 (SPEC 2: zoom levels are "
+          "0..N-1; the data hold 2 zoom levels (0, 40), model.cameras lists 1, and "
+          "screen.max_missing_zooms = 8 more may lack data), got '40'",
+          "pixels.csv:2: column 'theta': expected a face-2 zenith angle in [pi, 2 pi] (SPEC 1: "
+          "face 2 of the face-1 pointing (phi, theta) is (phi - pi mod 2 pi, 2 pi - theta)); this "
+          "face-2 row is written the face-1 way, got '1.2'",
+          "pixels.csv:2: column 'v': expected a pixel row v within the image of zoom 0, -0.5 .. "
+          "959.5 give or take screen.pixel_margin_px = 50 px (model.cameras[0]: 1280 x 960 px), "
+          "got '1100'"));
+}
+
 TEST_F(ScreenTest, MissingZoomLevelsAreAWarning) {
   FirstRow(&obs, 1, Tool::kCam).zoom = 3;
   const ScreenFindings f = FindDataMistakes(obs, truth.cams, options);
