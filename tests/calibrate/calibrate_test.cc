@@ -213,7 +213,8 @@ TEST(Calibrate, DataMistakesAreRejectedBeforeAnyStep) {
   SimulationOptions sim;
   sim.truth = PaperTruth(1);
   SimulatedData data = Simulate(sim);
-  for (size_t i = 0; i < data.obs.records.size(); ++i) data.obs.records[i].line = static_cast<int>(i) + 2;
+  for (size_t i = 0; i < data.obs.records.size(); ++i)
+    data.obs.records[i].line = static_cast<int>(i) + 2;
   Record& cam = *std::find_if(data.obs.records.begin(), data.obs.records.end(),
                               [](const Record& r) { return r.tool == Tool::kCam; });
   cam.zoom = std::numeric_limits<int>::max();
