@@ -55,8 +55,9 @@ std::string Resolve(const std::string& dir, const std::string& path) {
   return p.lexically_normal().string();
 }
 
-// fit.threads may exceed the hardware threads (a shared machine reports
-// fewer than a user may want to try), but not without bound.
+// fit.threads may exceed the hardware threads a little (harmless), but not
+// without bound: every thread costs memory, and beyond the cores threads
+// only wait (100000 needed 2.2 GB).
 constexpr int kThreadsPerCore = 4;
 unsigned HardwareThreads() { return std::thread::hardware_concurrency(); }
 
@@ -270,8 +271,6 @@ void ReadFit(const YamlNode& m, FitOptions* out) {
     }
   }
   if (const std::optional<YamlNode> n = m.Find("threads")) {
-    // Each thread costs memory (Ceres allocates per thread), and threads
-    // beyond the cores only wait: 100000 would exhaust memory for nothing.
     const int max_threads = kThreadsPerCore * static_cast<int>(std::max(1u, HardwareThreads()));
     const int x = n->AsInt();
     if (x < 1 || x > max_threads) {
