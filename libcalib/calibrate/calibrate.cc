@@ -11,6 +11,7 @@
 #include "libcalib/fit/start_models.h"
 #include "libcalib/fit/two_face.h"
 #include "libcalib/model/kinematics.h"
+#include "libcalib/screen/screen.h"
 
 namespace rtscalib {
 namespace {
@@ -340,6 +341,7 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   if (!problem.empty()) throw std::invalid_argument("calibration options: " + problem);
 
   CalibrationResult result;
+  result.notes = ScreenObservations(obs, options.model.cameras, options.screen);
   if (!obs.records.empty()) ExtractAndSimplify(obs, options, progress, &result);
   result.start = StartModel(obs, options, progress, &result);
 

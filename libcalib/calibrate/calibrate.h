@@ -105,8 +105,10 @@ struct CalibrationResult {
   bool LadderExtendedModel() const { return ladder.size() > 1; }
 };
 
-// Runs every stage above. Throws ExtractionError when the records give no
-// model, std::invalid_argument for invalid options or data the options cannot
+// Runs every stage above, after the screening of the observations
+// (libcalib/screen/screen.h), whose warnings start `notes`. Throws InputError
+// for the data mistakes the screening finds, ExtractionError when the records
+// give no model, std::invalid_argument for invalid options or data the options cannot
 // use (a zoom without a camera). A failing diagnosis does not fail the
 // calibration: it leaves a note (diagnosis absent).
 CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& options,

@@ -1,6 +1,7 @@
 // Options of the whole calibration (libcalib/calibrate/calibrate.h): what to
 // fit (the config's `model` section), how to fit it (FitOptions, the `fit`
-// section) and what to diagnose afterwards (the `diagnose` section). Every
+// section), what to diagnose afterwards (the `diagnose` section) and how to
+// screen the observations before (ScreenOptions, the `screen` section). Every
 // key is documented in docs/config.md.
 #pragma once
 
@@ -10,6 +11,7 @@
 #include "libcalib/fit/options.h"
 #include "libcalib/model/effects.h"
 #include "libcalib/model/instrument.h"
+#include "libcalib/screen/options.h"
 
 namespace rtscalib {
 
@@ -45,6 +47,9 @@ struct CalibrationOptions {
   // (CalibrationResult::intrinsics_fitted says what was decided).
   FitOptions fit;
   DiagnoseOptions diagnose;
+  // Checked by Calibrate's screening (ScreenObservations), which rejects
+  // invalid values itself.
+  ScreenOptions screen;
   // Empty if valid, else what is wrong (the option's name, what it must be).
   std::string Check() const;
 };

@@ -126,9 +126,28 @@ std::string Sweep::Describe(const std::vector<Record>& records) const {
 std::vector<std::optional<PrincipalPoint>> FindPrincipalPoints(
     const std::vector<Record>& records, const std::vector<CameraTool>& cameras,
     const ExtractOptions& options) {
-  int num_zooms = static_cast<int>(cameras.size());
+  // Camera rows by zoom, gathered once: the time grows with the data, not
+  // with the largest zoom number.
+  std::map<int, std::vector<const Record*>> rows_of_zoom;
   for (const Record& r : records) {
-    if (r.tool == Tool::kCam) num_zooms = std::max(num_zooms, r.zoom + 1);
+    if (r.tool == Tool::kCam) rows_of_zoom[r.zoom].push_back(&r);
+  }
+  // The result has an entry per level up to the largest (SPEC 2: levels are
+  // 0..N-1), so a mistyped zoom would allocate without bound: the levels
+  // are bounded by the data, one per camera row at most. In long long:
+  // zoom + 1 overflows an int at INT_MAX.
+  long long num_zooms = static_cast<long long>(cameras.size());
+  if (!rows_of_zoom.empty()) {
+    const auto& [largest, rows] = *rows_of_zoom.rbegin();
+    num_zooms = std::max(num_zooms, largest + 1LL);
+    const long long max_levels =
+        static_cast<long long>(cameras.size()) + static_cast<long long>(records.size());
+    if (num_zooms > max_levels) {
+      throw ExtractionError("zoom " + std::to_string(largest) + " on line " +
+                            std::to_string(rows.front()->line) + ", but the data hold " +
+                            std::to_string(rows_of_zoom.size()) +
+                            " zoom level(s); zoom levels are 0..N-1 (SPEC 2)");
+    }
   }
   std::vector<std::optional<PrincipalPoint>> out(num_zooms);
   const double q = options.pixel_tolerance_px;
@@ -137,11 +156,14 @@ std::vector<std::optional<PrincipalPoint>> FindPrincipalPoints(
       out[z] = PrincipalPoint{{cameras[z].intrinsics[2], cameras[z].intrinsics[3]}, false};
       continue;
     }
+    const auto zoom_rows = rows_of_zoom.find(z);
+    if (zoom_rows == rows_of_zoom.end()) continue;
     // Count the usable camera rows of this zoom per (quantised) pixel.
     std::map<std::pair<long long, long long>, int> count;
     std::map<std::pair<long long, long long>, Eigen::Vector2d> pixel;
-    for (const Record& r : records) {
-      if (r.tool != Tool::kCam || r.zoom != z || !IsUsableForExtraction(r, options)) continue;
+    for (const Record* row : zoom_rows->second) {
+      const Record& r = *row;
+      if (!IsUsableForExtraction(r, options)) continue;
       const std::pair<long long, long long> key{std::llround(r.u / q), std::llround(r.v / q)};
       ++count[key];
       pixel.emplace(key, Eigen::Vector2d(r.u, r.v));

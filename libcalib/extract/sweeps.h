@@ -75,6 +75,8 @@ struct PrincipalPoint {
 // paper's pixel triplet, Eq. 67; rows elsewhere in the image, e.g. a grid, are
 // not candidates), or the most shared pixel when no triplet exists;
 // std::nullopt when the zoom has neither intrinsics nor camera rows.
+// Throws ExtractionError when the largest zoom exceeds cameras.size() plus
+// the number of records (a mistyped zoom; memory would grow with it).
 std::vector<std::optional<PrincipalPoint>> FindPrincipalPoints(
     const std::vector<Record>& records, const std::vector<CameraTool>& cameras,
     const ExtractOptions& options);

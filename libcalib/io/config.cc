@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <thread>
 
 #include "libcalib/io/errors.h"
 #include "libcalib/io/number_text.h"
@@ -53,6 +54,12 @@ std::string Resolve(const std::string& dir, const std::string& path) {
   if (p.is_relative()) p = fs::path(dir) / p;
   return p.lexically_normal().string();
 }
+
+// fit.threads may exceed the hardware threads a little (harmless), but not
+// without bound: every thread costs memory, and beyond the cores threads
+// only wait (100000 needed 2.2 GB).
+constexpr int kThreadsPerCore = 4;
+unsigned HardwareThreads() { return std::thread::hardware_concurrency(); }
 
 // --- checked reads: each failure points at the key that holds the value ----
 
@@ -263,7 +270,16 @@ void ReadFit(const YamlNode& m, FitOptions* out) {
                 FormatShortestDouble(out->min_zenith_rad / kRadPerDeg) + " deg)");
     }
   }
-  ReadCount(m, "threads", &out->num_threads, 1, "a thread count");
+  if (const std::optional<YamlNode> n = m.Find("threads")) {
+    const int max_threads = kThreadsPerCore * static_cast<int>(std::max(1u, HardwareThreads()));
+    const int x = n->AsInt();
+    if (x < 1 || x > max_threads) {
+      n->Fail("a thread count 1.." + std::to_string(max_threads) + " (at most " +
+              std::to_string(kThreadsPerCore) + " x this machine's " +
+              std::to_string(std::max(1u, HardwareThreads())) + " hardware threads)");
+    }
+    out->num_threads = x;
+  }
   m.Read("covariance", &out->compute_covariance);
   m.Read("verbose", &out->verbose);
 }
@@ -317,6 +333,10 @@ void ReadPlan(const YamlNode& m, AcquisitionPlan* out) {
     out->zooms = ReadIndexList(
         *zooms, [](int z) { return z >= 0; }, "zoom levels >= 0");
   }
+  // The plan's size bounds (records, zoom levels) before anything is
+  // allocated for it (the simulated truth has one camera per zoom level).
+  const std::string problem = out->CheckSize();
+  if (!problem.empty()) m.Fail("a plan within the simulation's bounds: " + problem);
 }
 
 TagBoard ReadBoard(const YamlNode& m) {
@@ -441,6 +461,16 @@ void ReadSimulate(const YamlNode& m, const ModelSettings& model, SimulationOptio
     if (plan) plan->Require("zooms").Fail(expected);
     m.Fail(expected);
   }
+}
+
+void ReadScreen(const YamlNode& m, ScreenOptions* out) {
+  ReadNumber(m, "pixel_margin_px", &out->pixel_margin_px, IsNonNegative,
+             "a margin >= 0 [px] beyond the image");
+  ReadNumber(m, "max_extent_m", &out->max_extent_m, IsPositive,
+             "a distance > 0 [m] from the origin");
+  ReadCount(m, "max_missing_zooms", &out->max_missing_zooms, 0, "a count of zoom levels");
+  const std::string problem = out->Check();
+  if (!problem.empty()) m.Fail(problem);
 }
 
 void ReadDiagnose(const YamlNode& m, DiagnoseOptions* out) {
@@ -592,6 +622,7 @@ CalibrationOptions CalibrationOptionsOf(const RunConfig& config) {
   options.model = config.model;
   options.fit = config.fit;
   options.diagnose = config.diagnose;
+  options.screen = config.screen;
   return options;
 }
 
@@ -616,6 +647,7 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
     if (const std::optional<YamlNode> n = root.Find(section.key)) section.read(*n);
   }
   if (const std::optional<YamlNode> n = root.Find("diagnose")) ReadDiagnose(*n, &config.diagnose);
+  if (const std::optional<YamlNode> n = root.Find("screen")) ReadScreen(*n, &config.screen);
   std::string output = "out";
   root.Read("output", &output);
   config.output_dir = Resolve(config.config_dir, output);
@@ -698,6 +730,11 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::Key << "enabled" << YAML::Value << c.diagnose.enabled;
   e << YAML::Key << "auto" << YAML::Value << c.diagnose.auto_add;
   e << YAML::Key << "significance" << YAML::Value << Num(c.diagnose.significance);
+  e << YAML::EndMap;
+  e << YAML::Key << "screen" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "pixel_margin_px" << YAML::Value << Num(c.screen.pixel_margin_px);
+  e << YAML::Key << "max_extent_m" << YAML::Value << Num(c.screen.max_extent_m);
+  e << YAML::Key << "max_missing_zooms" << YAML::Value << c.screen.max_missing_zooms;
   e << YAML::EndMap;
   e << YAML::Key << "output" << YAML::Value << c.output_dir;
   e << YAML::EndMap;

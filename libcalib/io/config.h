@@ -6,7 +6,9 @@
 //   - relative paths are relative to the config file's folder;
 //   - values are checked where they are read, so each message points at the
 //     offending key (negative sigmas, zenith limits out of order, effects not
-//     in the catalogue, distortion longer than 14, non-positive image sizes...);
+//     in the catalogue, distortion longer than 14, non-positive image sizes,
+//     fit.threads beyond 4 x the machine's hardware threads, simulated plans
+//     beyond AcquisitionPlan::Check()'s bounds...);
 //   - the `render` section belongs to the render module (render/options.h),
 //     which reads it through a ConfigSection; its keys are checked as strictly.
 // io does not depend on sim or fit code, only on their option structs, so
@@ -22,6 +24,7 @@
 #include "libcalib/calibrate/options.h"
 #include "libcalib/fit/options.h"
 #include "libcalib/io/yaml_reader.h"
+#include "libcalib/screen/options.h"
 #include "libcalib/sim/options.h"
 
 namespace rtscalib {
@@ -45,6 +48,7 @@ struct RunConfig {
   // PaperTruth(PlanNumZooms(simulate->plan)) (libcalib/sim/simulator.h).
   bool truth_from_paper = false;
   DiagnoseOptions diagnose;
+  ScreenOptions screen;
   std::string output_dir;          // absolute; default <config_dir>/out
   std::vector<std::string> notes;  // things worth a line in the run log
 };

@@ -73,6 +73,21 @@ std::vector<std::string> SplitFields(const std::string& line, const std::string&
   return fields;
 }
 
+// The encoding of a file that is not UTF-8 (or ASCII): by its byte-order mark
+// on the first line, by NUL bytes (UTF-16/32 without a mark) on any line; ""
+// when neither is seen. Such a file would otherwise read as one odd field.
+std::string WideEncoding(const std::string& line, bool first) {
+  if (first) {
+    if (line.compare(0, 4, std::string("\xFF\xFE\0\0", 4)) == 0)
+      return "UTF-32 (little-endian BOM)";
+    if (line.compare(0, 4, std::string("\0\0\xFE\xFF", 4)) == 0) return "UTF-32 (big-endian BOM)";
+    if (line.compare(0, 2, "\xFF\xFE") == 0) return "UTF-16 (little-endian BOM)";
+    if (line.compare(0, 2, "\xFE\xFF") == 0) return "UTF-16 (big-endian BOM)";
+  }
+  if (line.find('\0') != std::string::npos) return "UTF-16 or UTF-32 (NUL bytes)";
+  return "";
+}
+
 bool IsSkipped(const std::string& line) {
   for (char c : line) {
     if (IsSpace(c)) continue;
@@ -104,6 +119,11 @@ CsvTable CsvTable::Parse(std::istream& in, const std::string& name, const Column
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
+    const std::string wide = WideEncoding(line, line_no == 1);
+    if (!wide.empty()) {
+      throw InputError::File(name, line_no, "encoding", "a UTF-8 text file (save it as UTF-8)",
+                             "file is " + wide);
+    }
     if (IsSkipped(line)) continue;
     std::vector<std::string> fields = SplitFields(line, name, line_no);
     if (!have_header) {

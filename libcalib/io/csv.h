@@ -14,7 +14,8 @@
 //   - a file needs at least one data row ("no rows" otherwise);
 //   - required columns missing -> InputError naming the column; columns that
 //     are neither required nor optional are ignored and listed in notes();
-//   - CRLF line ends and a UTF-8 byte-order mark are accepted.
+//   - CRLF line ends and a UTF-8 byte-order mark are accepted; a UTF-16 or
+//     UTF-32 file (byte-order mark or NUL bytes) is an error.
 // Numbers must be finite decimal numbers (NaN/Inf are errors), integers must
 // have an integral value ("2" and "2.0" are both the integer 2).
 #pragma once

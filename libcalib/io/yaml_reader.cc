@@ -331,11 +331,22 @@ YamlDocument YamlDocument::Load(const std::string& path) {
 YamlDocument YamlDocument::Parse(const std::string& text, const std::string& name) {
   auto state = std::make_shared<State>();
   state->file = name;
+  std::vector<YAML::Node> documents;
   try {
-    state->root = YAML::Load(text);
+    documents = YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
     throw InputError::File(name, Line(e.mark), "YAML syntax", "valid YAML", e.msg, Column(e.mark));
   }
+  // A second document (after `---`) would be silently ignored by a reader
+  // that takes the first: its keys would never take effect. An empty one
+  // (a trailing `---`) holds no keys.
+  for (size_t i = 1; i < documents.size(); ++i) {
+    if (documents[i].IsNull()) continue;
+    throw InputError::File(name, Line(documents[i].Mark()), "second YAML document",
+                           "one YAML document per file (remove the '---' line before it)",
+                           Brief(documents[i]), Column(documents[i].Mark()));
+  }
+  if (!documents.empty()) state->root = documents.front();
   YamlDocument doc(state);
   doc.Root().RequireMap();
   return doc;

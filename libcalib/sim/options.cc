@@ -1,6 +1,7 @@
 #include "libcalib/sim/options.h"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace rtscalib {
 
@@ -11,7 +12,44 @@ std::string NoiseOptions::Check() const {
   return "";
 }
 
+double AcquisitionPlan::EstimatedRecords() const {
+  const double zoom_count = static_cast<double>(zooms.size());
+  const double sweep_poses = sweeps ? 2.0 * sweep_points : 0.0;
+  // Per sweep pose: the EDM distances and three pixels of one ray per zoom.
+  const double per_sweep_pose = static_cast<double>(edm_distances.size()) + 3.0 * zoom_count;
+  const double grid_poses = static_cast<double>(grid_phi_steps) * grid_theta_steps;
+  const double pixels = static_cast<double>(grid_pixels_per_axis) * grid_pixels_per_axis;
+  const double per_grid_pose =
+      static_cast<double>(grid_edm_distances.size()) +
+      zoom_count * static_cast<double>(grid_cam_ray_lengths.size()) * pixels;
+  return static_cast<double>(faces.size()) *
+         (sweep_poses * per_sweep_pose + grid_poses * per_grid_pose);
+}
+
+std::string AcquisitionPlan::CheckSize() const {
+  for (int z : zooms) {
+    if (z >= kMaxZoomLevels) {
+      return "simulate.plan.zooms entries must be < " + std::to_string(kMaxZoomLevels) + " (got " +
+             std::to_string(z) + "; zoom levels are 0..N-1, SPEC 2)";
+    }
+  }
+  const double records = EstimatedRecords();
+  if (records > kMaxRecords) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "the plan gives %.3g records, more than the limit of %.3g (grid %d x %d poses, "
+                  "%d sweep points)",
+                  records, kMaxRecords, grid_phi_steps, grid_theta_steps, sweep_points);
+    return std::string(text) +
+           "; make simulate.plan.grid.phi_steps x theta_steps, grid.pixels_per_axis or "
+           "sweep_points smaller";
+  }
+  return "";
+}
+
 std::string AcquisitionPlan::Check() const {
+  const std::string size = CheckSize();
+  if (!size.empty()) return size;
   if (sweeps && sweep_points < 4)
     return "plan.sweep_points must be >= 4 (got " + std::to_string(sweep_points) + ")";
   if (edm_distances.empty()) return "plan.edm_distances must not be empty";

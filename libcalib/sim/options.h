@@ -37,7 +37,18 @@ struct AcquisitionPlan {
   int grid_pixels_per_axis = 3;  // n x n pixels over [0.1, 0.9] of the image
   std::vector<int> faces{1};
   std::vector<int> zooms{0};
-  std::string Check() const;
+  // Bounds that keep a simulation's memory in reach (a 1e5 x 1e5 grid would
+  // need about 13 GB): at most kMaxRecords records (EstimatedRecords) and
+  // zoom levels below kMaxZoomLevels (the truth has a camera per level).
+  static constexpr double kMaxRecords = 2e6;
+  static constexpr int kMaxZoomLevels = 100;
+  // The number of records the plan gives (PlanRecords), computed without
+  // building them (in double: the product of counts may exceed any int).
+  double EstimatedRecords() const;
+  // Empty if the plan is within the bounds above, else what is wrong, naming
+  // the simulate.plan keys to change.
+  std::string CheckSize() const;
+  std::string Check() const;  // includes CheckSize()
 };
 
 // Shots of known targets (simulator.cc, SimulatePixels): for every zoom and

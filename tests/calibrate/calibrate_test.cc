@@ -7,11 +7,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/io/errors.h"
 #include "libcalib/sim/simulator.h"
 
 namespace rtscalib {
@@ -201,6 +204,43 @@ TEST(Calibrate, InvalidOptionsAreRejectedBeforeAnyWork) {
   options = ApiOptions(sim.truth);
   options.fit.max_iterations = 0;
   EXPECT_THAT(options.Check(), HasSubstr("fit.max_iterations"));
+}
+
+// The screening runs inside Calibrate, so a program that calls it is
+// protected: a zoom of 2147483647 is an InputError naming the row before any
+// stage allocates a camera per level (SPEC 2), and no step starts.
+TEST(Calibrate, DataMistakesAreRejectedBeforeAnyStep) {
+  SimulationOptions sim;
+  sim.truth = PaperTruth(1);
+  SimulatedData data = Simulate(sim);
+  for (size_t i = 0; i < data.obs.records.size(); ++i)
+    data.obs.records[i].line = static_cast<int>(i) + 2;
+  Record& cam = *std::find_if(data.obs.records.begin(), data.obs.records.end(),
+                              [](const Record& r) { return r.tool == Tool::kCam; });
+  cam.zoom = std::numeric_limits<int>::max();
+  RecordingProgress progress;
+  try {
+    Calibrate(data.obs, ApiOptions(sim.truth), &progress);
+    FAIL() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file, "simulated records");
+    EXPECT_EQ(e.line, cam.line);
+    EXPECT_EQ(e.column, "zoom");
+  }
+  EXPECT_THAT(progress.steps, ::testing::IsEmpty());
+}
+
+// Warnings of the screening start the notes.
+TEST(Calibrate, ScreeningWarningsAreNotes) {
+  SimulationOptions sim;
+  sim.truth = PaperTruth(1);
+  SimulatedData data = Simulate(sim);
+  data.obs.records.front().phi += 2 * M_PI;
+  CalibrationOptions options = ApiOptions(sim.truth);
+  const CalibrationResult result = Calibrate(data.obs, options);
+  ASSERT_FALSE(result.notes.empty());
+  EXPECT_THAT(result.notes.front(),
+              ::testing::StartsWith("screening: simulated records: phi beyond 2 pi on 1 of "));
 }
 
 }  // namespace

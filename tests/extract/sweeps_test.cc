@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
+#include <string>
+
 #include "tests/extract/extract_fixture.h"
 
 namespace rtscalib {
@@ -28,6 +32,28 @@ TEST(FindPrincipalPoints, FromIntrinsicsOrDetected) {
   EXPECT_TRUE(pp[1]->detected);
   EXPECT_EQ(pp[1]->pixel, Eigen::Vector2d(640, 480));
   EXPECT_TRUE(FindPrincipalPoints({}, {}, ExtractOptions()).empty());
+}
+
+// A mistyped zoom must not size the result (2147483647 + 1 overflowed an int
+// and a zoom of 1e6 allocated a camera per level): the levels are bounded by
+// the data, and the message names the row.
+TEST(FindPrincipalPoints, ZoomFarBeyondTheDataIsAnError) {
+  auto records = PaperPlanRecords(kIdeal);
+  for (size_t i = 0; i < records.size(); ++i) records[i].line = static_cast<int>(i) + 2;
+  Record& cam = *std::find_if(records.begin(), records.end(),
+                              [](const Record& r) { return r.tool == Tool::kCam; });
+  for (int zoom : {1000000, std::numeric_limits<int>::max()}) {
+    cam.zoom = zoom;
+    try {
+      FindPrincipalPoints(records, {}, ExtractOptions());
+      FAIL() << "no ExtractionError for zoom " << zoom;
+    } catch (const ExtractionError& e) {
+      EXPECT_EQ(std::string(e.what()), "zoom " + std::to_string(zoom) + " on line " +
+                                           std::to_string(cam.line) +
+                                           ", but the data hold 2 zoom level(s); zoom levels "
+                                           "are 0..N-1 (SPEC 2)");
+    }
+  }
 }
 
 // Rows elsewhere in the image (a grid pixel at more poses than the triplet)

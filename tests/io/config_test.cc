@@ -3,7 +3,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <thread>
 
 #include "render/settings.h"
 #include "tests/io/io_test_util.h"
@@ -376,6 +378,52 @@ TEST(Config, BadPlanValues) {
             "diagnose.significance");
 }
 
+// Sizes that would exhaust memory (a 1e5 x 1e5 grid: 12.6 GB; 100000
+// threads: 2.2 GB) are errors at their key before anything is allocated.
+TEST(Config, SizeBoundsNameTheKey) {
+  TempDir dir;
+  const InputError grid =
+      ConfigError(dir, "simulate: {plan: {grid: {phi_steps: 100000, theta_steps: 100000}}}\n");
+  EXPECT_EQ(grid.key, "simulate.plan");
+  EXPECT_EQ(grid.expected,
+            "a plan within the simulation's bounds: the plan gives 2.2e+11 records, more than the "
+            "limit of 2e+06 (grid 100000 x 100000 poses, 15 sweep points); make "
+            "simulate.plan.grid.phi_steps x theta_steps, grid.pixels_per_axis or sweep_points "
+            "smaller");
+  const InputError zoom = ConfigError(dir, "simulate: {plan: {zooms: [0, 1000000]}}\n");
+  EXPECT_EQ(zoom.expected,
+            "a plan within the simulation's bounds: simulate.plan.zooms entries must be < 100 "
+            "(got 1000000; zoom levels are 0..N-1, SPEC 2)");
+  const InputError threads =
+      ConfigError(dir, std::string(kSimulateOnly) + "fit: {threads: 100000}\n");
+  EXPECT_EQ(threads.key, "fit.threads");
+  const int max_threads = 4 * static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  EXPECT_EQ(threads.expected, "a thread count 1.." + std::to_string(max_threads) +
+                                  " (at most 4 x this machine's " +
+                                  std::to_string(max_threads / 4) + " hardware threads)");
+  EXPECT_EQ(ConfigError(dir, std::string(kSimulateOnly) + "fit: {threads: 0}\n").key,
+            "fit.threads");
+}
+
+TEST(Config, ScreenSection) {
+  TempDir dir;
+  const RunConfig c = LoadConfig(dir.Write(
+      "run.yaml", std::string(kSimulateOnly) +
+                      "screen: {pixel_margin_px: 10, max_extent_m: 500, max_missing_zooms: 2}\n"));
+  EXPECT_EQ(c.screen.pixel_margin_px, 10.0);
+  EXPECT_EQ(c.screen.max_extent_m, 500.0);
+  EXPECT_EQ(c.screen.max_missing_zooms, 2);
+  EXPECT_EQ(CalibrationOptionsOf(c).screen.max_missing_zooms, 2);
+  EXPECT_EQ(ConfigError(dir, std::string(kSimulateOnly) + "screen: {max_extent_m: 0}\n").key,
+            "screen.max_extent_m");
+  const InputError many =
+      ConfigError(dir, std::string(kSimulateOnly) + "screen: {max_missing_zooms: 5000}\n");
+  EXPECT_EQ(many.key, "screen");
+  EXPECT_EQ(many.expected, "screen.max_missing_zooms must be in 0..1000 (got 5000)");
+  EXPECT_EQ(ConfigError(dir, std::string(kSimulateOnly) + "screen: {margin: 3}\n").key,
+            "screen.margin");
+}
+
 // The dump is a config that loads to the same run, and dumping that again
 // gives the same text (paths are absolute, numbers exact).
 TEST(Config, DumpLoadsBackToTheSameConfig) {
@@ -414,6 +462,9 @@ TEST(Config, DumpLoadsBackToTheSameConfig) {
   EXPECT_EQ(render_b.blur_sigma, render_a.blur_sigma);
   EXPECT_EQ(render_b.family, render_a.family);
   EXPECT_EQ(b.diagnose.significance, a.diagnose.significance);
+  EXPECT_EQ(b.screen.pixel_margin_px, a.screen.pixel_margin_px);
+  EXPECT_EQ(b.screen.max_extent_m, a.screen.max_extent_m);
+  EXPECT_EQ(b.screen.max_missing_zooms, a.screen.max_missing_zooms);
   EXPECT_EQ(b.truth_from_paper, a.truth_from_paper);
   EXPECT_EQ(b.simulate->targets.boards[0].ref_from_board.translation,
             a.simulate->targets.boards[0].ref_from_board.translation);

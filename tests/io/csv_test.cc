@@ -51,6 +51,43 @@ TEST(Csv, ExtraColumnsAreNoted) {
   EXPECT_THAT(t.notes()[0], HasSubstr("yy, zz"));
 }
 
+// A UTF-16 or UTF-32 file would read as one field of odd bytes per line;
+// its byte-order mark (or its NUL bytes) names the encoding instead.
+TEST(Csv, WideEncodingsAreErrorsThatSayHowToFixThem) {
+  const std::string utf16le(
+      "\xFF\xFE"
+      "a\0,\0b\0\n\0"
+      "1\0,\0"
+      "2\0\n\0",
+      16);
+  const InputError e16 = CatchInputError([&] { ParseText(utf16le, {{"a"}, {}}); });
+  EXPECT_EQ(std::string(e16.what()),
+            "t.csv:1: encoding: expected a UTF-8 text file (save it as UTF-8), got 'file is "
+            "UTF-16 (little-endian BOM)'");
+  const InputError e16be = CatchInputError([] {
+    ParseText(std::string("\xFE\xFF\0a\0\n", 6), {{"a"}, {}});
+  });
+  EXPECT_EQ(e16be.got, "file is UTF-16 (big-endian BOM)");
+  const InputError e32 = CatchInputError([] {
+    ParseText(std::string("\xFF\xFE\0\0"
+                          "a\0\0\0\n",
+                          9),
+              {{"a"}, {}});
+  });
+  EXPECT_EQ(e32.got, "file is UTF-32 (little-endian BOM)");
+  const InputError nul = CatchInputError([] {
+    ParseText(std::string("a\n1\0\n", 5), {{"a"}, {}});
+  });
+  EXPECT_EQ(nul.line, 2);
+  EXPECT_EQ(nul.got, "file is UTF-16 or UTF-32 (NUL bytes)");
+  // A UTF-8 byte-order mark is skipped.
+  const CsvTable t = ParseText(
+      "\xEF\xBB\xBF"
+      "a\n1\n",
+      {{"a"}, {}});
+  EXPECT_EQ(t.Number(0, "a"), 1.0);
+}
+
 TEST(Csv, RaggedRowIsAnError) {
   const InputError e = CatchInputError([] { ParseText("a,b\n1,2\n1,2,3\n", {{"a"}, {}}); });
   EXPECT_EQ(e.line, 3);

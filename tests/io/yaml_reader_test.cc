@@ -190,6 +190,21 @@ TEST(YamlReader, SyntaxErrorsAndBadRoot) {
   EXPECT_EQ(missing.file, "/nonexistent/c.yaml");
 }
 
+// A second document would be ignored by a reader that takes the first, so
+// none of its keys would take effect.
+TEST(YamlReader, SecondDocumentIsAnError) {
+  const InputError e = CatchInputError(
+      [] { YamlDocument::Parse("model: {kinematics: dh}\n---\nfit: {threads: 2}\n", "d.yaml"); });
+  EXPECT_EQ(std::string(e.what()),
+            "d.yaml:3:1: second YAML document: expected one YAML document per file (remove the "
+            "'---' line before it), got 'fit: {threads: 2}'");
+  // A leading `---` and a trailing empty document hold nothing else.
+  const YamlDocument doc = YamlDocument::Parse("---\na: 1\n---\n", "ok.yaml");
+  double a = 0;
+  EXPECT_TRUE(doc.Root().Read("a", &a));
+  EXPECT_EQ(a, 1.0);
+}
+
 TEST(YamlReader, MappingExpected) {
   const YamlDocument doc = YamlDocument::Parse("model: dh\n", "t.yaml");
   const InputError e = CatchInputError([&] { doc.Root().Require("model").Find("kinematics"); });

@@ -261,6 +261,39 @@ TEST(Simulator, InvalidOptionsAreRejectedWithAMessage) {
   EXPECT_NE(o.Check().find("sweep_points"), std::string::npos) << o.Check();
 }
 
+// The size bound counts what PlanRecords builds, exactly, without building
+// it; a plan beyond it (a 1e5 x 1e5 grid: about 13 GB) is rejected before
+// anything is allocated.
+TEST(Simulator, PlanSizeIsCountedExactlyAndBounded) {
+  const InstrumentModel truth = PaperTruth(3);
+  AcquisitionPlan plan;
+  EXPECT_EQ(plan.EstimatedRecords(), static_cast<double>(PlanRecords(plan, truth).size()));
+  plan.grid_phi_steps = 7;
+  plan.grid_theta_steps = 5;
+  plan.grid_pixels_per_axis = 4;
+  plan.faces = {1, 2};
+  plan.zooms = {0, 2};
+  EXPECT_EQ(plan.EstimatedRecords(), static_cast<double>(PlanRecords(plan, truth).size()));
+  plan.sweeps = false;
+  EXPECT_EQ(plan.EstimatedRecords(), static_cast<double>(PlanRecords(plan, truth).size()));
+  EXPECT_EQ(plan.CheckSize(), "");
+
+  AcquisitionPlan huge;
+  huge.grid_phi_steps = 100000;
+  huge.grid_theta_steps = 100000;
+  EXPECT_EQ(huge.Check(),
+            "the plan gives 2.2e+11 records, more than the limit of 2e+06 (grid 100000 x 100000 "
+            "poses, 15 sweep points); make simulate.plan.grid.phi_steps x theta_steps, "
+            "grid.pixels_per_axis or sweep_points smaller");
+  SimulationOptions o = IdealOptions();
+  o.plan = huge;
+  EXPECT_THROW(Simulate(o), std::invalid_argument);
+  AcquisitionPlan zooms;
+  zooms.zooms = {0, 100};
+  EXPECT_EQ(zooms.Check(),
+            "simulate.plan.zooms entries must be < 100 (got 100; zoom levels are 0..N-1, SPEC 2)");
+}
+
 TEST(Simulator, PaperTruthHasOneCameraPerZoom) {
   const InstrumentModel m = PaperTruth(3);
   EXPECT_EQ(m.kinematics, Kinematics::kDh);
