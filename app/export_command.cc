@@ -54,8 +54,9 @@ int RunExport(const ExportArgs& args) {
     if (fs::exists(f)) existing += (existing.empty() ? "'" : ", '") + f.string() + "'";
   }
   if (!existing.empty() && !args.force) {
-    throw std::runtime_error("export: " + existing +
-                             " exist(s); rtscalib does not overwrite files you have (use --force)");
+    throw std::invalid_argument(
+        "export: " + existing +
+        " exist(s); rtscalib does not overwrite files you have (use --force)");
   }
   fs::create_directories(dir);
 

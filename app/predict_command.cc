@@ -16,8 +16,9 @@ int RunPredict(const PredictArgs& args) {
     throw std::invalid_argument("predict: give exactly one of --records or --pixels");
   }
   if (std::filesystem::exists(args.out) && !args.force) {
-    throw std::runtime_error("predict: '" + args.out +
-                             "' exists; rtscalib does not overwrite files you have (use --force)");
+    throw std::invalid_argument(
+        "predict: '" + args.out +
+        "' exists; rtscalib does not overwrite files you have (use --force)");
   }
   // kKeep also covers a file that appears while predicting.
   const Existing existing = args.force ? Existing::kReplace : Existing::kKeep;
@@ -30,6 +31,7 @@ int RunPredict(const PredictArgs& args) {
             args.records + ":" + std::to_string(r.line) + ": column 'zoom': the model has " +
             std::to_string(model.NumZooms()) + " zoom level(s), got " + std::to_string(r.zoom));
       }
+      RequireDeterminedTool(model, r.tool, r.zoom, args.records, r.line);
       r.x = r.tool == Tool::kEdm ? PredictEdm(model, r.phi, r.theta, r.d)
                                  : PredictCam(model, r.zoom, r.phi, r.theta, r.u, r.v, r.d);
     }
@@ -46,6 +48,7 @@ int RunPredict(const PredictArgs& args) {
           args.pixels + ":" + std::to_string(p.line) + ": column 'zoom': the model has " +
           std::to_string(model.NumZooms()) + " zoom level(s), got " + std::to_string(p.zoom));
     }
+    RequireDeterminedTool(model, Tool::kCam, p.zoom, args.pixels, p.line);
     Eigen::Vector2d uv;
     if (!PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &uv)) {
       ++behind;
