@@ -205,7 +205,6 @@ void RefineConfigured(const Observations& obs, const std::vector<Record>& reduce
     // The sweeps alone never span the image: intrinsics stay as they are there.
     ro.fit_intrinsics = fo.fit_intrinsics && CamDataSpanImage(reduced_obs, result->start, 0);
     result->reduced.model = result->start;
-    ValidateStart("refinement on the reduced set", reduced_obs, result->start, ro, checks);
     result->reduced.fit = Refine(reduced_obs, ro, &result->reduced.model);
     ValidateFit("refinement on the reduced set", reduced_obs, result->reduced.model,
                 result->reduced.fit, ro, checks);
@@ -216,7 +215,6 @@ void RefineConfigured(const Observations& obs, const std::vector<Record>& reduce
   Refinement& full = result->refined;
   full.model = has_more ? result->reduced.model : result->start;
   full.model.sigmas = {};
-  ValidateStart("refinement on the full set", obs, full.model, fo, checks);
   full.fit = Refine(obs, fo, &full.model);
   progress->Note("converged: " + std::string(full.fit.converged ? "yes" : "no") + ", " +
                  std::to_string(full.fit.iterations) + " iterations");
@@ -382,6 +380,9 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   result.fit_options = options.fit;
   result.fit_options.fit_intrinsics = FitIntrinsics(obs, options, result.start);
   result.intrinsics_fitted = result.fit_options.fit_intrinsics;
+  // Against every row: a start made non-finite by one row outside the
+  // reduced set (the extraction uses them all) names that row.
+  ValidateStart("start of the refinement", obs, result.start, result.fit_options, options.checks);
   RefineConfigured(obs, reduced, options.checks, progress, &result);
 
   if (options.model.faces == FaceMode::kSeparate) {

@@ -270,11 +270,10 @@ void ValidateStart(const std::string& stage, const Observations& obs, const Inst
     std::vector<std::pair<double, std::string>> big;
     for (size_t i = 0; i < obs.records.size(); ++i) {
       const Record& r = obs.records[i];
-      const double size =
-          std::max({r.x.cwiseAbs().maxCoeff(), std::abs(r.d), std::abs(r.u), std::abs(r.v)});
+      const double size = std::max(r.x.cwiseAbs().maxCoeff(), std::abs(r.d));
       big.push_back({std::isfinite(size) ? size : std::numeric_limits<double>::infinity(),
                      WhereOf(obs.records_source, r.line, static_cast<int>(i)) +
-                         ": largest of |x|, |y|, |z|, |d|, |u|, |v| " + Sci(size)});
+                         ": largest of |x|, |y|, |z|, |d| " + Sci(size)});
     }
     std::stable_sort(big.begin(), big.end(),
                      [](const auto& a, const auto& b) { return a.first > b.first; });
