@@ -145,9 +145,12 @@ class Failure : public ::testing::Test {
     Put(config, y.str());
     return config;
   }
-  // Index of the first grid row of `tool` outside the default critical regions.
+  // Index of the last grid row of `tool` outside the default critical
+  // regions (in the first grid rows a huge value breaks the sweep search
+  // instead, an input error).
   static int GridRow(const std::vector<Record>& records, Tool tool) {
-    for (size_t i = 0; i < records.size(); ++i) {
+    for (size_t k = 0; k < records.size(); ++k) {
+      const size_t i = records.size() - 1 - k;
       const Record& r = records[i];
       if (r.tool == tool && r.set == "grid" &&
           !InCriticalRegion(r.theta, 10 * M_PI / 180, 135 * M_PI / 180))
@@ -210,6 +213,38 @@ TEST_F(Failure, BrokenRowExitsThreeNamesTheRowAndLeavesTheTopAlone) {
     if (Read(e.path() / "status").rfind("failed: ", 0) == 0) ++failed;
   }
   EXPECT_EQ(failed, 2);
+}
+
+// One EDM row 0.5 m off among rows at 1e-5 m: its residual cannot be
+// absorbed, EDM sigma0 ~ 0.5 / 1e-5 / sqrt(3 n) >> 100 (fit.max_sigma0): exit
+// 3 naming the row first.
+TEST_F(Failure, ResidualsFarBeyondTheSigmasExitThreeNamingTheRow) {
+  std::vector<Record> records = Records();
+  const int row = GridRow(records, Tool::kEdm);
+  records[row].x.z() += 0.5;
+  std::string err;
+  EXPECT_EQ(RunConfig(Config(records, "gross.csv"), &err), 3) << err;
+  EXPECT_NE(err.find("calibration failed (residuals far beyond the sigmas)"), std::string::npos)
+      << err;
+  EXPECT_NE(err.find("\n  " + (dir_ / "gross.csv").string() + ":" + std::to_string(row + 2) +
+                     ": EDM residual"),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(fs::exists(root_ / "model.yaml"));
+}
+
+// One iteration cannot reach convergence from the extraction: exit 3, not a
+// model "NOT converged" published.
+TEST_F(Failure, NotConvergedExitsThree) {
+  const fs::path config = Config(Records(), "records.csv");
+  std::string text = Read(config);
+  text.replace(text.find("fit:\n"), 5, "fit:\n  max_iterations: 1\n");
+  Put(config, text);
+  std::string err;
+  EXPECT_EQ(RunConfig(config, &err), 3) << err;
+  EXPECT_NE(err.find("calibration failed (not converged)"), std::string::npos) << err;
+  EXPECT_NE(err.find("Maximum number of iterations"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(root_ / "model.yaml"));
 }
 
 // Camera rows only: the EDM tool is written as not determined (no sigma),
