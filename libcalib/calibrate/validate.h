@@ -8,7 +8,10 @@
 //      residual (r / sigma_a_priori)^2 is not finite;
 //   2. not converged: Ceres stopped without convergence (NO_CONVERGENCE,
 //      FAILURE: FitSummary::converged false) or did not even evaluate the
-//      start (0 iterations);
+//      start (0 iterations). FitSummary does not count successful steps: a
+//      bad start from which no step succeeded (Ceres may then still report
+//      CONVERGENCE on the trust region radius) is caught by 3, a start that
+//      is already the optimum is not a failure;
 //   3. absurd: a group's (EDM records, camera records, pixels) a-posteriori
 //      sigma0 = sqrt(sum (r / sigma)^2 / (k n)) exceeds FitChecks::max_sigma0
 //      (r: a record's 3-D point distance [m] (k = 3) or a pixel's 2-D error
