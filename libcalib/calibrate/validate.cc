@@ -281,8 +281,9 @@ void ValidateStart(const std::string& stage, const Observations& obs, const Inst
     for (size_t i = 0; i < big.size() && static_cast<int>(i) < checks.max_rows_named; ++i)
       rows.push_back(big[i].second);
     throw CalibrationFailure(CalibrationFailure::Kind::kNonFinite, stage,
-                             "the start of the refinement is not finite: parameters " +
-                                 Join(params) + "; the records below have the largest values",
+                             "non-finite parameters " + Join(params) +
+                                 " (an overflow while computing the start); the records below "
+                                 "have the largest values",
                              rows);
   }
   ThrowIfNonFinite(stage, "the cost at the start", start, Residuals(obs, start, options), 0.0,
