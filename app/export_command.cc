@@ -5,9 +5,11 @@
 #include <stdexcept>
 
 #include "app/commands.h"
+#include "app/safe_write.h"
 #include "libcalib/export/opencv_export.h"
 #include "libcalib/export/surveyor_export.h"
 #include "libcalib/export/urdf_export.h"
+#include "libcalib/io/errors.h"
 #include "libcalib/io/model_io.h"
 
 namespace rtscalib::app {
@@ -19,7 +21,7 @@ void WriteText(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   out << text;
   out.close();
-  if (!out) throw std::runtime_error("export: cannot write " + path.string());
+  if (!out) throw WriteError(path.string(), "the output stream failed");
 }
 
 }  // namespace
@@ -51,11 +53,14 @@ int RunExport(const ExportArgs& args) {
   }
   std::string existing;
   for (const fs::path& f : files) {
-    if (fs::exists(f)) existing += (existing.empty() ? "'" : ", '") + f.string() + "'";
+    if (fs::exists(f)) existing += (existing.empty() ? "" : ", ") + f.string();
   }
   if (!existing.empty() && !args.force) {
-    throw std::runtime_error("export: " + existing +
-                             " exist(s); rtscalib does not overwrite files you have (use --force)");
+    // The user's files are in the way: an input error (exit 1).
+    throw InputError::File(existing, 0, "export",
+                           "no file under these names (rtscalib does not overwrite files you "
+                           "have; use --force)",
+                           "existing file(s)");
   }
   fs::create_directories(dir);
 

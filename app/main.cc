@@ -2,12 +2,38 @@
 // subcommands; each parses straight into the library's option structs.
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <stdexcept>
 
 #include "app/commands.h"
+#include "app/safe_write.h"
+#include "libcalib/calibrate/validate.h"
+#include "libcalib/extract/options.h"
+#include "libcalib/io/errors.h"
+
+namespace {
+
+// Exit codes (docs/conventions.md section 5; also in --help).
+constexpr int kExitInput = 1;     // bad config or data, a file that cannot be read or written
+constexpr int kExitUsage = 2;     // bad command line
+constexpr int kExitFit = 3;       // the data do not support a model (CalibrationFailure)
+constexpr int kExitInternal = 4;  // anything else: a bug in rtscalib
+
+constexpr const char* kExitCodes =
+    "Exit codes:\n"
+    "  0  success\n"
+    "  1  input error: bad config or data (file:line, key, expected, got), data the\n"
+    "     extraction cannot use, a file that cannot be read or written\n"
+    "  2  usage error: bad command line\n"
+    "  3  fit failure: the fit's outcome is not finite, not converged or far beyond\n"
+    "     the stated sigmas; the worst rows are named; nothing is published\n"
+    "  4  internal error: an unexpected exception (please report it)\n";
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"rtscalib - kinematic and camera calibration of robotic total stations"};
   app.require_subcommand(0, 1);
+  app.footer(kExitCodes);
 
   rtscalib::app::RunArgs run;
   app.add_option("--config", run.config, "run the pipeline a config describes (configs/*.yaml)");
@@ -59,7 +85,12 @@ int main(int argc, char** argv) {
   det->add_flag("--force", detect.force, "replace --out if it exists");
   det->add_flag("--quiet", detect.quiet, "no progress lines on stderr");
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help is a ParseError with exit code 0.
+    return app.exit(e) == 0 ? 0 : kExitUsage;
+  }
   try {
     if (pred->parsed()) return rtscalib::app::RunPredict(predict);
     if (dg->parsed()) return rtscalib::app::RunDiagnose(diag);
@@ -67,11 +98,28 @@ int main(int argc, char** argv) {
     if (det->parsed()) return rtscalib::app::RunDetect(detect);
     if (run.config.empty()) {
       std::cerr << app.help();
-      return 2;
+      return kExitUsage;
     }
     return rtscalib::app::RunCalibration(run);
-  } catch (const std::exception& e) {
+  } catch (const rtscalib::CalibrationFailure& e) {
+    std::cerr << "rtscalib: calibration failed (" << rtscalib::FailureKindName(e.kind)
+              << "): " << e.what() << "\n";
+    return kExitFit;
+  } catch (const rtscalib::InputError& e) {
     std::cerr << "rtscalib: error: " << e.what() << "\n";
-    return 1;
+    return kExitInput;
+  } catch (const rtscalib::app::WriteError& e) {
+    std::cerr << "rtscalib: error: " << e.what() << "\n";
+    return kExitInput;
+  } catch (const rtscalib::ExtractionError& e) {
+    std::cerr << "rtscalib: error: " << e.what() << "\n";
+    return kExitInput;
+  } catch (const std::invalid_argument& e) {
+    // The library's and the commands' rejections of arguments and data.
+    std::cerr << "rtscalib: error: " << e.what() << "\n";
+    return kExitInput;
+  } catch (const std::exception& e) {
+    std::cerr << "rtscalib: internal error: " << e.what() << "\n";
+    return kExitInternal;
   }
 }

@@ -84,8 +84,9 @@ int RunPredict(const PredictArgs& args) {
     throw std::invalid_argument("predict: give exactly one of --records or --pixels");
   }
   if (std::filesystem::exists(args.out) && !args.force) {
-    throw std::runtime_error("predict: '" + args.out +
-                             "' exists; rtscalib does not overwrite files you have (use --force)");
+    throw std::invalid_argument(
+        "predict: '" + args.out +
+        "' exists; rtscalib does not overwrite files you have (use --force)");
   }
   // kKeep also covers a file that appears while predicting.
   const Existing existing = args.force ? Existing::kReplace : Existing::kKeep;

@@ -23,12 +23,14 @@ std::string Fmt(const char* f, double v) {
   return buf;
 }
 
-json PoseJson(const PoseBlock& p, const PoseSigma* s) {
+// `determined` false: the start value, no sigmas (docs/conventions.md section 6).
+json PoseJson(const PoseBlock& p, const PoseSigma* s, bool determined = true) {
   const Eigen::Vector3d e = p.Euler();
   json j = {{"euler", {e[0], e[1], e[2]}},
             {"t", {p.t[0], p.t[1], p.t[2]}},
-            {"q", {p.q[0], p.q[1], p.q[2], p.q[3]}}};
-  if (s) {
+            {"q", {p.q[0], p.q[1], p.q[2], p.q[3]}},
+            {"determined", determined}};
+  if (s && determined) {
     j["euler_sigma"] = {s->euler[0], s->euler[1], s->euler[2]};
     j["t_sigma"] = {s->t[0], s->t[1], s->t[2]};
   }
@@ -55,17 +57,20 @@ json ModelJson(const InstrumentModel& m) {
             {"effects", m.effects.Names()},
             {"base", PoseJson(m.base, s ? &m.sigmas.base : nullptr)},
             {"links", LinksJson(m)},
-            {"edm", PoseJson(m.edm, s ? &m.sigmas.edm : nullptr)}};
+            {"edm", PoseJson(m.edm, s ? &m.sigmas.edm : nullptr, m.edm_determined)}};
   json cams = json::array();
   for (int z = 0; z < m.NumZooms(); ++z) {
     const CameraTool& c = m.cams[z];
     json cj = {{"zoom", z},
-               {"tool", PoseJson(c.flange_from_cam, s && z < (int)m.sigmas.cam_tools.size()
-                                                        ? &m.sigmas.cam_tools[z]
-                                                        : nullptr)},
+               {"tool",
+                PoseJson(c.flange_from_cam,
+                         s && z < (int)m.sigmas.cam_tools.size() ? &m.sigmas.cam_tools[z] : nullptr,
+                         c.determined)},
                {"intrinsics", c.intrinsics},
-               {"distortion", c.distortion}};
-    if (s && z < (int)m.sigmas.intrinsics.size()) cj["intrinsics_sigma"] = m.sigmas.intrinsics[z];
+               {"distortion", c.distortion},
+               {"determined", c.determined}};
+    if (s && c.determined && z < (int)m.sigmas.intrinsics.size())
+      cj["intrinsics_sigma"] = m.sigmas.intrinsics[z];
     cams.push_back(cj);
   }
   j["cameras"] = cams;
@@ -286,19 +291,21 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
         << Fmt("%.6f", std::abs(p[kDhGamma])) << "      " << Fmt("%+.4e", p[kDhD]) << "\n";
     }
   };
-  auto pose_row = [&](const char* name, const PoseBlock& p) {
+  auto pose_row = [&](const char* name, const PoseBlock& p, bool determined = true) {
     const Eigen::Vector3d e = p.Euler();
     o << "  " << std::left << std::setw(12) << name << std::right;
     for (int i = 0; i < 3; ++i) o << Fmt("%+.4f", e[i]) << "  ";
     for (int i = 0; i < 3; ++i) o << Fmt("%+.4e", p.t[i]) << "  ";
+    if (!determined) o << "(not determined by the data: start value)";
     o << "\n";
   };
   auto transforms = [&](const InstrumentModel& m, const char* title) {
     o << title << "\n  transform   alpha    beta     gamma    t_x [m]      t_y [m]      t_z [m]\n";
     pose_row("M_B", m.base);
     for (int z = 0; z < m.NumZooms(); ++z)
-      pose_row(("M_T(CAM" + std::to_string(z) + ")").c_str(), m.cams[z].flange_from_cam);
-    pose_row("M_T(EDM)", m.edm);
+      pose_row(("M_T(CAM" + std::to_string(z) + ")").c_str(), m.cams[z].flange_from_cam,
+               m.cams[z].determined);
+    pose_row("M_T(EDM)", m.edm, m.edm_determined);
   };
 
   o << "rtscalib report\n===============\nconfig: " << config.config_path << "\n";
@@ -354,6 +361,11 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
       const auto& k = r.calibration.model.cams[z].intrinsics;
       const auto& s = r.calibration.model.sigmas.intrinsics[z];
       o << "  zoom " << z << ":";
+      if (!r.calibration.model.cams[z].determined) {
+        for (int i = 0; i < 4; ++i) o << "  " << Fmt("%.3f", k[i]);
+        o << "  (not determined by the data: start value)\n";
+        continue;
+      }
       for (int i = 0; i < 4; ++i) o << "  " << Fmt("%.3f", k[i]) << " +- " << Fmt("%.3f", s[i]);
       o << "\n";
     }

@@ -44,8 +44,9 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
                         {"run", out.run().name},
                         {"records", result.obs.records_source},
                         {"pixels", result.obs.pixels_source}};
-  WriteFileAtomicWith(out.RunFile("model.yaml"),
-                      [&](const std::string& tmp) { WriteModelYaml(tmp, result.calibration.model, meta); });
+  WriteFileAtomicWith(out.RunFile("model.yaml"), [&](const std::string& tmp) {
+    WriteModelYaml(tmp, result.calibration.model, meta);
+  });
   const nlohmann::json report = ReportJson(config, result, out);
   out.Write("report.json", report.dump(2) + "\n");
   WriteReportHtml(config, result, report, out);
@@ -75,8 +76,8 @@ int RunCalibration(const RunArgs& args) {
   if (!args.output.empty()) config.output_dir = std::filesystem::absolute(args.output).string();
   if (!args.write_config.empty()) {
     if (std::filesystem::exists(args.write_config)) {
-      throw std::runtime_error("--write-config: '" + args.write_config +
-                               "' exists; rtscalib does not overwrite files you have");
+      throw std::invalid_argument("--write-config: '" + args.write_config +
+                                  "' exists; rtscalib does not overwrite files you have");
     }
     WriteFileAtomic(args.write_config, DumpRunSettings(settings), Existing::kKeep);
   }

@@ -234,6 +234,16 @@ void CalibratedInstrument::CheckZoom(int zoom) const {
   }
 }
 
+void CalibratedInstrument::CheckCameraDetermined(int zoom) const {
+  CheckZoom(zoom);
+  if (!model_.cams[zoom].determined) {
+    throw PredictionError(PredictionFailure::kNotDetermined,
+                          "a zoom whose camera the model determines (the calibration data had no "
+                          "camera rows or pixels of this zoom)",
+                          std::to_string(zoom));
+  }
+}
+
 int CalibratedInstrument::ImageWidth(int zoom) const {
   CheckZoom(zoom);
   return model_.cams[zoom].width;
@@ -265,6 +275,11 @@ void CheckInImage(const CameraTool& cam, int zoom, double u, double v, const cha
 }  // namespace
 
 Eigen::Vector3d CalibratedInstrument::EdmPoint(double phi, double theta, double d) const {
+  if (!model_.edm_determined) {
+    throw PredictionError(PredictionFailure::kNotDetermined,
+                          "a tool the model determines (the calibration data had no EDM rows)",
+                          "edm");
+  }
   CheckFinite({phi, theta, d}, "readings phi, theta, d");
   const Eigen::Vector3d x = PredictEdm(model_, phi, theta, d);
   CheckFiniteResult(x, "EDM point");
@@ -273,7 +288,7 @@ Eigen::Vector3d CalibratedInstrument::EdmPoint(double phi, double theta, double 
 
 Ray CalibratedInstrument::CameraRay(int zoom, double phi, double theta, double u, double v) const {
   CheckFinite({phi, theta, u, v}, "readings phi, theta and pixel u, v");
-  CheckZoom(zoom);
+  CheckCameraDetermined(zoom);
   CheckInImage(model_.cams[zoom], zoom, u, v, "a pixel");
   Eigen::Matrix<double, 6, 1> r;
   if (!RawRay(model_, zoom, phi, theta, u, v, &r)) {
@@ -298,7 +313,7 @@ Eigen::Vector3d CalibratedInstrument::CameraPoint(int zoom, double phi, double t
 Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
                                             const Eigen::Vector3d& x_ref) const {
   CheckFinite({phi, theta, x_ref[0], x_ref[1], x_ref[2]}, "readings phi, theta and point X, Y, Z");
-  CheckZoom(zoom);
+  CheckCameraDetermined(zoom);
   const CameraTool& cam = model_.cams[zoom];
   const Eigen::Vector3d x_cam = RefFromCam(model_, zoom, phi, theta).Inverse() * x_ref;
   if (!(x_cam.z() > 0)) {

@@ -46,6 +46,7 @@ namespace rtscalib {
 // Why a prediction was refused.
 enum class PredictionFailure {
   kNoSuchZoom,      // zoom level not in the model
+  kNotDetermined,   // the tool (EDM, or this zoom's camera) had no calibration data
   kOutsideImage,    // pixel beyond the image by more than kImageMargin
   kUntrustedPixel,  // pixel cannot be undistorted (outside the trusted region)
   kBehindCamera,    // point on or behind the image plane
@@ -151,6 +152,8 @@ class CalibratedInstrument {
 
  private:
   void CheckZoom(int zoom) const;
+  // CheckZoom, and the zoom's camera was determined by the calibration data.
+  void CheckCameraDetermined(int zoom) const;
   InstrumentModel model_;
   std::vector<ParameterBlock> blocks_;
   Eigen::MatrixXd covariance_;

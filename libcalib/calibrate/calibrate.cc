@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "libcalib/calibrate/validate.h"
 #include "libcalib/extract/intrinsics_from_rays.h"
 #include "libcalib/extract/simplify.h"
 #include "libcalib/fit/init_from_pixels.h"
@@ -194,7 +195,8 @@ bool FitIntrinsics(const Observations& obs, const CalibrationOptions& options,
 // Stage 4: refinement (Sec. 4.3) on the reduced set, then on the full set
 // starting from it; Table 5 of both.
 void RefineConfigured(const Observations& obs, const std::vector<Record>& reduced,
-                      CalibrationProgress* progress, CalibrationResult* result) {
+                      const FitChecks& checks, CalibrationProgress* progress,
+                      CalibrationResult* result) {
   const FitOptions& fo = result->fit_options;
   const Observations reduced_obs = Subset(obs, reduced);
   const bool has_more = reduced.size() < obs.records.size();
@@ -205,6 +207,9 @@ void RefineConfigured(const Observations& obs, const std::vector<Record>& reduce
     ro.fit_intrinsics = fo.fit_intrinsics && CamDataSpanImage(reduced_obs, result->start, 0);
     result->reduced.model = result->start;
     result->reduced.fit = Refine(reduced_obs, ro, &result->reduced.model);
+    ValidateFit("refinement on the reduced set", reduced_obs, result->reduced.model,
+                result->reduced.fit, ro, checks);
+    MarkUndeterminedTools(reduced_obs, ro, &result->reduced.model);
   }
   progress->Step("refining on the full set (" + std::to_string(obs.records.size()) + " records, " +
                  std::to_string(obs.pixels.size()) + " pixels)");
@@ -212,9 +217,14 @@ void RefineConfigured(const Observations& obs, const std::vector<Record>& reduce
   full.model = has_more ? result->reduced.model : result->start;
   full.model.sigmas = {};
   full.fit = Refine(obs, fo, &full.model);
-  if (!has_more) result->reduced = full;
   progress->Note("converged: " + std::string(full.fit.converged ? "yes" : "no") + ", " +
                  std::to_string(full.fit.iterations) + " iterations");
+  ValidateFit("refinement on the full set", obs, full.model, full.fit, fo, checks);
+  for (const std::string& n : MarkUndeterminedTools(obs, fo, &full.model)) {
+    result->notes.push_back(n);
+    progress->Note(n);
+  }
+  if (!has_more) result->reduced = full;
 
   Table5& t5 = result->table5;
   t5.reduced = EvaluateRecords(result->reduced.model, reduced, ErrorMethod::kB);
@@ -227,7 +237,8 @@ void RefineConfigured(const Observations& obs, const std::vector<Record>& reduce
 
 // Stage 5: `faces: separate`: one model per face, started from the joint
 // refined model, and the two-face check.
-FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResult& result) {
+FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResult& result,
+                                  const FitChecks& checks) {
   FaceComparison fc;
   fc.face1 = result.refined.model;
   fc.face2 = result.refined.model;
@@ -236,7 +247,13 @@ FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResu
     fc.note = "faces: separate needs observations in both faces";
   } else {
     fc.fit1 = Refine(o1, result.fit_options, &fc.face1);
+    ValidateFit("face 1 refinement (faces: separate)", o1, fc.face1, fc.fit1, result.fit_options,
+                checks);
+    MarkUndeterminedTools(o1, result.fit_options, &fc.face1);
     fc.fit2 = Refine(o2, result.fit_options, &fc.face2);
+    ValidateFit("face 2 refinement (faces: separate)", o2, fc.face2, fc.fit2, result.fit_options,
+                checks);
+    MarkUndeterminedTools(o2, result.fit_options, &fc.face2);
     ReadTwoFaceDifferences(obs, &fc);
   }
   return fc;
@@ -266,6 +283,12 @@ void DiagnoseModel(const Observations& obs, const CalibrationOptions& options,
           "; model.yaml, Tables 6-7, the final errors and the diagnosis are of that model, "
           "Tables 4-5 of the configured one");
     }
+    // The ladder's last rung is a fit of its own and becomes the run's model.
+    if (r->LadderExtendedModel()) {
+      ValidateFit("refinement of the stepwise model " + sw.ladder.back().model_description, obs,
+                  sw.model, sw.fit, r->fit_options, options.checks);
+      MarkUndeterminedTools(obs, r->fit_options, &sw.model);
+    }
     r->model = sw.model;
     r->fit = sw.fit;
     r->diagnosis = std::move(sw.diagnosis);
@@ -292,7 +315,7 @@ std::string CalibrationOptions::Check() const {
   }
   if (!(diagnose.significance > 0 && diagnose.significance < 1))
     return "diagnose.significance must be in (0, 1)";
-  return "";
+  return checks.Check();
 }
 
 std::vector<Record> ReducedRecords(const std::vector<Record>& records,
@@ -359,11 +382,14 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   result.fit_options = options.fit;
   result.fit_options.fit_intrinsics = FitIntrinsics(obs, options, result.start);
   result.intrinsics_fitted = result.fit_options.fit_intrinsics;
-  RefineConfigured(obs, reduced, progress, &result);
+  // Against every row: a start made non-finite by one row outside the
+  // reduced set (the extraction uses them all) names that row.
+  ValidateStart("start of the refinement", obs, result.start, result.fit_options, options.checks);
+  RefineConfigured(obs, reduced, options.checks, progress, &result);
 
   if (options.model.faces == FaceMode::kSeparate) {
     progress->Step("fitting one model per face");
-    result.faces = FitFacesSeparately(obs, result);
+    result.faces = FitFacesSeparately(obs, result, options.checks);
   }
 
   result.model = result.refined.model;

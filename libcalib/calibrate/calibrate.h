@@ -109,7 +109,11 @@ struct CalibrationResult {
 // (libcalib/screen/screen.h), whose warnings start `notes`. Throws InputError
 // for the data mistakes the screening finds, ExtractionError when the records
 // give no model, std::invalid_argument for invalid options or data the options cannot
-// use (a zoom without a camera). A failing diagnosis does not fail the
+// use (a zoom without a camera), CalibrationFailure (validate.h) when a fit
+// stage's outcome is not finite, not converged or far beyond the sigmas. A
+// tool without rows is kept at its start and marked not determined
+// (InstrumentModel::edm_determined, CameraTool::determined), with a note. A
+// failing diagnosis (its stepwise refit included) does not fail the
 // calibration: it leaves a note (diagnosis absent).
 CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& options,
                             CalibrationProgress* progress = nullptr);

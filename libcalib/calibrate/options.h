@@ -41,6 +41,19 @@ struct DiagnoseOptions {
   double significance = 0.01;  // test level for "significant"
 };
 
+// What a fit's outcome must satisfy to be a model (libcalib/calibrate/validate.h;
+// Check() is defined there).
+struct FitChecks {
+  // The a-priori sigmas are the user's statement of the instrument's noise.
+  // Misjudging them by a factor of a few, or effects the diagnosis still has
+  // to find, give sigma0 of a few to tens; 100 times the stated noise is a
+  // gross error (a wrong unit, a wrong row, a wrong local minimum).
+  double max_sigma0 = 100;
+  int max_rows_named = 20;
+  // Empty if valid, else what is wrong.
+  std::string Check() const;
+};
+
 struct CalibrationOptions {
   ModelSettings model;
   // fit.fit_intrinsics is not read: model.intrinsics decides it
@@ -50,6 +63,7 @@ struct CalibrationOptions {
   // Checked by Calibrate's screening (ScreenObservations), which rejects
   // invalid values itself.
   ScreenOptions screen;
+  FitChecks checks;  // key fit.max_sigma0
   // Empty if valid, else what is wrong (the option's name, what it must be).
   std::string Check() const;
 };

@@ -623,6 +623,7 @@ CalibrationOptions CalibrationOptionsOf(const RunConfig& config) {
   options.fit = config.fit;
   options.diagnose = config.diagnose;
   options.screen = config.screen;
+  options.checks = config.checks;
   return options;
 }
 
@@ -636,7 +637,12 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
 
   if (const std::optional<YamlNode> n = root.Find("data")) ReadData(*n, config.config_dir, &config);
   if (const std::optional<YamlNode> n = root.Find("model")) ReadModel(*n, &config.model);
-  if (const std::optional<YamlNode> n = root.Find("fit")) ReadFit(*n, &config.fit);
+  if (const std::optional<YamlNode> n = root.Find("fit")) {
+    ReadFit(*n, &config.fit);
+    ReadNumber(
+        *n, "max_sigma0", &config.checks.max_sigma0, [](double x) { return x > 1; },
+        "a factor > 1 (a-posteriori over a-priori sigma beyond which a fit fails)");
+  }
   config.fit.fit_intrinsics = config.model.intrinsics == IntrinsicsMode::kFit;
   const std::optional<YamlNode> simulate = root.Find("simulate");
   if (simulate) {
@@ -709,6 +715,7 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::EndMap;
   e << YAML::Key << "max_iterations" << YAML::Value << f.max_iterations;
   e << YAML::Key << "translation_bound_m" << YAML::Value << Num(f.translation_bound_m);
+  e << YAML::Key << "max_sigma0" << YAML::Value << Num(c.checks.max_sigma0);
   e << YAML::Key << "critical_region" << YAML::Value << YAML::Flow << YAML::BeginMap;
   e << YAML::Key << "min_zenith_deg" << YAML::Value << ExactScaled(f.min_zenith_rad, kRadPerDeg);
   e << YAML::Key << "max_zenith_deg" << YAML::Value << ExactScaled(f.max_zenith_rad, kRadPerDeg);

@@ -41,6 +41,7 @@ struct RunConfig {
   // model.intrinsics kFit sets fit.fit_intrinsics; kAuto leaves it false for
   // Calibrate to decide from the data.
   FitOptions fit;
+  FitChecks checks;  // fit.max_sigma0 (libcalib/calibrate/validate.h)
   // Present when the config has a `simulate` section. Used only when there
   // are no data files (then it is required).
   std::optional<SimulationOptions> simulate;

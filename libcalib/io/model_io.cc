@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "libcalib/io/errors.h"
@@ -39,8 +41,15 @@ void EmitNamed(YAML::Emitter& e, const char* const* names, const double* x, int 
   e << YAML::EndMap;
 }
 
-void EmitPose(YAML::Emitter& e, const PoseBlock& pose, const PoseSigma* sigma) {
+// `determined` false: the pose is its start value, not an estimate; it is
+// written with `determined: false` and no sigma (never a sigma of 0).
+void EmitPose(YAML::Emitter& e, const PoseBlock& pose, const PoseSigma* sigma,
+              bool determined = true) {
   e << YAML::BeginMap;
+  if (!determined) {
+    e << YAML::Key << "determined" << YAML::Value << false;
+    sigma = nullptr;
+  }
   e << YAML::Key << "q" << YAML::Value;
   EmitNumbers(e, pose.q.data(), 4);
   e << YAML::Key << "t" << YAML::Value;
@@ -94,13 +103,14 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
   e << YAML::Key << "zoom" << YAML::Value << zoom;
   e << YAML::Key << "width" << YAML::Value << cam.width;
   e << YAML::Key << "height" << YAML::Value << cam.height;
+  if (!cam.determined) e << YAML::Key << "determined" << YAML::Value << false;
   e << YAML::Key << "flange_from_cam" << YAML::Value;
-  EmitPose(e, cam.flange_from_cam, s.valid ? &s.cam_tools[zoom] : nullptr);
+  EmitPose(e, cam.flange_from_cam, s.valid ? &s.cam_tools[zoom] : nullptr, cam.determined);
   e << YAML::Key << "intrinsics" << YAML::Value;
   EmitNamed(e, kIntrinsicsParamNames, cam.intrinsics.data(), camera::kNumIntrinsics);
   e << YAML::Key << "distortion" << YAML::Value;
   EmitNamed(e, kDistortionCoefficientNames, cam.distortion.data(), camera::kNumDistortion);
-  if (s.valid) {
+  if (s.valid && cam.determined) {
     e << YAML::Key << "intrinsics_sigma" << YAML::Value;
     EmitNamed(e, kIntrinsicsParamNames, s.intrinsics[zoom].data(), camera::kNumIntrinsics);
     e << YAML::Key << "distortion_sigma" << YAML::Value;
@@ -129,8 +139,30 @@ void ReadNamedInto(const YamlNode& m, const char* const* names, double* out, int
   }
 }
 
-PoseBlock ReadPose(const YamlNode& m, bool with_sigma, PoseSigma* sigma) {
+// Whether a `determined` key (absent in files before it existed: true) says
+// the block was estimated.
+bool ReadDetermined(const YamlNode& m) {
+  const std::optional<YamlNode> n = m.Find("determined");
+  return !n || n->AsBool();
+}
+
+// A sigma that was never estimated: NaN, never 0.
+void SetNotEstimated(PoseSigma* sigma) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  sigma->rotation.fill(nan);
+  sigma->euler.fill(nan);
+  sigma->t.fill(nan);
+}
+
+PoseBlock ReadPose(const YamlNode& m, bool with_sigma, PoseSigma* sigma,
+                   bool* determined = nullptr) {
   PoseBlock pose;
+  const bool estimated = ReadDetermined(m);
+  if (determined) *determined = estimated;
+  if (!estimated) {
+    SetNotEstimated(sigma);
+    with_sigma = false;
+  }
   const YamlNode q = m.Require("q");
   ReadNumbersInto(q, pose.q.data(), 4);
   const double norm = std::sqrt(pose.q[0] * pose.q[0] + pose.q[1] * pose.q[1] +
@@ -215,7 +247,7 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
   e << YAML::Key << "base" << YAML::Value;
   EmitPose(e, model.base, s.valid ? &s.base : nullptr);
   e << YAML::Key << "edm" << YAML::Value;
-  EmitPose(e, model.edm, s.valid ? &s.edm : nullptr);
+  EmitPose(e, model.edm, s.valid ? &s.edm : nullptr, model.edm_determined);
   if (model.kinematics == Kinematics::kDh) {
     e << YAML::Key << "links" << YAML::Value << YAML::BeginSeq;
     for (int i = 0; i < 2; ++i) {
@@ -272,7 +304,7 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
   ModelSigmas& s = model.sigmas;
   s.valid = with_sigma;
   model.base = ReadPose(root.Require("base"), with_sigma, &s.base);
-  model.edm = ReadPose(root.Require("edm"), with_sigma, &s.edm);
+  model.edm = ReadPose(root.Require("edm"), with_sigma, &s.edm, &model.edm_determined);
   if (model.kinematics == Kinematics::kDh) {
     const YamlNode links = root.Require("links");
     const std::vector<YamlNode> items = links.Items();
@@ -301,7 +333,15 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
       if (*value <= 0) n.Fail(std::string("an image ") + key + " > 0 [px]");
     }
     PoseSigma tool_sigma;
-    cam.flange_from_cam = ReadPose(item.Require("flange_from_cam"), with_sigma, &tool_sigma);
+    cam.determined = ReadDetermined(item);
+    bool tool_determined = true;
+    cam.flange_from_cam =
+        ReadPose(item.Require("flange_from_cam"), with_sigma, &tool_sigma, &tool_determined);
+    if (tool_determined != cam.determined) {
+      item.Require("flange_from_cam")
+          .Fail(std::string("determined: ") + (cam.determined ? "true" : "false") +
+                " as the camera's (a camera is determined as a whole)");
+    }
     ReadNamedInto(item.Require("intrinsics"), kIntrinsicsParamNames, cam.intrinsics.data(),
                   camera::kNumIntrinsics);
     ReadNamedInto(item.Require("distortion"), kDistortionCoefficientNames, cam.distortion.data(),
@@ -309,11 +349,16 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
     if (with_sigma) {
       s.cam_tools.push_back(tool_sigma);
       s.intrinsics.emplace_back();
-      ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicsParamNames, s.intrinsics.back().data(),
-                    camera::kNumIntrinsics, true);
       s.distortion.emplace_back();
-      ReadNamedInto(item.Require("distortion_sigma"), kDistortionCoefficientNames,
-                    s.distortion.back().data(), camera::kNumDistortion, true);
+      if (cam.determined) {
+        ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicsParamNames,
+                      s.intrinsics.back().data(), camera::kNumIntrinsics, true);
+        ReadNamedInto(item.Require("distortion_sigma"), kDistortionCoefficientNames,
+                      s.distortion.back().data(), camera::kNumDistortion, true);
+      } else {
+        s.intrinsics.back().fill(std::numeric_limits<double>::quiet_NaN());
+        s.distortion.back().fill(std::numeric_limits<double>::quiet_NaN());
+      }
     }
     model.cams.push_back(cam);
   }

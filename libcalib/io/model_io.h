@@ -11,6 +11,9 @@
 //   cameras (index = zoom): {zoom, width, height, flange_from_cam: pose,
 //                        intrinsics: {fx, fy, cx, cy}, distortion: {k1 .. tauy},
 //                        intrinsics_sigma, distortion_sigma}
+//   determined: false  on edm or a camera (and its flange_from_cam) the data
+//                      did not determine: its values are the start's and it
+//                      has no sigma keys (never a sigma of 0); absent = true.
 // The parameter blocks (q, t, links, si, intrinsics, distortion) are written
 // with %.17g and are what predictions use, so a model read back predicts bit
 // for bit the same. Euler angles and report-unit values are for people; when
@@ -23,6 +26,7 @@
 #include <vector>
 
 #include "libcalib/model/instrument.h"
+#include "libcalib/model/observations.h"
 
 namespace rtscalib {
 
@@ -33,7 +37,8 @@ using ModelMetadata = std::vector<std::pair<std::string, std::string>>;
 // Throws std::runtime_error if the file cannot be written.
 void WriteModelYaml(const std::string& path, const InstrumentModel& model,
                     const ModelMetadata& metadata = {});
-// Throws InputError naming file and key for anything malformed.
+// Throws InputError naming file and key for anything malformed. Files
+// without `determined` keys (older ones) read as fully determined.
 InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata = nullptr);
 
 }  // namespace rtscalib

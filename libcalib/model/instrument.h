@@ -56,6 +56,10 @@ struct CameraTool {
   std::array<double, camera::kNumDistortion> distortion{};
   int width = 1280;
   int height = 960;
+  // False when the data held no rows of this zoom (outside the critical
+  // regions): the values are the start's, not an estimate, have no
+  // uncertainty, and nothing may be predicted with them.
+  bool determined = true;
 };
 
 // Standard deviations for every parameter, filled by the fit (tangent-space
@@ -84,6 +88,9 @@ struct InstrumentModel {
   std::vector<CameraTool> cams;  // index = zoom level
   std::array<std::array<double, kMaxEffectParams>, kNumKinematicEffects> effect_values{};
   double edm_cyclic_unit_length = 1.5;  // U of edm_cyclic [m], an instrument constant
+  // False when the data held no EDM rows (outside the critical regions): edm
+  // is the start value, not an estimate (as CameraTool::determined).
+  bool edm_determined = true;
   ModelSigmas sigmas;
 
   int NumZooms() const { return static_cast<int>(cams.size()); }

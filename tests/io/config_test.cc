@@ -87,6 +87,7 @@ TEST(Config, DocsFullExampleLoadsWithEveryKey) {
   EXPECT_EQ(c.model.cameras[1].distortion[13], 0.0);
   EXPECT_EQ(c.fit.loss, RobustLoss::kHuber);
   EXPECT_DOUBLE_EQ(c.fit.max_zenith_rad, 135 * M_PI / 180);
+  EXPECT_EQ(c.checks.max_sigma0, 100);
   EXPECT_FALSE(c.fit.fit_intrinsics);  // auto: the pipeline decides
   ASSERT_TRUE(c.simulate.has_value());
   EXPECT_FALSE(c.truth_from_paper);
@@ -252,6 +253,19 @@ TEST(Config, NegativeSigma) {
   EXPECT_THAT(e.expected, HasSubstr("> 0"));
   const InputError noise = ConfigError(dir, "simulate: {noise: {pixel_px: -0.1}}\n");
   EXPECT_EQ(noise.key, "simulate.noise.pixel_px");
+}
+
+// fit.max_sigma0 reaches the calibration's checks; a factor <= 1 would fail
+// every fit with noise and is refused.
+TEST(Config, MaxSigma0) {
+  TempDir dir;
+  const RunConfig c =
+      LoadConfig(dir.Write("run.yaml", std::string(kSimulateOnly) + "fit:\n  max_sigma0: 30\n"));
+  EXPECT_EQ(CalibrationOptionsOf(c).checks.max_sigma0, 30);
+  EXPECT_THAT(DumpConfig(c), HasSubstr("max_sigma0: 30"));
+  const InputError e = ConfigError(dir, std::string(kSimulateOnly) + "fit:\n  max_sigma0: 1\n");
+  EXPECT_EQ(e.key, "fit.max_sigma0");
+  EXPECT_THAT(e.expected, HasSubstr("> 1"));
 }
 
 TEST(Config, ZenithLimitsMustBeInOrder) {

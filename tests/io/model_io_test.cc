@@ -224,6 +224,49 @@ TEST(ModelIo, FileStatesReportUnitsAndEuler) {
   EXPECT_TRUE(n["cameras"][0]["distortion_sigma"].IsDefined());
 }
 
+// A tool the data did not determine: `determined: false` and no sigma keys
+// (never a sigma of 0); read back as not determined with NaN sigmas; predict's
+// check refuses it naming the row.
+TEST(ModelIo, UndeterminedToolsHaveNoSigmaAndReadBackAsUndetermined) {
+  TempDir dir;
+  InstrumentModel m = RandomModel(Kinematics::kDh, 2, true, 8);
+  m.edm_determined = false;
+  m.cams[1].determined = false;
+  WriteModelYaml(dir.Path("model.yaml"), m);
+  const YAML::Node n = YAML::LoadFile(dir.Path("model.yaml"));
+  EXPECT_FALSE(n["edm"]["determined"].as<bool>());
+  EXPECT_FALSE(n["edm"]["sigma"].IsDefined());
+  EXPECT_TRUE(n["base"]["sigma"].IsDefined());
+  EXPECT_FALSE(n["base"]["determined"].IsDefined());
+  EXPECT_FALSE(n["cameras"][0]["determined"].IsDefined());
+  EXPECT_TRUE(n["cameras"][0]["intrinsics_sigma"].IsDefined());
+  EXPECT_FALSE(n["cameras"][1]["determined"].as<bool>());
+  EXPECT_FALSE(n["cameras"][1]["flange_from_cam"]["sigma"].IsDefined());
+  EXPECT_FALSE(n["cameras"][1]["intrinsics_sigma"].IsDefined());
+  EXPECT_FALSE(n["cameras"][1]["distortion_sigma"].IsDefined());
+
+  const InstrumentModel r = ReadModelYaml(dir.Path("model.yaml"));
+  EXPECT_FALSE(r.edm_determined);
+  EXPECT_TRUE(r.cams[0].determined);
+  EXPECT_FALSE(r.cams[1].determined);
+  EXPECT_TRUE(std::isnan(r.sigmas.edm.t[0]));
+  EXPECT_TRUE(std::isnan(r.sigmas.intrinsics[1][0]));
+  EXPECT_EQ(r.edm.t, m.edm.t);  // the start value is kept as written
+}
+
+// Files written before `determined` existed read as fully determined.
+TEST(ModelIo, FilesWithoutDeterminedKeysReadAsDetermined) {
+  TempDir dir;
+  WriteModelYaml(dir.Path("model.yaml"), RandomModel(Kinematics::kDh, 1, true, 9));
+  ASSERT_EQ(std::string::npos, [&] {
+    std::ifstream in(dir.Path("model.yaml"));
+    return std::string(std::istreambuf_iterator<char>(in), {}).find("determined");
+  }());
+  const InstrumentModel r = ReadModelYaml(dir.Path("model.yaml"));
+  EXPECT_TRUE(r.edm_determined);
+  EXPECT_TRUE(r.cams[0].determined);
+}
+
 // Writes a model, lets `edit` change its YAML, and returns the read error.
 template <typename Edit>
 InputError EditedModelError(const TempDir& dir, Edit edit) {
