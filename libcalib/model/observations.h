@@ -1,11 +1,22 @@
-// In-memory observations: the device-API records (SPEC 3, records.csv) and
-// image observations of known points (pixels.csv). Files are read and written
-// by libcalib/io; the numerics only see these structs.
+// In-memory observations: the device-API records (SPEC 3, records.csv), image
+// observations (pixels.csv, or the corners detected in photos, SPEC 7) and the
+// boards those images show. Files are read and written by libcalib/io; the
+// numerics only see these structs.
+//
+// Points of unknown position (SPEC 7): a record with a non-empty `point` name
+// observes one fixed point shared by every record of that name (x is then
+// not an observation); a pixel observation with `X_known == false` observes
+// corner `corner` of tag `target` of a board in `Observations::targets` whose
+// pose is unknown (TagBoard::pose_known == false). Both are estimated with
+// everything else.
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
 #include <string>
 #include <vector>
+
+#include "libcalib/model/targets.h"
 
 namespace rtscalib {
 
@@ -20,6 +31,9 @@ struct Record {
   double d = 1;                                 // EDM distance or camera ray length [m]
   Eigen::Vector3d x = Eigen::Vector3d::Zero();  // point in the reference frame [m]
   std::string set;                              // free label, may be empty
+  // SPEC 7: the name of a fixed point of unknown position; x is unknown when
+  // this is not empty.
+  std::string point;
   int line = 0;  // 1-based line in the source file (0 = not from a file)
 };
 
@@ -30,13 +44,28 @@ struct PixelObservation {
   std::string shot;
   int target = 0, corner = 0;
   Eigen::Vector3d X = Eigen::Vector3d::Zero();   // known point, reference frame [m]
+  // False: X is unknown, the point is corner (target, corner) of a board of
+  // Observations::targets without a pose (SPEC 7).
+  bool X_known = true;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // observed pixel
   int line = 0;
+};
+
+// Width and height of one zoom's images [px], from the photos (SPEC 7: never
+// guessed from where the points fall).
+struct ImageSize {
+  int width = 0, height = 0;
 };
 
 struct Observations {
   std::vector<Record> records;
   std::vector<PixelObservation> pixels;
+  // The boards the pixels see: those with a pose give known X; those without
+  // are estimated (pixels with X_known == false refer to them by tag id).
+  TargetScene targets;
+  // Per zoom, the image size of its photos, when the observations come from
+  // photos (empty otherwise: sizes then come from model.cameras).
+  std::map<int, ImageSize> image_sizes;
   std::string records_source = "records";  // file names for messages
   std::string pixels_source = "pixels";
 };
