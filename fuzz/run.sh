@@ -21,10 +21,11 @@ fuzzers=("$@")
 
 launcher=()
 command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+mkdir -p "$build"
 CC=clang CXX=clang++ cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DRTSCALIB_FUZZ=ON -DRTSCALIB_WITH_RENDER=OFF -DRTSCALIB_BUILD_TESTS=OFF \
-  -DRTSCALIB_BUILD_BENCHMARKS=OFF "${launcher[@]}" > "$build.configure.log" 2>&1 ||
-  { cat "$build.configure.log"; exit 1; }
+  -DRTSCALIB_BUILD_BENCHMARKS=OFF "${launcher[@]}" > "$build/configure.log" 2>&1 ||
+  { cat "$build/configure.log"; exit 1; }
 targets=()
 for f in "${fuzzers[@]}"; do targets+=("${f}_fuzzer"); done
 nice -n "$nice_level" cmake --build "$build" -j2 --target "${targets[@]}"

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
+
 #include "fuzz/fuzz_util.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/yaml_reader.h"
@@ -18,8 +20,12 @@ using rtscalib::fuzz::Require;
 using rtscalib::fuzz::RequireFinite;
 
 constexpr char kName[] = "fuzz.yaml";
-// Deeper trees are legal YAML but only repeat the same code paths.
+// Deeper or bigger trees are legal YAML but only repeat the same code paths;
+// the node budget also keeps aliases of aliases ("billion laughs") from
+// turning the walk exponential.
 constexpr int kMaxDepth = 64;
+constexpr int kMaxNodes = 4000;
+int visited = 0;
 
 // Runs one getter; a clean InputError naming the document is fine.
 template <typename F>
@@ -32,7 +38,7 @@ void Try(F&& getter) {
 }
 
 void Walk(const YamlNode& node, int depth) {
-  if (depth > kMaxDepth) return;
+  if (depth > kMaxDepth || ++visited > kMaxNodes) return;
   Try([&] { node.Dump(); });
   if (node.IsScalar()) {
     Try([&] { RequireFinite(node.AsDouble(), "AsDouble() at " + node.path()); });
@@ -79,12 +85,31 @@ void Walk(const YamlNode& node, int depth) {
   }
 }
 
+// Number of nodes of the tree with aliases expanded, counted up to `limit`.
+// The key check walks the expanded tree; the readers only ever accept trees
+// whose expansion is about the file's size (they read lists of numbers), but
+// this fuzzer marks every key as used, so on an alias bomb it would spend
+// exponential time in a walk no reader can reach.
+int ExpandedSize(const YAML::Node& node, int limit) {
+  int count = 1;
+  if (node.IsMap() || node.IsSequence()) {
+    for (auto it = node.begin(); it != node.end() && count < limit; ++it) {
+      count +=
+          node.IsMap() ? ExpandedSize(it->second, limit - count) : ExpandedSize(*it, limit - count);
+    }
+  }
+  return count;
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   return rtscalib::fuzz::RunTextReader(data, size, kName, [](const std::string& text) {
     const rtscalib::YamlDocument doc = rtscalib::YamlDocument::Parse(text, kName);
+    visited = 0;
     Walk(doc.Root(), 0);
+    constexpr int kMaxExpanded = 20000;
+    if (ExpandedSize(YAML::Load(text), kMaxExpanded) >= kMaxExpanded) return;
     Try([&] { doc.UnusedKeys(); });
     doc.CheckAllKeysUsed();
   });
