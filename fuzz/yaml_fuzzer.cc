@@ -24,7 +24,7 @@ constexpr char kName[] = "fuzz.yaml";
 // the node budget also keeps aliases of aliases ("billion laughs") from
 // turning the walk exponential.
 constexpr int kMaxDepth = 64;
-constexpr int kMaxNodes = 4000;
+constexpr int kMaxNodes = 1000;
 int visited = 0;
 
 // Runs one getter; a clean InputError naming the document is fine.
@@ -90,12 +90,13 @@ void Walk(const YamlNode& node, int depth) {
 // whose expansion is about the file's size (they read lists of numbers), but
 // this fuzzer marks every key as used, so on an alias bomb it would spend
 // exponential time in a walk no reader can reach.
-int ExpandedSize(const YAML::Node& node, int limit) {
+int ExpandedSize(const YAML::Node& node, int limit, int depth = 0) {
+  // An anchor used inside itself makes the tree infinite.
+  if (depth > kMaxDepth) return limit;
   int count = 1;
   if (node.IsMap() || node.IsSequence()) {
     for (auto it = node.begin(); it != node.end() && count < limit; ++it) {
-      count +=
-          node.IsMap() ? ExpandedSize(it->second, limit - count) : ExpandedSize(*it, limit - count);
+      count += ExpandedSize(node.IsMap() ? it->second : *it, limit - count, depth + 1);
     }
   }
   return count;
