@@ -7,11 +7,10 @@
 // ASan/UBSan report, an exception of another type, a glog CHECK, a value the
 // reader should have refused.
 //
-// A fuzzer for a file reader is therefore a few lines:
+// A fuzzer for a file reader is therefore a few lines (records_fuzzer.cc):
 //   extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 //     return rtscalib::fuzz::RunFileReader(data, size, ".csv", [](const std::string& path) {
-//       const ShotsFile shots = ReadShots(path);
-//       for (const Shot& s : shots.shots) rtscalib::fuzz::RequireFinite(s.phi, "phi");
+//       for (const Record& r : ReadRecords(path).records) RequireFinite(r.d, "d");
 //     });
 //   }
 #pragma once

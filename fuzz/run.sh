@@ -15,9 +15,13 @@ shift || true
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_DIR:-$root/build-fuzz}
 nice_level=${NICE:-5}
-all=(records pixels yaml config model)
 fuzzers=("$@")
-[ ${#fuzzers[@]} -eq 0 ] && fuzzers=("${all[@]}")
+if [ ${#fuzzers[@]} -eq 0 ]; then
+  for source in "$root"/fuzz/*_fuzzer.cc; do
+    name=$(basename "$source" _fuzzer.cc)
+    fuzzers+=("$name")
+  done
+fi
 
 launcher=()
 command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
@@ -30,12 +34,16 @@ targets=()
 for f in "${fuzzers[@]}"; do targets+=("${f}_fuzzer"); done
 nice -n "$nice_level" cmake --build "$build" -j2 --target "${targets[@]}"
 
-# The dictionary of each fuzzer's format.
+# The dictionary of a fuzzer: dict/<name>.dict, else the one of its seeds'
+# format (dict/csv.dict for .csv seeds, dict/yaml.dict for .yaml).
 dict_of() {
-  case $1 in
-    records | pixels) echo csv ;;
-    *) echo "$1" ;;
-  esac
+  if [ -f "$root/fuzz/dict/$1.dict" ]; then
+    echo "$root/fuzz/dict/$1.dict"
+    return
+  fi
+  local seed
+  seed=$(find "$root/fuzz/corpus/$1" -type f -name '*.*' | head -1)
+  echo "$root/fuzz/dict/${seed##*.}.dict"
 }
 
 work=$build/fuzz-work
@@ -48,7 +56,7 @@ for f in "${fuzzers[@]}"; do
   echo "== $f: ${seconds}s (log $log)"
   # The first corpus folder receives new entries; the committed one is only read.
   if nice -n "$nice_level" "$build/fuzz/${f}_fuzzer" -max_total_time="$seconds" -rss_limit_mb=2048 \
-    -timeout=30 -print_final_stats=1 -dict="$root/fuzz/dict/$(dict_of "$f").dict" \
+    -timeout=30 -print_final_stats=1 -dict="$(dict_of "$f")" \
     -artifact_prefix="$crashes/" "$corpus" "$root/fuzz/corpus/$f" > "$log" 2>&1; then
     grep -E '^#[0-9]+[[:space:]]+DONE|stat::number_of_executed_units' "$log" | tail -2
   else
