@@ -28,6 +28,19 @@ constexpr double kUnitQuaternionTolerance = 1e-9;
 
 std::string Num(double x) { return YamlDouble(x); }
 
+// yaml-cpp writes a text with a carriage return or other control character
+// as a plain scalar, and "a\r" before the line break then reads back as "a";
+// double quotes escape them, so free text (metadata) reads back unchanged.
+void EmitText(YAML::Emitter& e, const std::string& text) {
+  for (unsigned char c : text) {
+    if (c < 0x20 || c == 0x7f) {
+      e << YAML::DoubleQuoted << text;
+      return;
+    }
+  }
+  e << text;
+}
+
 void EmitNumbers(YAML::Emitter& e, const double* x, int n) {
   e << YAML::Flow << YAML::BeginSeq;
   for (int i = 0; i < n; ++i) e << Num(x[i]);
@@ -239,7 +252,12 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
   e << YAML::Key << "format" << YAML::Value << kFormat;
   e << YAML::Key << "version" << YAML::Value << kVersion;
   e << YAML::Key << "metadata" << YAML::Value << YAML::BeginMap;
-  for (const auto& [key, value] : metadata) e << YAML::Key << key << YAML::Value << value;
+  for (const auto& [key, value] : metadata) {
+    e << YAML::Key;
+    EmitText(e, key);
+    e << YAML::Value;
+    EmitText(e, value);
+  }
   e << YAML::EndMap;
   e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(model.kinematics);
   e << YAML::Key << "edm_cyclic_unit_length" << YAML::Value << Num(model.edm_cyclic_unit_length);

@@ -278,6 +278,19 @@ InputError EditedModelError(const TempDir& dir, Edit edit) {
   return CatchInputError([&] { ReadModelYaml(path); });
 }
 
+// Found by fuzz/model_fuzzer: a metadata text ending in a carriage return
+// was written plain and came back without it.
+TEST(ModelIo, MetadataWithControlCharactersRoundTrips) {
+  TempDir dir;
+  const std::string path = dir.Path("model.yaml");
+  const ModelMetadata metadata = {
+      {"run", "a\r"}, {"key\r", "x"}, {"lines", "one\r\ntwo\n"}, {"tab", "\tx\x1b"}};
+  WriteModelYaml(path, IdealModel(Kinematics::kDh, 1, CameraTool{}), metadata);
+  ModelMetadata read;
+  ReadModelYaml(path, &read);
+  EXPECT_EQ(read, metadata);
+}
+
 TEST(ModelIo, UnknownKeyIsAnError) {
   TempDir dir;
   const InputError e = EditedModelError(dir, [](YAML::Node& n) { n["cameras"][1]["fov"] = 40; });
