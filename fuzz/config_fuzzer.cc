@@ -123,40 +123,24 @@ bool SameUpToRounding(const std::string& a, const std::string& b) {
   return i == a.size() && j == b.size();
 }
 
-// Known gaps of LoadConfig/DumpConfig (docs/fuzzing.md), let through so that
-// fuzzing goes on past them; remove each with its fix in config.cc:
-//  - data.records/pixels paths go to the throwing fs::is_regular_file, so a
-//    name too long for the file system escapes as std::filesystem_error;
-bool KnownGap(const std::exception& e) {
-  return dynamic_cast<const std::filesystem::filesystem_error*>(&e) != nullptr;
-}
-//  - DumpConfig writes a text ending in '\r' (output, data paths) as a plain
-//    scalar, which loads back without it.
-bool DumpHasKnownGap(const std::string& dump) { return dump.find('\r') != std::string::npos; }
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  return rtscalib::fuzz::RunFileReader(
-      data, size, ".yaml",
-      [](const std::string& path) {
-        const RunConfig config = rtscalib::LoadConfig(path);
-        RequireValid(config);
+  return rtscalib::fuzz::RunFileReader(data, size, ".yaml", [](const std::string& path) {
+    const RunConfig config = rtscalib::LoadConfig(path);
+    RequireValid(config);
 
-        const std::string dump = rtscalib::DumpConfig(config);
-        if (DumpHasKnownGap(dump)) return;
-        const std::string copy = rtscalib::fuzz::WriteInputFile(
-            reinterpret_cast<const uint8_t*>(dump.data()), dump.size(), ".dump.yaml");
-        try {
-          const RunConfig again = rtscalib::LoadConfig(copy);
-          const std::string dump_again = rtscalib::DumpConfig(again);
-          Require(SameUpToRounding(dump, dump_again),
-                  "the dumped config loads to the same dump\n--- first:\n" + dump +
-                      "--- second:\n" + dump_again);
-        } catch (const rtscalib::InputError& e) {
-          Require(false,
-                  std::string("the dumped config loads: ") + e.what() + "\n--- dump:\n" + dump);
-        }
-      },
-      KnownGap);
+    const std::string dump = rtscalib::DumpConfig(config);
+    const std::string copy = rtscalib::fuzz::WriteInputFile(
+        reinterpret_cast<const uint8_t*>(dump.data()), dump.size(), ".dump.yaml");
+    try {
+      const RunConfig again = rtscalib::LoadConfig(copy);
+      const std::string dump_again = rtscalib::DumpConfig(again);
+      Require(SameUpToRounding(dump, dump_again),
+              "the dumped config loads to the same dump\n--- first:\n" + dump + "--- second:\n" +
+                  dump_again);
+    } catch (const rtscalib::InputError& e) {
+      Require(false, std::string("the dumped config loads: ") + e.what() + "\n--- dump:\n" + dump);
+    }
+  });
 }

@@ -1,4 +1,5 @@
 #include "libcalib/io/config.h"
+#include "libcalib/io/yaml_writer.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -194,7 +195,8 @@ void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) 
                            std::pair<const char*, std::string*>{"pixels", &out->pixels_path}}) {
     if (const std::optional<YamlNode> n = m.Find(key)) {
       const std::string resolved = Resolve(config_dir, n->AsString());
-      if (!fs::is_regular_file(resolved)) {
+      std::error_code ec;  // e.g. a name too long for the file system: not a file either
+      if (!fs::is_regular_file(resolved, ec)) {
         n->Fail("an existing file (relative paths start at the config's folder " + config_dir +
                 ")");
       }
@@ -677,8 +679,14 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::BeginMap;
   if (!c.records_path.empty() || !c.pixels_path.empty()) {
     e << YAML::Key << "data" << YAML::Value << YAML::BeginMap;
-    if (!c.records_path.empty()) e << YAML::Key << "records" << YAML::Value << c.records_path;
-    if (!c.pixels_path.empty()) e << YAML::Key << "pixels" << YAML::Value << c.pixels_path;
+    if (!c.records_path.empty()) {
+      e << YAML::Key << "records" << YAML::Value;
+      EmitYamlText(e, c.records_path);
+    }
+    if (!c.pixels_path.empty()) {
+      e << YAML::Key << "pixels" << YAML::Value;
+      EmitYamlText(e, c.pixels_path);
+    }
     e << YAML::EndMap;
   }
 
@@ -743,7 +751,8 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::Key << "max_extent_m" << YAML::Value << Num(c.screen.max_extent_m);
   e << YAML::Key << "max_missing_zooms" << YAML::Value << c.screen.max_missing_zooms;
   e << YAML::EndMap;
-  e << YAML::Key << "output" << YAML::Value << c.output_dir;
+  e << YAML::Key << "output" << YAML::Value;
+  EmitYamlText(e, c.output_dir);
   e << YAML::EndMap;
   return std::string(e.c_str()) + "\n";
 }

@@ -1,4 +1,5 @@
 #include "libcalib/io/model_io.h"
+#include "libcalib/io/yaml_writer.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -27,19 +28,6 @@ constexpr double kDerivedTolerance = 1e-9;
 constexpr double kUnitQuaternionTolerance = 1e-9;
 
 std::string Num(double x) { return YamlDouble(x); }
-
-// yaml-cpp writes a text with a carriage return or other control character
-// as a plain scalar, and "a\r" before the line break then reads back as "a";
-// double quotes escape them, so free text (metadata) reads back unchanged.
-void EmitText(YAML::Emitter& e, const std::string& text) {
-  for (unsigned char c : text) {
-    if (c < 0x20 || c == 0x7f) {
-      e << YAML::DoubleQuoted << text;
-      return;
-    }
-  }
-  e << text;
-}
 
 void EmitNumbers(YAML::Emitter& e, const double* x, int n) {
   e << YAML::Flow << YAML::BeginSeq;
@@ -254,9 +242,9 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
   e << YAML::Key << "metadata" << YAML::Value << YAML::BeginMap;
   for (const auto& [key, value] : metadata) {
     e << YAML::Key;
-    EmitText(e, key);
+    EmitYamlText(e, key);
     e << YAML::Value;
-    EmitText(e, value);
+    EmitYamlText(e, value);
   }
   e << YAML::EndMap;
   e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(model.kinematics);

@@ -497,5 +497,24 @@ TEST(Config, TruthPoseAsQuaternion) {
       "simulate.truth.base.q");
 }
 
+// Found by fuzz/config_fuzzer.cc: a data path too long for the file system
+// is an input error naming the key, not a std::filesystem_error.
+TEST(Config, DataPathTooLongForTheFileSystemIsAnInputError) {
+  TempDir dir;
+  const InputError e = ConfigError(dir, "data: {records: " + std::string(300, 'r') + ".csv}\n");
+  EXPECT_EQ(e.key, "data.records");
+  EXPECT_THAT(e.what(), HasSubstr("an existing file"));
+}
+
+// Found by fuzz/config_fuzzer.cc: texts with control characters are written
+// quoted, so the effective config loads back to the same values.
+TEST(Config, DumpedTextWithCarriageReturnLoadsBackUnchanged) {
+  TempDir dir;
+  const RunConfig c = LoadConfig(dir.Write("run.yaml", "simulate: {seed: 3}\noutput: \"o\\r\"\n"));
+  ASSERT_EQ(c.output_dir.back(), '\r');
+  const RunConfig again = LoadConfig(dir.Write("again.yaml", DumpConfig(c)));
+  EXPECT_EQ(again.output_dir, c.output_dir);
+}
+
 }  // namespace
 }  // namespace rtscalib
