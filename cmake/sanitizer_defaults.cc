@@ -1,0 +1,30 @@
+// Default options of the sanitizer runtimes, compiled into every executable of
+// a sanitized build (RTSCALIB_SANITIZE; the README's test command), so that the
+// tests and the rtscalib processes they start behave alike without any
+// environment: the first undefined-behaviour report stops the process (and so
+// fails the test), and LeakSanitizer skips only system libraries that keep
+// process-lifetime allocations on purpose (Mesa/GLX/LLVM behind the renderer's
+// OpenGL, X11, fontconfig, VTK's singletons). rtscalib's own code is never
+// suppressed. Environment variables (ASAN_OPTIONS, ...) still override these.
+
+extern "C" const char* __asan_default_options() {
+  return "detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1";
+}
+
+extern "C" const char* __ubsan_default_options() {
+  return "print_stacktrace=1:halt_on_error=1";
+}
+
+extern "C" const char* __lsan_default_suppressions() {
+  return "leak:libGLX_mesa.so\n"
+         "leak:libGL.so\n"
+         "leak:libGLdispatch.so\n"
+         "leak:swrast_dri.so\n"
+         "leak:libgallium\n"
+         "leak:libLLVM\n"
+         "leak:libX11.so\n"
+         "leak:libxcb.so\n"
+         "leak:libfontconfig.so\n"
+         "leak:libvtk\n"
+         "leak:libdbus\n";
+}
