@@ -16,7 +16,7 @@ std::string Fmt(const char* f, double v) {
   return buf;
 }
 
-json GroupJson(const diagnose::GroupRms& g) {
+json GroupJson(const GroupRms& g) {
   json j = json::object();
   if (g.edm_n > 0) j["edm"] = {{"rms_m", g.edm_m}, {"n", g.edm_n}};
   if (g.cam_n > 0) j["cam"] = {{"rms_m", g.cam_m}, {"n", g.cam_n}};
@@ -35,7 +35,7 @@ json ValueJson(Effect e, const EffectReportValue& v) {
   return j;
 }
 
-json RankedJson(const diagnose::RankedEffect& r) {
+json RankedJson(const RankedEffect& r) {
   json j = {{"effect", r.name},
             {"rms_before", r.rms_before},
             {"rms_after", r.rms_after},
@@ -58,7 +58,7 @@ json RankedJson(const diagnose::RankedEffect& r) {
     j["value"] = ValueJson(r.effect, r.value);
   if (!r.distortion.empty()) {
     json d = json::array();
-    for (const diagnose::DistortionValue& v : r.distortion) {
+    for (const DistortionValue& v : r.distortion) {
       d.push_back({{"zoom", v.zoom},
                    {"coefficient", v.coefficient},
                    {"value", v.value},
@@ -72,13 +72,13 @@ json RankedJson(const diagnose::RankedEffect& r) {
   return j;
 }
 
-json HarmonicJson(const diagnose::Harmonic& h) {
-  return {{"variable", diagnose::ReadingName(h.probe.variable)},
+json HarmonicJson(const Harmonic& h) {
+  return {{"variable", ReadingName(h.probe.variable)},
           {"harmonic", h.probe.harmonic},
           {"amplitude", h.amplitude},
           {"phase", h.phase_deg},
           {"significant", h.significant},
-          {"reading", diagnose::ReadingName(h.probe.reading)},
+          {"reading", ReadingName(h.probe.reading)},
           {"face", h.probe.face},
           {"unit", h.unit},
           {"phase_unit", "deg"},
@@ -88,9 +88,9 @@ json HarmonicJson(const diagnose::Harmonic& h) {
           {"description", h.description}};
 }
 
-json LadderJson(const std::vector<diagnose::LadderStep>& ladder) {
+json LadderJson(const std::vector<LadderStep>& ladder) {
   json out = json::array();
-  for (const diagnose::LadderStep& s : ladder) {
+  for (const LadderStep& s : ladder) {
     out.push_back({{"added", s.added.empty() ? json() : json(s.added)},
                    {"model", s.model_description},
                    {"effects", s.effects},
@@ -105,27 +105,25 @@ json LadderJson(const std::vector<diagnose::LadderStep>& ladder) {
 
 json DiagnosisJson(const CalibrationResult& r) {
   if (!r.diagnosis) return json();
-  const diagnose::Diagnosis& d = *r.diagnosis;
+  const Diagnosis& d = *r.diagnosis;
   json ranking = json::array();
-  for (const diagnose::RankedEffect& e : d.ranking.entries) ranking.push_back(RankedJson(e));
+  for (const RankedEffect& e : d.ranking.entries) ranking.push_back(RankedJson(e));
   json unexplained = json::array();
-  for (const diagnose::Harmonic& h : d.harmonics.unexplained)
-    unexplained.push_back(HarmonicJson(h));
+  for (const Harmonic& h : d.harmonics.unexplained) unexplained.push_back(HarmonicJson(h));
   json harmonics = json::array();
-  for (const diagnose::Harmonic& h : d.harmonics.before_catalogue)
-    harmonics.push_back(HarmonicJson(h));
+  for (const Harmonic& h : d.harmonics.before_catalogue) harmonics.push_back(HarmonicJson(h));
   json worst = json::array();
-  for (const diagnose::OutlierEntry& o : d.outliers.worst) {
+  for (const OutlierEntry& o : d.outliers.worst) {
     worst.push_back({{"where", o.where},
-                     {"group", diagnose::GroupName(o.group)},
+                     {"group", GroupName(o.group)},
                      {"index", o.index},
                      {"w", o.w},
                      {"p_value", o.p_value},
                      {"flagged", o.flagged},
                      {"size", o.size},
-                     {"unit", o.group == diagnose::ObsGroup::kPixel ? "px" : "m"}});
+                     {"unit", o.group == ObsGroup::kPixel ? "px" : "m"}});
   }
-  const diagnose::RankedEffect* next = d.Next();
+  const RankedEffect* next = d.Next();
   json j = {{"model", d.model_description},
             {"verdict", d.verdict},
             {"next", next ? json(next->name) : json()},
@@ -154,7 +152,7 @@ json DiagnosisJson(const CalibrationResult& r) {
 
 std::string DiagnosisText(const CalibrationResult& r) {
   if (!r.diagnosis) return "";
-  const diagnose::Diagnosis& d = *r.diagnosis;
+  const Diagnosis& d = *r.diagnosis;
   std::ostringstream o;
   o << "Diagnosis\n=========\n";
   for (const std::string& v : d.verdict) o << "  " << v << "\n";
@@ -162,7 +160,7 @@ std::string DiagnosisText(const CalibrationResult& r) {
     o << "\nLadder (forward stepwise, " << r.ladder_stop << ")\n";
     o << "  step  added                   EDM rms [mm]  cam rms [mm]  pixels [px]   BIC\n";
     for (size_t i = 0; i < r.ladder.size(); ++i) {
-      const diagnose::LadderStep& s = r.ladder[i];
+      const LadderStep& s = r.ladder[i];
       o << "  " << std::setw(4) << i << "  " << std::left << std::setw(22)
         << (s.added.empty() ? "(start)" : s.added) << std::right << "  " << std::setw(12)
         << (s.rms.edm_n ? Fmt("%.4f", s.rms.edm_m * 1e3) : "-") << "  " << std::setw(12)
@@ -174,7 +172,7 @@ std::string DiagnosisText(const CalibrationResult& r) {
   o << "\nRanking of the effects not in the model (best first; rms over the fitted rows)\n";
   o << "  effect                  rms before -> after          delta BIC   p        signif  "
        "identif\n";
-  for (const diagnose::RankedEffect& e : d.ranking.entries) {
+  for (const RankedEffect& e : d.ranking.entries) {
     const double scale = e.rms_unit == "m" ? 1e3 : 1.0;
     const char* unit = e.rms_unit == "m" ? "mm" : "px";
     o << "  " << std::left << std::setw(22) << e.name << std::right << "  " << std::setw(9)
@@ -189,13 +187,13 @@ std::string DiagnosisText(const CalibrationResult& r) {
   }
   if (!d.harmonics.unexplained.empty()) {
     o << "\nStructure outside the catalogue (unexplained)\n";
-    for (const diagnose::Harmonic& h : d.harmonics.unexplained) o << "  " << h.description << "\n";
+    for (const Harmonic& h : d.harmonics.unexplained) o << "  " << h.description << "\n";
   }
   if (d.outliers.tested > 0) {
     o << "\nOutliers (w-test, critical w = " << Fmt("%.2f", d.outliers.critical_w) << ", "
       << d.outliers.flagged << " of " << d.outliers.tested << " flagged); worst observations:\n";
     for (size_t i = 0; i < d.outliers.worst.size() && i < 5; ++i) {
-      const diagnose::OutlierEntry& e = d.outliers.worst[i];
+      const OutlierEntry& e = d.outliers.worst[i];
       o << "  w = " << Fmt("%5.2f", e.w) << (e.flagged ? " FLAGGED " : "         ") << e.where
         << "\n";
     }

@@ -40,7 +40,7 @@ int RunExport(const ExportArgs& args) {
       throw std::invalid_argument("export: " + args.model + " has no cameras to export");
     }
     for (int z = 0; z < model.NumZooms(); ++z) {
-      files.push_back(dir / exports::OpenCvCameraFileName(z));
+      files.push_back(dir / OpenCvCameraFileName(z));
     }
   } else if (args.format == "urdf") {
     files.push_back(dir / "instrument.urdf");
@@ -67,10 +67,10 @@ int RunExport(const ExportArgs& args) {
   std::ostream& out = std::cout;
   if (args.format == "opencv") {
     for (int z = 0; z < model.NumZooms(); ++z) {
-      exports::WriteOpenCvCamera(files[z].string(), model, z);
+      WriteOpenCvCamera(files[z].string(), model, z);
       const CameraTool& cam = model.cams[z];
       out << "zoom " << z << ": " << files[z].string() << " (" << cam.width << "x" << cam.height
-          << " px from model.yaml, " << exports::OpenCvDistortionCount(model, z)
+          << " px from model.yaml, " << OpenCvDistortionCount(model, z)
           << " distortion coefficients)\n";
       // An extraction without given intrinsics sets the size from the
       // principal point (2 c + 1); flag it so that nobody mistakes it for the sensor's.
@@ -81,24 +81,24 @@ int RunExport(const ExportArgs& args) {
       }
     }
   } else if (args.format == "urdf") {
-    exports::UrdfOptions options;
+    UrdfOptions options;
     options.source = args.model;
-    const exports::UrdfExport urdf = exports::ExportUrdf(model, options);
+    const UrdfExport urdf = ExportUrdf(model, options);
     WriteText(files[0], urdf.xml);
     out << "urdf: " << files[0].string() << " (" << KinematicsName(model.kinematics)
-        << " kinematics; links " << exports::kUrdfReferenceLink << ", " << exports::kUrdfAlidadeLink
-        << ", " << exports::kUrdfTelescopeLink << ", " << exports::kUrdfEdmLink
-        << ", camera_zoom0.." << model.NumZooms() - 1 << ")\n";
+        << " kinematics; links " << kUrdfReferenceLink << ", " << kUrdfAlidadeLink << ", "
+        << kUrdfTelescopeLink << ", " << kUrdfEdmLink << ", camera_zoom0.." << model.NumZooms() - 1
+        << ")\n";
     out << "folded in exactly:" << (urdf.folded.empty() ? " nothing" : "") << "\n";
     for (const std::string& s : urdf.folded) out << "  " << s << "\n";
     out << "not held by the URDF (listed in its header comment):"
         << (urdf.not_held.empty() ? " nothing" : "") << "\n";
     for (const std::string& s : urdf.not_held) out << "  " << s << "\n";
   } else {
-    const exports::SurveyorConstants c = exports::ComputeSurveyorConstants(model);
-    const std::string text = exports::SurveyorText(c);
+    const SurveyorConstants c = ComputeSurveyorConstants(model);
+    const std::string text = SurveyorText(c);
     WriteText(files[0], text);
-    WriteText(files[1], exports::SurveyorJson(c));
+    WriteText(files[1], SurveyorJson(c));
     out << text << "\nsurveyor: " << files[0].string() << ", " << files[1].string() << "\n";
   }
   return 0;

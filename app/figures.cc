@@ -17,8 +17,6 @@
 namespace rtscalib::app {
 namespace {
 
-using diagnose::ObservationResidual;
-using diagnose::ObsGroup;
 using nlohmann::json;
 
 const cv::Scalar kInk(40, 40, 40);
@@ -425,7 +423,7 @@ void HistogramPanel(cv::Mat& img, cv::Rect area, const Series& s) {
 }
 
 Figure Histograms(const PipelineResult& r) {
-  const diagnose::Diagnosis& d = *r.calibration.diagnosis;
+  const Diagnosis& d = *r.calibration.diagnosis;
   Series edm{"EDM points (x, y, z)", "mm", {}, d.sigma[0] * 1e3};
   Series cam{"camera points (x, y, z)", "mm", {}, d.sigma[1] * 1e3};
   Series px{"image points (u, v)", "px", {}, d.sigma[2]};
@@ -590,7 +588,7 @@ std::vector<unsigned char> EncodePng(const cv::Mat& image) {
 std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   std::vector<Figure> figs;
   if (!r.calibration.diagnosis) return figs;
-  const diagnose::Diagnosis& d = *r.calibration.diagnosis;
+  const Diagnosis& d = *r.calibration.diagnosis;
   const std::string model = d.model_description;
   // Faces and zooms present.
   std::set<int> faces;
@@ -623,7 +621,7 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   if (r.calibration.ladder.size() > 1) {
     std::vector<Rung> rungs;
     for (size_t i = 0; i < r.calibration.ladder.size(); ++i) {
-      const diagnose::LadderStep& s = r.calibration.ladder[i];
+      const LadderStep& s = r.calibration.ladder[i];
       rungs.push_back({"step " + std::to_string(i), s.added.empty() ? "(start)" : "+" + s.added,
                        s.rms.edm_n ? s.rms.edm_m * 1e3 : NAN, s.rms.cam_n ? s.rms.cam_m * 1e3 : NAN,
                        s.rms.pixels_n ? s.rms.pixels_px : NAN});

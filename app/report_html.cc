@@ -86,13 +86,13 @@ std::string Figures(const std::vector<Figure>& figs, const std::string& section)
   return out;
 }
 
-std::string GroupCells(const diagnose::GroupRms& g) {
+std::string GroupCells(const GroupRms& g) {
   return "<td class=num>" + (g.edm_n ? Mm(g.edm_m) : std::string("-")) + "</td><td class=num>" +
          (g.cam_n ? Mm(g.cam_m) : std::string("-")) + "</td><td class=num>" +
          (g.pixels_n ? Fmt("%.4g", g.pixels_px) : std::string("-")) + "</td>";
 }
 
-std::string ValueCell(const diagnose::RankedEffect& r) {
+std::string ValueCell(const RankedEffect& r) {
   std::string out;
   const EffectInfo& info = Info(r.effect);
   if (r.has_equivalent) {
@@ -113,7 +113,7 @@ std::string ValueCell(const diagnose::RankedEffect& r) {
     return out;
   }
   for (size_t i = 0; i < r.distortion.size() && i < 8; ++i) {
-    const diagnose::DistortionValue& d = r.distortion[i];
+    const DistortionValue& d = r.distortion[i];
     out += (i ? "<br>" : "") + std::string("zoom ") + std::to_string(d.zoom) + " " + d.coefficient +
            " = " + Fmt("%.3g", d.value) + " &plusmn; " + Fmt("%.2g", d.sigma);
   }
@@ -121,14 +121,14 @@ std::string ValueCell(const diagnose::RankedEffect& r) {
   return out;
 }
 
-std::string RankingTable(const diagnose::Diagnosis& d) {
+std::string RankingTable(const Diagnosis& d) {
   std::ostringstream o;
   o << "<table><tr><th>#</th><th>effect</th><th>rms before &rarr; "
        "after</th><th>&Delta;BIC</th><th>p</th>"
        "<th>significant</th><th>identifiable</th><th>estimate (report "
        "units)</th><th>notes</th><th>config line</th></tr>\n";
   int i = 0;
-  for (const diagnose::RankedEffect& r : d.ranking.entries) {
+  for (const RankedEffect& r : d.ranking.entries) {
     const bool mm = r.rms_unit == "m";
     o << "<tr class=\""
       << (r.significant                  ? "sig"
@@ -176,16 +176,15 @@ std::string RankingTable(const diagnose::Diagnosis& d) {
   return o.str();
 }
 
-std::string HarmonicTable(const std::vector<diagnose::Harmonic>& hs, bool explained,
-                          double unit_length) {
+std::string HarmonicTable(const std::vector<Harmonic>& hs, bool explained, double unit_length) {
   std::ostringstream o;
   o << "<table><tr><th>structure</th><th>reading in "
        "error</th><th>face</th><th>amplitude</th><th>phase [deg]</th>"
        "<th>p</th>"
     << (explained ? "<th>explained by</th>" : "") << "</tr>\n";
-  for (const diagnose::Harmonic& h : hs) {
-    o << "<tr><td>" << Esc(diagnose::HarmonicName(h.probe, unit_length)) << "</td><td>"
-      << diagnose::ReadingName(h.probe.reading) << "</td><td class=num>" << h.probe.face
+  for (const Harmonic& h : hs) {
+    o << "<tr><td>" << Esc(HarmonicName(h.probe, unit_length)) << "</td><td>"
+      << ReadingName(h.probe.reading) << "</td><td class=num>" << h.probe.face
       << "</td><td class=num>" << Fmt("%.3g", h.amplitude) << " &plusmn; "
       << Fmt("%.2g", h.amplitude_sigma) << " " << Esc(h.unit) << "</td><td class=num>"
       << Fmt("%.0f", h.phase_deg) << "</td><td class=num>" << Fmt("%.2g", h.p_value) << "</td>";
@@ -240,8 +239,8 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
 
   // 1. Verdict.
   if (r.calibration.diagnosis) {
-    const diagnose::Diagnosis& d = *r.calibration.diagnosis;
-    const diagnose::RankedEffect* next = d.Next();
+    const Diagnosis& d = *r.calibration.diagnosis;
+    const RankedEffect* next = d.Next();
     o << "<section class=\"verdict" << (next || !d.harmonics.unexplained.empty() ? "" : " ok")
       << "\" id=\"verdict\"><h2 style=\"border:none;margin-top:4px\">Verdict</h2>\n";
     for (size_t i = 0; i < d.verdict.size(); ++i) {
@@ -268,7 +267,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
            "<th>model</th><th>EDM rms [mm]</th><th>camera rms [mm]</th><th>pixels rms "
            "[px]</th><th>BIC</th></tr>\n";
       for (size_t i = 0; i < r.calibration.ladder.size(); ++i) {
-        const diagnose::LadderStep& s = r.calibration.ladder[i];
+        const LadderStep& s = r.calibration.ladder[i];
         o << "<tr><td class=num>" << i << "</td><td>" << Esc(s.added.empty() ? "(start)" : s.added)
           << "</td><td>" << Esc(s.model_description) << "</td>" << GroupCells(s.rms)
           << "<td class=num>" << Fmt("%.1f", s.bic) << "</td></tr>\n";
@@ -314,7 +313,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
 
   // 4. Tables.
   if (r.calibration.diagnosis) {
-    const diagnose::Diagnosis& d = *r.calibration.diagnosis;
+    const Diagnosis& d = *r.calibration.diagnosis;
     o << "<h2 id=\"ranking\">Which effect is missing</h2>\n" << RankingTable(d);
     o << "<h2 id=\"structure\">Structure outside the catalogue</h2>\n";
     if (d.harmonics.unexplained.empty()) {
@@ -339,8 +338,8 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
       << " (Bonferroni over all observations). Worst "
          "observations:</p>\n<table><tr><th>w</th><th>flagged</th>"
          "<th>observation</th><th>|residual|</th></tr>\n";
-    for (const diagnose::OutlierEntry& e : d.outliers.worst) {
-      const bool px = e.group == diagnose::ObsGroup::kPixel;
+    for (const OutlierEntry& e : d.outliers.worst) {
+      const bool px = e.group == ObsGroup::kPixel;
       o << "<tr><td class=num>" << Fmt("%.2f", e.w) << "</td><td>"
         << (e.flagged ? "<b>yes</b>" : "no") << "</td><td>" << Esc(e.where) << "</td><td class=num>"
         << (px ? Fmt("%.3g px", e.size) : Fmt("%.3g mm", e.size * 1e3)) << "</td></tr>\n";

@@ -14,7 +14,7 @@
 #include "libcalib/fit/refine.h"
 #include "libcalib/sim/simulator.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 // The truth moved by ~1 mm / 1 mrad (PerturbedStart): a good extraction.
@@ -115,6 +115,6 @@ void BM_DiagnoseThreeZoomPixels(benchmark::State& state) {
 BENCHMARK(BM_DiagnoseThreeZoomPixels)->Unit(benchmark::kMillisecond);
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib
 
 BENCHMARK_MAIN();

@@ -37,10 +37,10 @@ InstrumentModel Truth() {
     const double f = 800.0 * std::pow(1.4, z);
     c.intrinsics = {f, f * (1 + 3e-4), 324.0 - z, 237.0 + 0.5 * z};
     c.distortion.fill(0.0);
-    c.distortion[camera::kK1] = -0.1 / (1 + z);
-    c.distortion[camera::kK2] = 0.05 / (1 + z);
-    c.distortion[camera::kP1] = 5e-4;
-    c.distortion[camera::kP2] = -3e-4;
+    c.distortion[kK1] = -0.1 / (1 + z);
+    c.distortion[kK2] = 0.05 / (1 + z);
+    c.distortion[kP1] = 5e-4;
+    c.distortion[kP2] = -3e-4;
   }
   m.effects.Add(Effect::kRadialDistortion);
   m.effects.Add(Effect::kTangentialDistortion);

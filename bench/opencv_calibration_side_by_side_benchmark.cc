@@ -44,10 +44,10 @@ SimulationOptions Options() {
     const double f = 800.0 * std::pow(1.6, z);
     c.intrinsics = {f, f * (1 + 3e-4), 324.0 - 2 * z, 237.0 + z};
     c.distortion.fill(0.0);
-    c.distortion[camera::kK1] = -0.1 / (1 + z);
-    c.distortion[camera::kK2] = 0.05 / (1 + z);
-    c.distortion[camera::kP1] = 5e-4;
-    c.distortion[camera::kP2] = -3e-4;
+    c.distortion[kK1] = -0.1 / (1 + z);
+    c.distortion[kK2] = 0.05 / (1 + z);
+    c.distortion[kP1] = 5e-4;
+    c.distortion[kP2] = -3e-4;
   }
   o.truth.effects.Add(Effect::kRadialDistortion);
   o.truth.effects.Add(Effect::kTangentialDistortion);

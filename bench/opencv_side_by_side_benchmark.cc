@@ -13,7 +13,7 @@
 
 #include "libcalib/camera/opencv_model.h"
 
-namespace rtscalib::camera {
+namespace rtscalib {
 namespace {
 
 constexpr int kPoints = 1000;
@@ -156,6 +156,6 @@ void BM_Ours_MaxTrustedRadius(benchmark::State& state) {
 BENCHMARK(BM_Ours_MaxTrustedRadius);
 
 }  // namespace
-}  // namespace rtscalib::camera
+}  // namespace rtscalib
 
 BENCHMARK_MAIN();

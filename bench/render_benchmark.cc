@@ -39,9 +39,9 @@ struct Fixture {
     b.ref_from_board.translation = Eigen::Vector3d(-w / 2, -h / 2, 2.0);
     scene.boards.push_back(b);
     cam.intrinsics = {1000.0, 1000.0, 640.3, 479.6};
-    cam.distortion[camera::kK1] = -0.1;
-    cam.distortion[camera::kK2] = 0.05;
-    cam.distortion[camera::kP1] = 1e-4;
+    cam.distortion[kK1] = -0.1;
+    cam.distortion[kK2] = 0.05;
+    cam.distortion[kP1] = 1e-4;
     pose.rotation = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()).toRotationMatrix();
     pose.translation = Eigen::Vector3d(0.2, 0.0, 0.0);
   }

@@ -53,8 +53,8 @@ struct Canvas {
 };
 
 struct DistortionMap {
-  std::array<double, camera::kNumIntrinsics> intrinsics{};
-  std::array<double, camera::kNumDistortion> distortion{};
+  std::array<double, kNumIntrinsics> intrinsics{};
+  std::array<double, kNumDistortion> distortion{};
   int width = 0, height = 0;
   bool identity = true;
   Canvas canvas;
@@ -82,7 +82,7 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor
   auto ideal = [&](double u, double v) {
     const double pixel[2] = {u, v};
     double xn, yn;
-    if (camera::UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
+    if (UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
         std::isfinite(xn) && std::isfinite(yn)) {
       return cv::Vec2d(fx * xn + cx, fy * yn + cy);
     }

@@ -8,7 +8,7 @@
 //      the size, on a canvas that covers every ray the distorted image sees;
 //   2. box (area) downsampling by `supersample`;
 //   3. lens distortion: for every output pixel the ideal pixel is found with
-//      camera::UndistortPixel and sampled bilinearly (cv::remap);
+//      UndistortPixel and sampled bilinearly (cv::remap);
 //   4. exposure gain, optional Gaussian blur, optional Gaussian noise, 8 bit.
 // The boards are textured rectangles (tag_texture.h) with linear, mipmapped
 // texture filtering; only their printed (-z) side is drawn.

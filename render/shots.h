@@ -6,7 +6,7 @@
 //   shots.csv       index, shot, face, zoom, phi, theta, image
 //   exact.csv       pixels.csv columns (SPEC 3: face, zoom, phi, theta, shot,
 //                   target, corner, X, Y, Z, u, v) plus `status`: the exact
-//                   projection (camera::ProjectToPixel) of every corner that
+//                   projection (ProjectToPixel) of every corner that
 //                   lands in the image, of every tag that faces the camera and
 //                   is not occluded; `status` is the tag's TagStatus
 //                   (visible / border / grazing / small), so exact.csv with

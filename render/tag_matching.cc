@@ -106,12 +106,12 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
           continue;
         }
         double px[2];
-        camera::ProjectToPixel(k, d, p.data(), px);
+        ProjectToPixel(k, d, p.data(), px);
         // A projection is only valid where the distortion does not fold the
         // image: the pixel must back-project onto the same ray.
         double xn, yn;
         const bool valid = std::isfinite(px[0]) && std::isfinite(px[1]) &&
-                           camera::UndistortPixel(k, d, px, &xn, &yn) &&
+                           UndistortPixel(k, d, px, &xn, &yn) &&
                            std::abs(xn - p.x() / p.z()) + std::abs(yn - p.y() / p.z()) < 1e-7;
         if (!valid) {
           failed = true;

@@ -1,7 +1,7 @@
 // Which tags of a scene a camera should see, and detections matched to them.
 //
 // ExpectTags classifies every tag of the scene for one camera pose, from the
-// exact projection of its corners (camera::ProjectToPixel). In order of
+// exact projection of its corners (ProjectToPixel). In order of
 // precedence:
 //   behind       a corner is not in front of the camera (z <= 0)
 //   back_facing  the camera is on the unprinted (+z) side of the board

@@ -114,11 +114,11 @@ std::vector<BlockAccess> Accessors(const InstrumentModel& m, std::vector<Paramet
         [z](InstrumentModel& x) { return x.cams[z].flange_from_cam.t.data(); },
         vz ? s.cam_tools[z].t.data() : nullptr);
     add(
-        c + ".intrinsics", camera::kNumIntrinsics, "px", Tangent::kEuclidean, z,
+        c + ".intrinsics", kNumIntrinsics, "px", Tangent::kEuclidean, z,
         [z](InstrumentModel& x) { return x.cams[z].intrinsics.data(); },
         vz ? s.intrinsics[z].data() : nullptr);
     add(
-        c + ".distortion", camera::kNumDistortion, "1 (OpenCV order)", Tangent::kEuclidean, z,
+        c + ".distortion", kNumDistortion, "1 (OpenCV order)", Tangent::kEuclidean, z,
         [z](InstrumentModel& x) { return x.cams[z].distortion.data(); },
         vz ? s.distortion[z].data() : nullptr);
   }
@@ -151,7 +151,7 @@ bool RawRay(const InstrumentModel& m, int zoom, double phi, double theta, double
   const CameraTool& cam = m.cams[zoom];
   const double pixel[2] = {u, v};
   double ray[3];
-  if (!camera::PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pixel, ray)) return false;
+  if (!PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pixel, ray)) return false;
   const Rigid3 ref_from_cam = RefFromCam(m, zoom, phi, theta);
   out->head<3>() = ref_from_cam.translation;
   out->tail<3>() = ref_from_cam.rotation * Eigen::Vector3d(ray[0], ray[1], ray[2]);
@@ -324,7 +324,7 @@ Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
   // Beyond the trusted radius the distortion folds the image back: the
   // projection would be a pixel where the point is not seen.
   const double r = x_cam.head<2>().norm() / x_cam.z();
-  const double r_max = camera::MaxTrustedRadius(cam.distortion.data());
+  const double r_max = MaxTrustedRadius(cam.distortion.data());
   if (!(r < r_max)) {
     throw PredictionError(PredictionFailure::kUntrustedPoint,
                           "a point inside zoom " + std::to_string(zoom) +
@@ -377,7 +377,7 @@ Uncertain<N> Propagate(
       const double h = Step(access[b].tangent, access[b].data(values)[i]);
       Eigen::Matrix<double, N, 1> f[2];
       for (int side = 0; side < 2; ++side) {
-        double delta[camera::kNumDistortion] = {};  // the largest block
+        double delta[kNumDistortion] = {};  // the largest block
         delta[i] = side == 0 ? h : -h;
         InstrumentModel m = model;
         PlusBlock(access[b], blocks[b].size, delta, &m);

@@ -264,12 +264,11 @@ FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResu
 // Throws what the diagnosis throws.
 void DiagnoseModel(const Observations& obs, const CalibrationOptions& options,
                    CalibrationProgress* progress, CalibrationResult* r) {
-  diagnose::Settings s;
+  Settings s;
   s.significance = options.diagnose.significance;
   if (options.diagnose.auto_add) {
     progress->Step("forward stepwise: adding significant effects one at a time");
-    diagnose::StepwiseResult sw =
-        diagnose::ForwardStepwise(obs, r->refined.model, r->refined.fit, r->fit_options, s);
+    StepwiseResult sw = ForwardStepwise(obs, r->refined.model, r->refined.fit, r->fit_options, s);
     for (size_t i = 1; i < sw.ladder.size(); ++i) {
       progress->Note("added " + sw.ladder[i].added + ": " + sw.ladder[i].model_description);
     }
@@ -294,8 +293,7 @@ void DiagnoseModel(const Observations& obs, const CalibrationOptions& options,
     r->diagnosis = std::move(sw.diagnosis);
   } else {
     progress->Step("diagnosing the model (ranking the missing effects)");
-    r->diagnosis =
-        diagnose::Diagnose(obs, r->model, diagnose::ContextOf(r->fit_options, r->fit), s);
+    r->diagnosis = Diagnose(obs, r->model, ContextOf(r->fit_options, r->fit), s);
   }
   for (const std::string& v : r->diagnosis->verdict) progress->Note(v);
 }

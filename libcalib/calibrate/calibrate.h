@@ -90,13 +90,13 @@ struct CalibrationResult {
   std::optional<FaceComparison> faces;
   // With diagnose.auto: the forward stepwise ladder; its first rung is
   // `refined`, its last rung `final_model`.
-  std::vector<diagnose::LadderStep> ladder;
+  std::vector<LadderStep> ladder;
   std::string ladder_stop;
   // The run's model: `refined`, or the last rung of the ladder when the
   // ladder added effects. The diagnosis and the final errors are of it.
   InstrumentModel model;
   FitSummary fit;
-  std::optional<diagnose::Diagnosis> diagnosis;  // absent when off or failed (see notes)
+  std::optional<Diagnosis> diagnosis;  // absent when off or failed (see notes)
   FinalErrors final_errors;
   std::vector<std::string> notes;
 

@@ -5,7 +5,7 @@
 #include <limits>
 #include <vector>
 
-namespace rtscalib::camera {
+namespace rtscalib {
 namespace {
 
 // Polynomials in s = r^2, coefficients in ascending order.
@@ -194,4 +194,4 @@ double MaxTrustedDistortedRadius(const double* dist) {
   return std::sqrt(s_slope) * Eval(polys.num, s_slope) / Eval(polys.den, s_slope);
 }
 
-}  // namespace rtscalib::camera
+}  // namespace rtscalib

@@ -29,7 +29,7 @@ template <typename T, int N>
 struct Jet;  // as in ceres/jet_fwd.h; this header does not need Ceres itself
 }  // namespace ceres
 
-namespace rtscalib::camera {
+namespace rtscalib {
 
 constexpr int kNumIntrinsics = 4;
 constexpr int kNumDistortion = 14;
@@ -240,4 +240,4 @@ bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T
   return true;
 }
 
-}  // namespace rtscalib::camera
+}  // namespace rtscalib

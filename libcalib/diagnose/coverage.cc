@@ -6,7 +6,7 @@
 
 #include "libcalib/eval/error_measures.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 std::string Num(double v) {
@@ -183,4 +183,4 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
   return out;
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

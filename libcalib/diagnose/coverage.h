@@ -23,7 +23,7 @@
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 // Thresholds of the requirements above (degrees, metres, fractions).
 struct CoverageRules {
@@ -53,4 +53,4 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
 std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const InstrumentModel& model,
                                        const CoverageRules& rules = {});
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 // Below this fraction of its norm outside the model's span, a column is
@@ -213,4 +213,4 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   return d;
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -20,7 +20,7 @@
 #include "libcalib/diagnose/ranking.h"
 #include "libcalib/diagnose/residuals.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 struct Settings {
   double significance = 0.01;  // family-wise level of each of: ranking, harmonics, outliers
@@ -65,4 +65,4 @@ struct Diagnosis {
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
                    const Settings& settings);
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -8,7 +8,7 @@
 #include "libcalib/fit/start_models.h"
 #include "libcalib/sim/simulator.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 EquivalentTerms EquivalentSurveyingTerms(const InstrumentModel& dh, const FitOptions& fit) {
   EquivalentTerms out;
@@ -67,4 +67,4 @@ EquivalentTerms EquivalentSurveyingTerms(const InstrumentModel& dh, const FitOpt
   return out;
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -13,7 +13,7 @@
 #include "libcalib/fit/refine.h"
 #include "libcalib/model/instrument.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 struct EquivalentTerms {
   bool valid = false;
@@ -27,4 +27,4 @@ struct EquivalentTerms {
 // `fit` supplies the zenith limits; `dh` must have dh kinematics.
 EquivalentTerms EquivalentSurveyingTerms(const InstrumentModel& dh, const FitOptions& fit);
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <limits>
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 constexpr double kArcsecPerRad = 180.0 * 3600.0 / M_PI;
@@ -179,4 +179,4 @@ HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
   return out;
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

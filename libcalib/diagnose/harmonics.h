@@ -31,7 +31,7 @@
 
 #include "libcalib/diagnose/linearization.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 struct Harmonic {
   Probe probe;
@@ -64,4 +64,4 @@ HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
 // "twice per turn in phi", "harmonic 2 of the EDM unit length (period 0.75 m)".
 std::string HarmonicName(const Probe& p, double unit_length_m);
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

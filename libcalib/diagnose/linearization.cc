@@ -15,7 +15,7 @@
 #include "libcalib/fit/parameterization.h"
 #include "libcalib/model/kinematics.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 const char* GroupName(ObsGroup g) {
   switch (g) {
@@ -407,4 +407,4 @@ Reduced Reduce(const Linearization& lin) {
   return red;
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

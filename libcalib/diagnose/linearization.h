@@ -36,9 +36,8 @@
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
-using ObsGroup = rtscalib::ObsGroup;  // the refinement's residual groups
 const char* GroupName(ObsGroup g);
 
 enum class Reading { kPhi, kTheta, kDistance };
@@ -125,4 +124,4 @@ struct Reduced {
 };
 Reduced Reduce(const Linearization& lin);
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -5,7 +5,7 @@
 #include <map>
 #include <tuple>
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 // Medians of chi2(1) and chi2(2): robust scale = median(e^2) / these.
@@ -128,4 +128,4 @@ OutlierReport TestOutliers(const Observations& obs, const Linearization& lin, co
   return out;
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -24,7 +24,7 @@
 #include "libcalib/diagnose/linearization.h"
 #include "libcalib/diagnose/residuals.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 struct OutlierEntry {
   ObsGroup group = ObsGroup::kEdm;
@@ -49,4 +49,4 @@ OutlierReport TestOutliers(const Observations& obs, const Linearization& lin, co
                            const std::vector<ObservationResidual>& residuals, double significance,
                            int max_listed = 12);
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -7,7 +7,7 @@
 
 #include "libcalib/eval/error_measures.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 void Finish(GroupRms* g) {
@@ -457,4 +457,4 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
   return out;
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

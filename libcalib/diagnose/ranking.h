@@ -38,7 +38,7 @@
 #include "libcalib/diagnose/equivalents.h"
 #include "libcalib/diagnose/linearization.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 // Below these an improvement is round-off, not physics: 1 nm is 1e-9 of a
 // metre-scale coordinate (double precision leaves ~1e-15); 1e-6 px likewise.
@@ -137,4 +137,4 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& options);
 // "model.effects: [hz_eccentricity, edm_scale]": the model's effects plus `e`.
 std::string ConfigLine(const InstrumentModel& model, Effect e);
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -7,7 +7,7 @@
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/model/kinematics.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 // Horizontal-direction and zenith components of a small change `delta` of a
@@ -83,8 +83,8 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
         PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &pred)) {
       const CameraTool& cam = model.cams[p.zoom];
       double ray_obs[3], ray_pred[3];
-      if (camera::PixelToRay(cam.intrinsics.data(), cam.distortion.data(), p.uv.data(), ray_obs) &&
-          camera::PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pred.data(), ray_pred)) {
+      if (PixelToRay(cam.intrinsics.data(), cam.distortion.data(), p.uv.data(), ray_obs) &&
+          PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pred.data(), ray_pred)) {
         const Eigen::Matrix3d rot = RefFromCam(model, p.zoom, p.phi, p.theta).rotation;
         const Eigen::Vector3d a = rot * Eigen::Vector3d(ray_obs).normalized();
         const Eigen::Vector3d b = rot * Eigen::Vector3d(ray_pred).normalized();
@@ -116,4 +116,4 @@ std::string Where(const Observations& obs, ObsGroup group, int index) {
   return obs.records_source + ", row " + std::to_string(index + 1) + " (" + buf + ")";
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

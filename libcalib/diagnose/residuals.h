@@ -21,7 +21,7 @@
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 struct ObservationResidual {
   ObsGroup group = ObsGroup::kEdm;
@@ -48,4 +48,4 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
 // "records.csv:17" or "simulated records, row 17 (edm, phi 30.0, theta 80.0 deg, d 2 m)".
 std::string Where(const Observations& obs, ObsGroup group, int index);
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

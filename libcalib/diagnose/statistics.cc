@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 // Regularised incomplete gamma functions by series (x < a + 1) and by Lentz's
@@ -165,4 +165,4 @@ Eigen::MatrixXd Projector::Apply(const Eigen::MatrixXd& x) const {
   return x - q_ * (q_.transpose() * x);
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -26,7 +26,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 double ChiSquareSurvival(double x, double dof);
 double ChiSquareCritical(double alpha, double dof);
@@ -72,4 +72,4 @@ class Projector {
   Eigen::MatrixXd q_;
 };
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

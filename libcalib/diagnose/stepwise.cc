@@ -1,6 +1,6 @@
 #include "libcalib/diagnose/stepwise.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& model,
                                const FitSummary& fit, const FitOptions& fit_options,
@@ -46,4 +46,4 @@ StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& m
   return out;
 }
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -11,7 +11,7 @@
 
 #include "libcalib/diagnose/diagnose.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 
 struct LadderStep {
   std::string added;  // "" on the first rung
@@ -37,4 +37,4 @@ StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& m
                                const FitSummary& fit, const FitOptions& fit_options,
                                const Settings& settings, int max_steps = 8);
 
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

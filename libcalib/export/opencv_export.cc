@@ -3,7 +3,7 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
-namespace rtscalib::exports {
+namespace rtscalib {
 
 int OpenCvDistortionCount(const InstrumentModel& model, int zoom) {
   if (zoom < 0 || zoom >= model.NumZooms()) {
@@ -16,14 +16,14 @@ int OpenCvDistortionCount(const InstrumentModel& model, int zoom) {
     for (int i : Info(e).distortion_indices) needed = std::max(needed, i + 1);
   }
   const auto& d = model.cams[zoom].distortion;
-  for (int i = 0; i < camera::kNumDistortion; ++i) {
+  for (int i = 0; i < kNumDistortion; ++i) {
     if (d[i] != 0.0) needed = std::max(needed, i + 1);
   }
   // The lengths cv::projectPoints and friends accept.
   for (int n : {4, 5, 8, 12}) {
     if (needed <= n) return n;
   }
-  return camera::kNumDistortion;
+  return kNumDistortion;
 }
 
 std::string OpenCvCameraFileName(int zoom) {
@@ -52,4 +52,4 @@ void WriteOpenCvCamera(const std::string& path, const InstrumentModel& model, in
   fs.release();
 }
 
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

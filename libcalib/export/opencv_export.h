@@ -16,7 +16,7 @@
 
 #include "libcalib/model/instrument.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 
 // The distortion vector length written for `zoom`: 4, 5, 8, 12 or 14.
 int OpenCvDistortionCount(const InstrumentModel& model, int zoom);
@@ -29,4 +29,4 @@ void WriteOpenCvCamera(const std::string& path, const InstrumentModel& model, in
 // The file name used for a zoom level: camera_zoom<z>.yaml.
 std::string OpenCvCameraFileName(int zoom);
 
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

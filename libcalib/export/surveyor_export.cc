@@ -9,7 +9,7 @@
 #include "libcalib/diagnose/equivalents.h"
 #include "libcalib/io/number_text.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 namespace {
 
 constexpr const char* kNotAvailable = "sigma not available";
@@ -102,11 +102,11 @@ bool PropagateDhSigmas(const InstrumentModel& dh, const FitOptions& fit,
   }
   sigma->fill(0.0);
   for (const Perturb& move : moves) {
-    diagnose::EquivalentTerms side[2];
+    EquivalentTerms side[2];
     for (int k = 0; k < 2; ++k) {
       InstrumentModel m = dh;
       move(k == 0 ? 1.0 : -1.0, &m);
-      side[k] = diagnose::EquivalentSurveyingTerms(m, fit);
+      side[k] = EquivalentSurveyingTerms(m, fit);
       if (!side[k].valid) {
         *why = "an equivalents fit of a perturbed model failed: " + side[k].message;
         return false;
@@ -144,12 +144,12 @@ SurveyorConstants ComputeSurveyorConstants(const InstrumentModel& model, const F
   out.kinematics = model.kinematics;
   const bool dh = model.kinematics == Kinematics::kDh;
 
-  diagnose::EquivalentTerms eq;
+  EquivalentTerms eq;
   std::array<double, kNumKinematicEffects> eq_sigma{};
   bool have_eq_sigma = false;
   std::string sigma_why;
   if (dh) {
-    eq = diagnose::EquivalentSurveyingTerms(model, fit);
+    eq = EquivalentSurveyingTerms(model, fit);
     if (eq.valid) {
       out.notes.push_back(
           "c, i, v0 and k0 are the dh model's equivalents: a spherical model with these terms "
@@ -279,4 +279,4 @@ std::string SurveyorJson(const SurveyorConstants& c) {
   return j.dump(2) + "\n";
 }
 
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

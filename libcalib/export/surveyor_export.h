@@ -9,7 +9,7 @@
 // Sources:
 //   spherical  the effect parameters, sigmas from the model's stored covariances.
 //   dh         c, i, v0, k0 live in the links and tools (redundant in dh, SPEC 4):
-//              their equivalents come from diagnose::EquivalentSurveyingTerms. Their sigmas
+//              their equivalents come from EquivalentSurveyingTerms. Their sigmas
 //              are propagated to first order from the model's stored marginal sigmas of the
 //              DH links and the EDM pose (central differences of +-1 sigma per parameter,
 //              root sum of squares). model.yaml holds no cross-covariances, so correlations
@@ -28,7 +28,7 @@
 #include "libcalib/fit/refine.h"
 #include "libcalib/model/instrument.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 
 struct SurveyorTerm {
   Effect effect;
@@ -59,4 +59,4 @@ std::string SurveyorJson(const SurveyorConstants& constants);
 double ArcsecToMgon(double arcsec);
 double DegToGon(double deg);
 
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

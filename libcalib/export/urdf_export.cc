@@ -7,7 +7,7 @@
 #include "libcalib/io/number_text.h"
 #include "libcalib/model/kinematics.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 namespace {
 
 // + 0.0 writes -0 as 0.
@@ -201,4 +201,4 @@ UrdfExport ExportUrdf(const InstrumentModel& model, const UrdfOptions& options) 
   return out;
 }
 
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

@@ -37,7 +37,7 @@
 
 #include "libcalib/model/instrument.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 
 constexpr const char* kUrdfReferenceLink = "reference";
 constexpr const char* kUrdfAlidadeLink = "alidade";
@@ -72,4 +72,4 @@ std::array<double, 2> UrdfJointPositions(const InstrumentModel& model, double ph
 // order one, so that an ill-determined roll is absorbed by yaw.
 Eigen::Vector3d UrdfRpy(const Eigen::Matrix3d& r);
 
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

@@ -141,8 +141,7 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
   auto add_exact = [&](const Record& r) {
     const double pixel[2] = {r.u, r.v};
     double ray[3];
-    if (!camera::PixelToRay(out.camera.intrinsics.data(), out.camera.distortion.data(), pixel,
-                            ray)) {
+    if (!PixelToRay(out.camera.intrinsics.data(), out.camera.distortion.data(), pixel, ray)) {
       throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
                             ": pixel (" + Num(r.u) + ", " + Num(r.v) + ") of line " +
                             std::to_string(r.line) +

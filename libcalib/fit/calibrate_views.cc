@@ -22,19 +22,6 @@
 namespace rtscalib {
 namespace {
 
-using camera::kK1;
-using camera::kK2;
-using camera::kK3;
-using camera::kK4;
-using camera::kK5;
-using camera::kK6;
-using camera::kNumDistortion;
-using camera::kNumIntrinsics;
-using camera::kP1;
-using camera::kP2;
-using camera::kS1;
-using camera::kS4;
-
 struct Shot {
   std::string id;
   int face = 1;
@@ -378,7 +365,7 @@ Start PoseShots(const Init& init, const std::vector<Shot>& shots) {
       for (size_t i = 0; i < shot.X.size() && ok; ++i) {
         const Eigen::Vector3d Xc = cam_from_ref * shot.X[i];
         double px[2];
-        ok = camera::ProjectToPixel(init.intrinsics.data(), init.distortion.data(), Xc.data(), px);
+        ok = ProjectToPixel(init.intrinsics.data(), init.distortion.data(), Xc.data(), px);
         if (ok) shot_sum += (Eigen::Vector2d(px[0], px[1]) - shot.uv[i]).squaredNorm();
       }
     }
@@ -417,7 +404,7 @@ struct ShotReprojection {
     // block only, formed once per shot instead of once per point
     // (internal::ProjectWithTilt, cost_functions.h; the same formula).
     T tilt[9];
-    camera::TiltMatrix(distortion[camera::kTauX], distortion[camera::kTauY], tilt);
+    TiltMatrix(distortion[kTauX], distortion[kTauY], tilt);
     for (size_t i = 0; i < shot->X.size(); ++i) {
       // Jet times double: the reference point carries no derivative.
       const Vec3<T> x_cam = cam_from_ref.R * shot->X[i] + cam_from_ref.t;
@@ -721,7 +708,7 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   out.intrinsics = state.intrinsics;
   out.distortion = state.distortion;
   out.num_points = num_points;
-  out.max_trusted_radius = camera::MaxTrustedRadius(state.distortion.data());
+  out.max_trusted_radius = MaxTrustedRadius(state.distortion.data());
   double total = 0;
   for (size_t k = 0; k < shots.size(); ++k) {
     const Shot& shot = shots[k];

@@ -59,7 +59,7 @@ struct DistortionGroups {
   bool thin_prism = false;   // thin_prism: s1 s2 s3 s4
   bool sensor_tilt = false;  // sensor_tilt: taux tauy
 
-  // Indices (camera::DistortionIndex) of the free coefficients, ascending.
+  // Indices (DistortionIndex) of the free coefficients, ascending.
   std::vector<int> FreeCoefficients() const;
   std::string Names() const;  // e.g. "radial+tangential", "none"
 };
@@ -96,16 +96,16 @@ struct ExcludedShot {
 struct ViewsCalibration {
   int zoom = 0;
   int width = 0, height = 0;
-  std::array<double, camera::kNumIntrinsics> intrinsics{};  // fx fy cx cy [px]
-  std::array<double, camera::kNumDistortion> distortion{};  // OpenCV order
-  std::vector<ShotPose> shots;         // usable shots, in order of first appearance
-  std::vector<ExcludedShot> excluded;  // shots left out, with the reason
-  int num_points = 0;                  // observations used
-  double rms_px = 0;                   // sqrt(mean(du^2 + dv^2)) over the used points
-  double opencv_rms_px = 0;            // the same after step 3 (OpenCV's estimate)
-  std::string init_note;               // how step 2 went (e.g. the radial-only fallback)
-  int iterations = 0;                  // of step 4
-  bool converged = false;              // step 4 met its tolerance within max_iterations
+  std::array<double, kNumIntrinsics> intrinsics{};  // fx fy cx cy [px]
+  std::array<double, kNumDistortion> distortion{};  // OpenCV order
+  std::vector<ShotPose> shots;                      // usable shots, in order of first appearance
+  std::vector<ExcludedShot> excluded;               // shots left out, with the reason
+  int num_points = 0;                               // observations used
+  double rms_px = 0;                                // sqrt(mean(du^2 + dv^2)) over the used points
+  double opencv_rms_px = 0;                         // the same after step 3 (OpenCV's estimate)
+  std::string init_note;   // how step 2 went (e.g. the radial-only fallback)
+  int iterations = 0;      // of step 4
+  bool converged = false;  // step 4 met its tolerance within max_iterations
   // MaxTrustedRadius of the result and how many used points lie beyond it
   // (their pixels cannot be back-projected; > 0 means the distortion model
   // folds inside the data and should be questioned).

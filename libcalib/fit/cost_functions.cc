@@ -21,8 +21,8 @@ BlockLayout LayoutFor(InstrumentModel* model, int zoom) {
   l.tool_q = add(tool.q.data(), 4);
   l.tool_t = add(tool.t.data(), 3);
   if (zoom >= 0) {
-    l.intrinsics = add(model->cams[zoom].intrinsics.data(), camera::kNumIntrinsics);
-    l.distortion = add(model->cams[zoom].distortion.data(), camera::kNumDistortion);
+    l.intrinsics = add(model->cams[zoom].intrinsics.data(), kNumIntrinsics);
+    l.distortion = add(model->cams[zoom].distortion.data(), kNumDistortion);
   }
   for (Effect e : model->effects.List()) {
     if (!IsKinematic(e)) continue;

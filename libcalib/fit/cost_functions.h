@@ -84,7 +84,7 @@ struct RecordGroupResidual {
       } else {
         const T pixel[2] = {T(row.u), T(row.v)};
         T ray[3];
-        if (!camera::PixelToRay(p[layout.intrinsics], p[layout.distortion], pixel, ray)) {
+        if (!PixelToRay(p[layout.intrinsics], p[layout.distortion], pixel, ray)) {
           return false;
         }
         local = Vec3<T>(ray[0], ray[1], ray[2]) * T(row.d);  // SPEC 2: ray LENGTH d
@@ -109,10 +109,10 @@ struct IsJet<ceres::Jet<S, N>> : std::true_type {
 // The projection's own variables: camera point (3), intrinsics (4),
 // distortion (14). Its derivatives are taken with these 21-wide jets and
 // chained onto the caller's wide jets (ShotResidual below).
-constexpr int kLocalVars = 3 + camera::kNumIntrinsics + camera::kNumDistortion;
+constexpr int kLocalVars = 3 + kNumIntrinsics + kNumDistortion;
 using LocalJet = ceres::Jet<double, kLocalVars>;
 
-// camera::ProjectToPixel with the tilt matrix `m` computed once per shot
+// ProjectToPixel with the tilt matrix `m` computed once per shot
 // (it depends on the distortion block only): the same formula, line for line
 // (opencv_model.h). tests/fit/cost_functions_test.cc checks both agree.
 template <typename T>
@@ -121,7 +121,7 @@ bool ProjectWithTilt(const T* intrinsics, const T* dist, const T* m, const T* po
   const T x = point[0] / point[2];
   const T y = point[1] / point[2];
   T xd, yd;
-  camera::DistortNormalized(dist, x, y, &xd, &yd);
+  DistortNormalized(dist, x, y, &xd, &yd);
   const T xt = m[0] * xd + m[1] * yd + m[2];
   const T yt = m[3] * xd + m[4] * yd + m[5];
   const T zt = m[6] * xd + m[7] * yd + m[8];
@@ -179,7 +179,7 @@ struct ShotResidual {
     const T* dist = p[layout.distortion];
     if constexpr (!internal::IsJet<T>::value) {
       T m[9];
-      camera::TiltMatrix(dist[camera::kTauX], dist[camera::kTauY], m);
+      TiltMatrix(dist[kTauX], dist[kTauY], m);
       for (size_t k = 0; k < points.size(); ++k) {
         const Vec3<T> x_cam = cam_from_ref_R * (points[k].X.cast<T>() - ref_from_cam.t);
         T pixel[2];
@@ -195,18 +195,18 @@ struct ShotResidual {
       constexpr int kN = internal::IsJet<T>::kSize;
       // Local jets of intrinsics and distortion, and where their wide
       // derivatives live.
-      LocalJet li[camera::kNumIntrinsics], ld[camera::kNumDistortion];
-      int slot[camera::kNumIntrinsics + camera::kNumDistortion];
-      for (int i = 0; i < camera::kNumIntrinsics; ++i) {
+      LocalJet li[kNumIntrinsics], ld[kNumDistortion];
+      int slot[kNumIntrinsics + kNumDistortion];
+      for (int i = 0; i < kNumIntrinsics; ++i) {
         li[i] = LocalJet(intrinsics[i].a, 3 + i);
         slot[i] = internal::SeedSlot<kN>(intrinsics[i]);
       }
-      for (int i = 0; i < camera::kNumDistortion; ++i) {
-        ld[i] = LocalJet(dist[i].a, 3 + camera::kNumIntrinsics + i);
-        slot[camera::kNumIntrinsics + i] = internal::SeedSlot<kN>(dist[i]);
+      for (int i = 0; i < kNumDistortion; ++i) {
+        ld[i] = LocalJet(dist[i].a, 3 + kNumIntrinsics + i);
+        slot[kNumIntrinsics + i] = internal::SeedSlot<kN>(dist[i]);
       }
       LocalJet m[9];
-      camera::TiltMatrix(ld[camera::kTauX], ld[camera::kTauY], m);
+      TiltMatrix(ld[kTauX], ld[kTauY], m);
       for (size_t k = 0; k < points.size(); ++k) {
         const Vec3<T> x_cam = cam_from_ref_R * (points[k].X.cast<T>() - ref_from_cam.t);
         const LocalJet lx[3] = {LocalJet(x_cam[0].a, 0), LocalJet(x_cam[1].a, 1),
@@ -218,13 +218,12 @@ struct ShotResidual {
           out.a = pixel[c].a;
           out.v =
               pixel[c].v[0] * x_cam[0].v + pixel[c].v[1] * x_cam[1].v + pixel[c].v[2] * x_cam[2].v;
-          for (int i = 0; i < camera::kNumIntrinsics + camera::kNumDistortion; ++i) {
+          for (int i = 0; i < kNumIntrinsics + kNumDistortion; ++i) {
             const double d = pixel[c].v[3 + i];
             if (slot[i] >= 0) {
               out.v[slot[i]] += d;
             } else if (slot[i] == -2) {
-              out.v += d * (i < camera::kNumIntrinsics ? intrinsics[i].v
-                                                       : dist[i - camera::kNumIntrinsics].v);
+              out.v += d * (i < kNumIntrinsics ? intrinsics[i].v : dist[i - kNumIntrinsics].v);
             }
           }
           r[2 * k + c] = (out - T(points[k].uv[c])) * T(inv_sigma);

@@ -119,7 +119,7 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
 
   // Distortion coefficients are free exactly when an enabled group owns them.
   std::vector<int> frozen_distortion;
-  for (int i = 0; i < camera::kNumDistortion; ++i) {
+  for (int i = 0; i < kNumDistortion; ++i) {
     if (!m.effects.Has(DistortionGroupOf(i))) frozen_distortion.push_back(i);
   }
   for (int z = 0; z < m.NumZooms(); ++z) {
@@ -133,10 +133,10 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
     Add(per_zoom(Translation(cam.flange_from_cam.t.data(), zs, {})));
     Add(per_zoom(Euclidean(cam.intrinsics.data(), zs + ".intrinsics",
                            options.fit_intrinsics ? BlockKind::kFree : BlockKind::kConstant,
-                           camera::kNumIntrinsics, {}, zs + ".", kIntrinsicsParamNames, "")));
-    BlockDecision dist = per_zoom(Euclidean(
-        cam.distortion.data(), zs + ".distortion", BlockKind::kSubset, camera::kNumDistortion,
-        frozen_distortion, zs + ".", kDistortionCoefficientNames, ""));
+                           kNumIntrinsics, {}, zs + ".", kIntrinsicsParamNames, "")));
+    BlockDecision dist = per_zoom(Euclidean(cam.distortion.data(), zs + ".distortion",
+                                            BlockKind::kSubset, kNumDistortion, frozen_distortion,
+                                            zs + ".", kDistortionCoefficientNames, ""));
     for (FreeColumn& c : dist.columns) c.effect = DistortionGroupOf(c.index);
     Add(std::move(dist));
   }

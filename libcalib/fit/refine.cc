@@ -194,7 +194,7 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentMo
   for (int z = 0; z < model->NumZooms(); ++z) {
     pose_sigma(model->cams[z].flange_from_cam, &s.cam_tools[z]);
     ambient_sigma(model->cams[z].intrinsics.data(), 4, s.intrinsics[z].data());
-    ambient_sigma(model->cams[z].distortion.data(), camera::kNumDistortion, s.distortion[z].data());
+    ambient_sigma(model->cams[z].distortion.data(), kNumDistortion, s.distortion[z].data());
   }
   for (Effect e : model->effects.List()) {
     if (!IsKinematic(e)) continue;

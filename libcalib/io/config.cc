@@ -170,8 +170,8 @@ void ReadCameraFields(const YamlNode& m, bool required, CameraTool* cam) {
       if (*value <= 0) n->Fail(std::string("an image ") + key + " > 0 [px]");
     }
   }
-  const char* names[camera::kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
-  for (int i = 0; i < camera::kNumIntrinsics; ++i) {
+  const char* names[kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
+  for (int i = 0; i < kNumIntrinsics; ++i) {
     if (const std::optional<YamlNode> n = get(names[i])) {
       const double x = n->AsDouble();
       if (i < 2 && !(x > 0)) n->Fail(std::string("a focal length ") + names[i] + " > 0 [px]");
@@ -180,7 +180,7 @@ void ReadCameraFields(const YamlNode& m, bool required, CameraTool* cam) {
   }
   if (const std::optional<YamlNode> n = m.Find("distortion")) {
     const std::vector<double> d = n->AsDoubles();
-    if (d.size() > camera::kNumDistortion) {
+    if (d.size() > kNumDistortion) {
       n->Fail("at most 14 OpenCV coefficients k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4 taux tauy");
     }
     cam->distortion.fill(0.0);
@@ -513,8 +513,8 @@ void EmitPose(YAML::Emitter& e, const PoseBlock& pose) {
 void EmitCameraFields(YAML::Emitter& e, const CameraTool& cam) {
   e << YAML::Key << "width" << YAML::Value << cam.width;
   e << YAML::Key << "height" << YAML::Value << cam.height;
-  const char* names[camera::kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
-  for (int i = 0; i < camera::kNumIntrinsics; ++i) {
+  const char* names[kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
+  for (int i = 0; i < kNumIntrinsics; ++i) {
     e << YAML::Key << names[i] << YAML::Value << Num(cam.intrinsics[i]);
   }
   e << YAML::Key << "distortion" << YAML::Value;

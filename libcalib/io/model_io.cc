@@ -108,14 +108,14 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
   e << YAML::Key << "flange_from_cam" << YAML::Value;
   EmitPose(e, cam.flange_from_cam, s.valid ? &s.cam_tools[zoom] : nullptr, cam.determined);
   e << YAML::Key << "intrinsics" << YAML::Value;
-  EmitNamed(e, kIntrinsicsParamNames, cam.intrinsics.data(), camera::kNumIntrinsics);
+  EmitNamed(e, kIntrinsicsParamNames, cam.intrinsics.data(), kNumIntrinsics);
   e << YAML::Key << "distortion" << YAML::Value;
-  EmitNamed(e, kDistortionCoefficientNames, cam.distortion.data(), camera::kNumDistortion);
+  EmitNamed(e, kDistortionCoefficientNames, cam.distortion.data(), kNumDistortion);
   if (s.valid && cam.determined) {
     e << YAML::Key << "intrinsics_sigma" << YAML::Value;
-    EmitNamed(e, kIntrinsicsParamNames, s.intrinsics[zoom].data(), camera::kNumIntrinsics);
+    EmitNamed(e, kIntrinsicsParamNames, s.intrinsics[zoom].data(), kNumIntrinsics);
     e << YAML::Key << "distortion_sigma" << YAML::Value;
-    EmitNamed(e, kDistortionCoefficientNames, s.distortion[zoom].data(), camera::kNumDistortion);
+    EmitNamed(e, kDistortionCoefficientNames, s.distortion[zoom].data(), kNumDistortion);
   }
   e << YAML::EndMap;
 }
@@ -349,18 +349,18 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
                 " as the camera's (a camera is determined as a whole)");
     }
     ReadNamedInto(item.Require("intrinsics"), kIntrinsicsParamNames, cam.intrinsics.data(),
-                  camera::kNumIntrinsics);
+                  kNumIntrinsics);
     ReadNamedInto(item.Require("distortion"), kDistortionCoefficientNames, cam.distortion.data(),
-                  camera::kNumDistortion);
+                  kNumDistortion);
     if (with_sigma) {
       s.cam_tools.push_back(tool_sigma);
       s.intrinsics.emplace_back();
       s.distortion.emplace_back();
       if (cam.determined) {
         ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicsParamNames,
-                      s.intrinsics.back().data(), camera::kNumIntrinsics, true);
+                      s.intrinsics.back().data(), kNumIntrinsics, true);
         ReadNamedInto(item.Require("distortion_sigma"), kDistortionCoefficientNames,
-                      s.distortion.back().data(), camera::kNumDistortion, true);
+                      s.distortion.back().data(), kNumDistortion, true);
       } else {
         s.intrinsics.back().fill(std::numeric_limits<double>::quiet_NaN());
         s.distortion.back().fill(std::numeric_limits<double>::quiet_NaN());

@@ -105,23 +105,23 @@ constexpr int kNumDataNeeds = 8;
   X(kSensorTilt, "sensor_tilt", kDistortion, 0, "", "", "", "", false, kNeedImageCorners,          \
     "OpenCV taux tauy", "sensor tilt (Scheimpflug)")
 
-// OpenCV's 14 distortion coefficients, in camera::DistortionIndex order, each
+// OpenCV's 14 distortion coefficients, in DistortionIndex order, each
 // with the effect (distortion group) that owns it: X(name, camera index, group).
 #define RTSCALIB_DISTORTION_COEFFICIENTS(X)                                                        \
-  X("k1", camera::kK1, kRadialDistortion)                                                          \
-  X("k2", camera::kK2, kRadialDistortion)                                                          \
-  X("p1", camera::kP1, kTangentialDistortion)                                                      \
-  X("p2", camera::kP2, kTangentialDistortion)                                                      \
-  X("k3", camera::kK3, kRadialDistortion)                                                          \
-  X("k4", camera::kK4, kRationalDistortion)                                                        \
-  X("k5", camera::kK5, kRationalDistortion)                                                        \
-  X("k6", camera::kK6, kRationalDistortion)                                                        \
-  X("s1", camera::kS1, kThinPrism)                                                                 \
-  X("s2", camera::kS2, kThinPrism)                                                                 \
-  X("s3", camera::kS3, kThinPrism)                                                                 \
-  X("s4", camera::kS4, kThinPrism)                                                                 \
-  X("taux", camera::kTauX, kSensorTilt)                                                            \
-  X("tauy", camera::kTauY, kSensorTilt)
+  X("k1", kK1, kRadialDistortion)                                                          \
+  X("k2", kK2, kRadialDistortion)                                                          \
+  X("p1", kP1, kTangentialDistortion)                                                      \
+  X("p2", kP2, kTangentialDistortion)                                                      \
+  X("k3", kK3, kRadialDistortion)                                                          \
+  X("k4", kK4, kRationalDistortion)                                                        \
+  X("k5", kK5, kRationalDistortion)                                                        \
+  X("k6", kK6, kRationalDistortion)                                                        \
+  X("s1", kS1, kThinPrism)                                                                 \
+  X("s2", kS2, kThinPrism)                                                                 \
+  X("s3", kS3, kThinPrism)                                                                 \
+  X("s4", kS4, kThinPrism)                                                                 \
+  X("taux", kTauX, kSensorTilt)                                                            \
+  X("tauy", kTauY, kSensorTilt)
 // clang-format on
 
 enum class Effect : int {
@@ -156,7 +156,7 @@ constexpr int kNumEffects = static_cast<int>(std::size(kEffectRows));
 
 struct DistortionCoefficient {
   const char* name;
-  int index;     // camera::DistortionIndex
+  int index;     // DistortionIndex
   Effect group;  // the distortion effect that owns it
 };
 inline constexpr DistortionCoefficient kDistortionCoefficients[] = {
@@ -165,7 +165,7 @@ inline constexpr DistortionCoefficient kDistortionCoefficients[] = {
 #undef RTSCALIB_DISTORTION_ROW
 };
 
-// The coefficients' names ("k1" ... "tauy"), in camera::DistortionIndex order.
+// The coefficients' names ("k1" ... "tauy"), in DistortionIndex order.
 inline constexpr const char* kDistortionCoefficientNames[] = {
 #define RTSCALIB_DISTORTION_NAME(name, index, group) name,
     RTSCALIB_DISTORTION_COEFFICIENTS(RTSCALIB_DISTORTION_NAME)
@@ -227,10 +227,10 @@ constexpr int kMaxEffectParams = 2;
 static_assert(effects_internal::RowsConsistent(),
               "RTSCALIB_EFFECT_LIST: rows out of enum order, a distortion group before a "
               "kinematic effect, or parameter count / report units / needs not matching the kind");
-static_assert(static_cast<int>(std::size(kDistortionCoefficients)) == camera::kNumDistortion,
+static_assert(static_cast<int>(std::size(kDistortionCoefficients)) == kNumDistortion,
               "RTSCALIB_DISTORTION_COEFFICIENTS must name all of OpenCV's coefficients");
 static_assert(effects_internal::CoefficientsConsistent(),
-              "RTSCALIB_DISTORTION_COEFFICIENTS: out of camera::DistortionIndex order, owned by a "
+              "RTSCALIB_DISTORTION_COEFFICIENTS: out of DistortionIndex order, owned by a "
               "kinematic effect, or a distortion group owning no coefficient");
 
 struct EffectInfo {

@@ -48,12 +48,12 @@ struct DhLink {
 };
 
 // Intrinsics names in storage order fx, fy, cx, cy (model.yaml keys, column names).
-inline constexpr const char* kIntrinsicsParamNames[camera::kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
+inline constexpr const char* kIntrinsicsParamNames[kNumIntrinsics] = {"fx", "fy", "cx", "cy"};
 
 struct CameraTool {
   PoseBlock flange_from_cam;
-  std::array<double, camera::kNumIntrinsics> intrinsics{1000, 1000, 640, 480};
-  std::array<double, camera::kNumDistortion> distortion{};
+  std::array<double, kNumIntrinsics> intrinsics{1000, 1000, 640, 480};
+  std::array<double, kNumDistortion> distortion{};
   int width = 1280;
   int height = 960;
   // False when the data held no rows of this zoom (outside the critical
@@ -74,8 +74,8 @@ struct ModelSigmas {
   PoseSigma base, edm;
   std::array<std::array<double, 4>, 2> links{};
   std::vector<PoseSigma> cam_tools;
-  std::vector<std::array<double, camera::kNumIntrinsics>> intrinsics;
-  std::vector<std::array<double, camera::kNumDistortion>> distortion;
+  std::vector<std::array<double, kNumIntrinsics>> intrinsics;
+  std::vector<std::array<double, kNumDistortion>> distortion;
   std::array<std::array<double, 4>, kNumKinematicEffects> effect_cov{};  // 2x2 row major
 };
 

@@ -141,7 +141,7 @@ bool CamPoint(const ModelView<T>& m, const T* cam_q, const T* cam_t, const T* in
               const T* distortion, const T& phi, const T& theta, const T* pixel, const T& d,
               Vec3<T>* out) {
   T ray[3];
-  if (!camera::PixelToRay(intrinsics, distortion, pixel, ray)) return false;
+  if (!PixelToRay(intrinsics, distortion, pixel, ray)) return false;
   const RigidT<T> flange = RefFromFlange(m, phi, theta);
   const RigidT<T> tool = PoseFromBlocks(cam_q, cam_t);
   *out = flange * (tool * Vec3<T>(d * ray[0], d * ray[1], d * ray[2]));
@@ -155,7 +155,7 @@ bool ProjectPoint(const ModelView<T>& m, const T* cam_q, const T* cam_t, const T
                   T* pixel) {
   const RigidT<T> ref_from_cam = RefFromFlange(m, phi, theta) * PoseFromBlocks(cam_q, cam_t);
   const Vec3<T> x_cam = ref_from_cam.InverseApply(x_ref);
-  return camera::ProjectToPixel(intrinsics, distortion, x_cam.data(), pixel);
+  return ProjectToPixel(intrinsics, distortion, x_cam.data(), pixel);
 }
 
 // ---------------------------------------------------------------------------

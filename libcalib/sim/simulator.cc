@@ -239,7 +239,7 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
           std::vector<PixelObservation> rows;
           std::vector<Eigen::Vector2d> exact;
           const Rigid3 ref_from_cam = RefFromCam(truth, zoom, phi, theta);
-          const double trusted_radius = camera::MaxTrustedRadius(cam.distortion.data());
+          const double trusted_radius = MaxTrustedRadius(cam.distortion.data());
           for (const TargetCorner& c : corners) {
             Eigen::Vector2d uv;
             if (!PredictPixel(truth, zoom, phi, theta, c.X, &uv)) continue;

@@ -50,10 +50,10 @@ void SetSigmas(InstrumentModel* m) {
     s.cam_tools[z].rotation = {5e-5, 9e-5, 3e-5};
     s.cam_tools[z].t = {1e-4, 1.2e-4, 8e-5};
     s.intrinsics[z] = {0.4, 0.5, 0.3, 0.35};
-    s.distortion[z][camera::kK1] = 2e-3;
-    s.distortion[z][camera::kK2] = 4e-3;
-    s.distortion[z][camera::kP1] = 1e-4;
-    s.distortion[z][camera::kP2] = 1.5e-4;
+    s.distortion[z][kK1] = 2e-3;
+    s.distortion[z][kK2] = 4e-3;
+    s.distortion[z][kP1] = 1e-4;
+    s.distortion[z][kP2] = 1.5e-4;
   }
   for (Effect e : m->effects.List()) {
     if (!IsKinematic(e)) continue;
@@ -66,10 +66,10 @@ void SetSigmas(InstrumentModel* m) {
 InstrumentModel DhModel() {
   InstrumentModel m = PaperTruth(2);
   for (CameraTool& c : m.cams) {
-    c.distortion[camera::kK1] = -0.08;
-    c.distortion[camera::kK2] = 0.03;
-    c.distortion[camera::kP1] = 3e-4;
-    c.distortion[camera::kP2] = -2e-4;
+    c.distortion[kK1] = -0.08;
+    c.distortion[kK2] = 0.03;
+    c.distortion[kP1] = 3e-4;
+    c.distortion[kP2] = -2e-4;
   }
   m.effects.Add(Effect::kRadialDistortion);
   m.effects.Add(Effect::kTangentialDistortion);
@@ -86,8 +86,8 @@ InstrumentModel SphericalModel() {
   cam.width = 640;
   cam.height = 480;
   cam.intrinsics = {900, 901, 322, 238};
-  cam.distortion[camera::kK1] = -0.12;
-  cam.distortion[camera::kK2] = 0.05;
+  cam.distortion[kK1] = -0.12;
+  cam.distortion[kK2] = 0.05;
   InstrumentModel m = IdealModel(Kinematics::kSpherical, 2, cam);
   m.base.t = {0.01, -0.02, 1.5};
   m.edm.t = {0, 0.002, 0};
@@ -255,8 +255,8 @@ InstrumentModel Sample(const InstrumentModel& m, std::mt19937_64* rng) {
     rotate(ceres::EigenQuaternionManifold(), c.flange_from_cam.q.data(),
            s.cam_tools[z].rotation.data());
     add(c.flange_from_cam.t.data(), s.cam_tools[z].t.data(), 3);
-    add(c.intrinsics.data(), s.intrinsics[z].data(), camera::kNumIntrinsics);
-    add(c.distortion.data(), s.distortion[z].data(), camera::kNumDistortion);
+    add(c.intrinsics.data(), s.intrinsics[z].data(), kNumIntrinsics);
+    add(c.distortion.data(), s.distortion[z].data(), kNumDistortion);
   }
   return out;
 }
@@ -421,7 +421,7 @@ TEST(ApiErrors, RefusesWhatTheModelCannotPredict) {
 TEST(ApiErrors, RefusesAPointWhoseProjectionTheDistortionFolds) {
   InstrumentModel m = DhModel();
   m.cams[0].distortion.fill(0.0);
-  m.cams[0].distortion[camera::kK1] = -0.3;
+  m.cams[0].distortion[kK1] = -0.3;
   const CalibratedInstrument inst(m);
   const double phi = 0.3, theta = 1.2;
   const Eigen::Vector3d x = RefFromCam(m, 0, phi, theta) * Eigen::Vector3d(2.0, 0, 1);

@@ -27,10 +27,10 @@ InstrumentModel Truth() {
     c.height = 480;
     const double f = 800.0 * std::pow(1.6, z);
     c.intrinsics = {f, f * (1 + 3e-4), 324.0 - z, 237.0 + z};
-    c.distortion[camera::kK1] = -0.1 / (1 + z);
-    c.distortion[camera::kK2] = 0.04 / (1 + z);
-    c.distortion[camera::kP1] = 4e-4;
-    c.distortion[camera::kP2] = -3e-4;
+    c.distortion[kK1] = -0.1 / (1 + z);
+    c.distortion[kK2] = 0.04 / (1 + z);
+    c.distortion[kP1] = 4e-4;
+    c.distortion[kP2] = -3e-4;
   }
   m.effects.Add(Effect::kRadialDistortion);
   m.effects.Add(Effect::kTangentialDistortion);
@@ -76,7 +76,7 @@ TEST(PredictPixels, PixelsOnlyRunThenPredictEveryZoomAndFace) {
   ASSERT_TRUE(model.sigmas.valid);
   for (int z = 0; z < 3; ++z) {
     for (int i = 0; i < 4; ++i) EXPECT_GT(model.sigmas.intrinsics[z][i], 0.0) << "zoom " << z;
-    for (int i : {camera::kK1, camera::kK2, camera::kP1, camera::kP2}) {
+    for (int i : {kK1, kK2, kP1, kP2}) {
       EXPECT_GT(model.sigmas.distortion[z][i], 0.0) << "zoom " << z << " coefficient " << i;
     }
     EXPECT_GT(model.sigmas.cam_tools[z].t[0], 0.0) << "zoom " << z;

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace rtscalib::camera {
+namespace rtscalib {
 namespace {
 
 // Tolerances, with where they come from (fx ~ 1000 px, image 1280 x 960).
@@ -559,4 +559,4 @@ TEST(CostFunctors, PassGradientChecker) {
 }
 
 }  // namespace
-}  // namespace rtscalib::camera
+}  // namespace rtscalib

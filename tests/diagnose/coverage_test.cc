@@ -4,7 +4,7 @@
 
 #include "libcalib/sim/simulator.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 bool Mentions(const std::vector<std::string>& needs, const std::string& what) {
@@ -54,4 +54,4 @@ TEST(Coverage, AGridInBothFacesLacksNothingForTheAngles) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

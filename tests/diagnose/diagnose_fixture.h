@@ -10,7 +10,7 @@
 #include "libcalib/model/kinematics.h"
 #include "libcalib/sim/simulator.h"
 
-namespace rtscalib::diagnose::testing {
+namespace rtscalib::testing_diagnose {
 
 // Noise of the simulated instrument: 1 arcsec per angle reading, 10 um per
 // EDM distance and per coordinate of a returned point (a PLT 300-class device).
@@ -88,4 +88,4 @@ inline double RecordsRms(const InstrumentModel& m, const Fitted& f) {
   return RmsOfModel(f.data.obs, m, f.options).records_m;
 }
 
-}  // namespace rtscalib::diagnose::testing
+}  // namespace rtscalib::testing_diagnose

@@ -14,13 +14,13 @@
 
 #include "tests/diagnose/diagnose_fixture.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
-using testing::FitBaseline;
-using testing::Fitted;
-using testing::PaperNoise;
-using testing::SmallPlan;
+using testing_diagnose::FitBaseline;
+using testing_diagnose::Fitted;
+using testing_diagnose::PaperNoise;
+using testing_diagnose::SmallPlan;
 
 // A dh baseline (PaperTruth) missing edm_scale (20 ppm: 0.6 mm at 30 m, 60
 // times the 10 um noise) plus one EDM row 3 mm off (300 sigma).
@@ -179,4 +179,4 @@ TEST(Diagnose, SettingsAreChecked) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

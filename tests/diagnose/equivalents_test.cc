@@ -9,7 +9,7 @@
 #include "libcalib/sim/simulator.h"
 #include "tests/diagnose/diagnose_fixture.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 constexpr double kArcsec = M_PI / (180.0 * 3600.0);
@@ -25,7 +25,7 @@ struct DhOfSpherical {
 
 DhOfSpherical Make(double c, double i, double v0, double k0) {
   DhOfSpherical out;
-  out.truth = testing::SphericalTruth();
+  out.truth = testing_diagnose::SphericalTruth();
   for (const auto& [e, v] : {std::pair<Effect, double>{Effect::kCollimation, c},
                              {Effect::kTiltingAxis, i},
                              {Effect::kVerticalIndex, v0},
@@ -75,7 +75,8 @@ TEST(EquivalentSurveyingTerms, ReadsTheFourTermsOffADhModel) {
 }
 
 TEST(EquivalentSurveyingTerms, IdealDhModelHasNone) {
-  const InstrumentModel dh = IdealModel(Kinematics::kDh, 1, testing::SphericalTruth().cams[0]);
+  const InstrumentModel dh =
+      IdealModel(Kinematics::kDh, 1, testing_diagnose::SphericalTruth().cams[0]);
   const EquivalentTerms e = EquivalentSurveyingTerms(dh, FitOptions());
   ASSERT_TRUE(e.valid) << e.message;
   // The ideal instrument is exactly spherical: round-off of the fit.
@@ -87,11 +88,12 @@ TEST(EquivalentSurveyingTerms, IdealDhModelHasNone) {
 }
 
 TEST(EquivalentSurveyingTerms, OnlyForDhModels) {
-  const EquivalentTerms e = EquivalentSurveyingTerms(testing::SphericalTruth(), FitOptions());
+  const EquivalentTerms e =
+      EquivalentSurveyingTerms(testing_diagnose::SphericalTruth(), FitOptions());
   EXPECT_FALSE(e.valid);
   EXPECT_FALSE(e.message.empty());
   EXPECT_NE(e.message.find("dh"), std::string::npos) << e.message;
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

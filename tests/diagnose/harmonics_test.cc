@@ -4,14 +4,14 @@
 
 #include "tests/diagnose/diagnose_fixture.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
-using testing::DiagnoseFitted;
-using testing::FitBaseline;
-using testing::Fitted;
-using testing::PaperNoise;
-using testing::SmallPlan;
+using testing_diagnose::DiagnoseFitted;
+using testing_diagnose::FitBaseline;
+using testing_diagnose::Fitted;
+using testing_diagnose::PaperNoise;
+using testing_diagnose::SmallPlan;
 
 // Records of `truth` whose horizontal encoder reads phi while the instrument
 // points at phi + A sin(2 phi - p): an error outside the catalogue.
@@ -154,12 +154,12 @@ TEST(Control, NoHiddenEffectFlagsNothingIn19Of20Seeds) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
-using namespace testing;
+using namespace testing_diagnose;
 
 // Exact (noise-free) records of an instrument without hidden effects: the
 // fitted residuals are round-off (~1e-15 m), so every test statistic is
@@ -179,4 +179,4 @@ TEST(Control, ExactDataFlagNothing) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -4,13 +4,13 @@
 
 #include "tests/diagnose/diagnose_fixture.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
-using testing::FitBaseline;
-using testing::Fitted;
-using testing::PaperNoise;
-using testing::SmallPlan;
+using testing_diagnose::FitBaseline;
+using testing_diagnose::Fitted;
+using testing_diagnose::PaperNoise;
+using testing_diagnose::SmallPlan;
 
 SimulatedData Data(std::uint64_t seed) {
   SimulationOptions o;
@@ -38,7 +38,7 @@ TEST(Outliers, GrossErrorIsFlaggedWithItsLine) {
   data.obs.records[target].line = 123;
   data.obs.records_source = "records.csv";
   const Fitted f = FitBaseline(data, PaperTruth(1), 42);
-  const Diagnosis d = testing::DiagnoseFitted(f);
+  const Diagnosis d = testing_diagnose::DiagnoseFitted(f);
   ASSERT_FALSE(d.outliers.worst.empty());
   EXPECT_EQ(d.outliers.worst.front().index, target);
   EXPECT_TRUE(d.outliers.worst.front().flagged);
@@ -49,11 +49,11 @@ TEST(Outliers, GrossErrorIsFlaggedWithItsLine) {
 
 TEST(Outliers, CleanDataFlagNothing) {
   const Fitted f = FitBaseline(Data(43), PaperTruth(1), 44);
-  const Diagnosis d = testing::DiagnoseFitted(f);
+  const Diagnosis d = testing_diagnose::DiagnoseFitted(f);
   EXPECT_EQ(d.outliers.flagged, 0)
       << d.outliers.worst.front().where << " w " << d.outliers.worst.front().w;
   EXPECT_GT(d.outliers.tested, 100);
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

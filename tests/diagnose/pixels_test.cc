@@ -5,12 +5,12 @@
 #include "libcalib/diagnose/diagnose.h"
 #include "tests/diagnose/diagnose_fixture.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
-using testing::FitBaseline;
-using testing::Fitted;
-using testing::PaperNoise;
+using testing_diagnose::FitBaseline;
+using testing_diagnose::Fitted;
+using testing_diagnose::PaperNoise;
 
 // Four boards of 6 x 8 tags, 2.5 m around the station, facing it: each spans
 // about half the image, the shots move it around.
@@ -39,9 +39,9 @@ TEST(Pixels, RadialDistortionInImagePointsRanksFirst) {
   // Pincushion (k1 > 0): with k1 < 0 the simulator's projection folds corners
   // far outside the field of view back into the image (it does not check the
   // trusted region of the distortion), which no model could fit.
-  o.truth.cams[0].distortion[camera::kK1] = 0.05;
+  o.truth.cams[0].distortion[kK1] = 0.05;
   o.truth.effects.Add(Effect::kRadialDistortion);
-  o.plan = testing::SmallPlan();
+  o.plan = testing_diagnose::SmallPlan();
   o.targets = Boards();
   o.shots.shots_per_board = 4;
   o.noise = PaperNoise();
@@ -55,7 +55,7 @@ TEST(Pixels, RadialDistortionInImagePointsRanksFirst) {
   data.obs.records = edm;
   ASSERT_GT(data.obs.pixels.size(), 500u);
   const Fitted f = FitBaseline(data, o.truth, 62);
-  const Diagnosis d = testing::DiagnoseFitted(f);
+  const Diagnosis d = testing_diagnose::DiagnoseFitted(f);
   const RankedEffect& top = d.ranking.entries.front();
   EXPECT_EQ(top.name, "radial_distortion");
   EXPECT_TRUE(top.significant);
@@ -70,4 +70,4 @@ TEST(Pixels, RadialDistortionInImagePointsRanksFirst) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

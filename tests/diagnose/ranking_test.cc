@@ -7,16 +7,16 @@
 #include "libcalib/extract/extract.h"
 #include "tests/diagnose/diagnose_fixture.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
-using testing::DiagnoseFitted;
-using testing::FitBaseline;
-using testing::Fitted;
-using testing::PaperNoise;
-using testing::RecordsRms;
-using testing::SmallPlan;
-using testing::SphericalTruth;
+using testing_diagnose::DiagnoseFitted;
+using testing_diagnose::FitBaseline;
+using testing_diagnose::Fitted;
+using testing_diagnose::PaperNoise;
+using testing_diagnose::RecordsRms;
+using testing_diagnose::SmallPlan;
+using testing_diagnose::SphericalTruth;
 
 struct HiddenEffect {
   Effect effect;
@@ -100,18 +100,14 @@ INSTANTIATE_TEST_SUITE_P(
         HiddenEffect{Effect::kEdmOffset, {0.8, 0}, {}},
         HiddenEffect{Effect::kEdmScale, {20.0, 0}, {}},
         HiddenEffect{Effect::kEdmCyclic, {0.3, 25.0}, {}},
-        HiddenEffect{Effect::kRadialDistortion, {}, {{camera::kK1, 0.02}}},
-        HiddenEffect{
-            Effect::kTangentialDistortion, {}, {{camera::kP1, 4e-4}, {camera::kP2, -3e-4}}},
-        HiddenEffect{Effect::kRationalDistortion, {}, {{camera::kK4, 0.03}}},
+        HiddenEffect{Effect::kRadialDistortion, {}, {{kK1, 0.02}}},
+        HiddenEffect{Effect::kTangentialDistortion, {}, {{kP1, 4e-4}, {kP2, -3e-4}}},
+        HiddenEffect{Effect::kRationalDistortion, {}, {{kK4, 0.03}}},
         // s1, s3 alone are tangential's p2, p1 up to a camera rotation; the
         // r^4 terms s2, s4 are thin prism's own.
         HiddenEffect{
-            Effect::kThinPrism,
-            {},
-            {{camera::kS1, 5e-4}, {camera::kS2, 4e-3}, {camera::kS3, -4e-4}, {camera::kS4, -3e-3}}},
-        HiddenEffect{
-            Effect::kSensorTilt, {}, {{camera::kTauX, 1e-3}, {camera::kTauY, -1e-3}}, false}),
+            Effect::kThinPrism, {}, {{kS1, 5e-4}, {kS2, 4e-3}, {kS3, -4e-4}, {kS4, -3e-3}}},
+        HiddenEffect{Effect::kSensorTilt, {}, {{kTauX, 1e-3}, {kTauY, -1e-3}}, false}),
     [](const auto& info) { return std::string(Info(info.param.effect).name); });
 
 // The linearised estimate (no confirming refinement) is the hidden value:
@@ -141,8 +137,8 @@ TEST(Ranking, LinearEstimateIsTheHiddenValue) {
 // With the intrinsics fitted, a small sensor tilt is a camera rotation plus a
 // principal point shift: reported as absorbed (redundant), never significant.
 TEST(Ranking, SensorTiltWithFittedIntrinsicsIsAbsorbed) {
-  const Fitted f = SimulateHidden(
-      {Effect::kSensorTilt, {}, {{camera::kTauX, 1e-3}, {camera::kTauY, -1e-3}}, true}, 9);
+  const Fitted f =
+      SimulateHidden({Effect::kSensorTilt, {}, {{kTauX, 1e-3}, {kTauY, -1e-3}}, true}, 9);
   const Diagnosis d = DiagnoseFitted(f);
   for (const RankedEffect& r : d.ranking.entries) {
     EXPECT_FALSE(r.significant) << r.name;
@@ -188,4 +184,4 @@ TEST(Ranking, CollimationOnDhIsRedundantWithItsEquivalentValue) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -7,7 +7,7 @@
 #include "libcalib/fit/refine.h"
 #include "libcalib/model/kinematics.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 // Small angular offsets a, b (rad) turn into the components to first order;
@@ -210,4 +210,4 @@ TEST(Where, NamesTheFileLineOrTheRow) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

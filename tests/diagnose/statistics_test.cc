@@ -4,7 +4,7 @@
 
 #include <random>
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
 // Table values of chi2 and normal quantiles (Abramowitz & Stegun 26.4, 26.2),
@@ -87,4 +87,4 @@ TEST(Statistics, HeteroscedasticNoiseDoesNotFakeSignificance) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

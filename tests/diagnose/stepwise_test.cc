@@ -6,14 +6,14 @@
 
 #include "tests/diagnose/diagnose_fixture.h"
 
-namespace rtscalib::diagnose {
+namespace rtscalib {
 namespace {
 
-using testing::FitBaseline;
-using testing::Fitted;
-using testing::PaperNoise;
-using testing::RecordsRms;
-using testing::SmallPlan;
+using testing_diagnose::FitBaseline;
+using testing_diagnose::Fitted;
+using testing_diagnose::PaperNoise;
+using testing_diagnose::RecordsRms;
+using testing_diagnose::SmallPlan;
 
 // Two hidden effects: the ladder adds exactly those two, the error falls at
 // every rung and ends within 10% of the noise floor.
@@ -63,4 +63,4 @@ TEST(Stepwise, StopsAtMaxSteps) {
 }
 
 }  // namespace
-}  // namespace rtscalib::diagnose
+}  // namespace rtscalib

@@ -9,7 +9,7 @@
 
 #include "libcalib/model/instrument.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 
 inline Rigid3 RandomPose(std::mt19937& rng, double max_angle, double max_shift) {
   std::uniform_real_distribution<double> a(-max_angle, max_angle), t(-max_shift, max_shift);
@@ -40,10 +40,10 @@ inline InstrumentModel RandomModel(Kinematics k, std::mt19937& rng,
       PoseBlock::FromRigid(m.cams[0].flange_from_cam.ToRigid() * RandomPose(rng, 0.0, 0.05));
   m.cams[1].flange_from_cam =
       PoseBlock::FromRigid(m.cams[1].flange_from_cam.ToRigid() * RandomPose(rng, 1.0, 0.05));
-  const double dist_scale[camera::kNumDistortion] = {0.1,   0.05, 1e-3, 1e-3, 0.01, 0.01, 0.005,
-                                                     0.001, 1e-3, 1e-4, 1e-3, 1e-4, 0.01, 0.01};
+  const double dist_scale[kNumDistortion] = {0.1,   0.05, 1e-3, 1e-3, 0.01, 0.01, 0.005,
+                                             0.001, 1e-3, 1e-4, 1e-3, 1e-4, 0.01, 0.01};
   for (CameraTool& c : m.cams) {
-    for (int i = 0; i < camera::kNumDistortion; ++i) c.distortion[i] = dist_scale[i] * u(rng);
+    for (int i = 0; i < kNumDistortion; ++i) c.distortion[i] = dist_scale[i] * u(rng);
   }
   constexpr double kArcsec = M_PI / 180.0 / 3600.0;
   for (Effect e : effects) {
@@ -58,4 +58,4 @@ inline InstrumentModel RandomModel(Kinematics k, std::mt19937& rng,
   return m;
 }
 
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

@@ -9,7 +9,7 @@
 #include "libcalib/model/kinematics.h"
 #include "tests/export/export_fixture.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 namespace {
 
 std::string TempPath(const std::string& name) {
@@ -59,8 +59,8 @@ TEST(OpenCvExport, ReadBackProjectsLikeRtscalib) {
       EXPECT_EQ(r.camera_matrix.at<double>(0, 2), cam.intrinsics[2]);
       EXPECT_EQ(r.camera_matrix.at<double>(1, 2), cam.intrinsics[3]);
       EXPECT_EQ(r.camera_matrix.at<double>(0, 1), 0.0);
-      ASSERT_EQ(static_cast<int>(r.dist.total()), camera::kNumDistortion);
-      for (int i = 0; i < camera::kNumDistortion; ++i) {
+      ASSERT_EQ(static_cast<int>(r.dist.total()), kNumDistortion);
+      for (int i = 0; i < kNumDistortion; ++i) {
         EXPECT_EQ(r.dist.at<double>(i), cam.distortion[i]) << i;
       }
 
@@ -119,7 +119,7 @@ TEST(OpenCvExport, InitUndistortRectifyMapAgreesWithTheModel) {
       const double ray[3] = {(u - cam.intrinsics[2]) / cam.intrinsics[0],
                              (v - cam.intrinsics[3]) / cam.intrinsics[1], 1.0};
       double pixel[2];
-      ASSERT_TRUE(camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), ray, pixel));
+      ASSERT_TRUE(ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), ray, pixel));
       EXPECT_NEAR(map_u.at<float>(v, u), pixel[0], 1e-3) << u << "," << v;
       EXPECT_NEAR(map_v.at<float>(v, u), pixel[1], 1e-3) << u << "," << v;
     }
@@ -142,7 +142,7 @@ TEST(OpenCvExport, DistortionCountIsTheShortestOpenCvLengthInUse) {
   EXPECT_EQ(OpenCvDistortionCount(m, 0), 14);
   // A non-zero coefficient counts even without its group (a given camera).
   InstrumentModel g = IdealModel(Kinematics::kSpherical, 1, CameraTool{});
-  g.cams[0].distortion[camera::kK5] = 1e-3;
+  g.cams[0].distortion[kK5] = 1e-3;
   EXPECT_EQ(OpenCvDistortionCount(g, 0), 8);
   EXPECT_THROW(OpenCvDistortionCount(g, 1), std::out_of_range);
 
@@ -152,4 +152,4 @@ TEST(OpenCvExport, DistortionCountIsTheShortestOpenCvLengthInUse) {
 }
 
 }  // namespace
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

@@ -7,7 +7,7 @@
 #include "libcalib/diagnose/equivalents.h"
 #include "tests/export/export_fixture.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 namespace {
 
 const SurveyorTerm& Find(const SurveyorConstants& c, Effect e, const std::string& symbol) {
@@ -91,7 +91,7 @@ TEST(SurveyorExport, WithoutUncertaintiesEverySigmaIsNotAvailable) {
   EXPECT_NE(text.find("sigma not available"), std::string::npos);
 }
 
-// dh: c, i, v0, k0 are the equivalents of diagnose::EquivalentSurveyingTerms.
+// dh: c, i, v0, k0 are the equivalents of EquivalentSurveyingTerms.
 // Their sigmas are propagated from the stored link sigmas. Two of the
 // derivatives are known exactly: the zenith index is link 2's gamma offset
 // (Z2 = Tz(d2) Rz(theta* + gamma2), so d v0 / d gamma2 = +-1) and the
@@ -105,7 +105,7 @@ TEST(SurveyorExport, DhEquivalentsAndPropagatedSigmas) {
   m.links[1].p[kDhGamma] += 30e-6;
 
   const SurveyorConstants without = ComputeSurveyorConstants(m);
-  const diagnose::EquivalentTerms eq = diagnose::EquivalentSurveyingTerms(m, FitOptions());
+  const EquivalentTerms eq = EquivalentSurveyingTerms(m, FitOptions());
   ASSERT_TRUE(eq.valid) << eq.message;
   for (Effect e :
        {Effect::kCollimation, Effect::kTiltingAxis, Effect::kVerticalIndex, Effect::kEdmOffset}) {
@@ -139,4 +139,4 @@ TEST(SurveyorExport, DhEquivalentsAndPropagatedSigmas) {
 }
 
 }  // namespace
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

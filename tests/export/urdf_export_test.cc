@@ -14,7 +14,7 @@
 #include "libcalib/model/kinematics.h"
 #include "tests/export/export_fixture.h"
 
-namespace rtscalib::exports {
+namespace rtscalib {
 namespace {
 
 // KDL's forward kinematics of the exported URDF from the root to `tip`.
@@ -199,4 +199,4 @@ TEST(UrdfExport, RpyIsExactNearGimbalLock) {
 }
 
 }  // namespace
-}  // namespace rtscalib::exports
+}  // namespace rtscalib

@@ -414,7 +414,7 @@ TEST(ExtractDhModel, MissingCameraTripletIsAClearError) {
 TEST(ExtractDhModel, CameraRowsWithoutTripletsUseEveryRowGivenIntrinsics) {
   std::mt19937 rng(34);
   InstrumentModel truth = RandomTruth(rng, 1e-4, 1e-3);
-  truth.cams[0].distortion[camera::kK1] = -0.1;
+  truth.cams[0].distortion[kK1] = -0.1;
   PaperPlan plan;
   plan.cam = false;
   auto records = PaperPlanRecords(truth, plan);

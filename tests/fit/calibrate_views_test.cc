@@ -15,25 +15,6 @@
 namespace rtscalib {
 namespace {
 
-using camera::kK1;
-using camera::kK2;
-using camera::kK3;
-using camera::kK4;
-using camera::kK5;
-using camera::kK6;
-using camera::kNumDistortion;
-using camera::kNumIntrinsics;
-using camera::kP1;
-using camera::kP2;
-using camera::kS1;
-using camera::kS2;
-using camera::kS3;
-using camera::kS4;
-using camera::kTauX;
-using camera::kTauY;
-using camera::PixelToRay;
-using camera::ProjectToPixel;
-
 // Exact-projection tests: pixels are ProjectToPixel of known corners, so the
 // refinement must reach the truth up to rounding and conditioning. Tolerances:
 //   rms:        1e-9 px   (rounding of pixel values ~1e3 is ~1e-13 px)

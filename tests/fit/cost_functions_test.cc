@@ -3,7 +3,7 @@
 // differences) on RecordGroupResidual and ShotResidual in both kinematics
 // with kinematic/EDM effects and every distortion group enabled, and the
 // ShotResidual's chained projection Jacobian against plain autodiff through
-// camera::ProjectToPixel.
+// ProjectToPixel.
 #include "libcalib/fit/cost_functions.h"
 
 #include <ceres/gradient_checker.h>
@@ -161,7 +161,7 @@ TEST_P(CostFunctionGradients, ShotInSeveralPasses) {
 }
 
 // The same residual written the plain way: every point projected by
-// camera::ProjectToPixel in the wide jets.
+// ProjectToPixel in the wide jets.
 struct PlainShotResidual {
   const ShotResidual* shot;
   const BlockLayout& layout() const { return shot->layout; }
@@ -173,8 +173,8 @@ struct PlainShotResidual {
     for (size_t k = 0; k < shot->points.size(); ++k) {
       const Vec3<T> x_cam = ref_from_cam.InverseApply(shot->points[k].X.cast<T>());
       T pixel[2];
-      if (!camera::ProjectToPixel(p[shot->layout.intrinsics], p[shot->layout.distortion],
-                                  x_cam.data(), pixel)) {
+      if (!ProjectToPixel(p[shot->layout.intrinsics], p[shot->layout.distortion], x_cam.data(),
+                          pixel)) {
         return false;
       }
       for (int c = 0; c < 2; ++c)

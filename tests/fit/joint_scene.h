@@ -34,28 +34,28 @@ inline void AddDistortion(const EffectSet& groups, InstrumentModel* m) {
     auto& d = m->cams[z].distortion;
     const double s = 1.0 / (1 + z);
     if (groups.Has(Effect::kRadialDistortion)) {
-      d[camera::kK1] = -0.12 * s;
-      d[camera::kK2] = 0.08 * s;
-      d[camera::kK3] = -0.02 * s;
+      d[kK1] = -0.12 * s;
+      d[kK2] = 0.08 * s;
+      d[kK3] = -0.02 * s;
     }
     if (groups.Has(Effect::kTangentialDistortion)) {
-      d[camera::kP1] = 8e-4;
-      d[camera::kP2] = -5e-4;
+      d[kP1] = 8e-4;
+      d[kP2] = -5e-4;
     }
     if (groups.Has(Effect::kRationalDistortion)) {
-      d[camera::kK4] = 0.05 * s;
-      d[camera::kK5] = -0.02 * s;
-      d[camera::kK6] = 0.01 * s;
+      d[kK4] = 0.05 * s;
+      d[kK5] = -0.02 * s;
+      d[kK6] = 0.01 * s;
     }
     if (groups.Has(Effect::kThinPrism)) {
-      d[camera::kS1] = 6e-4;
-      d[camera::kS2] = -2e-4;
-      d[camera::kS3] = -4e-4;
-      d[camera::kS4] = 1e-4;
+      d[kS1] = 6e-4;
+      d[kS2] = -2e-4;
+      d[kS3] = -4e-4;
+      d[kS4] = 1e-4;
     }
     if (groups.Has(Effect::kSensorTilt)) {
-      d[camera::kTauX] = 2e-3;
-      d[camera::kTauY] = -1.5e-3;
+      d[kTauX] = 2e-3;
+      d[kTauY] = -1.5e-3;
     }
   }
   for (Effect e : groups.List()) {

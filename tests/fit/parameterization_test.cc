@@ -86,18 +86,18 @@ TEST(Parameterization, RefinementAndDiagnosisFreeTheSameParameters) {
 
         // e fitted: the linearisation's base columns are the refinement's
         // free parameters, in the same order.
-        diagnose::LinearizeOptions fitted;
+        LinearizeOptions fitted;
         fitted.fit = fit;
-        const diagnose::Linearization lin_fitted = diagnose::Linearize(obs, with_e, fitted);
+        const Linearization lin_fitted = Linearize(obs, with_e, fitted);
         EXPECT_EQ(lin_fitted.base_names, refinement);
 
         // e a candidate: base columns are the baseline's free parameters and
         // e's columns complete them to the refinement's set with e.
-        diagnose::LinearizeOptions candidate = fitted;
+        LinearizeOptions candidate = fitted;
         candidate.candidates = {e};
-        const diagnose::Linearization lin = diagnose::Linearize(obs, baseline, candidate);
+        const Linearization lin = Linearize(obs, baseline, candidate);
         EXPECT_EQ(lin.base_names, RefinementColumns(baseline, fit));
-        const diagnose::ColumnBlock* block = lin.Find(info.name);
+        const ColumnBlock* block = lin.Find(info.name);
         ASSERT_NE(block, nullptr);
         EXPECT_GT(block->size, 0);
         std::vector<std::string> both = lin.base_names;

@@ -38,11 +38,11 @@ InstrumentModel RandomModel(Kinematics k, int zooms, bool with_sigmas, unsigned 
   for (CameraTool& c : m.cams) {
     c.flange_from_cam = PoseBlock::FromRigid(c.flange_from_cam.ToRigid() * small_rotation(1e-2));
     for (double& x : c.intrinsics) x += unif(rng);
-    c.distortion[camera::kK1] = 0.05 * unif(rng);
-    c.distortion[camera::kK2] = 0.01 * unif(rng);
-    c.distortion[camera::kP1] = 1e-3 * unif(rng);
-    c.distortion[camera::kP2] = 1e-3 * unif(rng);
-    c.distortion[camera::kK3] = 1e-3 * unif(rng);
+    c.distortion[kK1] = 0.05 * unif(rng);
+    c.distortion[kK2] = 0.01 * unif(rng);
+    c.distortion[kP1] = 1e-3 * unif(rng);
+    c.distortion[kP2] = 1e-3 * unif(rng);
+    c.distortion[kK3] = 1e-3 * unif(rng);
   }
   if (k == Kinematics::kDh) {
     for (DhLink& link : m.links) {
@@ -86,7 +86,7 @@ InstrumentModel RandomModel(Kinematics k, int zooms, bool with_sigmas, unsigned 
       for (double& x : s.distortion.back()) x = std::abs(unif(rng)) * 1e-4;
     }
     // Uncertainty that could not be computed is NaN and must survive.
-    s.distortion.back()[camera::kTauY] = std::nan("");
+    s.distortion.back()[kTauY] = std::nan("");
     for (Effect e : m.effects.List()) {
       if (!IsKinematic(e)) continue;
       const double a = 1e-12 * (1.5 + unif(rng)), b = 1e-12 * (1.5 + unif(rng));

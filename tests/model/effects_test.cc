@@ -36,7 +36,7 @@ TEST(EffectCatalogue, DistortionGroupsOwnTheirCoefficients) {
                                        std::end(kDistortionCoefficientNames));
   EXPECT_EQ(names, (std::vector<std::string>{"k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1",
                                              "s2", "s3", "s4", "taux", "tauy"}));
-  EXPECT_EQ(DistortionGroupOf(camera::kTauY), Effect::kSensorTilt);
+  EXPECT_EQ(DistortionGroupOf(kTauY), Effect::kSensorTilt);
 }
 
 // Report scales follow from the report units: arcsec per radian (exact by

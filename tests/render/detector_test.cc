@@ -46,8 +46,7 @@ void Accumulate(const std::vector<TagDetection>& detections, const TargetScene& 
     for (int k = 0; k < 4; ++k) {
       const Eigen::Vector3d p = cam_from_ref * corners[d.id][k];
       double px[2];
-      ASSERT_TRUE(
-          camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), p.data(), px));
+      ASSERT_TRUE(ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), p.data(), px));
       const double e = (d.corners[k] - Eigen::Vector2d(px[0], px[1])).norm();
       errors->sum_sq += e * e;
       errors->max = std::max(errors->max, e);

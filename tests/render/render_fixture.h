@@ -50,9 +50,9 @@ inline CameraTool TestCamera(bool distorted) {
   cam.height = 960;
   cam.intrinsics = {1000.0, 1000.0, 640.3, 479.6};
   if (distorted) {
-    cam.distortion[camera::kK1] = -0.1;
-    cam.distortion[camera::kK2] = 0.05;
-    cam.distortion[camera::kP1] = 1e-4;
+    cam.distortion[kK1] = -0.1;
+    cam.distortion[kK2] = 0.05;
+    cam.distortion[kP1] = 1e-4;
   }
   return cam;
 }

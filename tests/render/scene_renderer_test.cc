@@ -24,7 +24,7 @@ Eigen::Vector2d Project(const CameraTool& cam, const Rigid3& ref_from_cam,
                         const Eigen::Vector3d& x_ref) {
   const Eigen::Vector3d p = ref_from_cam.Inverse() * x_ref;
   double px[2];
-  EXPECT_TRUE(camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), p.data(), px));
+  EXPECT_TRUE(ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), p.data(), px));
   return {px[0], px[1]};
 }
 
@@ -141,7 +141,7 @@ TEST(SceneRendererTest, DistortionMovesThePictureLikeProjectToPixel) {
   const Eigen::Vector3d ray((c_ideal.x() - cam.intrinsics[2]) / cam.intrinsics[0],
                             (c_ideal.y() - cam.intrinsics[3]) / cam.intrinsics[1], 1.0);
   double px[2];
-  camera::ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), ray.data(), px);
+  ProjectToPixel(cam.intrinsics.data(), cam.distortion.data(), ray.data(), px);
   EXPECT_GT((c_dist - c_ideal).norm(), 5.0);
   EXPECT_NEAR(c_dist.x(), px[0], 0.3);
   EXPECT_NEAR(c_dist.y(), px[1], 0.3);

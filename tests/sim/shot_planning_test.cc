@@ -118,7 +118,7 @@ TEST(ShotPlanning, NoCornerBeyondTheTrustedRadius) {
   truth.cams[0].width = 640;
   truth.cams[0].height = 480;
   truth.cams[0].intrinsics = {300, 300, 320, 240};  // wide view: corners far off axis
-  truth.cams[0].distortion[camera::kK1] = -0.3;
+  truth.cams[0].distortion[kK1] = -0.3;
   SimulationOptions o;
   o.truth = truth;
   o.targets = ZoomScene(truth, 4, 4, 3.0);
