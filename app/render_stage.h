@@ -1,4 +1,4 @@
-// Synthetic calibration shots in the run (the rendering issue): the
+// Synthetic calibration shots in the run (docs/rendering.md): the
 // simulated instrument's shots are rendered with VTK as its camera would see
 // them (render/), AprilTags are detected in the images, and the detections
 // replace the exact projections as the run's pixel observations, so that the

@@ -109,8 +109,8 @@ TEST_F(Zoom3Demo, IntrinsicsWithinThreeSigma) {
     // render stage measures ~0.03 px RMS against the exact projections);
     // the covariance treats pixel errors as independent, so it cannot see a
     // common scale of that size: detection_rms / (half image width) relative.
-    // Measured here: 4-5e-5 relative, 4-5 sigma of noise alone (see the
-    // closing note of the rendering issue).
+    // Measured here: 4-5e-5 relative, 4-5 sigma of noise alone
+    // (docs/rendering.md, accuracy).
     for (int i = 0; i < 2; ++i) {
       const double err = m.cams[z].intrinsics[i] - truth[i];
       const double systematic =

@@ -20,7 +20,8 @@ TEST(ExtractOptions, DefaultsAreValid) {
 }
 
 // Every invalid setting gives a message that names the option and the value
-// it got (STYLE: options structs with a Check() that returns a message).
+// it got (an options struct's Check() returns a message, as Ceres's
+// Solver::Options::IsValid does).
 struct BadCase {
   const char* what;
   std::function<void(ExtractOptions*)> spoil;

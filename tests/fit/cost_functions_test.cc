@@ -1,5 +1,5 @@
-// Derivatives of the refinement's residuals (STYLE: derivatives at three
-// levels): ceres::GradientChecker (autodiff against Ridders' numeric
+// Derivatives of the refinement's residuals, checked at three levels as
+// COLMAP's models_jacobian_test does: ceres::GradientChecker (autodiff against Ridders' numeric
 // differences) on RecordGroupResidual and ShotResidual in both kinematics
 // with kinematic/EDM effects and every distortion group enabled, and the
 // ShotResidual's chained projection Jacobian against plain autodiff through
