@@ -22,6 +22,9 @@ InputError RowError(const std::string& file, int line, const PredictionError& e,
   switch (e.failure) {
     case PredictionFailure::kNoSuchZoom:
       return InputError::Cell(file, line, "zoom", e.expected, e.got);
+    case PredictionFailure::kNotDetermined:
+      // The EDM tool is named by the row's tool, a camera by its zoom.
+      return InputError::Cell(file, line, e.got == "edm" ? "tool" : "zoom", e.expected, e.got);
     case PredictionFailure::kOutsideImage:
       // A records row's u, v are input; a pixels row's u, v are the projection of X, Y, Z.
       return InputError::File(file, line, pixels ? "columns X, Y, Z" : "columns u, v", e.expected,
