@@ -16,6 +16,7 @@
 #include "libcalib/fit/cost_functions.h"
 #include "libcalib/fit/manifolds.h"
 #include "libcalib/fit/parameterization.h"
+#include "libcalib/fit/unknowns.h"
 
 namespace rtscalib {
 
@@ -196,6 +197,8 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentMo
     ambient_sigma(model->cams[z].intrinsics.data(), 4, s.intrinsics[z].data());
     ambient_sigma(model->cams[z].distortion.data(), camera::kNumDistortion, s.distortion[z].data());
   }
+  for (EstimatedBoard& b : model->boards) pose_sigma(b.pose, &b.sigma);
+  for (EstimatedPoint& p : model->points) ambient_sigma(p.x.data(), 3, p.sigma.data());
   for (Effect e : model->effects.List()) {
     if (!IsKinematic(e)) continue;
     Eigen::MatrixXd ec;
@@ -375,8 +378,14 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   ceres::Solver::Summary solver_summary;
   std::vector<ResidualRef> refs;
   std::unique_ptr<ceres::Problem> problem;
+  // SPEC 7: boards and points of unknown position get starting values, and
+  // what the data cannot determine is held (DataFacts).
+  const DataFacts facts = FactsOf(obs, rows);
+  for (const std::string& note : StartUnknowns(obs, rows, facts, &m)) {
+    summary.message += " " + note + ";";
+  }
   const InstrumentModel start = m;
-  const Parameterization param(&m, options);
+  const Parameterization param(&m, options, facts);
   summary.fixed_gauges = param.FixedGauges();
   // Klug Eq. 98's translation bounds: Ceres's projected steps stall on this
   // problem even when no bound is active, so the bounds are imposed as hard
@@ -415,6 +424,7 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   if (options.compute_covariance) {
     FillSigmas(problem.get(), FreeBlocks(param, *problem), &m, &summary, options.num_threads);
   }
+  for (EstimatedBoard& b : m.boards) b.board.ref_from_board = b.pose.ToRigid();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }
