@@ -12,6 +12,7 @@
 
 #include <Eigen/Dense>
 #include <iostream>
+#include <map>
 #include <random>
 
 #include "libcalib/fit/parameterization.h"
@@ -149,13 +150,16 @@ Fitted FitScene(const InstrumentModel& truth, std::uint64_t seed, bool boards_kn
 
 TEST(UnknownBoards, NormalisedErrorsHaveUnitMeanSquare) {
   const InstrumentModel truth = Truth();
-  constexpr int kSeeds = 3;
+  constexpr int kSeeds = 5;
   double sum_sq = 0;
   int n = 0;
+  std::map<std::string, std::pair<double, int>> by_kind;  // printed, for reading
   auto add = [&](double err, double sigma, const std::string& what) {
     ASSERT_GT(sigma, 0.0) << what;
     sum_sq += (err / sigma) * (err / sigma);
     ++n;
+    by_kind[what].first += (err / sigma) * (err / sigma);
+    ++by_kind[what].second;
   };
   for (int seed = 0; seed < kSeeds; ++seed) {
     std::vector<Eigen::Vector3d> prisms;
@@ -198,10 +202,13 @@ TEST(UnknownBoards, NormalisedErrorsHaveUnitMeanSquare) {
     EXPECT_NE(gauges.find("(along the ray) held"), std::string::npos) << gauges;
   }
   const double mean_square = sum_sq / n;
-  // ~130 normalised errors over 3 seeds, strongly correlated within a seed
+  // ~190 normalised errors over 5 seeds, strongly correlated within a seed
   // (a board's translation and the camera tools share the pose errors): the
   // issue's bounds [0.5, 2] hold for right sigmas and catch a factor 1.4.
   std::cout << "mean square of normalised errors: " << mean_square << " (" << n << " values)\n";
+  for (const auto& [kind, v] : by_kind) {
+    std::cout << "  " << kind << ": " << v.first / v.second << " (" << v.second << ")\n";
+  }
   EXPECT_GT(mean_square, 0.5);
   EXPECT_LT(mean_square, 2.0);
 }
