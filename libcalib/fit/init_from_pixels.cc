@@ -372,6 +372,17 @@ std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation
     throw std::invalid_argument("InitCameraFromPixels: zoom " + std::to_string(zoom) +
                                 " has no pixel observations outside the critical region");
   }
+  for (const PixelObservation& p : it->second) {
+    if (!p.X_known) {
+      // The camera tool would need the board's pose and the board's pose the
+      // camera tool; with records the chain is the extraction's, which has no
+      // camera for this zoom.
+      throw std::invalid_argument(
+          "pixels:" + std::to_string(p.line) + ": zoom " + std::to_string(zoom) +
+          " has no camera rows in records.csv and its pixels show a board without a pose: add "
+          "camera rows of this zoom, a surveyed board, or leave records.csv out (SPEC 7)");
+    }
+  }
   CameraTool cam = SizeFor(options, zoom, it->second, &notes);
   const ViewsCalibration v =
       CalibrateViews(it->second, cam.width, cam.height, ViewsOptions(options));

@@ -85,7 +85,8 @@ InstrumentModel DhFromSpherical(const InstrumentModel& spherical);
 
 // Sets zoom `zoom`'s camera of `model` (extending model->cams if needed)
 // from that zoom's pixels, given the rest of the chain (see above). Returns
-// notes for the run log.
+// notes for the run log. Throws std::invalid_argument naming the line when
+// the zoom's pixels show a board of unknown pose (SPEC 7: not started here).
 std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation>& pixels, int zoom,
                                               const InitFromPixelsOptions& options,
                                               InstrumentModel* model);
