@@ -77,12 +77,22 @@ void ReadTwoFaceDifferences(const Observations& obs, FaceComparison* f) {
     f->note = "read along zoom " + std::to_string(zoom) + "'s optical axis (no EDM records)";
 }
 
-// Options of the start from pixels alone (and of a zoom's camera from pixels).
-InitFromPixelsOptions PixelStartOptions(const CalibrationOptions& options) {
+// Options of the start from pixels alone (and of a zoom's camera from
+// pixels): image sizes from the photos (SPEC 7) where known, else from
+// model.cameras; boards of unknown pose from the observations' targets.
+InitFromPixelsOptions PixelStartOptions(const CalibrationOptions& options,
+                                        const Observations& obs) {
   InitFromPixelsOptions io;
   io.kinematics = options.model.kinematics;
   io.distortion = DistortionGroupsOf(options.model.effects);
   io.cameras = options.model.cameras;
+  for (const auto& [zoom, size] : obs.image_sizes) {
+    if (zoom < 0 || size.width <= 0 || size.height <= 0) continue;
+    if (zoom >= static_cast<int>(io.cameras.size())) io.cameras.resize(zoom + 1);
+    io.cameras[zoom].width = size.width;
+    io.cameras[zoom].height = size.height;
+  }
+  io.targets = obs.targets;
   io.min_zenith_rad = options.fit.min_zenith_rad;
   io.max_zenith_rad = options.fit.max_zenith_rad;
   return io;
@@ -146,16 +156,14 @@ InstrumentModel StartModel(const Observations& obs, const CalibrationOptions& op
       if (z < start.NumZooms() && z < static_cast<int>(poses.size()) && poses[z] > 0) continue;
       progress->Step("zoom " + std::to_string(z) + ": camera from its pixels");
       for (const std::string& n :
-           InitCameraFromPixels(obs.pixels, z, PixelStartOptions(options), &start)) {
+           InitCameraFromPixels(obs.pixels, z, PixelStartOptions(options, obs), &start)) {
         result->notes.push_back("pixel start: " + n);
       }
     }
     if (options.model.kinematics == Kinematics::kSpherical) start = SphericalFromDh(start);
   } else {
     progress->Step("starting from the pixels alone (OpenCV per zoom, then the chain)");
-    InitFromPixelsOptions io = PixelStartOptions(options);
-    io.targets = obs.targets;  // SPEC 7: boards of unknown pose
-    const InitFromPixelsResult init = InitFromPixels(obs.pixels, io);
+    const InitFromPixelsResult init = InitFromPixels(obs.pixels, PixelStartOptions(options, obs));
     for (const std::string& n : init.notes) result->notes.push_back("pixel start: " + n);
     start = init.model;
   }
