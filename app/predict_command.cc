@@ -34,6 +34,8 @@ InputError RowError(const std::string& file, int line, const PredictionError& e,
     case PredictionFailure::kBehindCamera:
     case PredictionFailure::kUntrustedPoint:
       return InputError::File(file, line, "columns X, Y, Z", e.expected, e.got);
+    case PredictionFailure::kNoSuchBoard:
+      return InputError::File(file, line, "columns target, corner", e.expected, e.got);
     case PredictionFailure::kNonFinite:
       break;
   }
@@ -120,7 +122,9 @@ int RunPredict(const PredictArgs& args) {
   out.reserve(in.pixels.size());
   for (PixelObservation& p : in.pixels) {
     try {
-      p.uv = instrument.Pixel(p.zoom, p.phi, p.theta, p.X);
+      // SPEC 7: empty X, Y, Z = a corner of a board the model estimated.
+      p.uv = p.X_known ? instrument.Pixel(p.zoom, p.phi, p.theta, p.X)
+                       : instrument.BoardCornerPixel(p.zoom, p.phi, p.theta, p.target, p.corner);
       out.push_back(p);
     } catch (const PredictionError& e) {
       bad.Add(p.line, e);

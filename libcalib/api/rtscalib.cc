@@ -310,6 +310,24 @@ Eigen::Vector3d CalibratedInstrument::CameraPoint(int zoom, double phi, double t
   return x;
 }
 
+Eigen::Vector3d CalibratedInstrument::BoardCorner(int target, int corner) const {
+  const EstimatedBoard* b = model_.BoardOf(target);
+  if (!b) {
+    throw PredictionError(PredictionFailure::kNoSuchBoard,
+                          "a tag of a board the model estimated (model.yaml boards)",
+                          "target " + std::to_string(target));
+  }
+  if (corner < 0 || corner > 3) {
+    throw PredictionError(PredictionFailure::kNoSuchBoard, "a corner 0..3", std::to_string(corner));
+  }
+  return b->pose.ToRigid() * b->board.CornersInBoard(target - b->board.first_id)[corner];
+}
+
+Eigen::Vector2d CalibratedInstrument::BoardCornerPixel(int zoom, double phi, double theta,
+                                                       int target, int corner) const {
+  return Pixel(zoom, phi, theta, BoardCorner(target, corner));
+}
+
 Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
                                             const Eigen::Vector3d& x_ref) const {
   CheckFinite({phi, theta, x_ref[0], x_ref[1], x_ref[2]}, "readings phi, theta and point X, Y, Z");

@@ -52,6 +52,7 @@ enum class PredictionFailure {
   kBehindCamera,    // point on or behind the image plane
   kUntrustedPoint,  // point outside the distortion's trusted region (image would fold)
   kNonFinite,       // NaN or infinity in the readings or the result
+  kNoSuchBoard,     // the tag is on no board the model estimated (SPEC 7)
 };
 // what() is one sentence; expected/got are its parts for messages that name a
 // file, line and column (`rtscalib predict`, io/errors.h style).
@@ -127,6 +128,15 @@ class CalibratedInstrument {
                               double d) const;
   // The pixel at which zoom level `zoom` sees the reference-frame point x_ref.
   Eigen::Vector2d Pixel(int zoom, double phi, double theta, const Eigen::Vector3d& x_ref) const;
+  // SPEC 7: corner `corner` (0..3) of tag `target` of a board the model
+  // estimated (ref_from_board * TagBoard::CornersInBoard), in the reference
+  // frame; throws PredictionError (kNoSuchBoard) when no estimated board
+  // holds the tag or the corner is not 0..3.
+  Eigen::Vector3d BoardCorner(int target, int corner) const;
+  // The pixel at which zoom level `zoom` sees that corner
+  // (= Pixel(zoom, phi, theta, BoardCorner(target, corner))).
+  Eigen::Vector2d BoardCornerPixel(int zoom, double phi, double theta, int target,
+                                   int corner) const;
 
   // The same with first-order covariances (header). The ray's value is
   // [origin; direction] (6 values: metres, then unitless). Throw

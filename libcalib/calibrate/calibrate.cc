@@ -11,6 +11,7 @@
 #include "libcalib/fit/init_from_pixels.h"
 #include "libcalib/fit/start_models.h"
 #include "libcalib/fit/two_face.h"
+#include "libcalib/fit/unknowns.h"
 #include "libcalib/model/kinematics.h"
 #include "libcalib/screen/screen.h"
 
@@ -76,12 +77,22 @@ void ReadTwoFaceDifferences(const Observations& obs, FaceComparison* f) {
     f->note = "read along zoom " + std::to_string(zoom) + "'s optical axis (no EDM records)";
 }
 
-// Options of the start from pixels alone (and of a zoom's camera from pixels).
-InitFromPixelsOptions PixelStartOptions(const CalibrationOptions& options) {
+// Options of the start from pixels alone (and of a zoom's camera from
+// pixels): image sizes from the photos (SPEC 7) where known, else from
+// model.cameras; boards of unknown pose from the observations' targets.
+InitFromPixelsOptions PixelStartOptions(const CalibrationOptions& options,
+                                        const Observations& obs) {
   InitFromPixelsOptions io;
   io.kinematics = options.model.kinematics;
   io.distortion = DistortionGroupsOf(options.model.effects);
   io.cameras = options.model.cameras;
+  for (const auto& [zoom, size] : obs.image_sizes) {
+    if (zoom < 0 || size.width <= 0 || size.height <= 0) continue;
+    if (zoom >= static_cast<int>(io.cameras.size())) io.cameras.resize(zoom + 1);
+    io.cameras[zoom].width = size.width;
+    io.cameras[zoom].height = size.height;
+  }
+  io.targets = obs.targets;
   io.min_zenith_rad = options.fit.min_zenith_rad;
   io.max_zenith_rad = options.fit.max_zenith_rad;
   return io;
@@ -145,14 +156,14 @@ InstrumentModel StartModel(const Observations& obs, const CalibrationOptions& op
       if (z < start.NumZooms() && z < static_cast<int>(poses.size()) && poses[z] > 0) continue;
       progress->Step("zoom " + std::to_string(z) + ": camera from its pixels");
       for (const std::string& n :
-           InitCameraFromPixels(obs.pixels, z, PixelStartOptions(options), &start)) {
+           InitCameraFromPixels(obs.pixels, z, PixelStartOptions(options, obs), &start)) {
         result->notes.push_back("pixel start: " + n);
       }
     }
     if (options.model.kinematics == Kinematics::kSpherical) start = SphericalFromDh(start);
   } else {
     progress->Step("starting from the pixels alone (OpenCV per zoom, then the chain)");
-    const InitFromPixelsResult init = InitFromPixels(obs.pixels, PixelStartOptions(options));
+    const InitFromPixelsResult init = InitFromPixels(obs.pixels, PixelStartOptions(options, obs));
     for (const std::string& n : init.notes) result->notes.push_back("pixel start: " + n);
     start = init.model;
   }
@@ -207,8 +218,8 @@ void RefineConfigured(const Observations& obs, const std::vector<Record>& reduce
     ro.fit_intrinsics = fo.fit_intrinsics && CamDataSpanImage(reduced_obs, result->start, 0);
     result->reduced.model = result->start;
     result->reduced.fit = Refine(reduced_obs, ro, &result->reduced.model);
-    ValidateFit("refinement on the reduced set", reduced_obs, result->reduced.model,
-                result->reduced.fit, ro, checks);
+    ValidateFit("refinement on the reduced set", WithEstimates(reduced_obs, result->reduced.model),
+                result->reduced.model, result->reduced.fit, ro, checks);
     MarkUndeterminedTools(reduced_obs, ro, &result->reduced.model);
   }
   progress->Step("refining on the full set (" + std::to_string(obs.records.size()) + " records, " +
@@ -219,7 +230,8 @@ void RefineConfigured(const Observations& obs, const std::vector<Record>& reduce
   full.fit = Refine(obs, fo, &full.model);
   progress->Note("converged: " + std::string(full.fit.converged ? "yes" : "no") + ", " +
                  std::to_string(full.fit.iterations) + " iterations");
-  ValidateFit("refinement on the full set", obs, full.model, full.fit, fo, checks);
+  ValidateFit("refinement on the full set", WithEstimates(obs, full.model), full.model, full.fit,
+              fo, checks);
   for (const std::string& n : MarkUndeterminedTools(obs, fo, &full.model)) {
     result->notes.push_back(n);
     progress->Note(n);
@@ -247,12 +259,12 @@ FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResu
     fc.note = "faces: separate needs observations in both faces";
   } else {
     fc.fit1 = Refine(o1, result.fit_options, &fc.face1);
-    ValidateFit("face 1 refinement (faces: separate)", o1, fc.face1, fc.fit1, result.fit_options,
-                checks);
+    ValidateFit("face 1 refinement (faces: separate)", WithEstimates(o1, fc.face1), fc.face1,
+                fc.fit1, result.fit_options, checks);
     MarkUndeterminedTools(o1, result.fit_options, &fc.face1);
     fc.fit2 = Refine(o2, result.fit_options, &fc.face2);
-    ValidateFit("face 2 refinement (faces: separate)", o2, fc.face2, fc.fit2, result.fit_options,
-                checks);
+    ValidateFit("face 2 refinement (faces: separate)", WithEstimates(o2, fc.face2), fc.face2,
+                fc.fit2, result.fit_options, checks);
     MarkUndeterminedTools(o2, result.fit_options, &fc.face2);
     ReadTwoFaceDifferences(obs, &fc);
   }
@@ -284,8 +296,8 @@ void DiagnoseModel(const Observations& obs, const CalibrationOptions& options,
     }
     // The ladder's last rung is a fit of its own and becomes the run's model.
     if (r->LadderExtendedModel()) {
-      ValidateFit("refinement of the stepwise model " + sw.ladder.back().model_description, obs,
-                  sw.model, sw.fit, r->fit_options, options.checks);
+      ValidateFit("refinement of the stepwise model " + sw.ladder.back().model_description,
+                  WithEstimates(obs, sw.model), sw.model, sw.fit, r->fit_options, options.checks);
       MarkUndeterminedTools(obs, r->fit_options, &sw.model);
     }
     r->model = sw.model;
@@ -363,7 +375,14 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
 
   CalibrationResult result;
   result.notes = ScreenObservations(obs, options.model.cameras, options.screen);
-  if (!obs.records.empty()) ExtractAndSimplify(obs, options, progress, &result);
+  // The extraction needs records of known points; records of points of
+  // unknown position (SPEC 7) are fitted, not extracted from.
+  Observations known = obs;
+  known.records.clear();
+  for (const Record& r : obs.records) {
+    if (r.point.empty()) known.records.push_back(r);
+  }
+  if (!known.records.empty()) ExtractAndSimplify(known, options, progress, &result);
   result.start = StartModel(obs, options, progress, &result);
 
   // Table 4: the extracted and simplified models on the reduced set.
@@ -382,7 +401,9 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   result.intrinsics_fitted = result.fit_options.fit_intrinsics;
   // Against every row: a start made non-finite by one row outside the
   // reduced set (the extraction uses them all) names that row.
-  ValidateStart("start of the refinement", obs, result.start, result.fit_options, options.checks);
+  // Pixels of boards of unknown pose are checked at the start's board poses.
+  ValidateStart("start of the refinement", WithEstimates(obs, result.start), result.start,
+                result.fit_options, options.checks);
   RefineConfigured(obs, reduced, options.checks, progress, &result);
 
   if (options.model.faces == FaceMode::kSeparate) {
@@ -396,14 +417,15 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
     // The calibration stands without its diagnosis: a failure here becomes
     // a note, not a failed calibration.
     try {
-      DiagnoseModel(obs, options, progress, &result);
+      // The diagnosis sees the estimated boards and points (SPEC 7) fixed at the fit's values.
+      DiagnoseModel(WithEstimates(obs, result.model), options, progress, &result);
     } catch (const std::exception& e) {
       result.diagnosis.reset();
       result.notes.push_back(std::string("diagnosis failed: ") + e.what());
       progress->Note(result.notes.back());
     }
   }
-  result.final_errors = ComputeFinalErrors(result.model, obs);
+  result.final_errors = ComputeFinalErrors(result.model, WithEstimates(obs, result.model));
   progress->Done();
   return result;
 }

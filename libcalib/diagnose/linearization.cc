@@ -364,7 +364,7 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   }
   for (int i : rows.pixels) zoom_used[obs.pixels[i].zoom] = true;
 
-  const Parameterization param(&work, options.fit);
+  const Parameterization param(&work, options.fit, FactsOf(obs, rows));
   const auto extra_col = CandidateColumns(param, options.candidates, zoom_used, &lin.blocks);
   const int num_candidate_cols =
       lin.blocks.empty() ? 0 : lin.blocks.back().first + lin.blocks.back().size;

@@ -5,13 +5,17 @@
 // touches, each a pointer into the InstrumentModel's own memory, in this order:
 //   base_q(4) base_t(3) [link0(4) link1(4) if dh] tool_q(4) tool_t(3)
 //   [intrinsics(4) distortion(14) for camera tools] [one block per enabled
-//   kinematic effect, in catalogue order]
+//   kinematic effect, in catalogue order] [board_q(4) board_t(3) per board of
+//   unknown pose the group sees] [point(3) per point of unknown position]
 // Observations that share a pointing share one residual block, so that the
 // chain ref_from_tool(phi, theta) is differentiated once per pointing, not
 // once per point (with a robust loss every observation gets its own block,
 // because the loss acts per block). Residuals are whitened by their sigma:
 //   records of one pose and tool:  (F_EDM / F_CAM - x) / sigma     3 per row
 //   pixels of one shot:            (project(X) - uv) / sigma        2 per point
+// SPEC 7: a record of a named point uses that point's block as x; a pixel of
+// a board of unknown pose uses X = ref_from_board * corner_in_board, with
+// ref_from_board from that board's blocks.
 #pragma once
 
 #include <ceres/dynamic_autodiff_cost_function.h>
@@ -35,6 +39,10 @@ struct BlockLayout {
   int intrinsics = -1, distortion = -1;
   int effect[kNumKinematicEffects];
   double edm_cyclic_unit_length = 1.5;
+  // Layout indices of the (q, t) blocks of boards of unknown pose and of the
+  // points of unknown position (SPEC 7), in the order the functor refers to.
+  std::vector<std::pair<int, int>> boards;
+  std::vector<int> points;
 
   BlockLayout() { std::fill(std::begin(effect), std::end(effect), -1); }
 
@@ -54,6 +62,12 @@ struct BlockLayout {
     v.edm_cyclic_unit_length = edm_cyclic_unit_length;
     return v;
   }
+  // Appends a block; returns its layout index.
+  int Add(double* p, int size) {
+    blocks.push_back(p);
+    sizes.push_back(size);
+    return static_cast<int>(blocks.size()) - 1;
+  }
 };
 
 // Layout for EDM observations (zoom = -1) or camera observations at `zoom`.
@@ -65,6 +79,7 @@ struct RecordGroupResidual {
     double u = 0, v = 0, d = 0;
     Eigen::Vector3d x;
     double inv_sigma = 1;
+    int point = -1;  // >= 0: x is layout.points[point]'s block (x above unused)
   };
   BlockLayout layout;
   bool edm = true;
@@ -90,7 +105,12 @@ struct RecordGroupResidual {
         local = Vec3<T>(ray[0], ray[1], ray[2]) * T(row.d);  // SPEC 2: ray LENGTH d
       }
       const Vec3<T> calc = ref_from_tool * local;
-      for (int i = 0; i < 3; ++i) r[3 * k + i] = (calc[i] - T(row.x[i])) * T(row.inv_sigma);
+      if (row.point >= 0) {
+        const T* x = p[layout.points[row.point]];
+        for (int i = 0; i < 3; ++i) r[3 * k + i] = (calc[i] - x[i]) * T(row.inv_sigma);
+      } else {
+        for (int i = 0; i < 3; ++i) r[3 * k + i] = (calc[i] - T(row.x[i])) * T(row.inv_sigma);
+      }
     }
     return true;
   }
@@ -161,16 +181,26 @@ int SeedSlot(const ceres::Jet<double, N>& j) {
 // against projecting in the wide jets; the values are identical.
 struct ShotResidual {
   struct Point {
-    Eigen::Vector3d X;
+    Eigen::Vector3d X;  // reference frame, or the board frame when board >= 0
     Eigen::Vector2d uv;
+    int board = -1;  // >= 0: X is a corner of layout.boards[board]
   };
   BlockLayout layout;
   double phi = 0, theta = 0;
   double inv_sigma = 1;
   std::vector<Point> points;
 
+  // The reference-frame position of point k (`boards` = the boards' poses).
+  template <typename T>
+  Vec3<T> PointInRef(const std::vector<RigidT<T>>& boards, size_t k) const {
+    if (points[k].board < 0) return points[k].X.cast<T>();
+    return boards[points[k].board] * Vec3<T>(points[k].X.cast<T>());
+  }
+
   template <typename T>
   bool operator()(T const* const* p, T* r) const {
+    std::vector<RigidT<T>> boards;
+    for (const auto& b : layout.boards) boards.push_back(PoseFromBlocks(p[b.first], p[b.second]));
     const ModelView<T> view = layout.View(p);
     const RigidT<T> ref_from_cam =
         RefFromFlange(view, T(phi), T(theta)) * PoseFromBlocks(p[layout.tool_q], p[layout.tool_t]);
@@ -181,7 +211,7 @@ struct ShotResidual {
       T m[9];
       TiltMatrix(dist[kTauX], dist[kTauY], m);
       for (size_t k = 0; k < points.size(); ++k) {
-        const Vec3<T> x_cam = cam_from_ref_R * (points[k].X.cast<T>() - ref_from_cam.t);
+        const Vec3<T> x_cam = cam_from_ref_R * (PointInRef(boards, k) - ref_from_cam.t);
         T pixel[2];
         if (!internal::ProjectWithTilt(intrinsics, dist, m, x_cam.data(), pixel)) {
           return false;  // behind the camera: the solver must reject the step
@@ -208,7 +238,7 @@ struct ShotResidual {
       LocalJet m[9];
       TiltMatrix(ld[kTauX], ld[kTauY], m);
       for (size_t k = 0; k < points.size(); ++k) {
-        const Vec3<T> x_cam = cam_from_ref_R * (points[k].X.cast<T>() - ref_from_cam.t);
+        const Vec3<T> x_cam = cam_from_ref_R * (PointInRef(boards, k) - ref_from_cam.t);
         const LocalJet lx[3] = {LocalJet(x_cam[0].a, 0), LocalJet(x_cam[1].a, 1),
                                 LocalJet(x_cam[2].a, 2)};
         LocalJet pixel[2];

@@ -30,12 +30,64 @@ Eigen::Vector3d LogRotation(const Eigen::Matrix3d& r) {
 
 Eigen::Matrix3d IdealLineOfSight(double phi, double theta) { return Rz(-phi) * Rx(-theta); }
 
-// One shot's pose from OpenCV and its readings.
+// One shot's pose from OpenCV and its readings; `frame` 0 = the reference
+// frame (known points), f > 0 = the frame of the (f-1)-th unknown board.
 struct PosedShot {
   int zoom;
   double phi, theta;
   Rigid3 ref_from_cam;
+  int frame = 0;
 };
+
+// Separator of a (shot, board) view's name: the shot, then the board's first id.
+constexpr char kViewSeparator = '\x1f';
+
+// SPEC 7: pixels of boards of unknown pose become views of their board alone,
+// X in the board frame; `frame_of_view` maps such a view's name to its frame
+// (1 + index into `boards`, the unknown boards in first-id order seen).
+std::vector<PixelObservation> BoardViews(const std::vector<PixelObservation>& pixels,
+                                         const TargetScene& targets,
+                                         std::vector<const TagBoard*>* boards,
+                                         std::map<std::string, int>* frame_of_view) {
+  std::vector<PixelObservation> out;
+  out.reserve(pixels.size());
+  for (PixelObservation p : pixels) {
+    if (!p.X_known) {
+      const TagBoard* board = nullptr;
+      for (const TagBoard& b : targets.boards) {
+        if (b.HasId(p.target)) board = &b;
+      }
+      if (!board) {
+        throw std::invalid_argument("pixels:" + std::to_string(p.line) +
+                                    ": X, Y, Z are empty but target " + std::to_string(p.target) +
+                                    " is not a tag of a board in the targets (SPEC 7)");
+      }
+      if (p.corner < 0 || p.corner > 3) {
+        throw std::invalid_argument("pixels:" + std::to_string(p.line) +
+                                    ": corner must be 0..3, got " + std::to_string(p.corner));
+      }
+      const Eigen::Vector3d in_board = board->CornersInBoard(p.target - board->first_id)[p.corner];
+      if (board->pose_known) {
+        p.X = board->ref_from_board * in_board;
+      } else {
+        int frame = 0;
+        for (size_t i = 0; i < boards->size(); ++i) {
+          if ((*boards)[i] == board) frame = static_cast<int>(i) + 1;
+        }
+        if (frame == 0) {
+          boards->push_back(board);
+          frame = static_cast<int>(boards->size());
+        }
+        p.X = in_board;
+        p.shot += kViewSeparator + std::to_string(board->first_id);
+        (*frame_of_view)[p.shot] = frame;
+      }
+      p.X_known = true;
+    }
+    out.push_back(std::move(p));
+  }
+  return out;
+}
 
 CameraTool SizeFor(const InitFromPixelsOptions& o, int zoom,
                    const std::vector<PixelObservation>& pixels, std::vector<std::string>* notes) {
@@ -137,11 +189,16 @@ InstrumentModel DhFromSpherical(const InstrumentModel& s) {
   return d;
 }
 
-InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
+InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observed,
                                     const InitFromPixelsOptions& options) {
   const std::string msg = options.Check();
   if (!msg.empty()) throw std::invalid_argument("InitFromPixels: " + msg);
   InitFromPixelsResult result;
+  std::vector<const TagBoard*> boards;
+  std::map<std::string, int> frame_of_view;
+  const std::vector<PixelObservation> pixels =
+      BoardViews(observed, options.targets, &boards, &frame_of_view);
+  const int num_frames = 1 + static_cast<int>(boards.size());
   int excluded = 0;
   const std::map<int, std::vector<PixelObservation>> zooms = ByZoom(pixels, options, &excluded);
   if (excluded > 0) {
@@ -166,7 +223,11 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
     cam.intrinsics = v.intrinsics;
     cam.distortion = v.distortion;
     m.cams[zoom] = cam;
-    for (const ShotPose& s : v.shots) shots.push_back({zoom, s.phi, s.theta, s.ref_from_cam});
+    for (const ShotPose& s : v.shots) {
+      const auto f = frame_of_view.find(s.shot);
+      shots.push_back(
+          {zoom, s.phi, s.theta, s.ref_from_cam, f == frame_of_view.end() ? 0 : f->second});
+    }
     result.views[zoom] = std::move(v);
   }
   for (int z = 0; z < num_zooms; ++z) {
@@ -184,7 +245,8 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
     for (size_t i = 0; i < shots.size(); ++i) {
       if (shots[i].zoom != zoom) continue;
       for (size_t j = i + 1; j < shots.size(); ++j) {
-        if (shots[j].zoom != zoom) continue;
+        // Relative motions are frame-free only within one frame.
+        if (shots[j].zoom != zoom || shots[j].frame != shots[i].frame) continue;
         const Eigen::Matrix3d a_ij = IdealLineOfSight(shots[i].phi, shots[i].theta).transpose() *
                                      IdealLineOfSight(shots[j].phi, shots[j].theta);
         const Eigen::Matrix3d b_ij =
@@ -216,32 +278,52 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
     cam_rotation[zoom] = ct.transpose();
   }
 
-  // 2b. Base rotation: chordal mean over every shot.
-  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  // 2b. Base rotation (one per frame): chordal mean over the frame's shots.
+  std::vector<Eigen::Matrix3d> sums(num_frames, Eigen::Matrix3d::Zero());
+  std::vector<int> frame_shots(num_frames, 0);
   for (const PosedShot& s : shots) {
-    sum += s.ref_from_cam.rotation * cam_rotation[s.zoom].transpose() *
-           IdealLineOfSight(s.phi, s.theta).transpose();
+    sums[s.frame] += s.ref_from_cam.rotation * cam_rotation[s.zoom].transpose() *
+                     IdealLineOfSight(s.phi, s.theta).transpose();
+    ++frame_shots[s.frame];
   }
-  const Eigen::Matrix3d base_rotation = ProjectToRotation(sum);
+  std::vector<Eigen::Matrix3d> frame_rotation(num_frames, Eigen::Matrix3d::Identity());
+  for (int f = 0; f < num_frames; ++f) {
+    if (frame_shots[f] > 0) frame_rotation[f] = ProjectToRotation(sums[f]);
+  }
 
-  // 2c. Translations: t_i = t_B + R_B A_i t_Cz, linear in (t_B, t_C0, t_C1, ...).
-  const int n_unknown = 3 + 3 * num_zooms;
+  // 2c. Translations: t_i = t_Bf + R_Bf A_i t_Cz, linear in (t_B0, t_B1, ...,
+  // t_C0, t_C1, ...).
+  const int n_unknown = 3 * num_frames + 3 * num_zooms;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(3 * shots.size(), n_unknown);
   Eigen::VectorXd b(3 * shots.size());
   for (size_t i = 0; i < shots.size(); ++i) {
     const PosedShot& s = shots[i];
-    a.block<3, 3>(3 * i, 0).setIdentity();
-    a.block<3, 3>(3 * i, 3 + 3 * s.zoom) = base_rotation * IdealLineOfSight(s.phi, s.theta);
+    a.block<3, 3>(3 * i, 3 * s.frame).setIdentity();
+    a.block<3, 3>(3 * i, 3 * num_frames + 3 * s.zoom) =
+        frame_rotation[s.frame] * IdealLineOfSight(s.phi, s.theta);
     b.segment<3>(3 * i) = s.ref_from_cam.translation;
   }
-  // Columns of zooms without shots are zero: the minimum-norm solution sets them to 0.
+  // Columns of zooms (frames) without shots are zero: the minimum-norm
+  // solution sets them to 0.
   const Eigen::VectorXd x = a.completeOrthogonalDecomposition().solve(b);
 
-  m.base = PoseBlock::FromRigid(Rigid3{base_rotation, x.head<3>()});
+  // Without known points the reference frame is the ideal base frame (SPEC 7).
+  const Rigid3 base = frame_shots[0] > 0 ? Rigid3{frame_rotation[0], x.head<3>()} : Rigid3{};
+  m.base = PoseBlock::FromRigid(base);
+  std::vector<Rigid3> frame_from_ref(num_frames);
+  for (int f = 1; f < num_frames; ++f) {
+    const Rigid3 frame_from_flange_base{frame_rotation[f], x.segment<3>(3 * f)};
+    frame_from_ref[f] = frame_from_flange_base * base.Inverse();
+    EstimatedBoard eb;
+    eb.board = *boards[f - 1];
+    eb.board.ref_from_board = frame_from_ref[f].Inverse();
+    eb.pose = PoseBlock::FromRigid(eb.board.ref_from_board);
+    m.boards.push_back(eb);
+  }
   m.edm = PoseBlock();
   for (int z = 0; z < num_zooms; ++z) {
     m.cams[z].flange_from_cam =
-        PoseBlock::FromRigid(Rigid3{cam_rotation[z], x.segment<3>(3 + 3 * z)});
+        PoseBlock::FromRigid(Rigid3{cam_rotation[z], x.segment<3>(3 * num_frames + 3 * z)});
   }
   // Zooms without pixels: a copy of the nearest zoom with pixels.
   for (int z = 0; z < num_zooms; ++z) {
@@ -256,7 +338,7 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
   // How well the chain explains the OpenCV poses.
   double sum_rot = 0, sum_pos = 0;
   for (const PosedShot& s : shots) {
-    const Rigid3 pred = RefFromCam(m, s.zoom, s.phi, s.theta);
+    const Rigid3 pred = frame_from_ref[s.frame] * RefFromCam(m, s.zoom, s.phi, s.theta);
     sum_rot += LogRotation(pred.rotation.transpose() * s.ref_from_cam.rotation).squaredNorm();
     sum_pos += (pred.translation - s.ref_from_cam.translation).squaredNorm();
   }
@@ -270,7 +352,12 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& pixels,
   }
 
   // 3. The requested kinematics.
-  if (options.kinematics == Kinematics::kDh) m = DhFromSpherical(m);
+  if (options.kinematics == Kinematics::kDh) {
+    // Same predictions in the same reference frame: the boards carry over.
+    const std::vector<EstimatedBoard> estimated = m.boards;
+    m = DhFromSpherical(m);
+    m.boards = estimated;
+  }
   return result;
 }
 
@@ -284,6 +371,17 @@ std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation
   if (it == zooms.end()) {
     throw std::invalid_argument("InitCameraFromPixels: zoom " + std::to_string(zoom) +
                                 " has no pixel observations outside the critical region");
+  }
+  for (const PixelObservation& p : it->second) {
+    if (!p.X_known) {
+      // The camera tool would need the board's pose and the board's pose the
+      // camera tool; with records the chain is the extraction's, which has no
+      // camera for this zoom.
+      throw std::invalid_argument(
+          "pixels:" + std::to_string(p.line) + ": zoom " + std::to_string(zoom) +
+          " has no camera rows in records.csv and its pixels show a board without a pose: add "
+          "camera rows of this zoom, a surveyed board, or leave records.csv out (SPEC 7)");
+    }
   }
   CameraTool cam = SizeFor(options, zoom, it->second, &notes);
   const ViewsCalibration v =

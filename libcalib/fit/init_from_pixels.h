@@ -19,6 +19,17 @@
 // The EDM tool is not observed by pixels; it is left ideal (the refinement
 // does not see it either).
 //
+// Boards of unknown pose (SPEC 7; pixels with X_known == false, boards in
+// `targets`): step 1 sees each (shot, board) as one view of a planar target
+// in its board frame (TagBoard::CornersInBoard): classic camera calibration,
+// giving board_from_cam per view. Each board is its own frame in step 2:
+//   board_from_cam_i = B_b * A(phi_i, theta_i) * C_z
+// (hand-eye pairs only within one frame; B_b per frame by chordal mean;
+// translations jointly in every t_Bb and t_Cz). The reference frame is that
+// of the known points when there are any (its B is the base), else the
+// instrument's ideal base frame (B = identity, SPEC 7); each board's pose is
+// ref_from_board = base * B_b^-1, stored in model.boards.
+//
 // Records and pixels, a zoom with pixels but no camera rows:
 // InitCameraFromPixels adds that zoom's camera to an extracted model: step 1,
 // then the camera tool = mean over shots of ref_from_flange(phi, theta)^-1 *
@@ -41,6 +52,8 @@ struct InitFromPixelsOptions {
   // Image sizes (and nothing else) per zoom from the config's model.cameras;
   // a zoom without an entry gets the size from its pixels' extent (a note says so).
   std::vector<CameraTool> cameras;
+  // The boards the pixels with X_known == false are corners of (SPEC 7).
+  TargetScene targets;
   // Observations outside this zenith window are not used (critical regions, SPEC 1).
   double min_zenith_rad = 10.0 * M_PI / 180.0;
   double max_zenith_rad = 135.0 * M_PI / 180.0;
@@ -72,7 +85,8 @@ InstrumentModel DhFromSpherical(const InstrumentModel& spherical);
 
 // Sets zoom `zoom`'s camera of `model` (extending model->cams if needed)
 // from that zoom's pixels, given the rest of the chain (see above). Returns
-// notes for the run log.
+// notes for the run log. Throws std::invalid_argument naming the line when
+// the zoom's pixels show a board of unknown pose (SPEC 7: not started here).
 std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation>& pixels, int zoom,
                                               const InitFromPixelsOptions& options,
                                               InstrumentModel* model);

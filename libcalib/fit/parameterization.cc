@@ -88,12 +88,50 @@ BlockDecision Translation(double* t, const std::string& name, std::vector<int> f
 
 }  // namespace
 
-Parameterization::Parameterization(InstrumentModel* model, const FitOptions& options)
+DataFacts FactsOf(const Observations& obs, const UsedRows& rows) {
+  DataFacts f;
+  f.known_positions = false;
+  bool edm_rows = false, edm_known = false;
+  for (int i : rows.records) {
+    const Record& r = obs.records[i];
+    if (r.point.empty()) f.known_positions = true;
+    if (r.tool == Tool::kEdm) {
+      edm_rows = true;
+      edm_known = edm_known || r.point.empty();
+    }
+  }
+  for (int i : rows.pixels) {
+    const PixelObservation& p = obs.pixels[i];
+    if (p.X_known) {
+      f.known_positions = true;
+      continue;
+    }
+    // A corner of a surveyed board is a known position.
+    for (const TagBoard& b : obs.targets.boards) {
+      if (b.HasId(p.target) && b.pose_known) f.known_positions = true;
+    }
+  }
+  f.known_edm_distances = !edm_rows || edm_known;
+  return f;
+}
+
+Parameterization::Parameterization(InstrumentModel* model, const FitOptions& options,
+                                   const DataFacts& facts)
     : translation_bound_m_(options.translation_bound_m) {
   InstrumentModel& m = *model;
   const bool dh = m.kinematics == Kinematics::kDh;
-  Add(Rotation(m.base.q.data(), "base", BlockKind::kQuaternion));
-  Add(Translation(m.base.t.data(), "base", {}));
+  if (facts.known_positions) {
+    Add(Rotation(m.base.q.data(), "base", BlockKind::kQuaternion));
+    Add(Translation(m.base.t.data(), "base", {}));
+  } else {
+    // SPEC 7: without any known position the reference frame is the ideal
+    // base frame; the whole scene would otherwise move with the base.
+    Add(Rotation(m.base.q.data(), "base", BlockKind::kConstant));
+    Add(Decision(m.base.t.data(), BlockKind::kConstant, "base.t", 3));
+    fixed_gauges_.push_back(
+        "base pose held at the instrument's ideal base frame: no observation has a known "
+        "position (SPEC 7), so the reference frame is defined by the instrument");
+  }
   if (dh) {
     Add(Euclidean(m.links[0].p.data(), "link1", BlockKind::kSubset, 4, {kDhD, kDhGamma}, "link1.",
                   kDhParamNames, ""));
@@ -107,7 +145,19 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
     Add(Rotation(m.edm.q.data(), "edm", BlockKind::kNoRoll));
     fixed_gauges_.push_back(
         "EDM roll about its ray held at the extraction's convention (Klug Eq. 79)");
-    Add(Translation(m.edm.t.data(), "edm", {}));
+    if (facts.known_edm_distances) {
+      Add(Translation(m.edm.t.data(), "edm", {}));
+    } else {
+      // The flange-frame axis closest to the ray: its translation moves the
+      // EDM along the ray, which every point of unknown position absorbs.
+      const Eigen::Vector3d ray = m.edm.ToRigid().rotation.col(2);
+      int along = 0;
+      ray.cwiseAbs().maxCoeff(&along);
+      Add(Translation(m.edm.t.data(), "edm", {along}));
+      fixed_gauges_.push_back(std::string("EDM t_") + kAxes[along] +
+                              " (along the ray) held: no EDM row has a known x, so the "
+                              "distance offset is not determined (each point absorbs it)");
+    }
   } else {
     // Spherical: the EDM ray is the line of sight; its offset along the ray
     // is edm_offset's job.
@@ -143,12 +193,30 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
   for (Effect e : m.effects.List()) {
     if (!IsKinematic(e)) continue;
     const EffectInfo& info = Info(e);
+    if (!facts.known_edm_distances && info.kind == EffectKind::kEdm) {
+      Add(Decision(m.EffectValue(e).data(), BlockKind::kConstant, info.name, info.num_params));
+      fixed_gauges_.push_back(std::string(info.name) +
+                              " held: no EDM row has a known x, so no function of the distance "
+                              "is determined (each point absorbs it)");
+      continue;
+    }
     BlockDecision d =
         Decision(m.EffectValue(e).data(), BlockKind::kFree, info.name, info.num_params);
     for (int k = 0; k < info.num_params; ++k) {
       d.columns.push_back(Column(std::string(info.name) + "[" + std::to_string(k) + "]", e, k));
     }
     Add(std::move(d));
+  }
+  // SPEC 7: boards of unknown pose and points of unknown position. No Eq. 98
+  // window: their start (PnP, ideal EDM) is not an extraction's.
+  for (EstimatedBoard& b : m.boards) {
+    const std::string name = "board[" + std::to_string(b.board.first_id) + "]";
+    Add(Rotation(b.pose.q.data(), name, BlockKind::kQuaternion));
+    Add(Euclidean(b.pose.t.data(), name + ".t", BlockKind::kFree, 3, {}, name + ".t[", kAxes, "]"));
+  }
+  for (EstimatedPoint& p : m.points) {
+    const std::string name = "point[" + p.name + "]";
+    Add(Euclidean(p.x.data(), name, BlockKind::kFree, 3, {}, name + "[", kAxes, "]"));
   }
 }
 
@@ -283,7 +351,41 @@ ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGro
     f->phi = g.phi;
     f->theta = g.theta;
     f->inv_sigma = inv_sigma;
-    for (int i : g.indices) f->points.push_back({obs.pixels[i].X, obs.pixels[i].uv});
+    std::map<const EstimatedBoard*, int> slots;
+    for (int i : g.indices) {
+      const PixelObservation& px = obs.pixels[i];
+      ShotResidual::Point pt{px.X, px.uv, -1};
+      if (!px.X_known) {
+        const std::string where = obs.pixels_source + ":" + std::to_string(px.line) + ": ";
+        if (px.corner < 0 || px.corner > 3) {
+          throw std::invalid_argument(where + "corner must be 0..3, got " +
+                                      std::to_string(px.corner));
+        }
+        if (EstimatedBoard* b = model->BoardOf(px.target)) {
+          auto it = slots.find(b);
+          if (it == slots.end()) {
+            it = slots.emplace(b, static_cast<int>(f->layout.boards.size())).first;
+            f->layout.boards.push_back(
+                {f->layout.Add(b->pose.q.data(), 4), f->layout.Add(b->pose.t.data(), 3)});
+          }
+          pt.X = b->board.CornersInBoard(px.target - b->board.first_id)[px.corner];
+          pt.board = it->second;
+        } else {
+          const TagBoard* known = nullptr;
+          for (const TagBoard& tb : obs.targets.boards) {
+            if (tb.HasId(px.target) && tb.pose_known) known = &tb;
+          }
+          if (!known) {
+            throw std::invalid_argument(
+                where + "X, Y, Z are empty but target " + std::to_string(px.target) +
+                " is not a tag of a board in the targets (SPEC 7: empty X, Y, Z need one)");
+          }
+          pt.X =
+              known->ref_from_board * known->CornersInBoard(px.target - known->first_id)[px.corner];
+        }
+      }
+      f->points.push_back(pt);
+    }
     *blocks = f->layout.blocks;
     return MakeCost(f, 2 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));
   }
@@ -292,9 +394,24 @@ ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGro
   f->edm = g.kind == ObsGroup::kEdm;
   f->phi = g.phi;
   f->theta = g.theta;
+  std::map<const EstimatedPoint*, int> slots;
   for (int i : g.indices) {
     const Record& r = obs.records[i];
-    f->rows.push_back({r.u, r.v, r.d, r.x, inv_sigma});
+    RecordGroupResidual::Row row{r.u, r.v, r.d, r.x, inv_sigma, -1};
+    if (!r.point.empty()) {
+      EstimatedPoint* q = model->Point(r.point);
+      if (!q) {
+        throw std::invalid_argument(obs.records_source + ":" + std::to_string(r.line) +
+                                    ": point '" + r.point + "' has no start value in the model");
+      }
+      auto it = slots.find(q);
+      if (it == slots.end()) {
+        it = slots.emplace(q, static_cast<int>(f->layout.points.size())).first;
+        f->layout.points.push_back(f->layout.Add(q->x.data(), 3));
+      }
+      row.point = it->second;
+    }
+    f->rows.push_back(row);
   }
   *blocks = f->layout.blocks;
   return MakeCost(f, 3 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));

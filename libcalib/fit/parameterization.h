@@ -16,6 +16,13 @@
 //   cam[z].intrinsics free when FitOptions::fit_intrinsics, else held
 //   cam[z].distortion the coefficients of the enabled distortion groups free, the rest held
 //   <effect>         one free block per enabled kinematic effect (effects.h)
+//   board[id]        a board of unknown pose (SPEC 7): quaternion manifold + free t
+//   point[name]      a point of unknown position (SPEC 7): free 3-vector
+// What the data cannot determine (DataFacts, docs/refinement.md) is held:
+//   no row with a known position: the base pose (and, dh, link1 d and
+//     gamma_offset as always) at the ideal base frame (SPEC 7);
+//   EDM rows but none with a known x: the EDM translation along its ray and
+//     every EDM effect (each point's distance absorbs any function of d).
 // Effects the kinematics already contain are never fitted (`ContainedInKinematics`).
 //
 // Every tangent column carries its name and, when it is an effect's parameter,
@@ -67,15 +74,25 @@ struct BlockDecision {
   std::vector<FreeColumn> columns;   // one per tangent column; empty when held
 };
 
+// What the observations a fit uses can determine (SPEC 7). The defaults are
+// those of data with known positions (records with x, pixels with X).
+struct DataFacts {
+  bool known_positions = true;      // some used row has a known reference-frame position
+  bool known_edm_distances = true;  // no EDM row, or some EDM row with a known x
+};
+struct UsedRows;
+DataFacts FactsOf(const Observations& obs, const UsedRows& rows);
+
 class Parameterization {
  public:
   // Decides every block of `model` (pointers into its memory; the model must
   // outlive this object). Translation windows are centred on the model's
   // values now.
-  Parameterization(InstrumentModel* model, const FitOptions& options);
+  Parameterization(InstrumentModel* model, const FitOptions& options,
+                   const DataFacts& facts = DataFacts());
 
   // All decisions, in a fixed order: base, links, EDM, cameras by zoom, effects
-  // in catalogue order.
+  // in catalogue order, boards, points.
   const std::vector<BlockDecision>& Blocks() const { return blocks_; }
   const BlockDecision* Find(const double* block) const;
   // Human-readable list of the held gauge freedoms (FitSummary::fixed_gauges).
@@ -139,6 +156,10 @@ std::vector<ObservationGroup> GroupObservations(const Observations& obs, const U
 // The residual block of one group (cost_functions.h), whitened by
 // `inv_sigma`, its jets sized to the blocks `param` leaves free; `blocks`
 // receives the parameter blocks in the cost's order. The caller owns the cost.
+// A pixel with X_known == false uses the model's estimated board holding its
+// tag, or else a board of obs.targets with a pose (its corner is then known);
+// a record with a `point` uses the model's point of that name. Throws
+// std::invalid_argument naming the file and line when neither exists.
 ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGroup& group,
                                    double inv_sigma, const Parameterization& param,
                                    InstrumentModel* model, std::vector<double*>* blocks);

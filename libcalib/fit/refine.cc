@@ -16,6 +16,7 @@
 #include "libcalib/fit/cost_functions.h"
 #include "libcalib/fit/manifolds.h"
 #include "libcalib/fit/parameterization.h"
+#include "libcalib/fit/unknowns.h"
 
 namespace rtscalib {
 
@@ -196,6 +197,8 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentMo
     ambient_sigma(model->cams[z].intrinsics.data(), 4, s.intrinsics[z].data());
     ambient_sigma(model->cams[z].distortion.data(), kNumDistortion, s.distortion[z].data());
   }
+  for (EstimatedBoard& b : model->boards) pose_sigma(b.pose, &b.sigma);
+  for (EstimatedPoint& p : model->points) ambient_sigma(p.x.data(), 3, p.sigma.data());
   for (Effect e : model->effects.List()) {
     if (!IsKinematic(e)) continue;
     Eigen::MatrixXd ec;
@@ -276,27 +279,48 @@ ceres::Solver::Options SolverOptions(const ceres::Problem& problem, const FitOpt
   return sopt;
 }
 
-// Variance-component estimate per group: s0^2 = sum r^2 / redundancy,
-// redundancy approximated by n_g * (1 - n_params / n_obs). Updates `sigma`;
+// Variance-component estimate per group: s0^2 = sum r^2 / redundancy. The
+// redundancy of group g is its number of residuals n_g less the parameters
+// only its residuals see (e.g. the points of unknown position for the
+// records, the board poses and intrinsics for pixels-only data) and its
+// share n_g / n of the parameters several groups see. Updates `sigma`;
 // returns whether any sigma moved by more than 5 % (another round is needed).
 bool ReestimateSigmas(ceres::Problem* problem, const std::vector<ResidualRef>& refs,
                       double sigma[3]) {
   double sum2[3] = {0, 0, 0};
   int count[3] = {0, 0, 0};
+  std::map<ceres::ResidualBlockId, int> group_of;
   for (const ResidualRef& ref : refs) {
     double cost = 0;
     problem->EvaluateResidualBlock(ref.id, false, &cost, nullptr, nullptr);
     sum2[static_cast<int>(ref.group)] += 2.0 * cost;
     count[static_cast<int>(ref.group)] +=
         (ref.group == ObsGroup::kPixel ? 2 : 3) * static_cast<int>(ref.indices.size());
+    group_of[ref.id] = static_cast<int>(ref.group);
+  }
+  double exclusive[3] = {0, 0, 0}, shared = 0;
+  std::vector<double*> blocks;
+  problem->GetParameterBlocks(&blocks);
+  for (double* b : blocks) {
+    if (problem->IsParameterBlockConstant(b)) continue;
+    std::vector<ceres::ResidualBlockId> ids;
+    problem->GetResidualBlocksForParameterBlock(b, &ids);
+    std::set<int> groups;
+    for (ceres::ResidualBlockId id : ids) groups.insert(group_of[id]);
+    const int size = problem->ParameterBlockTangentSize(b);
+    if (groups.size() == 1) {
+      exclusive[*groups.begin()] += size;
+    } else {
+      shared += size;
+    }
   }
   const int n_obs = count[0] + count[1] + count[2];
-  const double redundancy =
-      std::max(0.05, 1.0 - double(problem->NumParameters()) / std::max(n_obs, 1));
   bool changed = false;
   for (int g = 0; g < 3; ++g) {
     if (count[g] == 0) continue;
-    const double f = std::sqrt(sum2[g] / (count[g] * redundancy));
+    const double params = exclusive[g] + shared * count[g] / std::max(n_obs, 1);
+    const double redundancy = std::max(0.05 * count[g], count[g] - params);
+    const double f = std::sqrt(sum2[g] / redundancy);
     // Never shrink below a floor that would make exact data ill-posed.
     const double floor = g == 2 ? 1e-9 : 1e-15;
     const double next = std::max(sigma[g] * f, floor);
@@ -375,8 +399,14 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   ceres::Solver::Summary solver_summary;
   std::vector<ResidualRef> refs;
   std::unique_ptr<ceres::Problem> problem;
+  // SPEC 7: boards and points of unknown position get starting values, and
+  // what the data cannot determine is held (DataFacts).
+  const DataFacts facts = FactsOf(obs, rows);
+  for (const std::string& note : StartUnknowns(obs, rows, facts, &m)) {
+    summary.message += " " + note + ";";
+  }
   const InstrumentModel start = m;
-  const Parameterization param(&m, options);
+  const Parameterization param(&m, options, facts);
   summary.fixed_gauges = param.FixedGauges();
   // Klug Eq. 98's translation bounds: Ceres's projected steps stall on this
   // problem even when no bound is active, so the bounds are imposed as hard
@@ -415,6 +445,7 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   if (options.compute_covariance) {
     FillSigmas(problem.get(), FreeBlocks(param, *problem), &m, &summary, options.num_threads);
   }
+  for (EstimatedBoard& b : m.boards) b.board.ref_from_board = b.pose.ToRigid();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

@@ -275,6 +275,40 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
   e << YAML::Key << "cameras" << YAML::Value << YAML::BeginSeq;
   for (int z = 0; z < model.NumZooms(); ++z) EmitCamera(e, model, z);
   e << YAML::EndSeq;
+  // SPEC 7: the boards of unknown pose and the points of unknown position
+  // estimated with the instrument (absent when there are none, as in files
+  // written before they existed).
+  if (!model.boards.empty()) {
+    e << YAML::Key << "boards" << YAML::Value << YAML::BeginSeq;
+    for (const EstimatedBoard& b : model.boards) {
+      e << YAML::BeginMap;
+      e << YAML::Key << "family" << YAML::Value << b.board.family;
+      e << YAML::Key << "first_id" << YAML::Value << b.board.first_id;
+      e << YAML::Key << "rows" << YAML::Value << b.board.rows;
+      e << YAML::Key << "cols" << YAML::Value << b.board.cols;
+      e << YAML::Key << "tag_size" << YAML::Value << Num(b.board.tag_size);
+      e << YAML::Key << "spacing" << YAML::Value << Num(b.board.spacing);
+      e << YAML::Key << "ref_from_board" << YAML::Value;
+      EmitPose(e, b.pose, s.valid ? &b.sigma : nullptr);
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq;
+  }
+  if (!model.points.empty()) {
+    e << YAML::Key << "points" << YAML::Value << YAML::BeginSeq;
+    for (const EstimatedPoint& p : model.points) {
+      e << YAML::Flow << YAML::BeginMap;
+      e << YAML::Key << "name" << YAML::Value << p.name;
+      e << YAML::Key << "x" << YAML::Value;
+      EmitNumbers(e, p.x.data(), 3);
+      if (s.valid) {
+        e << YAML::Key << "sigma" << YAML::Value;
+        EmitNumbers(e, p.sigma.data(), 3);
+      }
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq;
+  }
   e << YAML::EndMap;
   if (!e.good()) throw std::logic_error("model.yaml emitter: " + e.GetLastError());
 
@@ -367,6 +401,40 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
       }
     }
     model.cams.push_back(cam);
+  }
+  if (const std::optional<YamlNode> boards = root.Find("boards")) {
+    for (const YamlNode& item : boards->Items()) {
+      EstimatedBoard b;
+      const YamlNode family = item.Require("family");
+      b.board.family = family.AsString();
+      b.board.first_id = item.Require("first_id").AsInt();
+      for (auto [key, value] : {std::pair<const char*, int*>{"rows", &b.board.rows},
+                                std::pair<const char*, int*>{"cols", &b.board.cols}}) {
+        const YamlNode n = item.Require(key);
+        *value = n.AsInt();
+        if (*value <= 0) n.Fail(std::string("a number of ") + key + " > 0");
+      }
+      const YamlNode tag = item.Require("tag_size");
+      b.board.tag_size = tag.AsDouble();
+      if (!(b.board.tag_size > 0)) tag.Fail("a tag size > 0 [m]");
+      const YamlNode spacing = item.Require("spacing");
+      b.board.spacing = spacing.AsDouble();
+      if (!(b.board.spacing >= 0)) spacing.Fail("a spacing >= 0 [m]");
+      if (b.board.first_id < 0) item.Require("first_id").Fail("a tag id >= 0");
+      b.pose = ReadPose(item.Require("ref_from_board"), with_sigma, &b.sigma);
+      b.board.ref_from_board = b.pose.ToRigid();
+      b.board.pose_known = false;  // estimated, not surveyed
+      model.boards.push_back(b);
+    }
+  }
+  if (const std::optional<YamlNode> points = root.Find("points")) {
+    for (const YamlNode& item : points->Items()) {
+      EstimatedPoint p;
+      p.name = item.Require("name").AsString();
+      ReadNumbersInto(item.Require("x"), p.x.data(), 3);
+      if (with_sigma) ReadNumbersInto(item.Require("sigma"), p.sigma.data(), 3, true);
+      model.points.push_back(p);
+    }
   }
   doc.CheckAllKeysUsed();
   if (metadata) *metadata = std::move(meta);

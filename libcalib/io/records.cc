@@ -35,7 +35,8 @@ Eigen::Vector3d ReadPoint(const CsvTable& t, int row, const char* x, const char*
 
 RecordsFile ReadRecords(const std::string& path) {
   const CsvTable t = CsvTable::Read(
-      path, {{"face", "zoom", "phi", "theta", "tool", "d", "x", "y", "z"}, {"u", "v", "set"}});
+      path,
+      {{"face", "zoom", "phi", "theta", "tool", "d", "x", "y", "z"}, {"u", "v", "set", "point"}});
   RecordsFile out;
   out.notes = t.notes();
   out.records.reserve(t.NumRows());
@@ -73,7 +74,17 @@ RecordsFile ReadRecords(const std::string& path) {
     if (!(r.d > 0)) {
       t.Fail(row, "d", r.tool == Tool::kEdm ? "an EDM distance > 0 [m]" : "a ray length > 0 [m]");
     }
-    r.x = ReadPoint(t, row, "x", "y", "z");
+    // SPEC 7: a row naming a point of unknown position may leave x, y, z
+    // empty (they are then not an observation); any other row needs them.
+    r.point = t.Has("point") ? t.Text(row, "point") : std::string();
+    if (r.point.empty()) {
+      r.x = ReadPoint(t, row, "x", "y", "z");
+    } else {
+      for (int i = 0; i < 3; ++i) {
+        const char* column = i == 0 ? "x" : i == 1 ? "y" : "z";
+        if (!t.Empty(row, column)) r.x[i] = t.Number(row, column);
+      }
+    }
     r.set = t.Text(row, "set");
     out.records.push_back(std::move(r));
   }
@@ -81,13 +92,31 @@ RecordsFile ReadRecords(const std::string& path) {
 }
 
 void WriteRecords(const std::string& path, const std::vector<Record>& records) {
-  CsvWriter w(path, {"face", "zoom", "phi", "theta", "tool", "u", "v", "d", "x", "y", "z", "set"});
+  // The `point` column (SPEC 7) only when some row names a point, so that
+  // files without such points keep their columns.
+  bool points = false;
+  for (const Record& r : records) points = points || !r.point.empty();
+  std::vector<std::string> header = {"face", "zoom", "phi", "theta", "tool", "u",
+                                     "v",    "d",    "x",   "y",     "z",    "set"};
+  if (points) header.push_back("point");
+  CsvWriter w(path, header);
   for (const Record& r : records) {
     const bool cam = r.tool == Tool::kCam;
-    w.Row({std::to_string(r.face), std::to_string(r.zoom), FormatDouble(r.phi),
-           FormatDouble(r.theta), cam ? "cam" : "edm", cam ? FormatDouble(r.u) : "",
-           cam ? FormatDouble(r.v) : "", FormatDouble(r.d), FormatDouble(r.x.x()),
-           FormatDouble(r.x.y()), FormatDouble(r.x.z()), r.set});
+    const bool unknown = !r.point.empty();
+    std::vector<std::string> row = {std::to_string(r.face),
+                                    std::to_string(r.zoom),
+                                    FormatDouble(r.phi),
+                                    FormatDouble(r.theta),
+                                    cam ? "cam" : "edm",
+                                    cam ? FormatDouble(r.u) : "",
+                                    cam ? FormatDouble(r.v) : "",
+                                    FormatDouble(r.d),
+                                    unknown ? "" : FormatDouble(r.x.x()),
+                                    unknown ? "" : FormatDouble(r.x.y()),
+                                    unknown ? "" : FormatDouble(r.x.z()),
+                                    r.set};
+    if (points) row.push_back(r.point);
+    w.Row(row);
   }
   w.Close();
 }
@@ -111,7 +140,13 @@ PixelsFile ReadPixels(const std::string& path) {
     p.target = ReadNonNegativeInt(t, row, "target", std::numeric_limits<int>::max(),
                                   "a target id (integer >= 0)");
     p.corner = ReadNonNegativeInt(t, row, "corner", 3, "a corner index 0, 1, 2 or 3");
-    p.X = ReadPoint(t, row, "X", "Y", "Z");
+    // SPEC 7: X, Y, Z all empty = a corner of a board without a pose (the
+    // calibration checks that `target` is on one and names this line if not).
+    if (t.Empty(row, "X") && t.Empty(row, "Y") && t.Empty(row, "Z")) {
+      p.X_known = false;
+    } else {
+      p.X = ReadPoint(t, row, "X", "Y", "Z");
+    }
     p.uv = {t.Number(row, "u"), t.Number(row, "v")};
     out.pixels.push_back(std::move(p));
   }
@@ -124,8 +159,8 @@ void WritePixels(const std::string& path, const std::vector<PixelObservation>& p
   for (const PixelObservation& p : pixels) {
     w.Row({std::to_string(p.face), std::to_string(p.zoom), FormatDouble(p.phi),
            FormatDouble(p.theta), p.shot, std::to_string(p.target), std::to_string(p.corner),
-           FormatDouble(p.X.x()), FormatDouble(p.X.y()), FormatDouble(p.X.z()),
-           FormatDouble(p.uv.x()), FormatDouble(p.uv.y())});
+           p.X_known ? FormatDouble(p.X.x()) : "", p.X_known ? FormatDouble(p.X.y()) : "",
+           p.X_known ? FormatDouble(p.X.z()) : "", FormatDouble(p.uv.x()), FormatDouble(p.uv.y())});
   }
   w.Close();
 }

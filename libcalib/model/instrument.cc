@@ -117,4 +117,23 @@ bool PredictPixel(const InstrumentModel& model, int zoom, double phi, double the
                       pixel->data());
 }
 
+const EstimatedBoard* InstrumentModel::BoardOf(int id) const {
+  for (const EstimatedBoard& b : boards) {
+    if (b.board.HasId(id)) return &b;
+  }
+  return nullptr;
+}
+EstimatedBoard* InstrumentModel::BoardOf(int id) {
+  return const_cast<EstimatedBoard*>(static_cast<const InstrumentModel*>(this)->BoardOf(id));
+}
+const EstimatedPoint* InstrumentModel::Point(const std::string& name) const {
+  for (const EstimatedPoint& p : points) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+EstimatedPoint* InstrumentModel::Point(const std::string& name) {
+  return const_cast<EstimatedPoint*>(static_cast<const InstrumentModel*>(this)->Point(name));
+}
+
 }  // namespace rtscalib

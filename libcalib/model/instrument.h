@@ -7,6 +7,9 @@
 //   edm         flange_from_edm pose (EDM ray = +z of this frame)
 //   cams[z]     per zoom: flange_from_cam pose, intrinsics[4], distortion[14]
 //   effects[e]  one block per kinematic/EDM effect (effects.h), SI units
+//   boards[b]   ref_from_board pose of a board of unknown pose (SPEC 7):
+//               quaternion + translation [m]; scale fixed by its tag_size
+//   points[p]   position of a fixed point of unknown position (SPEC 7) [m]
 //
 // Two kinematics share these blocks (kinematics.h has the formulas):
 //   dh         Klug Sec. 3:   ref_from_flange = Base * Z1 X1 * Z2 X2
@@ -22,6 +25,7 @@
 #include "libcalib/camera/opencv_model.h"
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/effects.h"
+#include "libcalib/model/targets.h"
 
 namespace rtscalib {
 
@@ -79,6 +83,22 @@ struct ModelSigmas {
   std::array<std::array<double, 4>, kNumKinematicEffects> effect_cov{};  // 2x2 row major
 };
 
+// A board of unknown pose (SPEC 7), estimated with the instrument: its
+// geometry (`board`, whose ref_from_board is kept equal to `pose` after a
+// fit) and its ref_from_board pose block. Corner (target, corner) is
+// ref_from_board * board.CornersInBoard(target - first_id)[corner].
+struct EstimatedBoard {
+  TagBoard board;
+  PoseBlock pose;
+  PoseSigma sigma;  // filled by the fit (zero when not estimated)
+};
+// A fixed point of unknown position named by records.csv's `point` column.
+struct EstimatedPoint {
+  std::string name;
+  std::array<double, 3> x{0, 0, 0};      // reference frame [m]
+  std::array<double, 3> sigma{0, 0, 0};  // [m], filled by the fit
+};
+
 struct InstrumentModel {
   Kinematics kinematics = Kinematics::kDh;
   EffectSet effects;
@@ -92,12 +112,22 @@ struct InstrumentModel {
   // is the start value, not an estimate (as CameraTool::determined).
   bool edm_determined = true;
   ModelSigmas sigmas;
+  // SPEC 7: boards of unknown pose and points of unknown position, estimated
+  // with everything else. Vectors (not maps) so that a same-sized copy keeps
+  // the block addresses a fit holds.
+  std::vector<EstimatedBoard> boards;
+  std::vector<EstimatedPoint> points;
 
   int NumZooms() const { return static_cast<int>(cams.size()); }
   std::array<double, 2>& EffectValue(Effect e) { return effect_values[static_cast<int>(e)]; }
   const std::array<double, 2>& EffectValue(Effect e) const {
     return effect_values[static_cast<int>(e)];
   }
+  // The estimated board holding tag `id`, or nullptr.
+  const EstimatedBoard* BoardOf(int id) const;
+  EstimatedBoard* BoardOf(int id);
+  const EstimatedPoint* Point(const std::string& name) const;
+  EstimatedPoint* Point(const std::string& name);
 };
 
 // Which face a (phi, theta) reading belongs to: face 1 for theta in [0, pi],

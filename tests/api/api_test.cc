@@ -390,6 +390,27 @@ PredictionFailure FailureOf(const std::function<void()>& f) {
   return PredictionFailure::kNonFinite;
 }
 
+// SPEC 7: a corner of a board the model estimated is predicted from the
+// board's pose; a tag on no estimated board is refused.
+TEST(ApiBoards, PredictsTheCornersOfEstimatedBoards) {
+  InstrumentModel m = PaperTruth(1);
+  EstimatedBoard b;
+  b.board.first_id = 48;
+  b.board.rows = 2;
+  b.board.cols = 3;
+  // 4 m along the line of sight of (phi, theta) = (0.3, 1.5), facing the camera.
+  const Rigid3 ref_from_cam = RefFromCam(m, 0, 0.3, 1.5);
+  b.pose = PoseBlock::FromRigid(ref_from_cam * Rigid3::FromEuler({0.1, 0, 0}, {-0.1, -0.05, 4}));
+  m.boards.push_back(b);
+  const CalibratedInstrument inst(m);
+  const Eigen::Vector3d corner = inst.BoardCorner(50, 2);
+  EXPECT_EQ(corner, b.pose.ToRigid() * b.board.CornersInBoard(2)[2]);
+  // The same pixel as projecting the corner (same arithmetic: bit-equal).
+  EXPECT_EQ(inst.BoardCornerPixel(0, 0.3, 1.5, 50, 2), inst.Pixel(0, 0.3, 1.5, corner));
+  EXPECT_EQ(FailureOf([&] { inst.BoardCorner(47, 0); }), PredictionFailure::kNoSuchBoard);
+  EXPECT_EQ(FailureOf([&] { inst.BoardCorner(48, 4); }), PredictionFailure::kNoSuchBoard);
+}
+
 TEST(ApiErrors, RefusesWhatTheModelCannotPredict) {
   const CalibratedInstrument inst(DhModel());
   const double phi = 0.3, theta = 1.2;

@@ -245,3 +245,49 @@ TEST(Calibrate, ScreeningWarningsAreNotes) {
 
 }  // namespace
 }  // namespace rtscalib
+
+#include "tests/fit/joint_scene.h"
+
+namespace rtscalib {
+namespace {
+
+// SPEC 7 end to end: pixels of boards of unknown pose only (no records, no
+// known position): Calibrate starts from the pixels alone (per-board views,
+// one frame per board), refines the boards with the instrument in the ideal
+// base frame and says what it held.
+TEST(CalibrateUnknownBoards, PixelsOfBoardsWithoutPoseOnly) {
+  InstrumentModel truth = testing_scene::DhTruth(1);
+  const InstrumentModel ideal = IdealModel(Kinematics::kDh, 0, CameraTool());
+  truth.base = ideal.base;  // the truth's frame is the ideal base frame
+  truth.links[0].p[kDhD] = ideal.links[0].p[kDhD];
+  truth.links[0].p[kDhGamma] = ideal.links[0].p[kDhGamma];
+  SimulationOptions sim = testing_scene::PixelsOnly(truth, 3, 11, 0.2);
+  SimulatedData data = Simulate(sim);
+  data.obs.records.clear();
+  data.obs.targets = sim.targets;
+  for (TagBoard& b : data.obs.targets.boards) b.pose_known = false;
+  for (PixelObservation& p : data.obs.pixels) {
+    p.X_known = false;
+    p.X.setZero();
+  }
+  CalibrationOptions options = ApiOptions(truth);
+  const CalibrationResult r = Calibrate(data.obs, options);
+  ASSERT_EQ(r.model.boards.size(), sim.targets.boards.size());
+  // 0.2 px noise on ~2,000 corners: the intrinsics to a fraction of a pixel
+  // (their sigmas are ~0.2-0.4 px, tests/fit/unknown_boards_test.cc); 2 px
+  // is far outside noise and far inside a wrong frame or scale.
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(r.model.cams[0].intrinsics[i], truth.cams[0].intrinsics[i], 2.0) << i;
+  }
+  // Boards in the ideal base frame = the truth's frame, to a few mm at 3-4 m.
+  for (const EstimatedBoard& b : r.model.boards) {
+    for (const TagBoard& t : sim.targets.boards) {
+      if (t.first_id != b.board.first_id) continue;
+      EXPECT_LT((b.pose.ToRigid().translation - t.ref_from_board.translation).norm(), 5e-3);
+    }
+  }
+  EXPECT_THAT(r.fit.fixed_gauges, Contains(HasSubstr("base pose held")));
+}
+
+}  // namespace
+}  // namespace rtscalib

@@ -43,7 +43,9 @@ InstrumentModel ModelWithEverything(Kinematics k) {
 std::vector<const ceres::Manifold*> ManifoldsFor(
     const BlockLayout& layout, std::vector<std::unique_ptr<ceres::Manifold>>* own) {
   std::vector<const ceres::Manifold*> out(layout.blocks.size(), nullptr);
-  for (int i : {layout.base_q, layout.tool_q}) {
+  std::vector<int> rotations = {layout.base_q, layout.tool_q};
+  for (const auto& b : layout.boards) rotations.push_back(b.first);
+  for (int i : rotations) {
     own->push_back(std::make_unique<ceres::EigenQuaternionManifold>());
     out[i] = own->back().get();
   }
@@ -120,6 +122,26 @@ TEST_P(CostFunctionGradients, CameraRecordGroupWithDistortion) {
   }
   const BlockLayout layout = f->layout;
   std::unique_ptr<ceres::CostFunction> cost(MakeCost(f, 9, TotalSize(layout)));
+  ExpectGradientsMatch(cost.get(), layout);
+}
+
+// SPEC 7: records of a point of unknown position, x from the point's block.
+TEST_P(CostFunctionGradients, EdmRecordGroupOfAnUnknownPoint) {
+  InstrumentModel m = ModelWithEverything(GetParam());
+  EstimatedPoint prism;
+  prism.name = "P1";
+  const Eigen::Vector3d x = PredictEdm(m, 0.71, 1.21, 7.9);
+  prism.x = {x.x() + 1e-3, x.y() - 2e-3, x.z()};
+  auto* f = new RecordGroupResidual;
+  f->layout = LayoutFor(&m, -1);
+  f->layout.points.push_back(f->layout.Add(prism.x.data(), 3));
+  f->edm = true;
+  f->phi = 0.7;
+  f->theta = 1.2;
+  f->rows.push_back({0, 0, 7.9, Eigen::Vector3d::Zero(), 1.0 / 1e-5, 0});
+  f->rows.push_back({0, 0, 3.1, PredictEdm(m, 0.7, 1.2, 3.1), 1.0 / 1e-5, -1});
+  const BlockLayout layout = f->layout;
+  std::unique_ptr<ceres::CostFunction> cost(MakeCost(f, 6, TotalSize(layout)));
   ExpectGradientsMatch(cost.get(), layout);
 }
 
@@ -238,6 +260,42 @@ TEST_P(CostFunctionGradients, ShotBehindCameraFails) {
 INSTANTIATE_TEST_SUITE_P(Kinematics, CostFunctionGradients,
                          ::testing::Values(Kinematics::kDh, Kinematics::kSpherical),
                          [](const auto& info) { return std::string(KinematicsName(info.param)); });
+
+// SPEC 7: a shot of two boards of unknown pose, X = ref_from_board *
+// corner_in_board with the boards' blocks, next to points of known X.
+TEST_P(CostFunctionGradients, ShotOfBoardsOfUnknownPose) {
+  InstrumentModel m = ModelWithEverything(GetParam());
+  auto* f = MakeShot(&m);
+  for (int b = 0; b < 2; ++b) {
+    // A board 4 m along the shot's line of sight, turned a little.
+    const Rigid3 ref_from_cam = RefFromCam(m, 0, f->phi, f->theta);
+    EstimatedBoard board;
+    board.board.rows = 2;
+    board.board.cols = 3;
+    board.board.first_id = 10 * b;
+    const Rigid3 cam_from_board =
+        Rigid3::FromEuler({0.2 - 0.3 * b, 0.1, 0.05}, {-0.3 + 0.2 * b, -0.1, 4.0});
+    board.pose = PoseBlock::FromRigid(ref_from_cam * cam_from_board);
+    m.boards.push_back(board);
+  }
+  for (int b = 0; b < 2; ++b) {
+    EstimatedBoard& board = m.boards[b];
+    f->layout.boards.push_back(
+        {f->layout.Add(board.pose.q.data(), 4), f->layout.Add(board.pose.t.data(), 3)});
+    for (int tag = 0; tag < board.board.NumTags(); tag += 2) {
+      for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector3d in_board = board.board.CornersInBoard(tag)[k];
+        Eigen::Vector2d uv;
+        ASSERT_TRUE(PredictPixel(m, 0, f->phi, f->theta, board.pose.ToRigid() * in_board, &uv));
+        f->points.push_back({in_board, uv + Eigen::Vector2d(0.2, -0.1), b});
+      }
+    }
+  }
+  const BlockLayout layout = f->layout;
+  std::unique_ptr<ceres::CostFunction> cost(
+      MakeCost(f, 2 * static_cast<int>(f->points.size()), TotalSize(layout)));
+  ExpectGradientsMatch(cost.get(), layout);
+}
 
 }  // namespace
 }  // namespace rtscalib

@@ -343,3 +343,57 @@ TEST(ModelIo, StructuralErrors) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// SPEC 7: the estimated boards and points, with their uncertainties, are
+// written and read back exactly; a model without them writes neither key.
+TEST(ModelIoBoards, BoardsAndPointsRoundTrip) {
+  testing_io::TempDir dir;
+  InstrumentModel m = IdealModel(Kinematics::kSpherical, 1, CameraTool());
+  EXPECT_EQ(m.boards.size(), 0u);
+  WriteModelYaml(dir.Path("plain.yaml"), m, {});
+  EXPECT_EQ(dir.Read("plain.yaml").find("boards"), std::string::npos);
+  EXPECT_EQ(dir.Read("plain.yaml").find("points"), std::string::npos);
+
+  EstimatedBoard b;
+  b.board.first_id = 48;
+  b.board.rows = 6;
+  b.board.cols = 8;
+  b.board.tag_size = 0.06;
+  b.board.spacing = 0.015;
+  b.pose = PoseBlock::FromRigid(Rigid3::FromEuler({0.1, -0.2, 1.3}, {2.0 / 3.0, -4.0, 1.5}));
+  b.sigma.rotation = {1e-4, 2e-4, 3e-4};
+  b.sigma.euler = {1e-4, 2e-4, 3e-4};
+  b.sigma.t = {1e-3, 2e-3, 3e-3};
+  m.boards.push_back(b);
+  EstimatedPoint p;
+  p.name = "prism 1";
+  p.x = {1.0 / 3.0, 12.5, -0.25};
+  p.sigma = {1e-4, 2e-4, 5e-4};
+  m.points.push_back(p);
+  m.sigmas.valid = true;
+  m.sigmas.cam_tools.resize(1);
+  m.sigmas.intrinsics.resize(1);
+  m.sigmas.distortion.resize(1);
+  WriteModelYaml(dir.Path("model.yaml"), m, {});
+  const InstrumentModel r = ReadModelYaml(dir.Path("model.yaml"), nullptr);
+  ASSERT_EQ(r.boards.size(), 1u);
+  EXPECT_EQ(r.boards[0].board.first_id, 48);
+  EXPECT_EQ(r.boards[0].board.rows, 6);
+  EXPECT_EQ(r.boards[0].board.cols, 8);
+  EXPECT_EQ(r.boards[0].board.tag_size, 0.06);
+  EXPECT_EQ(r.boards[0].board.spacing, 0.015);
+  EXPECT_FALSE(r.boards[0].board.pose_known);
+  EXPECT_EQ(r.boards[0].pose.q, b.pose.q);
+  EXPECT_EQ(r.boards[0].pose.t, b.pose.t);
+  EXPECT_EQ(r.boards[0].sigma.t, b.sigma.t);
+  ASSERT_EQ(r.points.size(), 1u);
+  EXPECT_EQ(r.points[0].name, "prism 1");
+  EXPECT_EQ(r.points[0].x, p.x);
+  EXPECT_EQ(r.points[0].sigma, p.sigma);
+}
+
+}  // namespace
+}  // namespace rtscalib

@@ -302,3 +302,72 @@ TEST(Pixels, WriteThenReadIsBitExact) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+using testing_io::CatchInputError;
+using testing_io::TempDir;
+
+// SPEC 7: a `point` column names a fixed point of unknown position; its rows
+// may leave x, y, z empty, other rows still may not.
+TEST(RecordsPoints, PointRowsMayLeaveXyzEmpty) {
+  TempDir dir;
+  const std::string path = dir.Write("records.csv",
+                                     "face,zoom,phi,theta,tool,d,x,y,z,point\n"
+                                     "1,,0.5,1.5,edm,12.5,,,,P1\n"
+                                     "2,,3.6,4.7,edm,12.5,,,,P1\n"
+                                     "1,,0.5,1.5,edm,2,0.1,0.2,0.3,\n");
+  const RecordsFile file = ReadRecords(path);
+  ASSERT_EQ(file.records.size(), 3u);
+  EXPECT_EQ(file.records[0].point, "P1");
+  EXPECT_EQ(file.records[1].point, "P1");
+  EXPECT_EQ(file.records[2].point, "");
+  EXPECT_EQ(file.records[2].x, Eigen::Vector3d(0.1, 0.2, 0.3));
+  // Written back with the point column and empty x, y, z; read back equal.
+  WriteRecords(dir.Path("out.csv"), file.records);
+  const RecordsFile back = ReadRecords(dir.Path("out.csv"));
+  ASSERT_EQ(back.records.size(), 3u);
+  EXPECT_EQ(back.records[1].point, "P1");
+  EXPECT_EQ(back.records[2].x, file.records[2].x);
+}
+
+TEST(RecordsPoints, EmptyXyzWithoutPointIsAnErrorNamingLineAndColumn) {
+  TempDir dir;
+  const std::string path = dir.Write("records.csv",
+                                     "face,zoom,phi,theta,tool,d,x,y,z,point\n"
+                                     "1,,0.5,1.5,edm,12.5,,,,P1\n"
+                                     "1,,0.5,1.5,edm,2,,0.2,0.3,\n");
+  const InputError e = CatchInputError([&] { ReadRecords(path); });
+  EXPECT_EQ(e.line, 3);
+  EXPECT_EQ(e.column, "x");
+}
+
+// SPEC 7: pixels.csv rows with X, Y, Z all empty are corners of a board
+// without a pose (X_known false); partly empty stays an error.
+TEST(PixelsBoards, EmptyXyzMeansABoardCorner) {
+  TempDir dir;
+  const std::string header = "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v\n";
+  const std::string path = dir.Write("pixels.csv", header +
+                                                       "1,0,0.5,1.5,s1,48,2,,,,100.5,200.25\n"
+                                                       "1,0,0.5,1.5,s1,1,0,1,2,3,10,20\n");
+  const PixelsFile file = ReadPixels(path);
+  ASSERT_EQ(file.pixels.size(), 2u);
+  EXPECT_FALSE(file.pixels[0].X_known);
+  EXPECT_EQ(file.pixels[0].target, 48);
+  EXPECT_TRUE(file.pixels[1].X_known);
+  WritePixels(dir.Path("out.csv"), file.pixels);
+  const PixelsFile back = ReadPixels(dir.Path("out.csv"));
+  ASSERT_EQ(back.pixels.size(), 2u);
+  EXPECT_FALSE(back.pixels[0].X_known);
+  EXPECT_EQ(back.pixels[0].uv, file.pixels[0].uv);
+  EXPECT_EQ(back.pixels[1].X, Eigen::Vector3d(1, 2, 3));
+
+  const std::string bad = dir.Write("bad.csv", header + "1,0,0.5,1.5,s1,48,2,,1,,100.5,200.25\n");
+  const InputError e = CatchInputError([&] { ReadPixels(bad); });
+  EXPECT_EQ(e.line, 2);
+  EXPECT_EQ(e.column, "X");
+}
+
+}  // namespace
+}  // namespace rtscalib
