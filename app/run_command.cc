@@ -1,4 +1,5 @@
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 
 #include "app/commands.h"
@@ -46,6 +47,16 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
                         {"pixels", result.obs.pixels_source}};
   WriteFileAtomicWith(out.RunFile("model.yaml"), [&](const std::string& tmp) {
     WriteModelYaml(tmp, result.calibration.model, meta);
+    // Where each zoom's width/height came from (SPEC 7): a YAML comment, so
+    // that model.yaml's readers are unaffected.
+    std::ofstream f(tmp, std::ios::app);
+    for (const auto& [z, source] : result.calibration.size_source) {
+      f << "# cameras[" << z << "] size_source: " << source
+        << (source == "estimated" ? " (width/height guessed: no photos, no model.cameras)" : "")
+        << "\n";
+    }
+    f.close();
+    if (!f) throw std::runtime_error("could not write " + tmp);
   });
   const nlohmann::json report = ReportJson(config, result, out);
   out.Write("report.json", report.dump(2) + "\n");

@@ -191,7 +191,9 @@ void ReadCameraFields(const YamlNode& m, bool required, CameraTool* cam) {
 
 void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) {
   for (auto [key, path] : {std::pair<const char*, std::string*>{"records", &out->records_path},
-                           std::pair<const char*, std::string*>{"pixels", &out->pixels_path}}) {
+                           std::pair<const char*, std::string*>{"pixels", &out->pixels_path},
+                           std::pair<const char*, std::string*>{"shots", &out->shots_path},
+                           std::pair<const char*, std::string*>{"targets", &out->targets_path}}) {
     if (const std::optional<YamlNode> n = m.Find(key)) {
       const std::string resolved = Resolve(config_dir, n->AsString());
       if (!fs::is_regular_file(resolved)) {
@@ -200,6 +202,14 @@ void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) 
       }
       *path = resolved;
     }
+  }
+  // A photo session needs its boards and vice versa (SPEC 7).
+  if (out->shots_path.empty() != out->targets_path.empty()) {
+    const char* given = out->shots_path.empty() ? "targets" : "shots";
+    const char* missing = out->shots_path.empty() ? "shots" : "targets";
+    const YamlNode n = *m.Find(given);
+    n.Fail(std::string("data.") + missing + " next to data." + given +
+           " (the photos and the boards they show come together)");
   }
 }
 
@@ -653,6 +663,9 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
     if (const std::optional<YamlNode> n = root.Find(section.key)) section.read(*n);
   }
   if (const std::optional<YamlNode> n = root.Find("diagnose")) ReadDiagnose(*n, &config.diagnose);
+  if (const std::optional<YamlNode> n = root.Find("detect")) {
+    ReadCount(*n, "jobs", &config.detect_jobs, 1, "detection threads");
+  }
   if (const std::optional<YamlNode> n = root.Find("screen")) ReadScreen(*n, &config.screen);
   std::string output = "out";
   root.Read("output", &output);
@@ -660,10 +673,12 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
 
   doc.CheckAllKeysUsed();
 
-  const bool have_data = !config.records_path.empty() || !config.pixels_path.empty();
+  const bool have_data =
+      !config.records_path.empty() || !config.pixels_path.empty() || !config.shots_path.empty();
   if (!have_data && !simulate) {
     throw InputError::Key(path, "data", 0, 0,
-                          "data.records and/or data.pixels, or a simulate section", "neither");
+                          "data.records, data.pixels and/or data.shots, or a simulate section",
+                          "neither");
   }
   if (have_data && simulate) {
     config.notes.push_back(path +
@@ -675,10 +690,12 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
 std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sections) {
   YAML::Emitter e;
   e << YAML::BeginMap;
-  if (!c.records_path.empty() || !c.pixels_path.empty()) {
+  if (!c.records_path.empty() || !c.pixels_path.empty() || !c.shots_path.empty()) {
     e << YAML::Key << "data" << YAML::Value << YAML::BeginMap;
     if (!c.records_path.empty()) e << YAML::Key << "records" << YAML::Value << c.records_path;
     if (!c.pixels_path.empty()) e << YAML::Key << "pixels" << YAML::Value << c.pixels_path;
+    if (!c.shots_path.empty()) e << YAML::Key << "shots" << YAML::Value << c.shots_path;
+    if (!c.targets_path.empty()) e << YAML::Key << "targets" << YAML::Value << c.targets_path;
     e << YAML::EndMap;
   }
 
@@ -732,6 +749,11 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   for (const ConfigSection& section : sections) {
     const YAML::Node node = section.dump();
     if (!node.IsNull()) e << YAML::Key << section.key << YAML::Value << node;
+  }
+  if (c.detect_jobs != 1) {
+    e << YAML::Key << "detect" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    e << YAML::Key << "jobs" << YAML::Value << c.detect_jobs;
+    e << YAML::EndMap;
   }
   e << YAML::Key << "diagnose" << YAML::Value << YAML::Flow << YAML::BeginMap;
   e << YAML::Key << "enabled" << YAML::Value << c.diagnose.enabled;
