@@ -5,6 +5,7 @@
 // simulator.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -119,6 +120,10 @@ TEST_F(PhotoSession, TheFolderIsWhatAUserHas) {
 TEST_F(PhotoSession, CalibrationFromThePhotosMatchesTheTruth) {
   const CameraTool& cam = result_->calibration.model.cams[0];
   const CameraTool& t = truth_->cams[0];
+  std::printf("fx %.6g (truth %.6g), cx %.4f (%.4f), k1 %.5f (%.5f), k2 %.5f (%.5f), rms %.3f px\n",
+              cam.intrinsics[0], t.intrinsics[0], cam.intrinsics[2], t.intrinsics[2],
+              cam.distortion[0], t.distortion[0], cam.distortion[1], t.distortion[1],
+              result_->calibration.final_errors.pixels.rms_px);
   // Focal lengths: 2e-4 relative. Detection bias (~0.03 px over a 640 px half
   // width, 5e-5) plus the noise of a small session (sigmas ~5e-5 here).
   for (int i = 0; i < 2; ++i) {
