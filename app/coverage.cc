@@ -68,10 +68,25 @@ CoverageReport ComputeCoverage(const Observations& obs, const InstrumentModel& m
       for (int k = 0; k < camera::kNumDistortion; ++k) {
         const double x = cam.distortion[k], s = model.sigmas.distortion[z][k];
         if (s > 0 && s > std::abs(x)) {
+          // What one sigma means in the image: the shift it gives at the
+          // image corner (radial terms k r^(2n) on a radius r; tangential
+          // ones at most 3 p r^2), so that a coefficient that is merely
+          // near zero can be told from one that moves pixels.
+          const double r = corner_r / cam.intrinsics[0];
+          double shift = -1;
+          if (k == 0) shift = s * std::pow(r, 3);
+          if (k == 1) shift = s * std::pow(r, 5);
+          if (k == 4) shift = s * std::pow(r, 7);
+          if (k == 2 || k == 3) shift = 3 * s * r * r;
+          char effect[96] = "";
+          if (shift >= 0) {
+            std::snprintf(effect, sizeof effect, "; 1 sigma moves the image corner by %.2g px",
+                          shift * cam.intrinsics[0]);
+          }
           std::snprintf(line, sizeof line,
                         "zoom %d: distortion %s = %.3g +- %.3g is badly determined (relative "
-                        "sigma %.1f > 1)",
-                        z, kDistortionNames[k], x, s, x != 0 ? s / std::abs(x) : INFINITY);
+                        "sigma %.1f > 1%s)",
+                        z, kDistortionNames[k], x, s, x != 0 ? s / std::abs(x) : INFINITY, effect);
           out.warnings.push_back(line);
         }
       }

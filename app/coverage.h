@@ -12,7 +12,10 @@
 //     grid's corners) without points: the distortion polynomial is evaluated
 //     at the image's corners beyond the data;
 //   * badly determined: a fitted distortion coefficient whose sigma exceeds
-//     its absolute value (relative sigma > 1), naming coefficient and zoom.
+//     its absolute value (relative sigma > 1), naming coefficient and zoom,
+//     with the shift one sigma gives at the image corner (k1, k2, k3, p1,
+//     p2), so that a coefficient merely near zero (a small shift) can be told
+//     from one that leaves the outer image undetermined.
 #pragma once
 
 #include <string>

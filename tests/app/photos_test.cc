@@ -34,8 +34,7 @@ class PhotoSession : public ::testing::Test {
     fs::remove_all(work_);
     fs::create_directories(work_);
     try {
-      RunSettings demo =
-          LoadRunSettings(std::string(RTSCALIB_SOURCE_DIR) + "/configs/zoom3.yaml");
+      RunSettings demo = LoadRunSettings(std::string(RTSCALIB_SOURCE_DIR) + "/configs/zoom3.yaml");
       SimulationOptions sim = *demo.config.simulate;
       // Small: zoom 0 only, 2 shots per board (the plan adds the positions
       // the image's middle needs), a coarse grid of records.
@@ -152,9 +151,9 @@ TEST_F(PhotoSession, BoardsWithoutPoseAreRefusedClearlyForNow) {
          "0.015}\n";
   Observations obs;
   Progress progress(true);
-  const PhotoSessionSummary s = LoadPhotoSession((photos_ / "shots.csv").string(),
-                                                 (photos_ / "targets_unknown.yaml").string(), 1,
-                                                 &obs, &progress);
+  const PhotoSessionSummary s =
+      LoadPhotoSession((photos_ / "shots.csv").string(),
+                       (photos_ / "targets_unknown.yaml").string(), 1, &obs, &progress);
   EXPECT_EQ(s.boards_without_pose, 4);
   ASSERT_FALSE(obs.pixels.empty());
   for (const PixelObservation& p : obs.pixels) EXPECT_FALSE(p.X_known);

@@ -508,8 +508,8 @@ TEST(Config, ShotsAndTargetsAreReadRelativeToTheConfig) {
   TempDir dir;
   dir.Write("shots.csv", "face,zoom,phi,theta,image\n");
   dir.Write("targets.yaml", "boards: []\n");
-  const std::string path = dir.Write(
-      "run.yaml", "data: {shots: shots.csv, targets: targets.yaml}\ndetect: {jobs: 3}\n");
+  const std::string path =
+      dir.Write("run.yaml", "data: {shots: shots.csv, targets: targets.yaml}\ndetect: {jobs: 3}\n");
   const RunConfig c = LoadConfig(path);
   EXPECT_EQ(c.shots_path, dir.Path("shots.csv"));
   EXPECT_EQ(c.targets_path, dir.Path("targets.yaml"));
