@@ -630,9 +630,9 @@ Figure CoverageFigure(const ZoomCoverage& c, const Observations& obs) {
   cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
   Put(img,
       "zoom " + std::to_string(c.zoom) + ": " + std::to_string(c.points) + " points, " +
-          Fmt("%.0f", 100 * c.covered_fraction) + "% of the cells, radius " +
-          Fmt("%.0f", 100 * c.radius_fraction) + "% of the corner's",
-      cv::Point(left, 25), 0.5);
+          Fmt("%.0f", 100 * c.covered_fraction) + "% of cells, radius " +
+          Fmt("%.0f", 100 * c.radius_fraction) + "% of corner",
+      cv::Point(left, 25), 0.45);
   Put(img, std::to_string(c.width) + " x " + std::to_string(c.height) + " px",
       cv::Point(left, top + panel_h + 25), 0.45);
   Figure f;
