@@ -85,6 +85,7 @@ int RunCalibration(const RunArgs& args) {
   RunSettings settings = LoadRunSettings(args.config);
   RunConfig& config = settings.config;
   if (!args.output.empty()) config.output_dir = std::filesystem::absolute(args.output).string();
+  if (args.jobs > 0) config.detect_jobs = args.jobs;
   if (!args.write_config.empty()) {
     if (std::filesystem::exists(args.write_config)) {
       throw std::invalid_argument("--write-config: '" + args.write_config +
