@@ -2,7 +2,8 @@
 // module's section) -> the observations (data files, or the simulator and,
 // with a `render` section, rendered shots and detected tags) -> the
 // calibration (Calibrate, libcalib/calibrate). Writes no files besides the
-// rendered images; app/report*.cc turn the result into files.
+// rendered photo session (<work_dir>/photos); app/report*.cc turn the result
+// into files.
 #pragma once
 
 #include <optional>
