@@ -13,6 +13,7 @@ struct RunArgs {
   bool quiet = false;
   bool diagnose = false;       // `rtscalib diagnose`: diagnosis on, print it instead of the tables
   bool diagnose_auto = false;  // --auto: forward stepwise (diagnose.auto)
+  int jobs = 0;                // --jobs: detection threads for data.shots (0 = detect.jobs)
 };
 int RunCalibration(const RunArgs& args);
 // `rtscalib diagnose --config X [--auto]` (app/diagnose_command.cc).

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
+#include "app/coverage.h"
 
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/model/kinematics.h"
@@ -585,8 +586,71 @@ std::vector<unsigned char> EncodePng(const cv::Mat& image) {
   return out;
 }
 
+// ---------------------------------------------------------------------------
+// Image coverage per zoom (app/coverage.h): points per cell of the image and
+// every observed point, with the 3x3 ninths whose corners the distortion
+// needs.
+
+Figure CoverageFigure(const ZoomCoverage& c, const Observations& obs) {
+  const int panel_w = 480;
+  const int panel_h =
+      std::max(1, static_cast<int>(std::lround(panel_w * double(c.height) / std::max(1, c.width))));
+  const int left = 30, top = 40;
+  cv::Mat img(panel_h + top + 60, panel_w + 2 * left, CV_8UC3, kWhite);
+  const cv::Mat lut = ViridisLut();
+  const int vmax = std::max(1, *std::max_element(c.counts.begin(), c.counts.end()));
+  for (int j = 0; j < kCoverageCells; ++j) {
+    for (int i = 0; i < kCoverageCells; ++i) {
+      const int n = c.counts[j * kCoverageCells + i];
+      const cv::Rect r(left + i * panel_w / kCoverageCells, top + j * panel_h / kCoverageCells,
+                       panel_w / kCoverageCells, panel_h / kCoverageCells);
+      if (n == 0) {
+        Hatch(img, r);
+      } else {
+        cv::rectangle(img, r, ColourOf(lut, 0.25 + 0.75 * std::log1p(n) / std::log1p(vmax)),
+                      cv::FILLED);
+      }
+    }
+  }
+  const double sx = double(panel_w) / std::max(1, c.width),
+               sy = double(panel_h) / std::max(1, c.height);
+  for (const PixelObservation& p : obs.pixels) {
+    if (p.zoom != c.zoom) continue;
+    cv::circle(img, cv::Point(left + int(p.uv.x() * sx), top + int(p.uv.y() * sy)), 1, kWhite,
+               cv::FILLED);
+  }
+  for (int k = 1; k < 3; ++k) {
+    cv::line(img, cv::Point(left + k * panel_w / 3, top),
+             cv::Point(left + k * panel_w / 3, top + panel_h), kInk, 1);
+    cv::line(img, cv::Point(left, top + k * panel_h / 3),
+             cv::Point(left + panel_w, top + k * panel_h / 3), kInk, 1);
+  }
+  cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
+  Put(img,
+      "zoom " + std::to_string(c.zoom) + ": " + std::to_string(c.points) + " points, " +
+          Fmt("%.0f", 100 * c.covered_fraction) + "% of cells, radius " +
+          Fmt("%.0f", 100 * c.radius_fraction) + "% of corner",
+      cv::Point(left, 25), 0.45);
+  Put(img, std::to_string(c.width) + " x " + std::to_string(c.height) + " px",
+      cv::Point(left, top + panel_h + 25), 0.45);
+  Figure f;
+  f.name = "coverage_zoom" + std::to_string(c.zoom) + ".png";
+  f.section = "image";
+  f.title = "Image coverage, zoom " + std::to_string(c.zoom);
+  f.caption =
+      "Where the observed points fell in the image: points per cell (colour, log scale; hatched "
+      "= none) and each point (white). The distortion polynomial is only determined where "
+      "points are: empty corner ninths mean it is extrapolated there.";
+  f.image = img;
+  return f;
+}
+
+// ---------------------------------------------------------------------------
 std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   std::vector<Figure> figs;
+  for (const ZoomCoverage& c : ComputeCoverage(r.obs, r.calibration.model).zooms) {
+    figs.push_back(CoverageFigure(c, r.obs));
+  }
   if (!r.calibration.diagnosis) return figs;
   const Diagnosis& d = *r.calibration.diagnosis;
   const std::string model = d.model_description;

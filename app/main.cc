@@ -41,6 +41,9 @@ int main(int argc, char** argv) {
   app.add_option("--write-config", run.write_config,
                  "also write the effective config to this new file");
   app.add_flag("--quiet", run.quiet, "no progress lines on stderr");
+  app.add_option("--jobs", run.jobs,
+                 "threads detecting the photos of data.shots (overrides detect.jobs)")
+      ->check(CLI::PositiveNumber);
 
   rtscalib::app::PredictArgs predict;
   CLI::App* pred =

@@ -23,7 +23,7 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
                               PipelineResult* result, Progress* progress) {
   const RunConfig& config = settings.config;
   Observations obs;
-  if (!config.records_path.empty() || !config.pixels_path.empty()) {
+  if (!config.records_path.empty() || !config.pixels_path.empty() || !config.shots_path.empty()) {
     progress->Step("reading observations");
     if (!config.records_path.empty()) {
       RecordsFile f = ReadRecords(config.records_path);
@@ -38,6 +38,11 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
       obs.pixels_source = config.pixels_path;
       for (const std::string& n : f.notes) progress->Note(n);
       result->notes.insert(result->notes.end(), f.notes.begin(), f.notes.end());
+    }
+    if (!config.shots_path.empty()) {
+      result->photos = LoadPhotoSession(config.shots_path, config.targets_path, config.detect_jobs,
+                                        &obs, progress);
+      for (const std::string& w : result->photos.warnings) result->notes.push_back("warning: " + w);
     }
     return obs;
   }
@@ -54,9 +59,20 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
   progress->Note(std::to_string(data.obs.records.size()) + " records, " +
                  std::to_string(data.obs.pixels.size()) + " pixel observations");
   if (settings.render.enabled && !sim.targets.boards.empty()) {
-    result->render = RenderAndDetect(settings.render, sim.truth, sim.targets, work_dir + "/images",
-                                     &data.obs, progress);
+    result->render = RenderSession(settings.render, sim.truth, sim.targets, data.obs.pixels,
+                                   work_dir + "/photos", progress);
     if (!result->render.note.empty()) result->notes.push_back(result->render.note);
+    if (result->render.ran) {
+      // The user's path: the simulator's exact pixels are dropped, the
+      // written photos are detected as data.shots would be.
+      data.obs.pixels.clear();
+      data.obs.image_sizes.clear();
+      result->photos = LoadPhotoSession(result->render.shots_path, result->render.targets_path,
+                                        settings.render.jobs, &data.obs, progress);
+      for (const std::string& w : result->photos.warnings) result->notes.push_back("warning: " + w);
+      result->render.detect_seconds = result->photos.seconds;
+      CompareWithExact(data.obs.pixels, &result->render, progress);
+    }
   }
   return std::move(data.obs);
 }

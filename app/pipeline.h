@@ -2,13 +2,15 @@
 // module's section) -> the observations (data files, or the simulator and,
 // with a `render` section, rendered shots and detected tags) -> the
 // calibration (Calibrate, libcalib/calibrate). Writes no files besides the
-// rendered images; app/report*.cc turn the result into files.
+// rendered photo session (<work_dir>/photos); app/report*.cc turn the result
+// into files.
 #pragma once
 
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "app/photo_session.h"
 #include "app/progress.h"
 #include "app/render_stage.h"
 #include "libcalib/calibrate/calibrate.h"
@@ -36,14 +38,19 @@ struct PipelineResult {
   bool simulated = false;
   std::optional<InstrumentModel> truth;  // only for simulated data, for the report
   RenderStageResult render;              // synthetic shots, when the config renders
+  // The photos read (data.shots, or the session the render stage wrote).
+  PhotoSessionSummary photos;
   CalibrationResult calibration;
   // Notes of reading or acquiring the observations, then the calibration's.
   std::vector<std::string> notes;
 };
 
-// The observations of a config: the data files, or the simulate section
-// (rendered and detected when the config renders) when there are none.
-// `work_dir` receives what acquisition produces (rendered images).
+// The observations of a config: the data files (records, pixels, and the
+// photos of data.shots with data.targets, detected here), or the simulate
+// section when there are none. A simulate section with a `render` section
+// writes a photo session into <work_dir>/photos (app/render_stage.h) and
+// reads it back through the same code as data.shots: its pixels are the
+// detected corners, never the simulator's own.
 Observations LoadObservations(const RunSettings& settings, const std::string& work_dir,
                               PipelineResult* result, Progress* progress);
 

@@ -1,9 +1,13 @@
 #include "app/render_stage.h"
 
-#include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <map>
+#include <set>
+#include <tuple>
 
+#include "libcalib/io/csv.h"
+#include "libcalib/io/targets_io.h"
 #include "libcalib/model/kinematics.h"
 
 #ifdef RTSCALIB_WITH_RENDER
@@ -12,22 +16,22 @@
 
 namespace rtscalib::app {
 
-RenderStageResult RenderAndDetect(const render::RenderSettings& settings,
-                                  const InstrumentModel& truth, const TargetScene& scene,
-                                  const std::string& image_dir, Observations* obs,
-                                  Progress* progress) {
+RenderStageResult RenderSession(const render::RenderSettings& settings,
+                                const InstrumentModel& truth, const TargetScene& scene,
+                                const std::vector<PixelObservation>& exact,
+                                const std::string& image_dir, Progress* progress) {
   RenderStageResult out;
   out.image_dir = image_dir;
 #ifndef RTSCALIB_WITH_RENDER
+  (void)settings, (void)truth, (void)scene, (void)exact, (void)progress;
   out.note = "this build has no renderer (RTSCALIB_WITH_RENDER=OFF): exact projections used";
   return out;
 #else
   // One shot per distinct shot id of the simulated pixel observations.
   std::vector<render::Shot> shots;
-  std::map<std::string, int> seen;
-  for (const PixelObservation& p : obs->pixels) {
-    if (seen.count(p.shot)) continue;
-    seen[p.shot] = static_cast<int>(shots.size());
+  std::set<std::string> seen;
+  for (const PixelObservation& p : exact) {
+    if (!seen.insert(p.shot).second) continue;
     render::Shot s;
     s.face = p.face;
     s.zoom = p.zoom;
@@ -55,32 +59,65 @@ RenderStageResult RenderAndDetect(const render::RenderSettings& settings,
   const render::RenderShotsResult rendered = render::RenderShots(scene, shots, ro);
   out.render_seconds = rendered.seconds;
 
-  progress->Step("detecting AprilTags in " + std::to_string(shots.size()) + " images");
-  const auto t0 = std::chrono::steady_clock::now();
-  render::DetectShotsOptions dopt;
-  dopt.detector.families = {settings.family};
-  dopt.jobs = settings.jobs;
-  dopt.progress = !progress->quiet();
-  // The truth only counts what was expected; it never filters what the
-  // calibration sees, as with a real instrument.
-  dopt.match.max_corner_error_px = 1e9;
-  const render::DetectShotsResult det = render::DetectShots(scene, shots, image_dir, dopt);
-  out.detect_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // RenderShots wrote shots.csv (SPEC 7 columns plus `index`); the boards as a
+  // user would describe them, and the truth apart.
+  namespace fs = std::filesystem;
+  out.shots_path = (fs::path(image_dir) / render::ShotsTableName(0, 1)).string();
+  out.targets_path = (fs::path(image_dir) / "targets.yaml").string();
+  WriteTargets(out.targets_path, scene, settings.board_poses_known,
+               settings.board_poses_known
+                   ? "Boards of the rendered session, with their (true) surveyed poses."
+                   : "Boards of the rendered session; their poses are estimated with the "
+                     "instrument\n(the truth is in truth_targets.yaml).");
+  WriteTargets((fs::path(image_dir) / "truth_targets.yaml").string(), scene, true,
+               "The boards' true poses of the rendered session (for tests; a user has no such "
+               "file).");
   out.ran = true;
   out.shots = static_cast<int>(shots.size());
-  out.expected_tags = det.total.expected;
-  out.found_tags = det.total.found;
-  out.skipped_border = det.total.skipped_border;
-  out.skipped_grazing = det.total.skipped_grazing;
-  out.skipped_small = det.total.skipped_small;
-  out.detection_rms_px = det.total.rms_error_px;
-  obs->pixels = det.pixels;
-  obs->pixels_source = image_dir + " (detected)";
-  progress->Note(std::to_string(out.found_tags) + " of " + std::to_string(out.expected_tags) +
-                 " visible tags found; detected corners vs exact projections: RMS " +
-                 std::to_string(out.detection_rms_px) + " px");
   return out;
 #endif
+}
+
+void CompareWithExact(const std::vector<PixelObservation>& detected, RenderStageResult* result,
+                      Progress* progress) {
+  const std::string path = (std::filesystem::path(result->image_dir) / "exact.csv").string();
+  const CsvTable t = CsvTable::Read(path, {{"shot", "target", "corner", "u", "v", "status"}, {}});
+  using Key = std::pair<std::string, int>;  // shot, tag
+  std::map<Key, std::string> status;
+  std::map<std::tuple<std::string, int, int>, Eigen::Vector2d> uv;
+  for (int r = 0; r < t.NumRows(); ++r) {
+    const Key k{t.Text(r, "shot"), static_cast<int>(t.Integer(r, "target"))};
+    status[k] = t.Text(r, "status");
+    uv[{k.first, k.second, static_cast<int>(t.Integer(r, "corner"))}] =
+        Eigen::Vector2d(t.Number(r, "u"), t.Number(r, "v"));
+  }
+  std::set<Key> found;
+  double sq = 0;
+  int n = 0;
+  for (const PixelObservation& p : detected) {
+    const Key k{p.shot, p.target};
+    const auto s = status.find(k);
+    if (s == status.end() || s->second != "visible") continue;
+    found.insert(k);
+    const auto e = uv.find({p.shot, p.target, p.corner});
+    if (e == uv.end()) continue;
+    sq += (p.uv - e->second).squaredNorm();
+    ++n;
+  }
+  result->expected_tags = result->found_tags = 0;
+  result->skipped_border = result->skipped_grazing = result->skipped_small = 0;
+  for (const auto& [k, s] : status) {
+    if (s == "visible") ++result->expected_tags;
+    if (s == "border") ++result->skipped_border;
+    if (s == "grazing") ++result->skipped_grazing;
+    if (s == "small") ++result->skipped_small;
+  }
+  result->found_tags = static_cast<int>(found.size());
+  result->detection_rms_px = n > 0 ? std::sqrt(sq / n) : 0.0;
+  progress->Note(std::to_string(result->found_tags) + " of " +
+                 std::to_string(result->expected_tags) +
+                 " visible tags found; detected corners vs exact projections: RMS " +
+                 std::to_string(result->detection_rms_px) + " px");
 }
 
 }  // namespace rtscalib::app

@@ -1,8 +1,15 @@
-// Synthetic calibration shots in the run (docs/rendering.md): the
-// simulated instrument's shots are rendered with VTK as its camera would see
-// them (render/), AprilTags are detected in the images, and the detections
-// replace the exact projections as the run's pixel observations, so that the
-// calibration sees what it would see from a real instrument.
+// Synthetic calibration shots in the run: the simulated instrument's shots
+// are rendered with VTK as its camera would see them (render/) and written as
+// a photo session exactly as a user's instrument would give it (SPEC 7):
+//   <image_dir>/<shot>.png          the photos
+//   <image_dir>/shots.csv           face, zoom, phi, theta, image, shot (+ index)
+//   <image_dir>/targets.yaml        the boards; poses only with
+//                                   render.board_poses: known
+//   <image_dir>/truth_targets.yaml  the boards with their true poses (for tests)
+//   <image_dir>/exact.csv           the exact projections (for tests)
+// The session is then read back through the same code as `data.shots`
+// (app/photo_session.h), so that the calibration sees what it would see from
+// a real instrument.
 #pragma once
 
 #include <string>
@@ -24,14 +31,21 @@ struct RenderStageResult {
   double render_seconds = 0, detect_seconds = 0;
   std::string image_dir;
   std::string note;
+  std::string shots_path, targets_path;  // the written session (empty when not rendered)
 };
 
-// Renders every shot in obs->pixels (shot id, zoom, face, phi, theta) with the
-// truth's camera poses, detects the tags and replaces obs->pixels by the
-// detections. Without VTK in the build, returns ran = false with a note.
-RenderStageResult RenderAndDetect(const render::RenderSettings& settings,
-                                  const InstrumentModel& truth, const TargetScene& scene,
-                                  const std::string& image_dir, Observations* obs,
-                                  Progress* progress);
+// Renders every shot in `exact` (shot id, zoom, face, phi, theta) with the
+// truth's camera poses and writes the session into image_dir. Without VTK in
+// the build, returns ran = false with a note.
+RenderStageResult RenderSession(const render::RenderSettings& settings,
+                                const InstrumentModel& truth, const TargetScene& scene,
+                                const std::vector<PixelObservation>& exact,
+                                const std::string& image_dir, Progress* progress);
+
+// After the session was read back (obs->pixels from the photos): how the
+// detections compare with the exact projections in image_dir/exact.csv
+// (tags expected = visible ones, found, skipped by reason, corner RMS).
+void CompareWithExact(const std::vector<PixelObservation>& detected, RenderStageResult* result,
+                      Progress* progress);
 
 }  // namespace rtscalib::app

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "app/coverage.h"
 #include "app/diagnosis_report.h"
 #include "libcalib/model/kinematics.h"
 
@@ -269,6 +270,62 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                       {"detect_seconds", r.render.detect_seconds},
                       {"images", r.render.image_dir}};
   }
+  if (r.photos.ran) {
+    const PhotoSessionSummary& p = r.photos;
+    json photos = json::array();
+    for (const PhotoSessionSummary::Photo& ph : p.photos) {
+      photos.push_back({{"line", ph.line},
+                        {"shot", ph.shot},
+                        {"image", ph.image},
+                        {"face", ph.face},
+                        {"zoom", ph.zoom},
+                        {"width", ph.width},
+                        {"height", ph.height},
+                        {"tags", ph.tags},
+                        {"tags_of_boards", ph.tags_of_boards},
+                        {"shift_rms_px", ph.shift_rms_px}});
+    }
+    j["photos"] = {{"shots", p.shots_path},
+                   {"targets", p.targets_path},
+                   {"boards_with_pose", p.boards_with_pose},
+                   {"boards_without_pose", p.boards_without_pose},
+                   {"photos", static_cast<int>(p.photos.size())},
+                   {"photos_without_tags", p.photos_without_tags},
+                   {"tags", p.tags},
+                   {"corners", p.corners},
+                   {"dropped",
+                    {{"unrefined", p.unrefined},
+                     {"not_on_boards", p.not_on_boards},
+                     {"duplicates", p.duplicates}}},
+                   {"detection_check",
+                    {{"refined_vs_apriltag_rms_px", p.shift_rms_px},
+                     {"refined_vs_apriltag_max_px", p.shift_max_px}}},
+                   {"seconds", p.seconds},
+                   {"images_per_second", p.images_per_second},
+                   {"jobs", p.jobs},
+                   {"per_photo", photos},
+                   {"warnings", p.warnings}};
+  }
+  {
+    json sizes = json::object();
+    for (const auto& [z, source] : r.calibration.size_source) {
+      const CameraTool& c = r.calibration.model.cams.at(z);
+      sizes[std::to_string(z)] = {{"width", c.width}, {"height", c.height}, {"source", source}};
+    }
+    j["image_sizes"] = sizes;
+    const CoverageReport cov = ComputeCoverage(r.obs, r.calibration.model);
+    json zooms = json::array();
+    for (const ZoomCoverage& c : cov.zooms) {
+      zooms.push_back({{"zoom", c.zoom},
+                       {"points", c.points},
+                       {"cells", kCoverageCells},
+                       {"counts", c.counts},
+                       {"covered_fraction", c.covered_fraction},
+                       {"radius_fraction", c.radius_fraction},
+                       {"corners_covered", c.corners_covered}});
+    }
+    j["coverage"] = {{"zooms", zooms}, {"warnings", cov.warnings}};
+  }
   j["notes"] = r.notes;
   j["history"] = HistoryJson(out);
   return j;
@@ -403,6 +460,44 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
       << " at the border, " << r.render.skipped_grazing << " grazing, " << r.render.skipped_small
       << " too small); detected vs exact corners RMS " << Fmt("%.3f", r.render.detection_rms_px)
       << " px\n\n";
+  }
+  if (r.photos.ran) {
+    const PhotoSessionSummary& p = r.photos;
+    o << "Photos (" << p.shots_path << ", boards " << p.targets_path << ": " << p.boards_with_pose
+      << " with pose, " << p.boards_without_pose << " without): " << p.photos.size() << " photos, "
+      << p.tags << " tags, " << p.corners << " corners, " << p.photos_without_tags
+      << " photos without tags; dropped " << p.unrefined << " unrefined, " << p.not_on_boards
+      << " not on a board, " << p.duplicates << " duplicated; detection check (refined vs "
+      << "libapriltag corners) RMS " << Fmt("%.3f", p.shift_rms_px) << " px, max "
+      << Fmt("%.3f", p.shift_max_px) << " px; " << Fmt("%.1f", p.images_per_second)
+      << " images/s with " << p.jobs << " job(s)\n";
+    o << "  line  shot                      zoom face  size         tags     shift_rms\n";
+    for (const PhotoSessionSummary::Photo& ph : p.photos) {
+      char row[256];
+      std::snprintf(row, sizeof row, "  %4d  %-24s  %4d %4d  %5dx%-5d  %3d/%-3d  %.3f px\n",
+                    ph.line, ph.shot.c_str(), ph.zoom, ph.face, ph.width, ph.height, ph.tags,
+                    ph.tags_of_boards, ph.shift_rms_px);
+      o << row;
+    }
+    for (const std::string& w : p.warnings) o << "  WARNING: " << w << "\n";
+    o << "\n";
+  }
+  {
+    const CoverageReport cov = ComputeCoverage(r.obs, r.calibration.model);
+    if (!cov.zooms.empty()) {
+      o << "Image coverage (" << kCoverageCells << "x" << kCoverageCells << " cells):\n";
+      for (const ZoomCoverage& c : cov.zooms) {
+        const auto src = r.calibration.size_source.find(c.zoom);
+        o << "  zoom " << c.zoom << ": " << c.width << "x" << c.height << " px ("
+          << (src == r.calibration.size_source.end() ? "?" : src->second) << "), " << c.points
+          << " points, " << Fmt("%.0f", 100 * c.covered_fraction) << "% of the image covered, "
+          << "largest radius " << Fmt("%.0f", 100 * c.radius_fraction)
+          << "% of the corner's, corners " << (c.corners_covered ? "covered" : "NOT covered")
+          << "\n";
+      }
+      for (const std::string& w : cov.warnings) o << "  WARNING: " << w << "\n";
+      o << "\n";
+    }
   }
   o << "Final (all observations): EDM " << stats(f.edm) << " m (n=" << f.edm.n << "), camera "
     << stats(f.cam) << " m (n=" << f.cam.n << ")";

@@ -1,4 +1,5 @@
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 
 #include "app/commands.h"
@@ -46,6 +47,16 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
                         {"pixels", result.obs.pixels_source}};
   WriteFileAtomicWith(out.RunFile("model.yaml"), [&](const std::string& tmp) {
     WriteModelYaml(tmp, result.calibration.model, meta);
+    // Where each zoom's width/height came from (SPEC 7): a YAML comment, so
+    // that model.yaml's readers are unaffected.
+    std::ofstream f(tmp, std::ios::app);
+    for (const auto& [z, source] : result.calibration.size_source) {
+      f << "# cameras[" << z << "] size_source: " << source
+        << (source == "estimated" ? " (width/height guessed: no photos, no model.cameras)" : "")
+        << "\n";
+    }
+    f.close();
+    if (!f) throw std::runtime_error("could not write " + tmp);
   });
   const nlohmann::json report = ReportJson(config, result, out);
   out.Write("report.json", report.dump(2) + "\n");
@@ -74,6 +85,7 @@ int RunCalibration(const RunArgs& args) {
   RunSettings settings = LoadRunSettings(args.config);
   RunConfig& config = settings.config;
   if (!args.output.empty()) config.output_dir = std::filesystem::absolute(args.output).string();
+  if (args.jobs > 0) config.detect_jobs = args.jobs;
   if (!args.write_config.empty()) {
     if (std::filesystem::exists(args.write_config)) {
       throw std::invalid_argument("--write-config: '" + args.write_config +

@@ -51,6 +51,11 @@ RenderSettings ReadRenderSettings(const YamlNode& section) {
   section.Read("blur_sigma", &s.blur_sigma);
   section.Read("exposure", &s.exposure);
   section.Read("family", &s.family);
+  if (const std::optional<YamlNode> n = section.Find("board_poses")) {
+    const std::string v = n->AsString();
+    if (v != "known" && v != "unknown") n->FailChoice({"known", "unknown"});
+    s.board_poses_known = v == "known";
+  }
   for (const Rule& rule : Rules()) {
     // A default always passes, so a failing rule has its key in the file.
     if (!rule.ok(s)) section.Require(rule.key).Fail(rule.expected);
@@ -68,6 +73,7 @@ YAML::Node RenderSettingsYaml(const RenderSettings& s) {
   n["blur_sigma"] = YamlDouble(s.blur_sigma, /*shortest=*/true);
   n["exposure"] = YamlDouble(s.exposure, /*shortest=*/true);
   n["family"] = s.family;
+  n["board_poses"] = s.board_poses_known ? "known" : "unknown";
   return n;
 }
 

@@ -24,6 +24,11 @@ struct RenderSettings {
   double blur_sigma = 0.0;          // Gaussian optical blur [px]
   double exposure = 1.0;            // gain on all grey levels before the noise
   std::string family = "tag36h11";  // AprilTag family searched for
+  // Whether the targets.yaml of the written photo session gives the boards'
+  // poses (`known`, as if surveyed) or leaves them out (`unknown`, as a user
+  // without a tracker has them: estimated with everything else, SPEC 7).
+  // The truth poses are always written to truth_targets.yaml for tests.
+  bool board_poses_known = true;
   // Empty if valid, else "render.<key>: expected ...".
   std::string Check() const;
 };

@@ -12,6 +12,7 @@
 #include "libcalib/fit/start_models.h"
 #include "libcalib/fit/two_face.h"
 #include "libcalib/fit/unknowns.h"
+#include "libcalib/io/errors.h"
 #include "libcalib/model/kinematics.h"
 #include "libcalib/screen/screen.h"
 
@@ -75,6 +76,48 @@ void ReadTwoFaceDifferences(const Observations& obs, FaceComparison* f) {
   f->valid = true;
   if (!edm)
     f->note = "read along zoom " + std::to_string(zoom) + "'s optical axis (no EDM records)";
+}
+
+// SPEC 7: image sizes come from the images or model.cameras. Photos of a
+// zoom whose configured camera has another size are a contradiction.
+void CheckImageSizes(const Observations& obs, const CalibrationOptions& options) {
+  for (const auto& [z, size] : obs.image_sizes) {
+    if (z >= static_cast<int>(options.model.cameras.size())) continue;
+    const CameraTool& c = options.model.cameras[z];
+    if (c.width != size.width || c.height != size.height) {
+      throw InputError::File(
+          obs.pixels_source, 0, "image size of zoom " + std::to_string(z),
+          "the size of model.cameras[" + std::to_string(z) + "] (" + std::to_string(c.width) +
+              " x " + std::to_string(c.height) + ")",
+          std::to_string(size.width) + " x " + std::to_string(size.height) + " px in the photos");
+    }
+  }
+}
+
+// Sets every zoom's width and height in `model` from the photos or the
+// configured cameras; records where each came from in result->size_source.
+void ApplyImageSizes(const Observations& obs, const CalibrationOptions& options,
+                     InstrumentModel* model, CalibrationResult* result) {
+  for (int z = 0; z < model->NumZooms(); ++z) {
+    CameraTool& cam = model->cams[z];
+    if (const auto it = obs.image_sizes.find(z); it != obs.image_sizes.end()) {
+      cam.width = it->second.width;
+      cam.height = it->second.height;
+      if (result != nullptr) result->size_source[z] = "images";
+    } else if (z < static_cast<int>(options.model.cameras.size())) {
+      cam.width = options.model.cameras[z].width;
+      cam.height = options.model.cameras[z].height;
+      if (result != nullptr) result->size_source[z] = "config";
+    } else if (result != nullptr && !result->size_source.count(z)) {
+      result->size_source[z] = "estimated";
+      result->notes.push_back(
+          "zoom " + std::to_string(z) + ": image size " + std::to_string(cam.width) + " x " +
+          std::to_string(cam.height) +
+          " px ESTIMATED from the principal point and the pixels (no photos, no "
+          "model.cameras entry); give model.cameras[" +
+          std::to_string(z) + "] width/height or data.shots for the true size");
+    }
+  }
 }
 
 // Options of the start from pixels alone (and of a zoom's camera from
@@ -373,6 +416,7 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   const std::string problem = options.Check();
   if (!problem.empty()) throw std::invalid_argument("calibration options: " + problem);
 
+  CheckImageSizes(obs, options);
   CalibrationResult result;
   result.notes = ScreenObservations(obs, options.model.cameras, options.screen);
   // The extraction needs records of known points; records of points of
@@ -382,8 +426,13 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   for (const Record& r : obs.records) {
     if (r.point.empty()) known.records.push_back(r);
   }
-  if (!known.records.empty()) ExtractAndSimplify(known, options, progress, &result);
+  if (!known.records.empty()) {
+    ExtractAndSimplify(known, options, progress, &result);
+    ApplyImageSizes(obs, options, &result.extraction->model, nullptr);
+    ApplyImageSizes(obs, options, &*result.simplified, nullptr);
+  }
   result.start = StartModel(obs, options, progress, &result);
+  ApplyImageSizes(obs, options, &result.start, &result);
 
   // Table 4: the extracted and simplified models on the reduced set.
   const std::vector<Record> reduced = ReducedRecords(obs.records, result.extraction);

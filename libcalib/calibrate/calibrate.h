@@ -20,6 +20,7 @@
 // CalibrationProgress, the caller writes the reports.
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -98,6 +99,12 @@ struct CalibrationResult {
   FitSummary fit;
   std::optional<Diagnosis> diagnosis;  // absent when off or failed (see notes)
   FinalErrors final_errors;
+  // Per zoom of the model, where its image size came from (SPEC 7: never
+  // guessed from where the points fall): "images" (Observations::image_sizes,
+  // read from the photos), "config" (model.cameras) or "estimated" (neither:
+  // records-only data; the size is the extraction's guess from the principal
+  // point and the pixels, and a note says so).
+  std::map<int, std::string> size_source;
   std::vector<std::string> notes;
 
   // True when the ladder extended the model beyond the configured one, so

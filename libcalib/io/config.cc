@@ -192,7 +192,9 @@ void ReadCameraFields(const YamlNode& m, bool required, CameraTool* cam) {
 
 void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) {
   for (auto [key, path] : {std::pair<const char*, std::string*>{"records", &out->records_path},
-                           std::pair<const char*, std::string*>{"pixels", &out->pixels_path}}) {
+                           std::pair<const char*, std::string*>{"pixels", &out->pixels_path},
+                           std::pair<const char*, std::string*>{"shots", &out->shots_path},
+                           std::pair<const char*, std::string*>{"targets", &out->targets_path}}) {
     if (const std::optional<YamlNode> n = m.Find(key)) {
       const std::string resolved = Resolve(config_dir, n->AsString());
       std::error_code ec;  // e.g. a name too long for the file system: not a file either
@@ -202,6 +204,14 @@ void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) 
       }
       *path = resolved;
     }
+  }
+  // A photo session needs its boards and vice versa (SPEC 7).
+  if (out->shots_path.empty() != out->targets_path.empty()) {
+    const char* given = out->shots_path.empty() ? "targets" : "shots";
+    const char* missing = out->shots_path.empty() ? "shots" : "targets";
+    const YamlNode n = *m.Find(given);
+    n.Fail(std::string("data.") + missing + " next to data." + given +
+           " (the photos and the boards they show come together)");
   }
 }
 
@@ -655,6 +665,9 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
     if (const std::optional<YamlNode> n = root.Find(section.key)) section.read(*n);
   }
   if (const std::optional<YamlNode> n = root.Find("diagnose")) ReadDiagnose(*n, &config.diagnose);
+  if (const std::optional<YamlNode> n = root.Find("detect")) {
+    ReadCount(*n, "jobs", &config.detect_jobs, 1, "detection threads");
+  }
   if (const std::optional<YamlNode> n = root.Find("screen")) ReadScreen(*n, &config.screen);
   std::string output = "out";
   root.Read("output", &output);
@@ -662,10 +675,12 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
 
   doc.CheckAllKeysUsed();
 
-  const bool have_data = !config.records_path.empty() || !config.pixels_path.empty();
+  const bool have_data =
+      !config.records_path.empty() || !config.pixels_path.empty() || !config.shots_path.empty();
   if (!have_data && !simulate) {
     throw InputError::Key(path, "data", 0, 0,
-                          "data.records and/or data.pixels, or a simulate section", "neither");
+                          "data.records, data.pixels and/or data.shots, or a simulate section",
+                          "neither");
   }
   if (have_data && simulate) {
     config.notes.push_back(path +
@@ -677,15 +692,16 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
 std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sections) {
   YAML::Emitter e;
   e << YAML::BeginMap;
-  if (!c.records_path.empty() || !c.pixels_path.empty()) {
+  if (!c.records_path.empty() || !c.pixels_path.empty() || !c.shots_path.empty()) {
     e << YAML::Key << "data" << YAML::Value << YAML::BeginMap;
-    if (!c.records_path.empty()) {
-      e << YAML::Key << "records" << YAML::Value;
-      EmitYamlText(e, c.records_path);
-    }
-    if (!c.pixels_path.empty()) {
-      e << YAML::Key << "pixels" << YAML::Value;
-      EmitYamlText(e, c.pixels_path);
+    for (auto [key, path] :
+         {std::pair<const char*, const std::string*>{"records", &c.records_path},
+          std::pair<const char*, const std::string*>{"pixels", &c.pixels_path},
+          std::pair<const char*, const std::string*>{"shots", &c.shots_path},
+          std::pair<const char*, const std::string*>{"targets", &c.targets_path}}) {
+      if (path->empty()) continue;
+      e << YAML::Key << key << YAML::Value;
+      EmitYamlText(e, *path);
     }
     e << YAML::EndMap;
   }
@@ -740,6 +756,11 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   for (const ConfigSection& section : sections) {
     const YAML::Node node = section.dump();
     if (!node.IsNull()) e << YAML::Key << section.key << YAML::Value << node;
+  }
+  if (c.detect_jobs != 1) {
+    e << YAML::Key << "detect" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    e << YAML::Key << "jobs" << YAML::Value << c.detect_jobs;
+    e << YAML::EndMap;
   }
   e << YAML::Key << "diagnose" << YAML::Value << YAML::Flow << YAML::BeginMap;
   e << YAML::Key << "enabled" << YAML::Value << c.diagnose.enabled;

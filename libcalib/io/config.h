@@ -37,6 +37,11 @@ struct RunConfig {
   std::string config_dir;    // its folder; relative paths start here
   std::string records_path;  // absolute, "" when the config names no records file
   std::string pixels_path;   // absolute, "" when the config names no pixels file
+  // SPEC 7: a photo session (shots.csv + its images) and the boards in the
+  // photos (targets.yaml); absolute, both given or neither.
+  std::string shots_path;
+  std::string targets_path;
+  int detect_jobs = 1;  // detect.jobs: threads detecting the photos
   ModelSettings model;
   // model.intrinsics kFit sets fit.fit_intrinsics; kAuto leaves it false for
   // Calibrate to decide from the data.

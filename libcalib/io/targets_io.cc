@@ -1,8 +1,13 @@
 #include "libcalib/io/targets_io.h"
 
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
 #include <vector>
 
+#include "libcalib/geometry/rotation.h"
 #include "libcalib/io/errors.h"
+#include "libcalib/io/number_text.h"
 #include "libcalib/io/yaml_reader.h"
 
 namespace rtscalib {
@@ -97,6 +102,33 @@ TargetScene ReadTargets(const std::string& path, const std::map<std::string, int
 TargetScene ParseTargets(const std::string& text, const std::string& name,
                          const std::map<std::string, int>* family_codes) {
   return ReadScene(YamlDocument::Parse(text, name), family_codes);
+}
+
+void WriteTargets(const std::string& path, const TargetScene& scene, bool with_poses,
+                  const std::string& comment) {
+  std::ostringstream o;
+  if (!comment.empty()) {
+    std::istringstream lines(comment);
+    for (std::string line; std::getline(lines, line);) o << "# " << line << "\n";
+  }
+  o << "boards:\n";
+  for (const TagBoard& b : scene.boards) {
+    o << "  - {family: " << b.family << ", first_id: " << b.first_id << ", rows: " << b.rows
+      << ", cols: " << b.cols << ", tag_size: " << FormatDouble(b.tag_size)
+      << ", spacing: " << FormatDouble(b.spacing);
+    if (with_poses && b.pose_known) {
+      const Eigen::Vector3d e = EulerFromRotation(b.ref_from_board.rotation);
+      const Eigen::Vector3d& t = b.ref_from_board.translation;
+      o << ",\n     pose: {euler: [" << FormatDouble(e[0]) << ", " << FormatDouble(e[1]) << ", "
+        << FormatDouble(e[2]) << "], t: [" << FormatDouble(t[0]) << ", " << FormatDouble(t[1])
+        << ", " << FormatDouble(t[2]) << "]}";
+    }
+    o << "}\n";
+  }
+  std::ofstream f(path);
+  f << o.str();
+  f.close();
+  if (!f) throw std::runtime_error("could not write " + path);
 }
 
 }  // namespace rtscalib

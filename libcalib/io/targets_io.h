@@ -35,4 +35,12 @@ TargetScene ReadTargets(const std::string& path,
 TargetScene ParseTargets(const std::string& text, const std::string& name,
                          const std::map<std::string, int>* family_codes = nullptr);
 
+// Writes `scene` as targets.yaml (the format above, numbers with 17
+// significant digits so that they read back exactly); boards with
+// pose_known get their pose, the others none. `with_poses == false` leaves
+// every pose out (a photo session whose boards are all to be estimated).
+// Throws std::runtime_error if the file cannot be written.
+void WriteTargets(const std::string& path, const TargetScene& scene, bool with_poses = true,
+                  const std::string& comment = "");
+
 }  // namespace rtscalib

@@ -179,15 +179,32 @@ BoardView ViewOfBoard(const TagBoard& b, int index, const Eigen::Vector3d& origi
 // Shot planning (docs/refinement.md): for every zoom level the boards whose
 // tags fit the view several times and that span a good part of it are used
 // (the best one alone when none qualifies, so every zoom gets shots). Each
-// board gets `shots_per_board` pointings per face on a stratified pattern:
-//   board larger than `fill` of the view: the aim wanders over the board, so
-//     every image is full of tags;
-//   board smaller: the board wanders over the image, so the shots together
-//     cover the whole image (corners and edges too, where distortion shows).
-// Offsets are stratified over a ceil(sqrt(n)) x ceil(sqrt(n)) grid, with a
-// uniform jitter of `pointing_jitter` cells, so that a few shots already span
-// the image. Face-2 shots use the face-2 readings of their own face-1
-// pointings (the same pattern, fresh jitter).
+// board gets `shots_per_board` pointings per face on a stratified pattern,
+// per image axis:
+//   board wider than the view: the aim wanders over the board (half range
+//     board - fill x view), so every image is full of tags;
+//   board narrower: the board centre is placed at chosen image positions,
+//     from the position where the board's edge touches one image edge
+//     (kEdgeReach of the half view, so that its tags stay whole) to the one
+//     where it touches the opposite edge. The positions of a pattern axis
+//     include both ends, so the shots put tags into the image's corners and
+//     along its edges, where distortion is largest: without them the
+//     distortion polynomial would be extrapolated there.
+// Positions are on a k x k grid in [-1, 1] (both ends included), k =
+// ceil(sqrt(n)), and k >= 3 on an axis along which the board spans less than
+// a third of the view (then a board at both ends would leave the middle
+// third empty; the board gets more than n shots), jittered by up to
+// `pointing_jitter` cells and kept in [-1, 1].
+// Face-2 shots use the face-2 readings of their own face-1 pointings (the
+// same pattern, fresh jitter): the image is turned by 180 degrees, so the
+// corners stay covered.
+// How far a board narrower than the view may reach towards the image edge
+// (fraction of the half view): its outer tags stay inside the image.
+constexpr double kEdgeReach = 0.96;
+// Board half extent over half view below which a board at both ends of an
+// axis leaves the middle third of the image without points (with margin).
+constexpr double kMiddleThird = 0.36;
+
 void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedData* data) {
   const InstrumentModel& truth = o.truth;
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -222,15 +239,27 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
         double phi0, theta0;
         AimAt(origin, o.targets.boards[view.board].CentreInRef(), &phi0, &theta0);
         // Half range of the aim offsets (angles off the board centre).
-        const double range_u = std::abs(view.board_u - o.shots.fill * view.fov_u);
-        const double range_v = std::abs(view.board_v - o.shots.fill * view.fov_v);
-        for (int s = 0; s < n; ++s) {
-          // Cell centre in [-1, 1], jittered within its cell.
-          const int iu = s % cells, iv = (s / cells) % cells;
-          const double cu = cells == 1 ? 0.0 : -1.0 + 2.0 * (iu + 0.5) / cells;
-          const double cv = cells == 1 ? 0.0 : -1.0 + 2.0 * (iv + 0.5) / cells;
-          const double ju = cu + o.shots.pointing_jitter * uniform(rng) / cells;
-          const double jv = cv + o.shots.pointing_jitter * uniform(rng) / cells;
+        auto half_range = [&](double board, double fov) {
+          return board >= fov ? board - o.shots.fill * fov
+                              : std::max(0.0, kEdgeReach * fov - board);
+        };
+        const double range_u = half_range(view.board_u, view.fov_u);
+        const double range_v = half_range(view.board_v, view.fov_v);
+        // A board narrower than a third of the view, placed only at both
+        // ends, leaves the image's middle third empty: one position more.
+        auto positions = [&](double board, double fov) {
+          return cells >= 2 && board < kMiddleThird * fov ? std::max(cells, 3) : cells;
+        };
+        const int ku = positions(view.board_u, view.fov_u);
+        const int kv = positions(view.board_v, view.fov_v);
+        for (int s = 0; s < std::max(n, ku * kv); ++s) {
+          // Grid position in [-1, 1], both ends included, jittered and kept
+          // inside the range.
+          const int iu = s % ku, iv = (s / ku) % kv;
+          const double cu = ku == 1 ? 0.0 : -1.0 + 2.0 * iu / (ku - 1);
+          const double cv = kv == 1 ? 0.0 : -1.0 + 2.0 * iv / (kv - 1);
+          const double ju = std::clamp(cu + o.shots.pointing_jitter * uniform(rng) / ku, -1.0, 1.0);
+          const double jv = std::clamp(cv + o.shots.pointing_jitter * uniform(rng) / kv, -1.0, 1.0);
           double phi = phi0 + ju * range_u / std::max(std::sin(theta0), 0.2);
           double theta = theta0 + jv * range_v;
           if (face == 2) OtherFace(phi, theta, &phi, &theta);
@@ -338,7 +367,14 @@ SimulatedData Simulate(const SimulationOptions& o) {
   data.obs.records = std::move(records);
   data.obs.records_source = "simulated records";
   data.obs.pixels_source = "simulated pixels";
-  if (!o.targets.boards.empty()) SimulatePixels(o, rng, &data);
+  if (!o.targets.boards.empty()) {
+    SimulatePixels(o, rng, &data);
+    // The simulated photos have the simulated cameras' sizes (SPEC 7: sizes
+    // come from the images).
+    for (int z = 0; z < o.truth.NumZooms(); ++z) {
+      data.obs.image_sizes[z] = ImageSize{o.truth.cams[z].width, o.truth.cams[z].height};
+    }
+  }
   return data;
 }
 

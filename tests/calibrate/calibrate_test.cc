@@ -289,5 +289,38 @@ TEST(CalibrateUnknownBoards, PixelsOfBoardsWithoutPoseOnly) {
   EXPECT_THAT(r.fit.fixed_gauges, Contains(HasSubstr("base pose held")));
 }
 
+// SPEC 7: image sizes come from the images or model.cameras and are never
+// guessed silently. Records only, no cameras configured: the extraction's
+// guess is used, marked "estimated" and noted; with the photos' sizes in
+// Observations::image_sizes those are used; a configured camera of another
+// size than the photos is an error.
+TEST(Calibrate, ImageSizesComeFromTheImagesOrTheConfigOrAreMarkedEstimated) {
+  SimulationOptions sim;
+  sim.seed = 7;
+  sim.truth = PaperTruth(1);
+  sim.plan = TrainingPlan();
+  const SimulatedData data = Simulate(sim);
+  CalibrationOptions none = ApiOptions(sim.truth);
+  none.model.cameras.clear();
+
+  const CalibrationResult guessed = Calibrate(data.obs, none);
+  EXPECT_EQ(guessed.size_source.at(0), "estimated");
+  EXPECT_THAT(guessed.notes, Contains(HasSubstr("zoom 0: image size")));
+  EXPECT_THAT(guessed.notes, Contains(HasSubstr("ESTIMATED")));
+
+  Observations photos = data.obs;
+  photos.image_sizes[0] = ImageSize{sim.truth.cams[0].width + 4, sim.truth.cams[0].height + 2};
+  const CalibrationResult measured = Calibrate(photos, none);
+  EXPECT_EQ(measured.size_source.at(0), "images");
+  EXPECT_EQ(measured.model.cams[0].width, sim.truth.cams[0].width + 4);
+  EXPECT_EQ(measured.model.cams[0].height, sim.truth.cams[0].height + 2);
+
+  const CalibrationResult configured = Calibrate(data.obs, ApiOptions(sim.truth));
+  EXPECT_EQ(configured.size_source.at(0), "config");
+  EXPECT_EQ(configured.model.cams[0].width, sim.truth.cams[0].width);
+
+  EXPECT_THROW(Calibrate(photos, ApiOptions(sim.truth)), InputError);
+}
+
 }  // namespace
 }  // namespace rtscalib

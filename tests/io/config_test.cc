@@ -518,3 +518,50 @@ TEST(Config, DumpedTextWithCarriageReturnLoadsBackUnchanged) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// SPEC 7: a photo session in the config, paths relative to the config file.
+TEST(Config, ShotsAndTargetsAreReadRelativeToTheConfig) {
+  TempDir dir;
+  dir.Write("shots.csv", "face,zoom,phi,theta,image\n");
+  dir.Write("targets.yaml", "boards: []\n");
+  const std::string path =
+      dir.Write("run.yaml", "data: {shots: shots.csv, targets: targets.yaml}\ndetect: {jobs: 3}\n");
+  const RunConfig c = LoadConfig(path);
+  EXPECT_EQ(c.shots_path, dir.Path("shots.csv"));
+  EXPECT_EQ(c.targets_path, dir.Path("targets.yaml"));
+  EXPECT_EQ(c.detect_jobs, 3);
+  EXPECT_FALSE(c.simulate.has_value());
+  // The effective config reads back to the same paths.
+  const std::string dumped = dir.Write("dumped.yaml", DumpConfig(c));
+  const RunConfig again = LoadConfig(dumped);
+  EXPECT_EQ(again.shots_path, c.shots_path);
+  EXPECT_EQ(again.targets_path, c.targets_path);
+  EXPECT_EQ(again.detect_jobs, 3);
+}
+
+TEST(Config, ShotsWithoutTargetsNameTheMissingKey) {
+  TempDir dir;
+  dir.Write("shots.csv", "face,zoom,phi,theta,image\n");
+  const InputError e = ConfigError(dir, "data: {shots: shots.csv}\n");
+  EXPECT_EQ(e.key, "data.shots");
+  EXPECT_THAT(e.what(), HasSubstr("data.targets next to data.shots"));
+}
+
+TEST(Config, BoardPosesMustBeKnownOrUnknown) {
+  TempDir dir;
+  render::RenderSettings render;
+  const std::string path =
+      dir.Write("run.yaml", std::string(kSimulateOnly) + "render: {board_poses: surveyed}\n");
+  const InputError e = CatchInputError([&] { LoadWithRender(path, &render); });
+  EXPECT_EQ(e.key, "render.board_poses");
+  const std::string ok =
+      dir.Write("ok.yaml", std::string(kSimulateOnly) + "render: {board_poses: unknown}\n");
+  LoadWithRender(ok, &render);
+  EXPECT_FALSE(render.board_poses_known);
+}
+
+}  // namespace
+}  // namespace rtscalib

@@ -138,3 +138,71 @@ TEST(ShotPlanning, NoCornerBeyondTheTrustedRadius) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// The distortion is determined only where points fall: every zoom and face
+// must put points into each ninth of the image (3 x 3 cells), the four corner
+// cells included, or the distortion polynomial is extrapolated there.
+void ExpectEveryNinthCovered(const SimulationOptions& o, int width, int height) {
+  const SimulatedData data = Simulate(o);
+  std::map<std::pair<int, int>, std::set<int>> cells;  // (zoom, face) -> cells hit
+  for (const PixelObservation& p : data.obs.pixels) {
+    const int i = std::min(2, static_cast<int>(3 * (p.uv.x() + 0.5) / width));
+    const int j = std::min(2, static_cast<int>(3 * (p.uv.y() + 0.5) / height));
+    cells[{p.zoom, p.face}].insert(3 * j + i);
+  }
+  for (int z : o.plan.zooms) {
+    for (int face : o.plan.faces) {
+      const std::set<int>& hit = cells[{z, face}];
+      for (int c = 0; c < 9; ++c) {
+        EXPECT_TRUE(hit.count(c)) << "zoom " << z << " face " << face << ": no point in image cell "
+                                  << "(u " << c % 3 << ", v " << c / 3 << ") of 3 x 3";
+      }
+    }
+  }
+}
+
+TEST(ShotPlanning, EveryZoomAndFacePutsPointsIntoEveryNinthOfTheImage) {
+  // Boards a quarter of the view wide (ZoomScene): the pattern needs three
+  // positions per axis.
+  ExpectEveryNinthCovered(Options(SevenZoomTruth()), 640, 480);
+}
+
+TEST(ShotPlanning, ZoomThreeDemoSceneCoversTheImageCorners) {
+  // The main demo's instrument and boards (configs/zoom3.yaml): before the
+  // corner-reaching pattern, zoom 0's points stayed within u 312-921,
+  // v 225-725 of 1280 x 960.
+  InstrumentModel truth = PaperTruth(3);
+  const double f[3] = {1500, 3000, 6000};
+  for (int z = 0; z < 3; ++z) {
+    truth.cams[z].width = 1280;
+    truth.cams[z].height = 960;
+    truth.cams[z].intrinsics = {f[z], f[z], 639.5, 479.5};
+  }
+  SimulationOptions o;
+  o.truth = truth;
+  o.plan.faces = {1, 2};
+  o.plan.zooms = {0, 1, 2};
+  o.shots.shots_per_board = 4;
+  const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> poses = {
+      {{-1.570796, 0.0, -0.261799}, {-0.2825, 3.0465, 0.6350}},
+      {{-1.570796, 0.0, -1.308997}, {3.4910, -0.0295, -0.1588}},
+      {{-1.570796, 0.0, 2.617994}, {-0.7876, -3.0061, 1.2064}},
+      {{-1.570796, 0.0, 1.431170}, {-3.9275, 1.1250, -0.5118}}};
+  for (size_t b = 0; b < poses.size(); ++b) {
+    TagBoard board;
+    board.first_id = 48 * static_cast<int>(b);
+    board.rows = 6;
+    board.cols = 8;
+    board.tag_size = 0.06;
+    board.spacing = 0.015;
+    board.ref_from_board = Rigid3::FromEuler(poses[b].first, poses[b].second);
+    o.targets.boards.push_back(board);
+  }
+  ExpectEveryNinthCovered(o, 1280, 960);
+}
+
+}  // namespace
+}  // namespace rtscalib
