@@ -28,7 +28,7 @@ struct RenderSettings {
   // poses (`known`, as if surveyed) or leaves them out (`unknown`, as a user
   // without a tracker has them: estimated with everything else, SPEC 7).
   // The truth poses are always written to truth_targets.yaml for tests.
-  bool board_poses_known = true;
+  bool board_poses_known = false;
   // Empty if valid, else "render.<key>: expected ...".
   std::string Check() const;
 };
