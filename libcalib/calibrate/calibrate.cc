@@ -49,10 +49,12 @@ std::set<int> ZoomsInData(const Observations& obs) {
   return z;
 }
 
+// `obs` with `records` for its records and, with face 1 or 2, only that face's
+// rows; everything else (the boards, the image sizes, the sources) as in `obs`.
 Observations Subset(const Observations& obs, const std::vector<Record>& records, int face = 0) {
-  Observations out;
-  out.records_source = obs.records_source;
-  out.pixels_source = obs.pixels_source;
+  Observations out = obs;
+  out.records.clear();
+  out.pixels.clear();
   for (const Record& r : records) {
     if (face == 0 || r.face == face) out.records.push_back(r);
   }
