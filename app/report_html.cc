@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "app/reports.h"
 #include "app/safe_write.h"
 
 namespace rtscalib::app {
@@ -372,6 +373,10 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
 
   o << "<h2 id=\"image\">Image residuals</h2>\n" << Figures(figs, "image");
   o << "<h2 id=\"histograms\">Residual distributions</h2>\n" << Figures(figs, "histograms");
+  if (!r.calibration.gross_rows.empty()) {
+    o << "<h2 id=\"gross\">Gross errors</h2>\n<pre class=small>" << Esc(GrossRowsText(r))
+      << "</pre>\n";
+  }
   if (!r.notes.empty()) {
     o << "<h2>Notes</h2><ul class=small>";
     for (const std::string& n : r.notes) o << "<li>" << Esc(n) << "</li>";

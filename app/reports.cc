@@ -326,9 +326,35 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
     }
     j["coverage"] = {{"zooms", zooms}, {"warnings", cov.warnings}};
   }
+  json gross = json::array();
+  for (const ExcludedRow& e : r.calibration.gross_rows) {
+    gross.push_back({{"file", e.pixel ? r.obs.pixels_source : r.obs.records_source},
+                     {"line", e.line},
+                     {"reason", e.reason}});
+  }
+  j["gross_errors"] = gross;
   j["notes"] = r.notes;
   j["history"] = HistoryJson(out);
   return j;
+}
+
+// ---------------------------------------------------------------------------
+std::string GrossRowsText(const PipelineResult& r) {
+  const std::vector<ExcludedRow>& rows = r.calibration.gross_rows;
+  if (rows.empty()) return "";
+  std::ostringstream o;
+  o << "Gross errors: " << rows.size()
+    << " rows taken out before the fit (docs/refinement.md, \"Gross errors\"):\n";
+  constexpr size_t kListed = 50;
+  for (size_t i = 0; i < rows.size() && i < kListed; ++i) {
+    const ExcludedRow& e = rows[i];
+    o << "  " << (e.pixel ? r.obs.pixels_source : r.obs.records_source) << ":" << e.line << ": "
+      << e.reason << "\n";
+  }
+  if (rows.size() > kListed) {
+    o << "  ... and " << rows.size() - kListed << " more (report.json lists every row)\n";
+  }
+  return o.str();
 }
 
 // ---------------------------------------------------------------------------
@@ -513,6 +539,7 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     for (const auto& [pair, rho] : r.calibration.fit.strong_correlations)
       o << "  " << pair << "  rho = " << Fmt("%+.3f", rho) << "\n";
   }
+  o << GrossRowsText(r);
   for (const std::string& n : r.notes) o << "note: " << n << "\n";
   return o.str();
 }

@@ -14,6 +14,9 @@ namespace rtscalib::app {
 nlohmann::json ReportJson(const RunConfig& config, const PipelineResult& result,
                           const OutputFolder& out);
 std::string ReportText(const RunConfig& config, const PipelineResult& result);
+// The rows taken out as gross errors, a line each (the first 50), for
+// report.txt and report.html; empty when there are none.
+std::string GrossRowsText(const PipelineResult& result);
 
 // Key figures of earlier runs, read back from their report.json (for the
 // ladder of errors across runs).

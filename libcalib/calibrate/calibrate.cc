@@ -9,11 +9,13 @@
 #include "libcalib/extract/intrinsics_from_rays.h"
 #include "libcalib/extract/simplify.h"
 #include "libcalib/fit/init_from_pixels.h"
+#include "libcalib/fit/robust.h"
 #include "libcalib/fit/start_models.h"
 #include "libcalib/fit/two_face.h"
 #include "libcalib/fit/unknowns.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/model/kinematics.h"
+#include "libcalib/screen/gross.h"
 #include "libcalib/screen/screen.h"
 
 namespace rtscalib {
@@ -355,6 +357,42 @@ void DiagnoseModel(const Observations& obs, const CalibrationOptions& options,
   for (const std::string& v : r->diagnosis->verdict) progress->Note(v);
 }
 
+// Stages 1-3 on `obs`: extraction and simplification (records of known
+// points), the start, Table 4 and the intrinsics decision. Returns the
+// reduced set.
+std::vector<Record> Prepare(const Observations& obs, const CalibrationOptions& options,
+                            CalibrationProgress* progress, CalibrationResult* result) {
+  // The extraction needs records of known points; records of points of
+  // unknown position (SPEC 7) are fitted, not extracted from.
+  Observations known = obs;
+  known.records.clear();
+  for (const Record& r : obs.records) {
+    if (r.point.empty()) known.records.push_back(r);
+  }
+  if (!known.records.empty()) {
+    ExtractAndSimplify(known, options, progress, result);
+    ApplyImageSizes(obs, options, &result->extraction->model, nullptr);
+    ApplyImageSizes(obs, options, &*result->simplified, nullptr);
+  }
+  result->start = StartModel(obs, options, progress, result);
+  ApplyImageSizes(obs, options, &result->start, result);
+
+  // Table 4: the extracted and simplified models on the reduced set.
+  std::vector<Record> reduced = ReducedRecords(obs.records, result->extraction);
+  if (result->extraction) {
+    Table4 t;
+    t.dh_a = EvaluateRecords(result->extraction->model, reduced, ErrorMethod::kA);
+    t.dh_b = EvaluateRecords(result->extraction->model, reduced, ErrorMethod::kB);
+    t.simplified_a = EvaluateRecords(*result->simplified, reduced, ErrorMethod::kA);
+    t.simplified_b = EvaluateRecords(*result->simplified, reduced, ErrorMethod::kB);
+    result->table4 = t;
+  }
+  result->fit_options = options.fit;
+  result->fit_options.fit_intrinsics = FitIntrinsics(obs, options, result->start);
+  result->intrinsics_fitted = result->fit_options.fit_intrinsics;
+  return reduced;
+}
+
 }  // namespace
 
 std::string CalibrationOptions::Check() const {
@@ -420,46 +458,63 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
 
   CheckImageSizes(obs, options);
   CalibrationResult result;
-  result.notes = ScreenObservations(obs, options.model.cameras, options.screen);
-  // The extraction needs records of known points; records of points of
-  // unknown position (SPEC 7) are fitted, not extracted from.
-  Observations known = obs;
-  known.records.clear();
-  for (const Record& r : obs.records) {
-    if (r.point.empty()) known.records.push_back(r);
+  const std::vector<std::string> screening =
+      ScreenObservations(obs, options.model.cameras, options.screen);
+  result.notes = screening;
+  // Gross errors (issue 11 item 3): rows no instrument could produce are
+  // taken out before the extraction; what is left is found by a robust fit
+  // from the start, and the calibration starts again without those rows.
+  result.gross_rows = FindGrossRows(obs, options.screen.gross_errors);
+  std::vector<int> record_from, pixel_from;  // `used` row -> `obs` row
+  Observations used = WithoutRows(obs, result.gross_rows, &record_from, &pixel_from);
+  std::vector<Record> reduced = Prepare(used, options, progress, &result);
+  if (options.fit.gross_errors.enabled) {
+    progress->Step("looking for gross errors (robust fit from the start)");
+    InstrumentModel robust = result.start;
+    RobustFitResult found;
+    try {
+      found = FindGrossErrorsByFit(used, result.fit_options, options.fit.gross_errors, &robust);
+    } catch (const std::exception& e) {
+      // The least-squares stages below meet the same cause and report it
+      // with the rows (validate.h).
+      found.notes.push_back(std::string("gross errors: the robust fit failed (") + e.what() +
+                            "); no rows taken out by it");
+    }
+    if (!found.gross.empty()) {
+      for (ExcludedRow& e : found.gross) {
+        e.index = e.pixel ? pixel_from[e.index] : record_from[e.index];
+        result.gross_rows.push_back(e);
+      }
+      used = WithoutRows(obs, result.gross_rows, &record_from, &pixel_from);
+      // The tables and the start of the clean rows.
+      CalibrationResult again;
+      again.notes = screening;
+      again.gross_rows = std::move(result.gross_rows);
+      result = std::move(again);
+      reduced = Prepare(used, options, progress, &result);
+    }
+    for (std::string& n : found.notes) result.notes.push_back(std::move(n));
   }
-  if (!known.records.empty()) {
-    ExtractAndSimplify(known, options, progress, &result);
-    ApplyImageSizes(obs, options, &result.extraction->model, nullptr);
-    ApplyImageSizes(obs, options, &*result.simplified, nullptr);
+  if (!result.gross_rows.empty()) {
+    std::sort(result.gross_rows.begin(), result.gross_rows.end(),
+              [](const ExcludedRow& a, const ExcludedRow& b) {
+                return a.pixel != b.pixel ? !a.pixel : a.index < b.index;
+              });
+    const std::string n = "gross errors: " + std::to_string(result.gross_rows.size()) +
+                          " rows taken out (listed in the report with their lines and reasons)";
+    result.notes.push_back(n);
+    progress->Note(n);
   }
-  result.start = StartModel(obs, options, progress, &result);
-  ApplyImageSizes(obs, options, &result.start, &result);
-
-  // Table 4: the extracted and simplified models on the reduced set.
-  const std::vector<Record> reduced = ReducedRecords(obs.records, result.extraction);
-  if (result.extraction) {
-    Table4 t;
-    t.dh_a = EvaluateRecords(result.extraction->model, reduced, ErrorMethod::kA);
-    t.dh_b = EvaluateRecords(result.extraction->model, reduced, ErrorMethod::kB);
-    t.simplified_a = EvaluateRecords(*result.simplified, reduced, ErrorMethod::kA);
-    t.simplified_b = EvaluateRecords(*result.simplified, reduced, ErrorMethod::kB);
-    result.table4 = t;
-  }
-
-  result.fit_options = options.fit;
-  result.fit_options.fit_intrinsics = FitIntrinsics(obs, options, result.start);
-  result.intrinsics_fitted = result.fit_options.fit_intrinsics;
   // Against every row: a start made non-finite by one row outside the
   // reduced set (the extraction uses them all) names that row.
   // Pixels of boards of unknown pose are checked at the start's board poses.
-  ValidateStart("start of the refinement", WithEstimates(obs, result.start), result.start,
+  ValidateStart("start of the refinement", WithEstimates(used, result.start), result.start,
                 result.fit_options, options.checks);
-  RefineConfigured(obs, reduced, options.checks, progress, &result);
+  RefineConfigured(used, reduced, options.checks, progress, &result);
 
   if (options.model.faces == FaceMode::kSeparate) {
     progress->Step("fitting one model per face");
-    result.faces = FitFacesSeparately(obs, result, options.checks);
+    result.faces = FitFacesSeparately(used, result, options.checks);
   }
 
   result.model = result.refined.model;
@@ -469,14 +524,14 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
     // a note, not a failed calibration.
     try {
       // The diagnosis sees the estimated boards and points (SPEC 7) fixed at the fit's values.
-      DiagnoseModel(WithEstimates(obs, result.model), options, progress, &result);
+      DiagnoseModel(WithEstimates(used, result.model), options, progress, &result);
     } catch (const std::exception& e) {
       result.diagnosis.reset();
       result.notes.push_back(std::string("diagnosis failed: ") + e.what());
       progress->Note(result.notes.back());
     }
   }
-  result.final_errors = ComputeFinalErrors(result.model, WithEstimates(obs, result.model));
+  result.final_errors = ComputeFinalErrors(result.model, WithEstimates(used, result.model));
   progress->Done();
   return result;
 }

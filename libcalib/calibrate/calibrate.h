@@ -105,6 +105,10 @@ struct CalibrationResult {
   // records-only data; the size is the extraction's guess from the principal
   // point and the pixels, and a note says so).
   std::map<int, std::string> size_source;
+  // Rows taken out as gross errors (screening before the fit, then the
+  // robust fit; ExcludedRow::index into the observations given). Every
+  // stage above saw the observations without them.
+  std::vector<ExcludedRow> gross_rows;
   std::vector<std::string> notes;
 
   // True when the ladder extended the model beyond the configured one, so

@@ -16,6 +16,10 @@ namespace {
 // candidate (footnote 8): the axis is within 0.06 deg of z_EDM.
 constexpr double kMinProjection = 1e-3;
 
+// RobustKabsch's floor: correspondences within 0.1 mm of the robust fit are
+// always kept (exact data leave round-off, which no robust sigma should cut).
+constexpr double kKabschFloorM = 1e-4;
+
 double AngleDiff(double a, double b) { return std::abs(WrapAngle(a - b)); }
 
 // Rows taken at the same pointing (phi modulo 2 pi) within the tolerance.
@@ -118,18 +122,24 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
     out.camera = *given;
   } else {
     // Chord between the unit-length-d rays one pixel apart (header).
-    double fu = 0, fv = 0;
+    // The median over the poses: one wrong row cannot move it.
+    std::vector<double> fu, fv;
     for (const Triplet& t : triplets) {
       const Eigen::Vector3d& x0 = records[t.row[0]].x;
       auto focal = [&](const Eigen::Vector3d& x) {
         const double half = std::asin(std::min(1.0, (x - x0).norm() / (2.0 * t.d)));
         return 1.0 / std::tan(2.0 * half);
       };
-      fu += focal(records[t.row[1]].x);
-      fv += focal(records[t.row[2]].x);
+      fu.push_back(focal(records[t.row[1]].x));
+      fv.push_back(focal(records[t.row[2]].x));
     }
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      const size_t n = v.size();
+      return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    };
     out.camera = CameraTool{};
-    out.camera.intrinsics = {fu / triplets.size(), fv / triplets.size(), c.x(), c.y()};
+    out.camera.intrinsics = {median(fu), median(fv), c.x(), c.y()};
     out.camera.distortion.fill(0.0);
     out.camera.width = static_cast<int>(std::lround(2.0 * c.x() + 1.0));
     out.camera.height = static_cast<int>(std::lround(2.0 * c.y() + 1.0));
@@ -173,7 +183,8 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
                           ": only " + std::to_string(a.size()) +
                           " usable camera rows (need 3 at different pixels or ray lengths)");
   }
-  const KabschResult k = Kabsch(a, b);
+  std::vector<int> dropped;
+  const KabschResult k = RobustKabsch(a, b, kKabschFloorM, &dropped);
   if (k.rank < 2) {
     throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
                           ": its " + std::to_string(rows.size()) +
@@ -195,6 +206,10 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
        << (options.exact_camera_rays ? ", exact back-projected rays"
                                      : ", paper's unit axes (Eq. 69/70)")
        << ", alignment RMS " << Num(k.rms) << " m";
+  if (!dropped.empty()) {
+    note << "; " << dropped.size() << " of " << a.size()
+         << " correspondences left out (off by more than 8 robust sigmas: gross errors)";
+  }
   if (out.intrinsics_estimated) {
     note << "; no intrinsics given: fx = " << Num(out.camera.intrinsics[0])
          << ", fy = " << Num(out.camera.intrinsics[1])
@@ -245,7 +260,8 @@ std::optional<EdmToolEstimate> ExtractEdmTool(const std::vector<Record>& records
     ++poses;
   }
   if (poses == 0) return std::nullopt;
-  const KabschResult k = Kabsch(a, b);
+  std::vector<int> dropped;
+  const KabschResult k = RobustKabsch(a, b, kKabschFloorM, &dropped);
   EdmToolEstimate out;
   out.flange_from_edm = PoseBlock::FromRigid(k.b_from_a);
   out.poses = poses;
@@ -260,6 +276,11 @@ std::optional<EdmToolEstimate> ExtractEdmTool(const std::vector<Record>& records
     if (i < 2) s << " of zoom " << reference_zoom;
     s << " at " << used[i] << " poses";
     first = false;
+  }
+  if (!dropped.empty()) {
+    s << "; " << dropped.size() << " of " << a.size()
+      << " correspondences left out of the tool's Kabsch fit (off by more than 8 robust sigmas: "
+         "gross errors)";
   }
   out.x_reference = s.str();
   return out;

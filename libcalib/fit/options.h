@@ -11,6 +11,17 @@ namespace rtscalib {
 
 enum class RobustLoss { kNone, kHuber, kCauchy };
 
+// Gross errors found by a robust fit before the least-squares fit
+// (libcalib/fit/robust.h; config `fit.gross_errors`).
+struct GrossErrorOptions {
+  bool enabled = true;
+  double loss_scale = 3.0;    // Cauchy scale [a-priori sigmas]
+  double reject = 8.0;        // [robust sigmas] (robust.h says why 8)
+  double max_fraction = 0.2;  // of a group's rows
+  // Defined beside FindGrossErrorsByFit (robust.cc).
+  std::string Check() const;  // empty if valid
+};
+
 struct FitOptions {
   double sigma_edm_m = 1e-5;      // a-priori sigma of an EDM point coordinate
   double sigma_cam_m = 1e-5;      // a-priori sigma of a camera-record coordinate
@@ -31,6 +42,8 @@ struct FitOptions {
   double max_zenith_rad = 135.0 * M_PI / 180.0;
   int num_threads = 2;
   bool compute_covariance = true;
+  // Read by Calibrate (not by Refine, which fits what it is given).
+  GrossErrorOptions gross_errors;
   bool verbose = false;
   // Defined beside Refine (refine.cc), which enforces it.
   std::string Check() const;

@@ -30,7 +30,7 @@ std::string FitOptions::Check() const {
   if (!(min_zenith_rad < max_zenith_rad))
     return "fit.critical_region: min_zenith must be < max_zenith";
   if (num_threads < 1) return "fit.threads must be >= 1";
-  return "";
+  return gross_errors.Check();
 }
 
 namespace {

@@ -35,4 +35,16 @@ struct KabschResult {
 // 3 points.
 KabschResult Kabsch(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b);
 
+// Kabsch on the correspondences that agree: least median of squares over
+// random 3-point samples (a sample free of gross errors wins as long as
+// fewer than half the pairs are wrong), then Kabsch on the pairs whose
+// residual is within max(8 robust sigmas, `floor`) of that fit (robust sigma
+// of one coordinate = median residual / 1.5382, the median of chi with 3
+// degrees of freedom). Equal to Kabsch when no pair is off. `outliers`,
+// when given, receives the indices of the pairs left out. Sets of fewer
+// than 6 pairs go to Kabsch unchanged. Throws as Kabsch.
+KabschResult RobustKabsch(const std::vector<Eigen::Vector3d>& a,
+                          const std::vector<Eigen::Vector3d>& b, double floor,
+                          std::vector<int>* outliers = nullptr);
+
 }  // namespace rtscalib

@@ -260,6 +260,16 @@ void ReadFit(const YamlNode& m, FitOptions* out) {
     loss->ReadEnum("type", kLossNames, &out->loss);
     ReadNumber(*loss, "scale", &out->loss_scale, IsPositive, "a scale > 0 [sigmas]");
   }
+  if (const std::optional<YamlNode> g = m.Find("gross_errors")) {
+    GrossErrorOptions& o = out->gross_errors;
+    g->Read("enabled", &o.enabled);
+    ReadNumber(*g, "loss_scale", &o.loss_scale, IsPositive, "a Cauchy scale > 0 [sigmas]");
+    ReadNumber(
+        *g, "reject", &o.reject, [](double x) { return x > 1; }, "a limit > 1 [robust sigmas]");
+    ReadNumber(
+        *g, "max_fraction", &o.max_fraction, [](double x) { return x > 0 && x < 1; },
+        "a fraction of a group's rows in (0, 1)");
+  }
   ReadCount(m, "max_iterations", &out->max_iterations, 1, "an iteration limit");
   ReadNumber(m, "translation_bound_m", &out->translation_bound_m, IsPositive,
              "a translation bound > 0 [m]");
@@ -481,6 +491,13 @@ void ReadScreen(const YamlNode& m, ScreenOptions* out) {
   ReadNumber(m, "max_extent_m", &out->max_extent_m, IsPositive,
              "a distance > 0 [m] from the origin");
   ReadCount(m, "max_missing_zooms", &out->max_missing_zooms, 0, "a count of zoom levels");
+  if (const std::optional<YamlNode> g = m.Find("gross_errors")) {
+    GrossScreenOptions& o = out->gross_errors;
+    g->Read("enabled", &o.enabled);
+    ReadNumber(*g, "sphere_threshold", &o.sphere_threshold, IsPositive,
+               "a threshold > 0 [robust sigmas]");
+    ReadNumber(*g, "sphere_floor_m", &o.sphere_floor_m, IsNonNegative, "a distance >= 0 [m]");
+  }
   const std::string problem = out->Check();
   if (!problem.empty()) m.Fail(problem);
 }
@@ -737,6 +754,12 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::Key << "type" << YAML::Value << NameOf(kLossNames, f.loss);
   e << YAML::Key << "scale" << YAML::Value << Num(f.loss_scale);
   e << YAML::EndMap;
+  e << YAML::Key << "gross_errors" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "enabled" << YAML::Value << f.gross_errors.enabled;
+  e << YAML::Key << "loss_scale" << YAML::Value << Num(f.gross_errors.loss_scale);
+  e << YAML::Key << "reject" << YAML::Value << Num(f.gross_errors.reject);
+  e << YAML::Key << "max_fraction" << YAML::Value << Num(f.gross_errors.max_fraction);
+  e << YAML::EndMap;
   e << YAML::Key << "max_iterations" << YAML::Value << f.max_iterations;
   e << YAML::Key << "translation_bound_m" << YAML::Value << Num(f.translation_bound_m);
   e << YAML::Key << "max_sigma0" << YAML::Value << Num(c.checks.max_sigma0);
@@ -771,6 +794,12 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::Key << "pixel_margin_px" << YAML::Value << Num(c.screen.pixel_margin_px);
   e << YAML::Key << "max_extent_m" << YAML::Value << Num(c.screen.max_extent_m);
   e << YAML::Key << "max_missing_zooms" << YAML::Value << c.screen.max_missing_zooms;
+  e << YAML::Key << "gross_errors" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "enabled" << YAML::Value << c.screen.gross_errors.enabled;
+  e << YAML::Key << "sphere_threshold" << YAML::Value
+    << Num(c.screen.gross_errors.sphere_threshold);
+  e << YAML::Key << "sphere_floor_m" << YAML::Value << Num(c.screen.gross_errors.sphere_floor_m);
+  e << YAML::EndMap;
   e << YAML::EndMap;
   e << YAML::Key << "output" << YAML::Value;
   EmitYamlText(e, c.output_dir);

@@ -66,10 +66,14 @@ struct CameraTool {
   bool determined = true;
 };
 
-// Standard deviations for every parameter, filled by the fit (tangent-space
-// rotation sigmas in radians about the block's local axes).
+// Standard deviations for every parameter, filled by the fit. Rotation
+// sigmas are those of the fit's tangent coordinates (libcalib/fit/manifolds.h):
+// for the base, the camera tools and the boards (Ceres's
+// EigenQuaternionManifold, q -> exp(delta) q) HALF the rotation angle about
+// the PARENT frame's x, y, z; for the EDM tool (no-roll manifold, q ->
+// q exp(delta)) the rotation angle about its own x and y (z: 0, not fitted).
 struct PoseSigma {
-  std::array<double, 3> rotation{};  // rad, about local x, y, z
+  std::array<double, 3> rotation{};  // rad, tangent coordinates (above)
   std::array<double, 3> euler{};     // rad, of [a, b, g]
   std::array<double, 3> t{};         // m
 };

@@ -43,12 +43,23 @@ struct PixelObservation {
   double phi = 0, theta = 0;
   std::string shot;
   int target = 0, corner = 0;
-  Eigen::Vector3d X = Eigen::Vector3d::Zero();   // known point, reference frame [m]
+  Eigen::Vector3d X = Eigen::Vector3d::Zero();  // known point, reference frame [m]
   // False: X is unknown, the point is corner (target, corner) of a board of
   // Observations::targets without a pose (SPEC 7).
   bool X_known = true;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // observed pixel
   int line = 0;
+};
+
+// A row taken out of a calibration as a gross error (libcalib/screen/gross.h
+// before the fit, libcalib/fit/robust.h after the robust fit): which row,
+// its line in its file, and why, with the numbers (SPEC 3: rows are never
+// silently dropped).
+struct ExcludedRow {
+  bool pixel = false;  // a pixels.csv row (else a records.csv row)
+  int index = 0;       // into Observations::pixels or ::records as given
+  int line = 0;
+  std::string reason;
 };
 
 // Width and height of one zoom's images [px], from the photos (SPEC 7: never

@@ -18,6 +18,15 @@ std::string ScreenOptions::Check() const {
     return "screen.max_missing_zooms must be in 0.." + std::to_string(kMaxMissingZoomsLimit) +
            " (got " + std::to_string(max_missing_zooms) + ")";
   }
+  return gross_errors.Check();
+}
+
+std::string GrossScreenOptions::Check() const {
+  if (!(sphere_threshold > 0) || !std::isfinite(sphere_threshold))
+    return "screen.gross_errors.sphere_threshold must be > 0 [robust sigmas]";
+  if (!(sphere_floor_m >= 0) || !std::isfinite(sphere_floor_m))
+    return "screen.gross_errors.sphere_floor_m must be >= 0 [m]";
+  if (min_rows < 5) return "screen.gross_errors.min_rows must be >= 5";
   return "";
 }
 

@@ -6,6 +6,16 @@
 
 namespace rtscalib {
 
+// The gross-error screening before the fit (libcalib/screen/gross.h; key
+// `screen.gross_errors`).
+struct GrossScreenOptions {
+  bool enabled = true;
+  double sphere_threshold = 8.0;  // robust sigmas (1.4826 MAD)
+  double sphere_floor_m = 5e-3;   // never flag below this departure [m]
+  int min_rows = 12;              // fewer rows per sphere: not screened
+  std::string Check() const;      // empty if valid
+};
+
 struct ScreenOptions {
   // A pixel may lie this far outside its zoom's image (model.cameras) before
   // it is an error: detectors report corners a little beyond the border [px].
@@ -18,6 +28,7 @@ struct ScreenOptions {
   // Memory grows with the largest zoom, so a zoom far beyond the data's
   // levels is an error, not an allocation.
   int max_missing_zooms = 8;
+  GrossScreenOptions gross_errors;
   // Empty if valid, else what is wrong (the key's name, what it must be).
   std::string Check() const;
 };

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "libcalib/io/number_text.h"
+#include "libcalib/screen/gross.h"
 
 namespace rtscalib {
 namespace {
@@ -118,8 +119,10 @@ std::string UnitCause(const std::vector<RowView>& rows) {
 }
 
 // Angle units, the phi wrap and the faces of SPEC 1.
-void CheckAngles(const std::string& file, const std::vector<RowView>& rows, ScreenFindings* out) {
+void CheckAngles(const std::string& file, const std::vector<RowView>& rows, bool gross_rows,
+                 ScreenFindings* out) {
   Offenders phi_range, theta_range, face2, face1;
+  size_t face1_rows = 0, face2_rows = 0;
   std::vector<int> phi_wrapped;
   for (const RowView& r : rows) {
     const bool phi_ok = InAngleRange(r.phi), theta_ok = InAngleRange(r.theta);
@@ -127,9 +130,15 @@ void CheckAngles(const std::string& file, const std::vector<RowView>& rows, Scre
     if (!theta_ok) theta_range.Add(r.line, Num(r.theta));
     if (phi_ok && r.phi >= kTwoPi) phi_wrapped.push_back(r.line);
     if (!theta_ok) continue;
-    if (r.face == 2 && r.theta < M_PI) face2.Add(r.line, Num(r.theta));
-    if (r.face == 1 && r.theta > M_PI) face1.Add(r.line, Num(r.theta));
+    ++(r.face == 1 ? face1_rows : face2_rows);
+    if (r.face == 2 && FaceContradictsTheta(2, r.theta)) face2.Add(r.line, Num(r.theta));
+    if (r.face == 1 && FaceContradictsTheta(1, r.theta)) face1.Add(r.line, Num(r.theta));
   }
+  // A few rows against the face convention are gross errors, taken out and
+  // listed by the gross-error screening (gross.h); most rows, a convention
+  // mistake.
+  if (gross_rows && FewEnoughToBeGross(face1.lines.size(), face1_rows)) face1 = Offenders();
+  if (gross_rows && FewEnoughToBeGross(face2.lines.size(), face2_rows)) face2 = Offenders();
   const std::string cause =
       phi_range.Empty() && theta_range.Empty() ? std::string() : UnitCause(rows);
   phi_range.Report(file, "phi", "a horizontal angle in radians within [-2 pi, 4 pi)" + cause, out);
@@ -223,7 +232,7 @@ std::string PointText(const Eigen::Vector3d& x) {
 // within sqrt(3) d_max of it and |x - m| <= d + sqrt(3) d_max. The test
 // allows twice that plus 1 m; it does not depend on where the reference
 // frame's origin is.
-void CheckRecordPoints(const std::string& file, const std::vector<Record>& records,
+void CheckRecordPoints(const std::string& file, const std::vector<Record>& records, bool gross_rows,
                        ScreenFindings* out) {
   if (records.size() < 3) return;
   Eigen::Vector3d median;
@@ -251,7 +260,8 @@ void CheckRecordPoints(const std::string& file, const std::vector<Record>& recor
     // Millimetres: scaled back to metres (d stays), the point passes.
     millimetres = millimetres && distance / kMmPerM <= bound(r.d);
   }
-  if (far.Empty()) return;
+  // A few such rows are gross errors (gross.h's sphere test lists them).
+  if (far.Empty() || (gross_rows && FewEnoughToBeGross(far.lines.size(), records.size()))) return;
   const std::string cause =
       millimetres && far.lines.size() * 2 > records.size()
           ? "; the coordinates look like millimetres (SPEC 1: metres)"
@@ -350,11 +360,14 @@ ScreenFindings FindDataMistakes(const Observations& obs, const std::vector<Camer
   const std::vector<RowView> record_rows = RowsOf(obs.records);
   const std::vector<RowView> pixel_rows = RowsOf(obs.pixels);
   CheckZooms(obs, cameras, options.max_missing_zooms, &out);
-  CheckAngles(obs.records_source, record_rows, &out);
-  CheckAngles(obs.pixels_source, pixel_rows, &out);
+  // With the gross-error screening on (gross.h), a few offending rows are
+  // its business; off, every offending row is an error here.
+  const bool gross_rows = options.gross_errors.enabled;
+  CheckAngles(obs.records_source, record_rows, gross_rows, &out);
+  CheckAngles(obs.pixels_source, pixel_rows, gross_rows, &out);
   CheckPixels(obs.records_source, record_rows, cameras, options.pixel_margin_px, &out);
   CheckPixels(obs.pixels_source, pixel_rows, cameras, options.pixel_margin_px, &out);
-  CheckRecordPoints(obs.records_source, obs.records, &out);
+  CheckRecordPoints(obs.records_source, obs.records, gross_rows, &out);
   CheckKnownPoints(obs.pixels_source, obs.pixels, options.max_extent_m, &out);
   CheckTools(obs, &out);
   return out;

@@ -6,7 +6,8 @@
 //   - phi or theta outside [-2 pi, 4 pi): degrees or gon (the cause names
 //     which, from the values' range and where face-1 zenith angles cluster);
 //   - face 2 with theta < pi (written the face-1 way) and face 1 with
-//     theta > pi (a face-2 reading): SPEC 1's faces;
+//     theta > pi (a face-2 reading): SPEC 1's faces, when more than one in
+//     ten rows of the face do so (fewer are gross rows: gross.h);
 //   - pixels outside their zoom's image (model.cameras) by more than
 //     ScreenOptions::pixel_margin_px, or u and v swapped (every u fits the
 //     height and every v the width, while at least 3 rows and 1/20 of the
@@ -15,7 +16,8 @@
 //     allow (|x - m| > 2 (d + sqrt(3) d_max) + 1 m, m the coordinate-wise
 //     median of the points: every point lies within d of the instrument, so
 //     m lies within sqrt(3) d_max of it): millimetres when the excess is
-//     about 1000-fold;
+//     about 1000-fold; when more than one in ten rows do so (fewer are
+//     gross rows: gross.h);
 //   - known points of pixels.csv beyond ScreenOptions::max_extent_m;
 //   - zoom levels beyond the data's count of levels (or model.cameras) plus
 //     ScreenOptions::max_missing_zooms (SPEC 2: levels are 0..N-1).

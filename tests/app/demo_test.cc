@@ -33,8 +33,9 @@ class Zoom3Demo : public ::testing::Test {
     config.simulate->plan.zooms = {0, 2};
     config.simulate->plan.grid_phi_steps = 8;
     config.simulate->plan.grid_theta_steps = 4;
-    // One folder per process: ctest runs each test of this suite in its own
-    // process, in parallel.
+    // One folder per process: ctest runs this suite as one process
+    // (tests/CMakeLists.txt, SHARED_FIXTURE_SUITES), but a developer may run
+    // single tests side by side.
     work_ = std::filesystem::temp_directory_path() /
             ("rtscalib_demo_test_" + std::to_string(::getpid()));
     std::filesystem::remove_all(work_);

@@ -145,6 +145,15 @@ class Failure : public ::testing::Test {
     Put(config, y.str());
     return config;
   }
+  // The same without the gross-error handling (docs/refinement.md): the
+  // protections of a single fit must hold on their own.
+  fs::path ConfigWithoutGrossErrors(const std::vector<Record>& records, const std::string& name) {
+    const fs::path config = Config(records, name);
+    std::string text = Read(config);
+    text.replace(text.find("fit:\n"), 5, "fit:\n  gross_errors: {enabled: false}\n");
+    Put(config, text + "screen: {gross_errors: {enabled: false}}\n");
+    return config;
+  }
   // Index of the last grid row of `tool` outside the default critical
   // regions (in the first grid rows a huge value breaks the sweep search
   // instead, an input error).
@@ -175,7 +184,36 @@ TEST_F(Failure, PaperRunWritesOnlyFiniteNumbers) {
 
 // One EDM grid row with z = 1e308 m (it aborted in a glog CHECK, exit 134)
 // and one camera row with d = 1e300 m (it published `camera inf +- nan`):
-// exit 3 naming the row's file and line; the top still shows the good run.
+// by default gross rows, taken out and listed in the report with their
+// lines (exit 0, every number finite).
+TEST_F(Failure, BrokenRowIsAGrossRowListedInTheReport) {
+  const std::vector<Record> good = Records();
+  for (const Tool tool : {Tool::kEdm, Tool::kCam}) {
+    std::vector<Record> broken = good;
+    const int row = GridRow(broken, tool);
+    if (tool == Tool::kEdm) {
+      broken[row].x.z() = 1e308;
+    } else {
+      broken[row].d = 1e300;
+    }
+    std::string err;
+    ASSERT_EQ(RunConfig(Config(broken, "broken.csv"), &err), 0) << err;
+    ExpectAllFinite(root_);
+    const std::string text = Read(root_ / "report.txt");
+    EXPECT_NE(text.find("Gross errors: 1 rows taken out before the fit"), std::string::npos)
+        << text;
+    EXPECT_NE(text.find((dir_ / "broken.csv").string() + ":" + std::to_string(row + 2) + ": " +
+                        (tool == Tool::kEdm ? "EDM row" : "camera row")),
+              std::string::npos)
+        << text;
+    const nlohmann::json report = nlohmann::json::parse(Read(root_ / "report.json"));
+    ASSERT_EQ(report["gross_errors"].size(), 1u);
+    EXPECT_EQ(report["gross_errors"][0]["line"], row + 2);
+  }
+}
+
+// The same rows without the gross-error handling: exit 3 (or 1) naming the
+// row's file and line; the top still shows the good run.
 TEST_F(Failure, BrokenRowExitsThreeNamesTheRowAndLeavesTheTopAlone) {
   std::string err;
   const std::vector<Record> good = Records();
@@ -203,7 +241,7 @@ TEST_F(Failure, BrokenRowExitsThreeNamesTheRowAndLeavesTheTopAlone) {
     } else {
       broken[row].d = 1e300;
     }
-    EXPECT_EQ(RunConfig(Config(broken, c.name), &err), c.exit_code) << err;
+    EXPECT_EQ(RunConfig(ConfigWithoutGrossErrors(broken, c.name), &err), c.exit_code) << err;
     EXPECT_NE(err.find(c.says), std::string::npos) << err;
     // Line = index + 2 (header on line 1).
     EXPECT_NE(err.find(c.name + std::string(":") + std::to_string(row + 2) + ":"),
@@ -221,15 +259,15 @@ TEST_F(Failure, BrokenRowExitsThreeNamesTheRowAndLeavesTheTopAlone) {
   EXPECT_EQ(failed, 2);
 }
 
-// One EDM row 0.5 m off among rows at 1e-5 m: its residual cannot be
-// absorbed, EDM sigma0 ~ 0.5 / 1e-5 / sqrt(3 n) >> 100 (fit.max_sigma0): exit
-// 3 naming the row first.
+// One EDM row 0.5 m off among rows at 1e-5 m, without the gross-error
+// handling: its residual cannot be absorbed, EDM sigma0 ~ 0.5 / 1e-5 /
+// sqrt(3 n) >> 100 (fit.max_sigma0): exit 3 naming the row first.
 TEST_F(Failure, ResidualsFarBeyondTheSigmasExitThreeNamingTheRow) {
   std::vector<Record> records = Records();
   const int row = GridRow(records, Tool::kEdm);
   records[row].x.z() += 0.5;
   std::string err;
-  EXPECT_EQ(RunConfig(Config(records, "gross.csv"), &err), 3) << err;
+  EXPECT_EQ(RunConfig(ConfigWithoutGrossErrors(records, "gross.csv"), &err), 3) << err;
   EXPECT_NE(err.find("calibration failed (residuals far beyond the sigmas)"), std::string::npos)
       << err;
   EXPECT_NE(err.find("\n  " + (dir_ / "gross.csv").string() + ":" + std::to_string(row + 2) +

@@ -196,19 +196,30 @@ CalibrationOptions Options(const InstrumentModel& truth) {
   return o;
 }
 
+// Gross-error handling off: every protection of a fit against a single huge
+// value must hold on its own.
+CalibrationOptions WithoutGrossErrorHandling(CalibrationOptions o) {
+  o.screen.gross_errors.enabled = false;
+  o.fit.gross_errors.enabled = false;
+  return o;
+}
+
 // z = 1e308 m in an EDM grid row overflowed the extraction's EDM tool
 // (Kabsch centroids) into NaN, and Ceres aborted on the NaN quaternion
-// (glog CHECK, exit 134). Now the start is checked first. (In the first grid
-// rows the same value breaks the sweep search instead: an ExtractionError.)
-TEST(Calibrate, HugeCoordinateInAGridRowIsAnInputErrorBeforeAnyFit) {
-  // The screening (libcalib/screen) sees the point 1e308 m from the others
-  // before the extraction, whose Kabsch would otherwise return a NaN tool and
-  // abort inside Ceres.
+// (glog CHECK, exit 134). Now the gross-error screening takes the row out and
+// names it; without it, the screening sees the point 1e308 m from the others
+// before the extraction and stops with an InputError.
+TEST(Calibrate, HugeCoordinateInAGridRowIsAGrossRowOrAnInputErrorBeforeAnyFit) {
   Data data;
   const int row = GridRow(data.obs, Tool::kEdm, /*last=*/true);
   data.obs.records[row].x.z() = 1e308;
+  const CalibrationResult r = Calibrate(data.obs, Options(data.truth));
+  ASSERT_EQ(r.gross_rows.size(), 1u);
+  EXPECT_EQ(r.gross_rows[0].line, data.obs.records[row].line);
+  EXPECT_THAT(r.gross_rows[0].reason, HasSubstr("EDM row: the point is inf m farther"));
+  EXPECT_TRUE(r.refined.fit.converged);
   try {
-    Calibrate(data.obs, Options(data.truth));
+    Calibrate(data.obs, WithoutGrossErrorHandling(Options(data.truth)));
     FAIL() << "no InputError";
   } catch (const InputError& e) {
     EXPECT_EQ(e.line, data.obs.records[row].line);
@@ -217,13 +228,18 @@ TEST(Calibrate, HugeCoordinateInAGridRowIsAnInputErrorBeforeAnyFit) {
 }
 
 // d = 1e300 m on a camera row: the fit cannot reach it; the old run said
-// "converged: yes" and reported `camera inf +- nan`.
-TEST(Calibrate, HugeDistanceFailsAndNamesTheRow) {
+// "converged: yes" and reported `camera inf +- nan`. Now the gross-error
+// screening names the row; without it the fit fails and names it.
+TEST(Calibrate, HugeDistanceIsAGrossRowOrFailsAndNamesTheRow) {
   Data data;
   const int row = GridRow(data.obs, Tool::kCam);
   data.obs.records[row].d = 1e300;
+  const CalibrationResult r = Calibrate(data.obs, Options(data.truth));
+  ASSERT_EQ(r.gross_rows.size(), 1u);
+  EXPECT_EQ(r.gross_rows[0].line, row + 2);
+  EXPECT_THAT(r.gross_rows[0].reason, HasSubstr("camera row (zoom 0): the point is 1e+300 m"));
   try {
-    Calibrate(data.obs, Options(data.truth));
+    Calibrate(data.obs, WithoutGrossErrorHandling(Options(data.truth)));
     FAIL() << "no CalibrationFailure";
   } catch (const CalibrationFailure& e) {
     ASSERT_FALSE(e.rows.empty());

@@ -1,9 +1,8 @@
 // Photos of AprilTags synthesized with OpenCV alone (no renderer), exact to
 // the SPEC 2 pixel convention: pixel (i, j) is the area [i - 1/2, i + 1/2] x
 // [j - 1/2, j + 1/2] of the continuous image plane, its centre (i, j). A
-// pixel's value is the mean of the printed pattern over that area (exact
-// where the pixel lies in one code bit, 64 x 64 samples where it straddles
-// an edge: see RenderCoverage).
+// pixel's value is the mean of the printed pattern over that area, computed
+// exactly by clipping (see RenderCoverage).
 //
 // The printed plane is mapped to the image by a homography `image_from_plane`
 // (continuous coordinates on both sides); the plane holds code images of tags
@@ -85,31 +84,69 @@ inline std::array<Eigen::Vector2d, 4> QuadCorners(const PrintedTag& t) {
           Eigen::Vector2d(t.x0 + t.size, t.y0), Eigen::Vector2d(t.x0, t.y0)};
 }
 
-// A CV_64FC1 image of coverage values (0 = ink, 1 = paper). A pixel whose
-// four corners map into one code bit (or all onto plain paper) lies wholly in
-// it: a pixel's preimage under a homography is a convex quadrilateral and a
-// bit is a convex square. Any other pixel is the mean of 64 x 64 samples
-// mapped back to the plane: the area error is below 1/128 px per pixel even
-// for an edge parallel to the sample grid (the worst case, where every row
-// errs alike), 0.008 px of edge position.
+// Area of the part of convex polygon `poly` (image points, either
+// orientation) inside the pixel square [i - 1/2, i + 1/2] x [j - 1/2, j + 1/2]
+// (SPEC 2): Sutherland-Hodgman clipping by the square's four sides, then the
+// shoelace formula. Exact up to rounding.
+inline double AreaInPixel(std::vector<Eigen::Vector2d> poly, int i, int j) {
+  const double lo[2] = {i - 0.5, j - 0.5}, hi[2] = {i + 0.5, j + 0.5};
+  for (int side = 0; side < 4 && !poly.empty(); ++side) {
+    const int axis = side / 2;
+    const bool upper = side % 2 == 1;
+    const double bound = upper ? hi[axis] : lo[axis];
+    auto inside = [&](const Eigen::Vector2d& p) {
+      return upper ? p[axis] <= bound : p[axis] >= bound;
+    };
+    std::vector<Eigen::Vector2d> out;
+    for (size_t k = 0; k < poly.size(); ++k) {
+      const Eigen::Vector2d& a = poly[k];
+      const Eigen::Vector2d& b = poly[(k + 1) % poly.size()];
+      if (inside(a)) out.push_back(a);
+      if (inside(a) != inside(b)) {
+        const double t = (bound - a[axis]) / (b[axis] - a[axis]);
+        out.push_back(a + t * (b - a));
+      }
+    }
+    poly.swap(out);
+  }
+  double twice = 0;
+  for (size_t k = 0; k < poly.size(); ++k) {
+    const Eigen::Vector2d& a = poly[k];
+    const Eigen::Vector2d& b = poly[(k + 1) % poly.size()];
+    twice += a.x() * b.y() - a.y() * b.x();
+  }
+  return std::abs(twice) / 2;
+}
+
+// A CV_64FC1 image of coverage values (0 = ink, 1 = paper), exact: a pixel's
+// value is 1 minus the area of the pixel square covered by the images of the
+// tags' ink bits. A homography maps a bit's square onto a convex
+// quadrilateral (the scenes here keep the line at infinity off the boards),
+// which is clipped against the pixel square. A pixel whose four corners map
+// into one code bit (or all onto plain paper) lies wholly in it: a pixel's
+// preimage is a convex quadrilateral and a bit a convex square. Otherwise
+// the bits looked at are those of the tags at the pixel's corners within the
+// bounding box of the pixel's preimage.
 inline cv::Mat RenderCoverage(const std::vector<PrintedTag>& tags,
                               const Eigen::Matrix3d& image_from_plane, int width, int height) {
-  constexpr int kSamples = 64;
   const Eigen::Matrix3d plane_from_image = image_from_plane.inverse();
-  // Cells at pixel corners: corner (i, j) is the image point (i - 1/2, j - 1/2).
-  std::vector<Cell> corners((width + 1) * (height + 1));
+  // Pixel corner (i, j) is the image point (i - 1/2, j - 1/2).
+  std::vector<Eigen::Vector2d> plane((width + 1) * (height + 1));
+  std::vector<Cell> corners(plane.size());
   for (int j = 0; j <= height; ++j) {
     for (int i = 0; i <= width; ++i) {
-      corners[j * (width + 1) + i] =
-          CellAt(tags, Project(plane_from_image, Eigen::Vector2d(i - 0.5, j - 0.5)));
+      const int k = j * (width + 1) + i;
+      plane[k] = Project(plane_from_image, Eigen::Vector2d(i - 0.5, j - 0.5));
+      corners[k] = CellAt(tags, plane[k]);
     }
   }
   cv::Mat out(height, width, CV_64FC1);
   for (int j = 0; j < height; ++j) {
     for (int i = 0; i < width; ++i) {
-      const Cell& c = corners[j * (width + 1) + i];
-      if (c == corners[j * (width + 1) + i + 1] && c == corners[(j + 1) * (width + 1) + i] &&
-          c == corners[(j + 1) * (width + 1) + i + 1]) {
+      const std::array<int, 4> at = {j * (width + 1) + i, j * (width + 1) + i + 1,
+                                     (j + 1) * (width + 1) + i, (j + 1) * (width + 1) + i + 1};
+      const Cell& c = corners[at[0]];
+      if (c == corners[at[1]] && c == corners[at[2]] && c == corners[at[3]]) {
         out.at<double>(j, i) = c.value;
         continue;
       }
@@ -117,21 +154,42 @@ inline cv::Mat RenderCoverage(const std::vector<PrintedTag>& tags,
       // bit apart and their outer ring is white for the families used here,
       // so no other tag can change the pixel's value.
       std::vector<int> candidates;
-      for (const int k : {j * (width + 1) + i, j * (width + 1) + i + 1, (j + 1) * (width + 1) + i,
-                          (j + 1) * (width + 1) + i + 1}) {
+      for (const int k : at) {
         const int tag = corners[k].tag;
         if (tag >= 0 && std::find(candidates.begin(), candidates.end(), tag) == candidates.end()) {
           candidates.push_back(tag);
         }
       }
-      double sum = 0;
-      for (int b = 0; b < kSamples; ++b) {
-        for (int a = 0; a < kSamples; ++a) {
-          const Eigen::Vector2d q(i - 0.5 + (a + 0.5) / kSamples, j - 0.5 + (b + 0.5) / kSamples);
-          sum += CellAt(tags, Project(plane_from_image, q), candidates).value;
+      Eigen::Vector2d lo = plane[at[0]], hi = plane[at[0]];
+      for (const int k : at) {
+        lo = lo.cwiseMin(plane[k]);
+        hi = hi.cwiseMax(plane[k]);
+      }
+      double ink = 0;
+      for (const int tag : candidates) {
+        const PrintedTag& t = tags[tag];
+        const double bit = t.size / t.width_at_border;
+        auto bit_index = [&](double v, double origin) {
+          return static_cast<int>(std::floor((v - origin) / bit + t.border_offset));
+        };
+        const int x0 = std::max(0, bit_index(lo.x(), t.x0));
+        const int x1 = std::min(t.code.cols - 1, bit_index(hi.x(), t.x0));
+        const int y0 = std::max(0, bit_index(lo.y(), t.y0));
+        const int y1 = std::min(t.code.rows - 1, bit_index(hi.y(), t.y0));
+        for (int by = y0; by <= y1; ++by) {
+          for (int bx = x0; bx <= x1; ++bx) {
+            if (t.code.at<uint8_t>(by, bx) != 0) continue;  // paper
+            const double px = t.x0 + (bx - t.border_offset) * bit;
+            const double py = t.y0 + (by - t.border_offset) * bit;
+            ink += AreaInPixel(
+                {Project(image_from_plane, {px, py}), Project(image_from_plane, {px + bit, py}),
+                 Project(image_from_plane, {px + bit, py + bit}),
+                 Project(image_from_plane, {px, py + bit})},
+                i, j);
+          }
         }
       }
-      out.at<double>(j, i) = sum / (kSamples * kSamples);
+      out.at<double>(j, i) = 1.0 - ink;
     }
   }
   return out;

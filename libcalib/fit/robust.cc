@@ -1,0 +1,219 @@
+#include "libcalib/fit/robust.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <stdexcept>
+
+#include "libcalib/eval/error_measures.h"
+#include "libcalib/fit/parameterization.h"
+#include "libcalib/fit/refine.h"
+#include "libcalib/fit/unknowns.h"
+
+namespace rtscalib {
+namespace {
+
+// Medians of the chi distribution: sqrt of chi-square's median (3 dof:
+// 2.3660, 2 dof: 2 ln 2).
+constexpr double kChi3Median = 1.5382, kChi2Median = 1.1774;
+// Rows per robust sigma along the distance: the median of 40 chi values
+// is good to about 10 %.
+constexpr size_t kRun = 40;
+// Robust sigmas below this fraction of the a-priori sigma are raised to it.
+constexpr double kSigmaFloor = 0.01;
+const char* const kGroupNames[3] = {"EDM rows", "camera rows", "pixels"};
+const char* const kUnits[3] = {"m", "m", "px"};
+
+struct Row {
+  int group = 0;  // 0 EDM, 1 camera rows, 2 pixels
+  int index = 0;
+  double r = 0;  // |residual|, NaN when the model cannot evaluate the row
+};
+
+std::vector<Row> RowResiduals(const Observations& obs, const UsedRows& used,
+                              const InstrumentModel& model) {
+  const Observations est = WithEstimates(obs, model);
+  std::vector<Row> out;
+  std::vector<Record> records;
+  for (int i : used.records) records.push_back(est.records[i]);
+  for (const RecordResidual& rr : RecordResiduals(model, records)) {
+    const int i = used.records[rr.index];
+    out.push_back(
+        {obs.records[i].tool == Tool::kEdm ? 0 : 1, i, rr.valid ? rr.distance : std::nan("")});
+  }
+  std::vector<PixelObservation> pixels;
+  for (int i : used.pixels) pixels.push_back(est.pixels[i]);
+  for (const PixelResidual& pr : PixelResiduals(model, pixels)) {
+    out.push_back({2, used.pixels[pr.index], pr.valid ? pr.delta.norm() : std::nan("")});
+  }
+  return out;
+}
+
+ExcludedRow Excluded(const Observations& obs, const Row& row, const std::string& reason) {
+  const int line = row.group == 2 ? obs.pixels[row.index].line : obs.records[row.index].line;
+  return {row.group == 2, row.index, line, reason};
+}
+
+// Rows of each group flagged; none of a group whose flagged share exceeds
+// max_fraction (then a note).
+void Keep(const std::vector<Row>& rows, const std::vector<ExcludedRow>& flagged,
+          const GrossErrorOptions& options, const char* what, RobustFitResult* out) {
+  int count[3] = {0, 0, 0}, bad[3] = {0, 0, 0};
+  for (const Row& r : rows) ++count[r.group];
+  for (const ExcludedRow& e : flagged) {
+    for (const Row& r : rows) {
+      if (r.index == e.index && (r.group == 2) == e.pixel) {
+        ++bad[r.group];
+        break;
+      }
+    }
+  }
+  for (const ExcludedRow& e : flagged) {
+    int group = 2;
+    if (!e.pixel) {
+      for (const Row& r : rows) {
+        if (!(r.group == 2) && r.index == e.index) group = r.group;
+      }
+    }
+    if (bad[group] <= options.max_fraction * count[group]) out->gross.push_back(e);
+  }
+  for (int g = 0; g < 3; ++g) {
+    if (bad[g] > options.max_fraction * count[g]) {
+      out->notes.push_back(std::string("gross errors: ") + std::to_string(bad[g]) + " of " +
+                           std::to_string(count[g]) + " " + kGroupNames[g] + " " + what +
+                           ", more than fit.gross_errors.max_fraction; none excluded: the model "
+                           "or the a-priori sigmas, not single rows, are wrong");
+    }
+  }
+}
+
+}  // namespace
+
+std::string GrossErrorOptions::Check() const {
+  if (!(loss_scale > 0) || !std::isfinite(loss_scale))
+    return "fit.gross_errors.loss_scale must be > 0 [sigmas]";
+  if (!(reject > 1) || !std::isfinite(reject))
+    return "fit.gross_errors.reject must be > 1 [sigmas]";
+  if (!(max_fraction > 0 && max_fraction < 1))
+    return "fit.gross_errors.max_fraction must be in (0, 1)";
+  return "";
+}
+
+RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& options,
+                                     const GrossErrorOptions& robust, InstrumentModel* model) {
+  const std::string problem = robust.Check();
+  if (!problem.empty()) throw std::invalid_argument(problem);
+  RobustFitResult out;
+  if (!robust.enabled) return out;
+  const UsedRows used = SelectRows(obs, options, model->NumZooms(), UnknownZoom::kThrow);
+
+  // 1. Rows the start cannot evaluate.
+  const std::vector<Row> at_start = RowResiduals(obs, used, *model);
+  std::vector<ExcludedRow> unusable;
+  for (const Row& r : at_start) {
+    if (!std::isfinite(r.r)) {
+      unusable.push_back(Excluded(obs, r,
+                                  "the starting model cannot evaluate this row (a known point "
+                                  "behind the camera or a pixel outside the distortion's "
+                                  "trusted region)"));
+    }
+  }
+  Keep(at_start, unusable, robust, "cannot be evaluated at the start", &out);
+  Observations usable = obs;
+  std::vector<int> record_map, pixel_map;  // usable index -> obs index
+  {
+    std::vector<bool> drop_r(obs.records.size()), drop_p(obs.pixels.size());
+    for (const ExcludedRow& e : out.gross) (e.pixel ? drop_p : drop_r)[e.index] = true;
+    usable.records.clear();
+    usable.pixels.clear();
+    for (size_t i = 0; i < obs.records.size(); ++i) {
+      if (drop_r[i]) continue;
+      usable.records.push_back(obs.records[i]);
+      record_map.push_back(static_cast<int>(i));
+    }
+    for (size_t i = 0; i < obs.pixels.size(); ++i) {
+      if (drop_p[i]) continue;
+      usable.pixels.push_back(obs.pixels[i]);
+      pixel_map.push_back(static_cast<int>(i));
+    }
+  }
+
+  // 2. The Cauchy fit.
+  FitOptions o = options;
+  o.loss = RobustLoss::kCauchy;
+  o.loss_scale = robust.loss_scale;
+  o.reestimate_sigmas = false;
+  o.compute_covariance = false;
+  Refine(usable, o, model);
+
+  // 3. Robust sigmas: per group (EDM rows, camera rows of a zoom, pixels of
+  // a zoom) and, for records, along the distance: angle noise grows with d,
+  // so rows sorted by d form runs of kRun rows with a sigma each (the last
+  // run takes the remainder).
+  const UsedRows used2 = SelectRows(usable, options, model->NumZooms(), UnknownZoom::kThrow);
+  const std::vector<Row> rows = RowResiduals(usable, used2, *model);
+  std::map<std::pair<int, int>, std::vector<int>> groups;  // (group, zoom) -> rows
+  for (int k = 0; k < static_cast<int>(rows.size()); ++k) {
+    const Row& r = rows[k];
+    const int zoom = r.group == 2 ? usable.pixels[r.index].zoom
+                                  : (r.group == 1 ? usable.records[r.index].zoom : 0);
+    groups[{r.group, zoom}].push_back(k);
+  }
+  std::vector<double> sigma_of(rows.size(), 0.0);
+  for (auto& [key, members] : groups) {
+    if (key.first < 2) {
+      std::stable_sort(members.begin(), members.end(), [&](int a, int b) {
+        return usable.records[rows[a].index].d < usable.records[rows[b].index].d;
+      });
+    }
+    const size_t run = key.first < 2 ? std::max<size_t>(kRun, 1) : members.size();
+    for (size_t begin = 0; begin < members.size();) {
+      size_t end = std::min(members.size(), begin + run);
+      if (members.size() - end < run) end = members.size();
+      std::vector<double> norms;
+      for (size_t k = begin; k < end; ++k) {
+        if (std::isfinite(rows[members[k]].r)) norms.push_back(rows[members[k]].r);
+      }
+      double s = 0;
+      if (!norms.empty()) {
+        std::nth_element(norms.begin(), norms.begin() + norms.size() / 2, norms.end());
+        s = norms[norms.size() / 2] / (key.first == 2 ? kChi2Median : kChi3Median);
+      }
+      for (size_t k = begin; k < end; ++k) sigma_of[members[k]] = s;
+      out.robust_sigma[key.first] = std::max(out.robust_sigma[key.first], s);
+      begin = end;
+    }
+  }
+
+  // 4. Rows beyond `reject` robust sigmas.
+  std::vector<ExcludedRow> flagged;
+  const double apriori[3] = {options.sigma_edm_m, options.sigma_cam_m, options.sigma_pixel_px};
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const Row& r = rows[k];
+    // Noise-free data leave round-off (1e-14 m) with a robust sigma of
+    // 1e-16: the sigma never goes below 1 % of the a-priori one.
+    const double s = std::max(sigma_of[k], kSigmaFloor * apriori[r.group]);
+    const double limit = robust.reject * s;
+    if (std::isfinite(r.r) && !(r.r > limit && s > 0)) continue;
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "residual %.4g %s after the robust fit, %.1f robust sigmas (sigma %.3g %s of "
+                  "the %s like it; limit %.3g sigmas)",
+                  r.r, kUnits[r.group], s > 0 ? r.r / s : 0.0, s, kUnits[r.group],
+                  kGroupNames[r.group], robust.reject);
+    flagged.push_back(Excluded(usable, r, buf));
+  }
+  const size_t before = out.gross.size();
+  Keep(rows, flagged, robust, "beyond the limit after the robust fit", &out);
+  for (size_t k = before; k < out.gross.size(); ++k) {
+    ExcludedRow& e = out.gross[k];
+    e.index = e.pixel ? pixel_map[e.index] : record_map[e.index];
+  }
+  std::sort(out.gross.begin(), out.gross.end(), [](const ExcludedRow& a, const ExcludedRow& b) {
+    return a.pixel != b.pixel ? !a.pixel : a.index < b.index;
+  });
+  return out;
+}
+
+}  // namespace rtscalib
