@@ -6,8 +6,12 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
+
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
 
 #include "libcalib/io/number_text.h"
 
@@ -328,25 +332,89 @@ YamlDocument YamlDocument::Load(const std::string& path) {
   return Parse(text.str(), path);
 }
 
+namespace {
+
+// Where a document's first content is (a scalar, a collection or an alias);
+// a document without content (a trailing `---`) has none.
+class FirstContent : public YAML::EventHandler {
+ public:
+  std::optional<YAML::Mark> mark;
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { Seen(m); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                const std::string&) override {
+    Seen(m);
+  }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
+    Seen(m);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
+    Seen(m);
+  }
+  void OnMapEnd() override {}
+
+ private:
+  void Seen(const YAML::Mark& m) {
+    if (!mark) mark = m;
+  }
+};
+
+// Documents looked at after the first. yaml-cpp 0.7's LoadAll never returns
+// on some malformed text (", 2]" : the parser hands out empty documents
+// without advancing, and LoadAll collects them until memory runs out; found
+// by fuzz/yaml_fuzzer.cc), so the documents are walked with a bound.
+constexpr int kMaxDocuments = 16;
+
+}  // namespace
+
 YamlDocument YamlDocument::Parse(const std::string& text, const std::string& name) {
   auto state = std::make_shared<State>();
   state->file = name;
-  std::vector<YAML::Node> documents;
   try {
-    documents = YAML::LoadAll(text);
+    state->root = YAML::Load(text);
+    // A second document (after `---`) would be silently ignored by a reader
+    // that takes the first: its keys would never take effect. An empty one
+    // (a trailing `---`) holds no keys.
+    std::stringstream stream(text);
+    YAML::Parser parser(stream);
+    for (int i = 0; i < kMaxDocuments; ++i) {
+      FirstContent content;
+      if (!parser.HandleNextDocument(content)) break;
+      if (i == 0 || !content.mark) continue;
+      // What the document holds, parsed from where its content starts.
+      std::string got;
+      try {
+        got = Brief(YAML::Load(text.substr(std::min<size_t>(content.mark->pos, text.size()))));
+      } catch (const YAML::Exception&) {
+        got = "a document at line " + std::to_string(Line(*content.mark));
+      }
+      throw InputError::File(name, Line(*content.mark), "second YAML document",
+                             "one YAML document per file (remove the '---' line before it)", got,
+                             Column(*content.mark));
+    }
   } catch (const YAML::Exception& e) {
     throw InputError::File(name, Line(e.mark), "YAML syntax", "valid YAML", e.msg, Column(e.mark));
   }
-  // A second document (after `---`) would be silently ignored by a reader
-  // that takes the first: its keys would never take effect. An empty one
-  // (a trailing `---`) holds no keys.
-  for (size_t i = 1; i < documents.size(); ++i) {
-    if (documents[i].IsNull()) continue;
-    throw InputError::File(name, Line(documents[i].Mark()), "second YAML document",
-                           "one YAML document per file (remove the '---' line before it)",
-                           Brief(documents[i]), Column(documents[i].Mark()));
+  // yaml-cpp reads some malformed text as an empty document (", 2]" is
+  // null): text beyond comments and document markers that gave no value is
+  // an error, not an empty config.
+  if (state->root.IsNull()) {
+    std::istringstream lines(text);
+    std::string line;
+    for (int number = 1; std::getline(lines, line); ++number) {
+      const size_t first = line.find_first_not_of(" \t\r");
+      if (first == std::string::npos || line[first] == '#') continue;
+      const std::string content = line.substr(first);
+      if (content.rfind("---", 0) == 0 || content.rfind("...", 0) == 0) continue;
+      throw InputError::File(name, number, "YAML syntax", "a YAML mapping (key: value lines)",
+                             content.substr(0, 60), static_cast<int>(first) + 1);
+    }
   }
-  if (!documents.empty()) state->root = documents.front();
   YamlDocument doc(state);
   doc.Root().RequireMap();
   return doc;

@@ -2,6 +2,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <cmath>
 
@@ -188,6 +189,24 @@ TEST(YamlReader, SyntaxErrorsAndBadRoot) {
   EXPECT_THAT(root.expected, HasSubstr("mapping"));
   const InputError missing = CatchInputError([] { YamlDocument::Load("/nonexistent/c.yaml"); });
   EXPECT_EQ(missing.file, "/nonexistent/c.yaml");
+}
+
+// yaml-cpp 0.7's LoadAll never returns on this text (the parser hands out
+// empty documents without advancing; found by fuzz/yaml_fuzzer.cc, which ate
+// 24 GB): the reader walks the documents with a bound. yaml-cpp reads the
+// text as an empty document, which is no config: an error naming the first
+// line that gave no value. A memory limit keeps a regression
+// from taking the machine down (not under ASan, whose shadow memory needs
+// the address space).
+TEST(YamlReader, TextOnWhichLoadAllNeverReturnsIsAnError) {
+#ifndef __SANITIZE_ADDRESS__
+  const rlimit two_gb{2L << 30, 2L << 30};
+  ASSERT_EQ(setrlimit(RLIMIT_AS, &two_gb), 0);
+#endif
+  const InputError e = CatchInputError(
+      [] { YamlDocument::Parse(", 2, 3]}\nother: *a\nmerge: {<<: *a, y: 2}\n", "f.yaml"); });
+  EXPECT_EQ(std::string(e.what()),
+            "f.yaml:1:1: YAML syntax: expected a YAML mapping (key: value lines), got ', 2, 3]}'");
 }
 
 // A second document would be ignored by a reader that takes the first, so
