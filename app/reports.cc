@@ -198,6 +198,7 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                {"pixels", r.obs.pixels.size()},
                {"records_source", r.obs.records_source},
                {"pixels_source", r.obs.pixels_source},
+               {"angle_unit", AngleUnitName(r.obs.angle_unit)},
                {"simulated", r.simulated},
                {"excluded_critical_region", r.calibration.fit.excluded_critical}};
   if (r.calibration.extraction) {
@@ -368,7 +369,12 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   o << "rtscalib report\n===============\nconfig: " << config.config_path << "\n";
   o << "data: " << r.obs.records.size() << " records (" << r.obs.records_source << "), "
     << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "")
-    << "\n\n";
+    << "\n";
+  // The readings' unit as the files gave it; every angle below is in radians
+  // (or the unit its column names), converted when the files were read.
+  o << "readings (phi, theta) given in: " << AngleUnitName(r.obs.angle_unit)
+    << (r.obs.angle_unit == AngleUnit::kRad ? "" : " (data.angle_unit)")
+    << "; angles below in radians unless a unit is named\n\n";
   if (r.calibration.extraction) {
     dh_table(r.calibration.extraction->model, "Table 1 - extracted DH parameters (Klug Sec. 3)");
     o << "\n";

@@ -32,6 +32,9 @@ const Names<FaceMode> kFaceModeNames = {{"joint", FaceMode::kJoint},
 const Names<IntrinsicsMode> kIntrinsicsNames = {{"auto", IntrinsicsMode::kAuto},
                                                 {"fit", IntrinsicsMode::kFit},
                                                 {"fixed", IntrinsicsMode::kFixed}};
+const Names<AngleUnit> kAngleUnitChoices = {{AngleUnitName(AngleUnit::kRad), AngleUnit::kRad},
+                                             {AngleUnitName(AngleUnit::kDeg), AngleUnit::kDeg},
+                                             {AngleUnitName(AngleUnit::kGon), AngleUnit::kGon}};
 const Names<RobustLoss> kLossNames = {
     {"none", RobustLoss::kNone}, {"huber", RobustLoss::kHuber}, {"cauchy", RobustLoss::kCauchy}};
 
@@ -205,6 +208,7 @@ void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) 
       *path = resolved;
     }
   }
+  m.ReadEnum("angle_unit", kAngleUnitChoices, &out->angle_unit);
   // A photo session needs its boards and vice versa (SPEC 7).
   if (out->shots_path.empty() != out->targets_path.empty()) {
     const char* given = out->shots_path.empty() ? "targets" : "shots";
@@ -703,6 +707,7 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
       e << YAML::Key << key << YAML::Value;
       EmitYamlText(e, *path);
     }
+    e << YAML::Key << "angle_unit" << YAML::Value << NameOf(kAngleUnitChoices, c.angle_unit);
     e << YAML::EndMap;
   }
 

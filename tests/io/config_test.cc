@@ -565,3 +565,40 @@ TEST(Config, BoardPosesMustBeKnownOrUnknown) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+TEST(ConfigAngleUnit, DefaultIsRadiansAndEachNameIsRead) {
+  TempDir dir;
+  dir.Write("records.csv", "x\n");
+  EXPECT_EQ(LoadConfig(dir.Write("a.yaml", "data: {records: records.csv}\n")).angle_unit,
+            AngleUnit::kRad);
+  for (AngleUnit unit : {AngleUnit::kRad, AngleUnit::kDeg, AngleUnit::kGon}) {
+    const std::string text =
+        std::string("data: {records: records.csv, angle_unit: ") + AngleUnitName(unit) + "}\n";
+    const RunConfig c = LoadConfig(dir.Write("b.yaml", text));
+    EXPECT_EQ(c.angle_unit, unit);
+    // --write-config spells it out and reads back the same.
+    const RunConfig again = LoadConfig(dir.Write("c.yaml", DumpConfig(c)));
+    EXPECT_EQ(again.angle_unit, unit);
+  }
+}
+
+TEST(ConfigAngleUnit, UnknownUnitNamesKeyExpectedValuesAndWhatCame) {
+  TempDir dir;
+  dir.Write("records.csv", "x\n");
+  const InputError e =
+      ConfigError(dir, "data:\n  records: records.csv\n  angle_unit: degrees\n");
+  EXPECT_EQ(e.file, dir.Path("run.yaml"));
+  EXPECT_EQ(e.key, "data.angle_unit");
+  EXPECT_EQ(e.line, 3);
+  EXPECT_EQ(e.got, "degrees");
+  for (const char* name : {"rad", "deg", "gon"}) EXPECT_THAT(e.expected, HasSubstr(name));
+  EXPECT_THAT(e.what(), HasSubstr("run.yaml:3"));
+  EXPECT_THAT(e.what(), HasSubstr("data.angle_unit"));
+  EXPECT_THAT(e.what(), HasSubstr("'degrees'"));
+}
+
+}  // namespace
+}  // namespace rtscalib
