@@ -15,8 +15,8 @@ namespace rtscalib::app {
 inline AngleUnit AngleUnitArg(const std::string& command, const std::string& name) {
   const std::optional<AngleUnit> unit = AngleUnitFromName(name);
   if (!unit) {
-    throw std::invalid_argument(command + ": --angle-unit: expected rad, deg or gon, got '" +
-                                name + "'");
+    throw std::invalid_argument(command + ": --angle-unit: expected rad, deg or gon, got '" + name +
+                                "'");
   }
   return *unit;
 }

@@ -368,8 +368,7 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
 
   o << "rtscalib report\n===============\nconfig: " << config.config_path << "\n";
   o << "data: " << r.obs.records.size() << " records (" << r.obs.records_source << "), "
-    << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "")
-    << "\n";
+    << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "") << "\n";
   // The readings' unit as the files gave it; every angle below is in radians
   // (or the unit its column names), converted when the files were read.
   o << "readings (phi, theta) given in: " << AngleUnitName(r.obs.angle_unit)

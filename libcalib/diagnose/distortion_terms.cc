@@ -106,8 +106,7 @@ std::string ConfigLine(const InstrumentModel& model, Effect group,
   for (const std::vector<int>& f : fitted) {
     if (count[f] > count[common]) common = f;
   }
-  std::string line =
-      std::string("model.") + Info(group).name + ": {coefficients: " + List(common);
+  std::string line = std::string("model.") + Info(group).name + ": {coefficients: " + List(common);
   std::string zooms;
   for (int z = 0; z < model.NumZooms(); ++z) {
     if (fitted[z] == common) continue;

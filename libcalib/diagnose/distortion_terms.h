@@ -31,9 +31,9 @@
 namespace rtscalib {
 
 struct DistortionTermRules {
-  double max_t = 2.0;          // |v| / s below this: not distinguishable from 0
+  double max_t = 2.0;              // |v| / s below this: not distinguishable from 0
   double max_corner_sigmas = 1.0;  // corner_px above this many pixel sigmas: badly determined
-  double max_rho = 0.99;       // |correlation| above this with a coefficient of the same zoom
+  double max_rho = 0.99;           // |correlation| above this with a coefficient of the same zoom
 };
 
 // One fitted coefficient and what the data say about it.
@@ -43,11 +43,11 @@ struct DistortionTerm {
   std::string name;  // "k3"
   Effect group = Effect::kRadialDistortion;
   double value = 0, sigma = 0;
-  double corner_px = 0;  // sigma's effect at the farthest image corner [px]
-  double rho = 0;        // largest |correlation| with another fitted coefficient of the zoom
-  std::string partner;   // that coefficient's name ("" when there is none)
-  bool drop = false;     // the rule above holds and it is the zoom's and group's weakest
-  std::string reason;    // why, in words (drop only)
+  double corner_px = 0;     // sigma's effect at the farthest image corner [px]
+  double rho = 0;           // largest |correlation| with another fitted coefficient of the zoom
+  std::string partner;      // that coefficient's name ("" when there is none)
+  bool drop = false;        // the rule above holds and it is the zoom's and group's weakest
+  std::string reason;       // why, in words (drop only)
   std::string config_line;  // the group's config line with it dropped (drop only)
 };
 

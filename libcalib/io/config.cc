@@ -33,8 +33,8 @@ const Names<IntrinsicsMode> kIntrinsicsNames = {{"auto", IntrinsicsMode::kAuto},
                                                 {"fit", IntrinsicsMode::kFit},
                                                 {"fixed", IntrinsicsMode::kFixed}};
 const Names<AngleUnit> kAngleUnitChoices = {{AngleUnitName(AngleUnit::kRad), AngleUnit::kRad},
-                                             {AngleUnitName(AngleUnit::kDeg), AngleUnit::kDeg},
-                                             {AngleUnitName(AngleUnit::kGon), AngleUnit::kGon}};
+                                            {AngleUnitName(AngleUnit::kDeg), AngleUnit::kDeg},
+                                            {AngleUnitName(AngleUnit::kGon), AngleUnit::kGon}};
 const Names<RobustLoss> kLossNames = {
     {"none", RobustLoss::kNone}, {"huber", RobustLoss::kHuber}, {"cauchy", RobustLoss::kCauchy}};
 

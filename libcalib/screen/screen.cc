@@ -104,9 +104,8 @@ bool InAngleRange(double x) { return x >= -kTwoPi && x < 2.0 * kTwoPi; }
 // reads them so. Read in degrees or gon already: the unit is wrong too.
 std::string UnitCause(const std::vector<RowView>& rows, AngleUnit unit) {
   if (unit != AngleUnit::kRad) {
-    return std::string("; the file's angles leave that range even read in ") +
-           AngleUnitName(unit) + " (data.angle_unit: " + AngleUnitName(unit) +
-           "): check the key and the file";
+    return std::string("; the file's angles leave that range even read in ") + AngleUnitName(unit) +
+           " (data.angle_unit: " + AngleUnitName(unit) + "): check the key and the file";
   }
   double max_abs = 0;
   std::vector<double> theta1;
@@ -153,9 +152,9 @@ void CheckAngles(const std::string& file, const std::vector<RowView>& rows, Angl
       phi_range.Empty() && theta_range.Empty() ? std::string() : UnitCause(rows, unit);
   // "in radians" for files in radians; "(read in deg)" otherwise: the range
   // is checked on the converted values either way.
-  const std::string as_read =
-      unit == AngleUnit::kRad ? std::string(" in radians")
-                              : std::string(" (read in ") + AngleUnitName(unit) + ")";
+  const std::string as_read = unit == AngleUnit::kRad
+                                  ? std::string(" in radians")
+                                  : std::string(" (read in ") + AngleUnitName(unit) + ")";
   const std::string range = unit == AngleUnit::kRad ? "[-2 pi, 4 pi)" : "[-2 pi, 4 pi) rad";
   phi_range.Report(file, "phi", "a horizontal angle" + as_read + " within " + range + cause, out);
   theta_range.Report(file, "theta", "a zenith angle" + as_read + " within " + range + cause, out);

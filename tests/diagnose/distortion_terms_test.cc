@@ -93,8 +93,8 @@ TEST(DistortionTerms, TheSceneLeavesTheImageCornersEmpty) {
   const double half_diagonal = std::hypot(cam.width / 2.0, cam.height / 2.0);
   double farthest = 0;
   for (const PixelObservation& p : s.obs.pixels) {
-    farthest = std::max(farthest, std::hypot(p.uv.x() - cam.intrinsics[2],
-                                             p.uv.y() - cam.intrinsics[3]));
+    farthest =
+        std::max(farthest, std::hypot(p.uv.x() - cam.intrinsics[2], p.uv.y() - cam.intrinsics[3]));
   }
   // The premise of the tests below: points reach less than 80 % of the
   // corner's radius (the coverage warning's limit, docs/conventions.md).
@@ -133,9 +133,8 @@ TEST(DistortionTerms, FittingK3WithoutCornersSuggestsDroppingIt) {
   EXPECT_TRUE(said);
   for (const DistortionTerm& t : d.distortion_terms.terms) {
     std::printf("zoom %d %s = %+.5f +- %.5f (true %+.5f), corner %.3g px, rho %.4f (%s)%s\n",
-                t.zoom, t.name.c_str(), t.value, t.sigma,
-                s.truth.cams[0].distortion[t.index], t.corner_px, t.rho, t.partner.c_str(),
-                t.drop ? " DROP" : "");
+                t.zoom, t.name.c_str(), t.value, t.sigma, s.truth.cams[0].distortion[t.index],
+                t.corner_px, t.rho, t.partner.c_str(), t.drop ? " DROP" : "");
   }
 }
 

@@ -595,8 +595,7 @@ TEST(ConfigAngleUnit, DefaultIsRadiansAndEachNameIsRead) {
 TEST(ConfigAngleUnit, UnknownUnitNamesKeyExpectedValuesAndWhatCame) {
   TempDir dir;
   dir.Write("records.csv", "x\n");
-  const InputError e =
-      ConfigError(dir, "data:\n  records: records.csv\n  angle_unit: degrees\n");
+  const InputError e = ConfigError(dir, "data:\n  records: records.csv\n  angle_unit: degrees\n");
   EXPECT_EQ(e.file, dir.Path("run.yaml"));
   EXPECT_EQ(e.key, "data.angle_unit");
   EXPECT_EQ(e.line, 3);

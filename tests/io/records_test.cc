@@ -390,8 +390,8 @@ std::string AngleRows(double scale, const std::vector<std::pair<double, double>>
   for (size_t i = 0; i < angles.size(); ++i) {
     const bool edm = i % 2 == 0;
     text += std::string(i % 3 == 0 ? "2" : "1") + ",1," + FormatDouble(angles[i].first * scale) +
-            "," + FormatDouble(angles[i].second * scale) + (edm ? ",edm,,," : ",cam,320.5,240.25,") +
-            "2.5,0.1,0.2,0.3,grid\n";
+            "," + FormatDouble(angles[i].second * scale) +
+            (edm ? ",edm,,," : ",cam,320.5,240.25,") + "2.5,0.1,0.2,0.3,grid\n";
   }
   return text;
 }
@@ -476,9 +476,9 @@ TEST(PixelsAngleUnit, DegreesGiveTheRadianObservations) {
   TempDir dir;
   const std::string header = "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v\n";
   const double phi = 1.2345678901234567, theta = 1.4142135623730951;
-  const PixelsFile rad = ReadPixels(dir.Write(
-      "rad.csv", header + "1,0," + FormatDouble(phi) + "," + FormatDouble(theta) +
-                     ",s1,3,0,1,2,3,10.5,20.5\n"));
+  const PixelsFile rad =
+      ReadPixels(dir.Write("rad.csv", header + "1,0," + FormatDouble(phi) + "," +
+                                          FormatDouble(theta) + ",s1,3,0,1,2,3,10.5,20.5\n"));
   const PixelsFile deg = ReadPixels(
       dir.Write("deg.csv", header + "1,0," + FormatDouble(phi * 180 / M_PI) + "," +
                                FormatDouble(theta * 180 / M_PI) + ",s1,3,0,1,2,3,10.5,20.5\n"),

@@ -155,7 +155,7 @@ TEST(ShotsAngleUnit, DegreesAndGonGiveTheRadianReadings) {
   dir.Write("a.png", "x");
   dir.Write("b.png", "x");
   const double phi[2] = {0.123456789012345, 5.4321098765432};
-  const double theta[2] = {1.5707963267948966, 4.6}; // face 1, face 2
+  const double theta[2] = {1.5707963267948966, 4.6};  // face 1, face 2
   auto file = [&](const char* name, double scale) {
     std::string text = kHeader;
     for (int i = 0; i < 2; ++i) {
