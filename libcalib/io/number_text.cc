@@ -49,8 +49,7 @@ std::string FormatDouble(double x) {
 
 std::string FormatReading(double rad, AngleUnit unit) {
   if (unit == AngleUnit::kRad) return FormatDouble(rad);
-  const double scale = RadiansPer(unit);
-  double best = rad / scale, up = best, down = best;
+  double best = rad / M_PI * HalfTurn(unit), up = best, down = best;
   for (int step = 0; step < 4 && ReadingToRadians(best, unit) != rad; ++step) {
     up = std::nextafter(up, INFINITY);
     down = std::nextafter(down, -INFINITY);

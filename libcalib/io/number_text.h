@@ -26,7 +26,7 @@ std::optional<long long> ParseInteger(std::string_view text);
 std::string FormatDouble(double x);
 // A reading of `rad` radians written in `unit` (%.17g), chosen so that
 // reading it back in `unit` (ReadingToRadians) gives `rad` exactly whenever
-// such a number lies within a few ulps of rad / RadiansPer(unit): a file read
+// such a number lies within a few ulps of rad / pi * HalfTurn(unit): a file read
 // in degrees and written back keeps its readings.
 std::string FormatReading(double rad, AngleUnit unit);
 // The shortest text that reads back to the same double ("1e-05" rather than

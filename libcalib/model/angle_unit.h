@@ -30,23 +30,26 @@ inline std::optional<AngleUnit> AngleUnitFromName(std::string_view name) {
   return std::nullopt;
 }
 
-// Radians per unit.
-inline double RadiansPer(AngleUnit u) {
+// Units per half turn (pi radians).
+inline double HalfTurn(AngleUnit u) {
   switch (u) {
     case AngleUnit::kRad:
-      return 1.0;
+      return M_PI;
     case AngleUnit::kDeg:
-      return M_PI / 180.0;
+      return 180.0;
     case AngleUnit::kGon:
-      return M_PI / 200.0;
+      return 200.0;
   }
-  return 1.0;
+  return M_PI;
 }
 
-// A reading in `u` as radians: one multiplication, so that deg and gon files
-// give the radians of a rad file to within an ulp or two (~2e-16 relative).
+// A reading in `u` as radians: (reading / half turn) * pi, so that the
+// quarter and half turns of deg and gon files (90, 180, 100, 200, ...) are
+// exactly the M_PI / 2, M_PI of a rad file (a face-1 zenith angle of 200 gon
+// stays within [0, pi]); otherwise two roundings, within ~2 ulp (~4.4e-16
+// relative) of the exact value.
 inline double ReadingToRadians(double reading, AngleUnit u) {
-  return u == AngleUnit::kRad ? reading : reading * RadiansPer(u);
+  return u == AngleUnit::kRad ? reading : reading / HalfTurn(u) * M_PI;
 }
 
 }  // namespace rtscalib

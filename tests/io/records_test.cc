@@ -380,9 +380,10 @@ namespace {
 // data.angle_unit (libcalib/model/angle_unit.h): readings written in degrees
 // or gon give the observations of the same readings written in radians.
 // Tolerance 1e-15 relative (the issue's): each file holds the reading with
-// 17 significant digits (exact to 0.5 ulp) and the reader multiplies once by
-// pi/180 or pi/200 (0.5 ulp more, plus the constant's own 0.5 ulp), so deg
-// and gon differ from the radians by at most ~2 ulp = 4.4e-16 relative.
+// 17 significant digits (exact to 0.5 ulp; the test's own scaling of the
+// radians adds 0.5-1 ulp) and the reader divides by 180 or 200 and
+// multiplies by pi (0.5 ulp each), so deg and gon differ from the radians by
+// at most ~3 ulp = 6.7e-16 relative.
 constexpr double kUnitRelTolerance = 1e-15;
 
 std::string AngleRows(double scale, const std::vector<std::pair<double, double>>& angles) {
@@ -441,16 +442,29 @@ TEST(RecordsAngleUnit, DegreesAndGonGiveTheRadianObservations) {
   }
 }
 
+// Quarter and half turns are exact: 180 deg and 200 gon are M_PI itself, so
+// a face-1 zenith angle of a half turn stays within SPEC 1's [0, pi].
+TEST(RecordsAngleUnit, HalfAndQuarterTurnsAreExact) {
+  for (AngleUnit unit : {AngleUnit::kDeg, AngleUnit::kGon}) {
+    const double half = unit == AngleUnit::kDeg ? 180.0 : 200.0;
+    EXPECT_EQ(ReadingToRadians(half, unit), M_PI);
+    EXPECT_EQ(ReadingToRadians(half / 2, unit), M_PI / 2);
+    EXPECT_EQ(ReadingToRadians(1.5 * half, unit), 1.5 * M_PI);
+    EXPECT_EQ(ReadingToRadians(2 * half, unit), 2 * M_PI);
+    EXPECT_EQ(FormatReading(M_PI, unit), unit == AngleUnit::kDeg ? "180" : "200");
+  }
+}
+
 TEST(RecordsAngleUnit, ExactAnglesOfDegreesAndGon) {
   TempDir dir;
   const RecordsFile deg = ReadRecords(
       dir.Write("deg.csv", std::string(kHeader) + "1,0,90,45,edm,,,2,0,0,1,\n"), AngleUnit::kDeg);
-  EXPECT_DOUBLE_EQ(deg.records[0].phi, M_PI / 2);
-  EXPECT_DOUBLE_EQ(deg.records[0].theta, M_PI / 4);
+  EXPECT_EQ(deg.records[0].phi, M_PI / 2);
+  EXPECT_EQ(deg.records[0].theta, M_PI / 4);
   const RecordsFile gon = ReadRecords(
       dir.Write("gon.csv", std::string(kHeader) + "1,0,100,300,edm,,,2,0,0,1,\n"), AngleUnit::kGon);
-  EXPECT_DOUBLE_EQ(gon.records[0].phi, M_PI / 2);
-  EXPECT_DOUBLE_EQ(gon.records[0].theta, 3 * M_PI / 2);
+  EXPECT_EQ(gon.records[0].phi, M_PI / 2);
+  EXPECT_EQ(gon.records[0].theta, 3 * M_PI / 2);
 }
 
 // predict and detect echo a user's rows in the user's unit: written back in

@@ -148,8 +148,9 @@ namespace rtscalib {
 namespace {
 
 // data.angle_unit for shots.csv: degrees and gon give the photos' readings in
-// radians to 1e-15 relative (17-digit text and one multiplication by pi/180
-// or pi/200: ~2 ulp, tests/io/records_test.cc), and the file keeps its unit.
+// radians to 1e-15 relative (17-digit text, a division by 180 or 200 and a
+// multiplication by pi: ~3 ulp, tests/io/records_test.cc), and the file
+// keeps its unit.
 TEST(ShotsAngleUnit, DegreesAndGonGiveTheRadianReadings) {
   TempDir dir;
   dir.Write("a.png", "x");
