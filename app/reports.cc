@@ -72,6 +72,14 @@ json ModelJson(const InstrumentModel& m) {
                {"determined", c.determined}};
     if (s && c.determined && z < (int)m.sigmas.intrinsics.size())
       cj["intrinsics_sigma"] = m.sigmas.intrinsics[z];
+    // Coefficients of enabled groups held by model.<group>.coefficients:
+    // not estimated (model.yaml writes their sigma as `held`).
+    json held = json::array();
+    for (int i = 0; i < kNumDistortion; ++i) {
+      if (m.effects.Has(DistortionGroupOf(i)) && c.distortion_held[i])
+        held.push_back(kDistortionCoefficientNames[i]);
+    }
+    cj["distortion_held"] = held;
     cams.push_back(cj);
   }
   j["cameras"] = cams;
