@@ -2,9 +2,24 @@
 // returns the process exit code and reports bad input as one clear message.
 #pragma once
 
+#include <optional>
+#include <stdexcept>
 #include <string>
 
+#include "libcalib/model/angle_unit.h"
+
 namespace rtscalib::app {
+
+// The unit an --angle-unit option names (main.cc checks the names already;
+// this is for callers of the Run* functions).
+inline AngleUnit AngleUnitArg(const std::string& command, const std::string& name) {
+  const std::optional<AngleUnit> unit = AngleUnitFromName(name);
+  if (!unit) {
+    throw std::invalid_argument(command + ": --angle-unit: expected rad, deg or gon, got '" + name +
+                                "'");
+  }
+  return *unit;
+}
 
 struct RunArgs {
   std::string config;
@@ -26,6 +41,9 @@ struct PredictArgs {
   std::string out;
   bool force = false;     // allow replacing an existing --out file
   bool skip_bad = false;  // leave out rows the model cannot predict (listed on stderr)
+  // --angle-unit: phi, theta of --records/--pixels (and of --out) in rad, deg
+  // or gon (libcalib/model/angle_unit.h), as data.angle_unit of a config.
+  std::string angle_unit = "rad";
 };
 int RunPredict(const PredictArgs& args);
 
@@ -47,6 +65,9 @@ struct DetectArgs {
   bool keep_unrefined = false;
   bool force = false;  // allow replacing existing output files
   bool quiet = false;
+  // --angle-unit: phi, theta of --shots in rad, deg or gon; pixels.csv is
+  // written in the same unit.
+  std::string angle_unit = "rad";
 };
 int RunDetect(const DetectArgs& args);
 

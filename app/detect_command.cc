@@ -26,7 +26,7 @@ int RunDetect(const DetectArgs& args) {
   }
   const std::map<std::string, int> families = detect::FamilyCodeCounts();
   const TargetScene targets = ReadTargets(args.targets, &families);
-  const ShotsFile shots = ReadShots(args.shots);
+  const ShotsFile shots = ReadShots(args.shots, AngleUnitArg("detect", args.angle_unit));
   for (const std::string& note : shots.notes) std::cerr << "detect: note: " << note << "\n";
 
   detect::PhotoDetectionOptions options;

@@ -123,12 +123,36 @@ json DiagnosisJson(const CalibrationResult& r) {
                      {"size", o.size},
                      {"unit", o.group == ObsGroup::kPixel ? "px" : "m"}});
   }
+  json distortion = json::array();
+  json drop = json::array();
+  for (const DistortionTerm& t : d.distortion_terms.terms) {
+    json e = {{"zoom", t.zoom},
+              {"coefficient", t.name},
+              {"effect", Info(t.group).name},
+              {"value", t.value},
+              {"sigma", t.sigma},
+              {"corner_sigma_px", t.corner_px},
+              {"max_abs_correlation", std::fabs(t.rho)},
+              {"correlated_with", t.partner},
+              {"drop", t.drop}};
+    if (t.drop) {
+      e["reason"] = t.reason;
+      e["config_line"] = t.config_line;
+      drop.push_back({{"zoom", t.zoom},
+                      {"coefficient", t.name},
+                      {"reason", t.reason},
+                      {"config_line", t.config_line}});
+    }
+    distortion.push_back(e);
+  }
   const RankedEffect* next = d.Next();
   json j = {{"model", d.model_description},
             {"verdict", d.verdict},
             {"next", next ? json(next->name) : json()},
             {"ranking", ranking},
             {"unexplained", unexplained},
+            {"distortion_coefficients", distortion},
+            {"drop", drop},
             {"harmonics", harmonics},
             {"outliers",
              {{"critical_w", d.outliers.critical_w},
@@ -184,6 +208,18 @@ std::string DiagnosisText(const CalibrationResult& r) {
           : e.identifiable ? "yes"
                            : "no")
       << "\n";
+  }
+  if (!d.distortion_terms.terms.empty()) {
+    o << "\nFitted distortion coefficients (corner: px the sigma moves the image corners; "
+         "rho: largest |correlation| in the zoom)\n";
+    o << "  zoom  coef   value         sigma      corner [px]  rho    drop\n";
+    for (const DistortionTerm& t : d.distortion_terms.terms) {
+      o << "  " << std::setw(4) << t.zoom << "  " << std::left << std::setw(5) << t.name
+        << std::right << "  " << std::setw(12) << Fmt("%+.4e", t.value) << "  " << std::setw(9)
+        << Fmt("%.2e", t.sigma) << "  " << std::setw(11) << Fmt("%.3g", t.corner_px) << "  "
+        << Fmt("%.3f", std::fabs(t.rho)) << "  " << (t.drop ? "yes: " + t.config_line : "no")
+        << "\n";
+    }
   }
   if (!d.harmonics.unexplained.empty()) {
     o << "\nStructure outside the catalogue (unexplained)\n";

@@ -56,6 +56,10 @@ int main(int argc, char** argv) {
   pred->add_flag("--skip-bad", predict.skip_bad,
                  "leave out rows the model cannot predict and list them (default: stop at the "
                  "first, naming its line)");
+  pred->add_option("--angle-unit", predict.angle_unit,
+                   "unit of phi, theta in the input (and the output): rad | deg | gon, as the "
+                   "config's data.angle_unit (default rad)")
+      ->check(CLI::IsMember({"rad", "deg", "gon"}));
 
   rtscalib::app::RunArgs diag;
   CLI::App* dg = app.add_subcommand(
@@ -87,6 +91,10 @@ int main(int argc, char** argv) {
                 "keep tags whose sub-pixel refinement failed (libapriltag's corners)");
   det->add_flag("--force", detect.force, "replace --out if it exists");
   det->add_flag("--quiet", detect.quiet, "no progress lines on stderr");
+  det->add_option("--angle-unit", detect.angle_unit,
+                  "unit of phi, theta in shots.csv (pixels.csv is written in the same unit): rad "
+                  "| deg | gon, as the config's data.angle_unit (default rad)")
+      ->check(CLI::IsMember({"rad", "deg", "gon"}));
 
   try {
     app.parse(argc, argv);

@@ -13,14 +13,15 @@
 namespace rtscalib::app {
 
 PhotoSessionSummary LoadPhotoSession(const std::string& shots_path, const std::string& targets_path,
-                                     int jobs, Observations* obs, Progress* progress) {
+                                     int jobs, Observations* obs, Progress* progress,
+                                     AngleUnit angle_unit) {
   PhotoSessionSummary out;
   out.shots_path = shots_path;
   out.targets_path = targets_path;
   out.jobs = jobs;
   const std::map<std::string, int> families = detect::FamilyCodeCounts();
   const TargetScene targets = ReadTargets(targets_path, &families);
-  const ShotsFile shots = ReadShots(shots_path);
+  const ShotsFile shots = ReadShots(shots_path, angle_unit);
   for (const std::string& n : shots.notes) progress->Note(n);
   for (const TagBoard& b : targets.boards)
     ++(b.pose_known ? out.boards_with_pose : out.boards_without_pose);

@@ -48,8 +48,10 @@ struct PhotoSessionSummary {
 // Reads shots.csv and targets.yaml, detects every photo with `jobs` threads
 // and appends the corners to obs->pixels (obs->pixels_source = the shots
 // file when obs had no pixels); sets obs->targets and obs->image_sizes.
+// shots.csv's phi, theta are read in `angle_unit` (data.angle_unit).
 // Throws InputError for bad files, unreadable images and mixed sizes.
 PhotoSessionSummary LoadPhotoSession(const std::string& shots_path, const std::string& targets_path,
-                                     int jobs, Observations* obs, Progress* progress);
+                                     int jobs, Observations* obs, Progress* progress,
+                                     AngleUnit angle_unit = AngleUnit::kRad);
 
 }  // namespace rtscalib::app

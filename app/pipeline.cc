@@ -25,15 +25,16 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
   Observations obs;
   if (!config.records_path.empty() || !config.pixels_path.empty() || !config.shots_path.empty()) {
     progress->Step("reading observations");
+    obs.angle_unit = config.angle_unit;
     if (!config.records_path.empty()) {
-      RecordsFile f = ReadRecords(config.records_path);
+      RecordsFile f = ReadRecords(config.records_path, config.angle_unit);
       obs.records = std::move(f.records);
       obs.records_source = config.records_path;
       for (const std::string& n : f.notes) progress->Note(n);
       result->notes.insert(result->notes.end(), f.notes.begin(), f.notes.end());
     }
     if (!config.pixels_path.empty()) {
-      PixelsFile f = ReadPixels(config.pixels_path);
+      PixelsFile f = ReadPixels(config.pixels_path, config.angle_unit);
       obs.pixels = std::move(f.pixels);
       obs.pixels_source = config.pixels_path;
       for (const std::string& n : f.notes) progress->Note(n);
@@ -41,7 +42,7 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
     }
     if (!config.shots_path.empty()) {
       result->photos = LoadPhotoSession(config.shots_path, config.targets_path, config.detect_jobs,
-                                        &obs, progress);
+                                        &obs, progress, config.angle_unit);
       for (const std::string& w : result->photos.warnings) result->notes.push_back("warning: " + w);
     }
     return obs;

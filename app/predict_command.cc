@@ -95,9 +95,10 @@ int RunPredict(const PredictArgs& args) {
   }
   // kKeep also covers a file that appears while predicting.
   const Existing existing = args.force ? Existing::kReplace : Existing::kKeep;
+  const AngleUnit unit = AngleUnitArg("predict", args.angle_unit);
   const CalibratedInstrument instrument = CalibratedInstrument::Load(args.model);
   if (!args.records.empty()) {
-    RecordsFile in = ReadRecords(args.records);
+    RecordsFile in = ReadRecords(args.records, unit);
     BadRows bad(args.records, args.skip_bad, false);
     std::vector<Record> out;
     out.reserve(in.records.size());
@@ -111,12 +112,12 @@ int RunPredict(const PredictArgs& args) {
       }
     }
     WriteFileAtomicWith(
-        args.out, [&](const std::string& tmp) { WriteRecords(tmp, out); }, existing);
+        args.out, [&](const std::string& tmp) { WriteRecords(tmp, out, unit); }, existing);
     bad.Report(in.records.size());
     std::cerr << "predict: " << out.size() << " records -> " << args.out << "\n";
     return 0;
   }
-  PixelsFile in = ReadPixels(args.pixels);
+  PixelsFile in = ReadPixels(args.pixels, unit);
   BadRows bad(args.pixels, args.skip_bad, true);
   std::vector<PixelObservation> out;
   out.reserve(in.pixels.size());
@@ -131,7 +132,7 @@ int RunPredict(const PredictArgs& args) {
     }
   }
   WriteFileAtomicWith(
-      args.out, [&](const std::string& tmp) { WritePixels(tmp, out); }, existing);
+      args.out, [&](const std::string& tmp) { WritePixels(tmp, out, unit); }, existing);
   bad.Report(in.pixels.size());
   std::cerr << "predict: " << out.size() << " pixel rows -> " << args.out << "\n";
   return 0;

@@ -236,6 +236,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     << Esc(config.config_path) << "</code> &middot; " << r.obs.records.size() << " records ("
     << Esc(r.obs.records_source) << "), " << r.obs.pixels.size() << " image points"
     << (r.obs.pixels.empty() ? "" : " (" + Esc(r.obs.pixels_source) + ")")
+    << " &middot; readings given in " << AngleUnitName(r.obs.angle_unit)
     << (r.simulated ? " &middot; simulated data" : "") << "</p>\n";
 
   // 1. Verdict.

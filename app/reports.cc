@@ -72,6 +72,14 @@ json ModelJson(const InstrumentModel& m) {
                {"determined", c.determined}};
     if (s && c.determined && z < (int)m.sigmas.intrinsics.size())
       cj["intrinsics_sigma"] = m.sigmas.intrinsics[z];
+    // Coefficients of enabled groups held by model.<group>.coefficients:
+    // not estimated (model.yaml writes their sigma as `held`).
+    json held = json::array();
+    for (int i = 0; i < kNumDistortion; ++i) {
+      if (m.effects.Has(DistortionGroupOf(i)) && c.distortion_held[i])
+        held.push_back(kDistortionCoefficientNames[i]);
+    }
+    cj["distortion_held"] = held;
     cams.push_back(cj);
   }
   j["cameras"] = cams;
@@ -198,6 +206,7 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                {"pixels", r.obs.pixels.size()},
                {"records_source", r.obs.records_source},
                {"pixels_source", r.obs.pixels_source},
+               {"angle_unit", AngleUnitName(r.obs.angle_unit)},
                {"simulated", r.simulated},
                {"excluded_critical_region", r.calibration.fit.excluded_critical}};
   if (r.calibration.extraction) {
@@ -393,8 +402,12 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
 
   o << "rtscalib report\n===============\nconfig: " << config.config_path << "\n";
   o << "data: " << r.obs.records.size() << " records (" << r.obs.records_source << "), "
-    << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "")
-    << "\n\n";
+    << r.obs.pixels.size() << " pixel observations" << (r.simulated ? " [simulated]" : "") << "\n";
+  // The readings' unit as the files gave it; every angle below is in radians
+  // (or the unit its column names), converted when the files were read.
+  o << "readings (phi, theta) given in: " << AngleUnitName(r.obs.angle_unit)
+    << (r.obs.angle_unit == AngleUnit::kRad ? "" : " (data.angle_unit)")
+    << "; angles below in radians unless a unit is named\n\n";
   if (r.calibration.extraction) {
     dh_table(r.calibration.extraction->model, "Table 1 - extracted DH parameters (Klug Sec. 3)");
     o << "\n";

@@ -235,8 +235,9 @@ void WriteDetectedPixels(const std::string& path, const ShotsFile& shots,
           y = FormatDouble(X.y());
           z = FormatDouble(X.z());
         }
-        w.Row({std::to_string(s.face), std::to_string(s.zoom), FormatDouble(s.phi),
-               FormatDouble(s.theta), s.shot, std::to_string(tag.id), std::to_string(k), x, y, z,
+        w.Row({std::to_string(s.face), std::to_string(s.zoom),
+               FormatReading(s.phi, shots.angle_unit), FormatReading(s.theta, shots.angle_unit),
+               s.shot, std::to_string(tag.id), std::to_string(k), x, y, z,
                FormatDouble(tag.uv[k].x()), FormatDouble(tag.uv[k].y()), std::to_string(p.width),
                std::to_string(p.height)});
       }

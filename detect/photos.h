@@ -82,7 +82,9 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
 // pixels.csv (SPEC 3) of the kept tags: face, zoom, phi, theta, shot, target,
 // corner, X, Y, Z, u, v, width, height; X, Y, Z are the corner in the
 // reference frame for boards with a known pose and empty otherwise (SPEC 7);
-// width, height are the image size (an extra column for readers of SPEC 3).
+// width, height are the image size (an extra column for readers of SPEC 3);
+// phi, theta in the unit shots.csv gave them in (ShotsFile::angle_unit), so
+// that the config that reads the shots reads these pixels too.
 // Rows in shots.csv order, then by tag id, corners 0..3.
 void WriteDetectedPixels(const std::string& path, const ShotsFile& shots,
                          const TargetScene& targets, const PhotoDetectionResult& result);

@@ -223,6 +223,8 @@ InstrumentModel StartModel(const Observations& obs, const CalibrationOptions& op
   }
   start.edm_cyclic_unit_length = options.model.edm_cyclic_unit_length;
   EnableEffects(options.model.effects, &start);
+  // model.<group>.coefficients: the unlisted ones held at their given value or 0.
+  HoldDistortion(options.model.distortion_choices, options.model.cameras, &start);
   for (Effect e : options.model.effects.List()) {
     if (start.kinematics == Kinematics::kDh && Info(e).redundant_in_dh) {
       result->notes.push_back(std::string(Info(e).name) +

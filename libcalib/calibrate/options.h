@@ -32,6 +32,10 @@ struct ModelSettings {
   // zoom level; index = zoom. Empty when the config gives none. The
   // flange_from_cam poses are not configured (extraction finds them).
   std::vector<CameraTool> cameras;
+  // model.<distortion group>: {coefficients: [...], zooms: {z: [...]}}: the
+  // coefficients of enabled groups that are fitted (libcalib/fit/options.h);
+  // at most one per group, each for a group in `effects`.
+  std::vector<DistortionChoice> distortion_choices;
 };
 
 // The `diagnose` section.

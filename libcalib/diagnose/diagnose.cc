@@ -92,6 +92,10 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
       v.push_back("Also significant alone, but not once " + r.name + " is in: " + also + ".");
     }
   }
+  for (const DistortionTerm* t : d.distortion_terms.Drops()) {
+    v.push_back("Drop " + t->name + " of zoom " + std::to_string(t->zoom) +
+                " (hold it at 0): " + t->reason + ". Config: " + t->config_line);
+  }
   for (const Harmonic& h : d.harmonics.unexplained) {
     v.push_back("Structure outside the catalogue: " + h.description + ".");
   }
@@ -203,6 +207,7 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   d.ranking = RankEffects(in, ro);
   d.current = d.ranking.current;
 
+  d.distortion_terms = AssessDistortionTerms(lin, model);
   d.residuals = ObservationResiduals(obs, model, fit.options);
   if (settings.outliers) {
     d.outliers =

@@ -6,6 +6,7 @@
 //     -> AnalyseHarmonics (structure outside the catalogue; the nuisance for the ranking)
 //     -> RankEffects (every effect not in the model; best ones confirmed by Refine)
 //     -> TestOutliers (w-test per observation)
+//     -> AssessDistortionTerms (fitted distortion coefficients to drop)
 //     -> verdict (the sentences a report opens with)
 // Nothing here writes files; app/ turns a Diagnosis into report.json and report.html.
 #pragma once
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "libcalib/diagnose/coverage.h"
+#include "libcalib/diagnose/distortion_terms.h"
 #include "libcalib/diagnose/equivalents.h"
 #include "libcalib/diagnose/harmonics.h"
 #include "libcalib/diagnose/outliers.h"
@@ -49,6 +51,8 @@ struct Diagnosis {
   Ranking ranking;
   HarmonicAnalysis harmonics;
   OutlierReport outliers;
+  // Fitted distortion coefficients, and those to drop with their config line.
+  DistortionTerms distortion_terms;
   Coverage coverage;
   EquivalentTerms equivalents;
   std::vector<ObservationResidual> residuals;  // every observation (for maps and histograms)

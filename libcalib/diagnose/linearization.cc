@@ -252,6 +252,7 @@ void EvaluateColumns(ceres::Problem* problem, const std::vector<ceres::ResidualB
         base_col.push_back(static_cast<int>(lin->base_names.size()));
         to_extra.push_back(-1);
         lin->base_names.push_back(d->columns[k].name);
+        lin->base_columns.push_back(d->columns[k]);
       }
     }
   }

@@ -86,6 +86,7 @@ struct Linearization {
   Eigen::VectorXd r;
   Eigen::MatrixXd base;
   std::vector<std::string> base_names;
+  std::vector<FreeColumn> base_columns;  // per base column: its name, effect, zoom, index
   Eigen::MatrixXd extra;
   std::vector<ColumnBlock> blocks;
   std::vector<ResidualRow> rows;

@@ -5,7 +5,11 @@
 #pragma once
 
 #include <cmath>
+#include <map>
 #include <string>
+#include <vector>
+
+#include "libcalib/model/effects.h"
 
 namespace rtscalib {
 
@@ -20,6 +24,23 @@ struct GrossErrorOptions {
   double max_fraction = 0.2;  // of a group's rows
   // Defined beside FindGrossErrorsByFit (robust.cc).
   std::string Check() const;  // empty if valid
+};
+
+// Which coefficients of an enabled distortion group the joint refinement
+// fits (the config's `model.<group>: {coefficients: [k1, k2], zooms: {2:
+// [k1]}}`, docs/config.md); the group's other coefficients are held at their
+// start value. A group without a choice fits all its coefficients.
+// HoldDistortion (libcalib/fit/parameterization.h) turns choices into the
+// model's CameraTool::distortion_held.
+struct DistortionChoice {
+  Effect group = Effect::kRadialDistortion;
+  std::vector<int> coefficients;          // DistortionIndex, fitted at every zoom not in `zooms`
+  std::map<int, std::vector<int>> zooms;  // zoom -> the coefficients fitted there
+  // The coefficients fitted at `zoom`.
+  const std::vector<int>& At(int zoom) const {
+    const auto it = zooms.find(zoom);
+    return it == zooms.end() ? coefficients : it->second;
+  }
 };
 
 struct FitOptions {

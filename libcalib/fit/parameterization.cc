@@ -2,7 +2,9 @@
 
 #include <ceres/problem.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <stdexcept>
 #include <tuple>
@@ -26,7 +28,49 @@ std::vector<Effect> RemoveContainedEffects(InstrumentModel* model) {
   return removed;
 }
 
+bool DistortionIsFree(const InstrumentModel& model, int zoom, int index) {
+  return model.effects.Has(DistortionGroupOf(index)) && !model.cams[zoom].distortion_held[index];
+}
+
+void HoldDistortion(const std::vector<DistortionChoice>& choices,
+                    const std::vector<CameraTool>& configured, InstrumentModel* model) {
+  for (const DistortionChoice& choice : choices) {
+    const std::string key = std::string("model.") + Info(choice.group).name;
+    if (!model->effects.Has(choice.group)) {
+      throw std::invalid_argument(key + ": " + Info(choice.group).name +
+                                  " is not in model.effects (its coefficients are all held)");
+    }
+    for (const auto& [zoom, list] : choice.zooms) {
+      if (zoom < 0 || zoom >= model->NumZooms()) {
+        throw std::invalid_argument(key + ".zooms: expected zoom levels of the model (0.." +
+                                    std::to_string(model->NumZooms() - 1) + "), got " +
+                                    std::to_string(zoom));
+      }
+    }
+    for (int z = 0; z < model->NumZooms(); ++z) {
+      CameraTool& cam = model->cams[z];
+      const std::vector<int>& fitted = choice.At(z);
+      for (int index : Info(choice.group).distortion_indices) {
+        const bool fit = std::find(fitted.begin(), fitted.end(), index) != fitted.end();
+        cam.distortion_held[index] = !fit;
+        if (fit) continue;
+        // Held at the start value the user gave, else at zero (an extraction
+        // or OpenCV start may have estimated it; that is not a given value).
+        cam.distortion[index] =
+            z < static_cast<int>(configured.size()) ? configured[z].distortion[index] : 0.0;
+      }
+    }
+  }
+}
+
 namespace {
+
+// A held value for a message: %g keeps 0 as "0".
+std::string FormatNumber(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
 
 // Names of the columns of translations and rotations.
 const char* const kAxes[] = {"x", "y", "z"};
@@ -167,13 +211,23 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
         "spherical: EDM rotation is the line of sight (held); EDM t_z held (edm_offset models it)");
   }
 
-  // Distortion coefficients are free exactly when an enabled group owns them.
-  std::vector<int> frozen_distortion;
-  for (int i = 0; i < kNumDistortion; ++i) {
-    if (!m.effects.Has(DistortionGroupOf(i))) frozen_distortion.push_back(i);
-  }
   for (int z = 0; z < m.NumZooms(); ++z) {
     CameraTool& cam = m.cams[z];
+    // Distortion coefficients are free exactly when an enabled group owns
+    // them and the user did not hold them (model.<group>.coefficients).
+    std::vector<int> frozen_distortion;
+    std::string held;
+    for (int i = 0; i < kNumDistortion; ++i) {
+      if (!DistortionIsFree(m, z, i)) frozen_distortion.push_back(i);
+      if (m.effects.Has(DistortionGroupOf(i)) && cam.distortion_held[i]) {
+        held += std::string(held.empty() ? "" : ", ") + kDistortionCoefficientNames[i] + " = " +
+                FormatNumber(cam.distortion[i]);
+      }
+    }
+    if (!held.empty()) {
+      fixed_gauges_.push_back("cam[" + std::to_string(z) + "] distortion held (not estimated, " +
+                              "model.<group>.coefficients): " + held);
+    }
     const std::string zs = "cam[" + std::to_string(z) + "]";
     auto per_zoom = [z](BlockDecision d) {
       for (FreeColumn& c : d.columns) c.zoom = z;

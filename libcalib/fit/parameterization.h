@@ -14,7 +14,9 @@
 //   spherical: edm.rotation held (the line of sight), edm.t {x, y} free, t_z held (edm_offset)
 //   cam[z].rotation  quaternion manifold; cam[z].t free, Eq. 98 window
 //   cam[z].intrinsics free when FitOptions::fit_intrinsics, else held
-//   cam[z].distortion the coefficients of the enabled distortion groups free, the rest held
+//   cam[z].distortion the coefficients of the enabled distortion groups free, except those
+//                    the user holds (CameraTool::distortion_held, set by HoldDistortion
+//                    from the config's model.<group>.coefficients); the rest held
 //   <effect>         one free block per enabled kinematic effect (effects.h)
 //   board[id]        a board of unknown pose (SPEC 7): quaternion manifold + free t
 //   point[name]      a point of unknown position (SPEC 7): free 3-vector
@@ -55,6 +57,22 @@ namespace rtscalib {
 bool ContainedInKinematics(Kinematics kinematics, Effect e);
 // Removes such effects from `model`; returns the ones removed.
 std::vector<Effect> RemoveContainedEffects(InstrumentModel* model);
+
+// Whether a fit of `model` frees coefficient `index` (DistortionIndex) of
+// zoom `zoom`'s distortion: its group is enabled and the coefficient is not
+// held (CameraTool::distortion_held). The Parameterization below decides
+// with it; model.yaml and the diagnosis read it to say what was fitted.
+bool DistortionIsFree(const InstrumentModel& model, int zoom, int index);
+
+// Applies the config's distortion choices (model.<group>: {coefficients,
+// zooms}) to `model`: per zoom, every coefficient of a chosen group that is
+// not listed is held (CameraTool::distortion_held) at its start value, the
+// configured camera's (`configured[zoom].distortion`, model.cameras) or 0;
+// listed ones are freed. Groups without a choice are left as they are.
+// Throws std::invalid_argument naming the key when a choice names a zoom the
+// model has no camera for, or a group that is not enabled.
+void HoldDistortion(const std::vector<DistortionChoice>& choices,
+                    const std::vector<CameraTool>& configured, InstrumentModel* model);
 
 // One tangent column of a free block.
 struct FreeColumn {

@@ -32,6 +32,9 @@ const Names<FaceMode> kFaceModeNames = {{"joint", FaceMode::kJoint},
 const Names<IntrinsicsMode> kIntrinsicsNames = {{"auto", IntrinsicsMode::kAuto},
                                                 {"fit", IntrinsicsMode::kFit},
                                                 {"fixed", IntrinsicsMode::kFixed}};
+const Names<AngleUnit> kAngleUnitChoices = {{AngleUnitName(AngleUnit::kRad), AngleUnit::kRad},
+                                            {AngleUnitName(AngleUnit::kDeg), AngleUnit::kDeg},
+                                            {AngleUnitName(AngleUnit::kGon), AngleUnit::kGon}};
 const Names<RobustLoss> kLossNames = {
     {"none", RobustLoss::kNone}, {"huber", RobustLoss::kHuber}, {"cauchy", RobustLoss::kCauchy}};
 
@@ -205,6 +208,7 @@ void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) 
       *path = resolved;
     }
   }
+  m.ReadEnum("angle_unit", kAngleUnitChoices, &out->angle_unit);
   // A photo session needs its boards and vice versa (SPEC 7).
   if (out->shots_path.empty() != out->targets_path.empty()) {
     const char* given = out->shots_path.empty() ? "targets" : "shots";
@@ -213,6 +217,48 @@ void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) 
     n.Fail(std::string("data.") + missing + " next to data." + given +
            " (the photos and the boards they show come together)");
   }
+}
+
+// The coefficients of one distortion group, by name, each once (an empty
+// list holds every coefficient of the group at that zoom).
+std::vector<int> ReadCoefficientList(const YamlNode& n, const EffectInfo& group) {
+  std::vector<std::string> names;
+  for (int index : group.distortion_indices) names.emplace_back(kDistortionCoefficientNames[index]);
+  std::vector<int> out;
+  for (const YamlNode& item : n.Items()) {
+    const std::string name = item.AsString();
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) item.FailChoice(names);
+    const int index = group.distortion_indices[it - names.begin()];
+    if (std::find(out.begin(), out.end(), index) != out.end()) item.Fail("each coefficient once");
+    out.push_back(index);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// model.<group>: {coefficients: [k1, k2], zooms: {2: [k1]}}: which of an
+// enabled distortion group's coefficients are fitted (libcalib/fit/options.h).
+DistortionChoice ReadDistortionChoice(const YamlNode& n, const EffectInfo& group,
+                                      const EffectSet& effects) {
+  if (!effects.Has(group.effect)) {
+    n.Fail(std::string(group.name) + " in model.effects (the coefficients to fit of an effect " +
+           "that is not in the model)");
+  }
+  DistortionChoice choice;
+  choice.group = group.effect;
+  choice.coefficients = group.distortion_indices;
+  if (const std::optional<YamlNode> list = n.Find("coefficients")) {
+    choice.coefficients = ReadCoefficientList(*list, group);
+  }
+  if (const std::optional<YamlNode> zooms = n.Find("zooms")) {
+    for (const YamlNode::Entry& entry : zooms->Entries()) {
+      const int zoom = entry.key.AsInt();
+      if (zoom < 0) entry.key.Fail("a zoom level >= 0");
+      choice.zooms[zoom] = ReadCoefficientList(entry.value, group);
+    }
+  }
+  return choice;
 }
 
 void ReadModel(const YamlNode& m, ModelSettings* out) {
@@ -236,6 +282,12 @@ void ReadModel(const YamlNode& m, ModelSettings* out) {
   if (const std::optional<YamlNode> cyclic = m.Find("edm_cyclic")) {
     ReadNumber(*cyclic, "unit_length", &out->edm_cyclic_unit_length, IsPositive,
                "a unit length U > 0 [m]");
+  }
+  for (const EffectInfo& info : EffectCatalogue()) {
+    if (info.kind != EffectKind::kDistortion) continue;
+    if (const std::optional<YamlNode> n = m.Find(info.name)) {
+      out->distortion_choices.push_back(ReadDistortionChoice(*n, info, out->effects));
+    }
   }
   m.ReadEnum("faces", kFaceModeNames, &out->faces);
   m.ReadEnum("intrinsics", kIntrinsicsNames, &out->intrinsics);
@@ -720,6 +772,7 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
       e << YAML::Key << key << YAML::Value;
       EmitYamlText(e, *path);
     }
+    e << YAML::Key << "angle_unit" << YAML::Value << NameOf(kAngleUnitChoices, c.angle_unit);
     e << YAML::EndMap;
   }
 
@@ -729,6 +782,23 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::Key << "effects" << YAML::Value << YAML::Flow << m.effects.Names();
   e << YAML::Key << "edm_cyclic" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
     << "unit_length" << YAML::Value << Num(m.edm_cyclic_unit_length) << YAML::EndMap;
+  for (const DistortionChoice& choice : m.distortion_choices) {
+    auto names = [](const std::vector<int>& indices) {
+      std::vector<std::string> out;
+      for (int i : indices) out.emplace_back(kDistortionCoefficientNames[i]);
+      return out;
+    };
+    e << YAML::Key << Info(choice.group).name << YAML::Value << YAML::Flow << YAML::BeginMap;
+    e << YAML::Key << "coefficients" << YAML::Value << YAML::Flow << names(choice.coefficients);
+    if (!choice.zooms.empty()) {
+      e << YAML::Key << "zooms" << YAML::Value << YAML::Flow << YAML::BeginMap;
+      for (const auto& [zoom, list] : choice.zooms) {
+        e << YAML::Key << zoom << YAML::Value << YAML::Flow << names(list);
+      }
+      e << YAML::EndMap;
+    }
+    e << YAML::EndMap;
+  }
   e << YAML::Key << "faces" << YAML::Value << FaceModeName(m.faces);
   e << YAML::Key << "intrinsics" << YAML::Value << IntrinsicsModeName(m.intrinsics);
   if (!m.cameras.empty()) {

@@ -24,6 +24,7 @@
 #include "libcalib/calibrate/options.h"
 #include "libcalib/fit/options.h"
 #include "libcalib/io/yaml_reader.h"
+#include "libcalib/model/angle_unit.h"
 #include "libcalib/screen/options.h"
 #include "libcalib/sim/options.h"
 
@@ -41,6 +42,9 @@ struct RunConfig {
   // photos (targets.yaml); absolute, both given or neither.
   std::string shots_path;
   std::string targets_path;
+  // data.angle_unit: the unit of phi, theta in records.csv, pixels.csv and
+  // shots.csv; the readers convert to radians (libcalib/model/angle_unit.h).
+  AngleUnit angle_unit = AngleUnit::kRad;
   int detect_jobs = 1;  // detect.jobs: threads detecting the photos
   ModelSettings model;
   // model.intrinsics kFit sets fit.fit_intrinsics; kAuto leaves it false for

@@ -26,6 +26,8 @@
 #include <string>
 #include <vector>
 
+#include "libcalib/model/angle_unit.h"
+
 namespace rtscalib {
 
 class CsvTable {
@@ -50,6 +52,11 @@ class CsvTable {
   bool Empty(int row, const std::string& column) const { return Text(row, column).empty(); }
   // A finite number; InputError naming file, line and column otherwise.
   double Number(int row, const std::string& column) const;
+  // A reading phi or theta given in `unit`, in radians: the one place where
+  // a file's angles become radians (libcalib/model/angle_unit.h).
+  double Angle(int row, const std::string& column, AngleUnit unit) const {
+    return ReadingToRadians(Number(row, column), unit);
+  }
   // An integral value (see above); InputError otherwise.
   long long Integer(int row, const std::string& column) const;
   // Notes about the file for the run log (ignored columns).

@@ -3,12 +3,14 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <optional>
 #include <stdexcept>
 
+#include "libcalib/fit/parameterization.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/number_text.h"
 #include "libcalib/io/yaml_reader.h"
@@ -26,6 +28,8 @@ constexpr double kDerivedTolerance = 1e-9;
 // Quaternions are written normalised; more than this off unit length means a
 // hand edit, which would scale every prediction.
 constexpr double kUnitQuaternionTolerance = 1e-9;
+// The sigma of a distortion coefficient the fit did not estimate.
+constexpr const char* kHeldSigma = "held";
 
 std::string Num(double x) { return YamlDouble(x); }
 
@@ -111,11 +115,30 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
   EmitNamed(e, kIntrinsicsParamNames, cam.intrinsics.data(), kNumIntrinsics);
   e << YAML::Key << "distortion" << YAML::Value;
   EmitNamed(e, kDistortionCoefficientNames, cam.distortion.data(), kNumDistortion);
+  // The coefficients of enabled groups that the user held
+  // (model.<group>.coefficients): not estimated, so that a reader knows.
+  std::vector<std::string> held;
+  for (int i = 0; i < kNumDistortion; ++i) {
+    if (model.effects.Has(DistortionGroupOf(i)) && cam.distortion_held[i]) {
+      held.emplace_back(kDistortionCoefficientNames[i]);
+    }
+  }
+  if (!held.empty()) e << YAML::Key << "distortion_held" << YAML::Value << YAML::Flow << held;
   if (s.valid && cam.determined) {
     e << YAML::Key << "intrinsics_sigma" << YAML::Value;
     EmitNamed(e, kIntrinsicsParamNames, s.intrinsics[zoom].data(), kNumIntrinsics);
-    e << YAML::Key << "distortion_sigma" << YAML::Value;
-    EmitNamed(e, kDistortionCoefficientNames, s.distortion[zoom].data(), kNumDistortion);
+    // A coefficient the fit did not free (held by the user, or of a group
+    // not in the model) has no sigma: `held`, never a precision of 0.
+    e << YAML::Key << "distortion_sigma" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    for (int i = 0; i < kNumDistortion; ++i) {
+      e << YAML::Key << kDistortionCoefficientNames[i] << YAML::Value;
+      if (DistortionIsFree(model, zoom, i)) {
+        e << Num(s.distortion[zoom][i]);
+      } else {
+        e << kHeldSigma;
+      }
+    }
+    e << YAML::EndMap;
   }
   e << YAML::EndMap;
 }
@@ -386,6 +409,15 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
                   kNumIntrinsics);
     ReadNamedInto(item.Require("distortion"), kDistortionCoefficientNames, cam.distortion.data(),
                   kNumDistortion);
+    if (const std::optional<YamlNode> held = item.Find("distortion_held")) {
+      std::vector<std::string> names(std::begin(kDistortionCoefficientNames),
+                                     std::end(kDistortionCoefficientNames));
+      for (const YamlNode& name : held->Items()) {
+        const auto it = std::find(names.begin(), names.end(), name.AsString());
+        if (it == names.end()) name.FailChoice(names);
+        cam.distortion_held[it - names.begin()] = true;
+      }
+    }
     if (with_sigma) {
       s.cam_tools.push_back(tool_sigma);
       s.intrinsics.emplace_back();
@@ -393,8 +425,13 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
       if (cam.determined) {
         ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicsParamNames,
                       s.intrinsics.back().data(), kNumIntrinsics, true);
-        ReadNamedInto(item.Require("distortion_sigma"), kDistortionCoefficientNames,
-                      s.distortion.back().data(), kNumDistortion, true);
+        // `held`: not estimated; 0 in memory, so that it adds no uncertainty.
+        const YamlNode sigma = item.Require("distortion_sigma");
+        for (int i = 0; i < kNumDistortion; ++i) {
+          const YamlNode n = sigma.Require(kDistortionCoefficientNames[i]);
+          s.distortion.back()[i] =
+              n.IsScalar() && n.AsString() == kHeldSigma ? 0.0 : n.AsDoubleOrNan();
+        }
       } else {
         s.intrinsics.back().fill(std::numeric_limits<double>::quiet_NaN());
         s.distortion.back().fill(std::numeric_limits<double>::quiet_NaN());

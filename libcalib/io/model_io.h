@@ -10,7 +10,11 @@
 //                      [{name}]   distortion groups (coefficients are in cameras)
 //   cameras (index = zoom): {zoom, width, height, flange_from_cam: pose,
 //                        intrinsics: {fx, fy, cx, cy}, distortion: {k1 .. tauy},
-//                        intrinsics_sigma, distortion_sigma}
+//                        distortion_held: [k3, ...]  coefficients of enabled groups the
+//                                  user held (model.<group>.coefficients): not estimated;
+//                        intrinsics_sigma, distortion_sigma}  a coefficient the fit did not
+//                                  free (held, or of a group not in the model) has the sigma
+//                                  `held`, never a number (read back as 0: no uncertainty)
 //   determined: false  on edm or a camera (and its flange_from_cam) the data
 //                      did not determine: its values are the start's and it
 //                      has no sigma keys (never a sigma of 0); absent = true.

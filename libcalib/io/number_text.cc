@@ -47,6 +47,18 @@ std::string FormatDouble(double x) {
   return buffer;
 }
 
+std::string FormatReading(double rad, AngleUnit unit) {
+  if (unit == AngleUnit::kRad) return FormatDouble(rad);
+  double best = rad / M_PI * HalfTurn(unit), up = best, down = best;
+  for (int step = 0; step < 4 && ReadingToRadians(best, unit) != rad; ++step) {
+    up = std::nextafter(up, INFINITY);
+    down = std::nextafter(down, -INFINITY);
+    if (ReadingToRadians(up, unit) == rad) best = up;
+    if (ReadingToRadians(down, unit) == rad) best = down;
+  }
+  return FormatDouble(best);
+}
+
 std::string FormatShortestDouble(double x) {
   char buffer[32];
   const auto [ptr, ec] = std::to_chars(buffer, buffer + sizeof(buffer), x);

@@ -10,6 +10,8 @@
 #include <string>
 #include <string_view>
 
+#include "libcalib/model/angle_unit.h"
+
 namespace rtscalib {
 
 // A finite double, or nullopt.
@@ -22,6 +24,11 @@ std::optional<double> ParseDouble(std::string_view text);
 std::optional<long long> ParseInteger(std::string_view text);
 // %.17g: what the data files and model.yaml use.
 std::string FormatDouble(double x);
+// A reading of `rad` radians written in `unit` (%.17g), chosen so that
+// reading it back in `unit` (ReadingToRadians) gives `rad` exactly whenever
+// such a number lies within a few ulps of rad / pi * HalfTurn(unit): a file read
+// in degrees and written back keeps its readings.
+std::string FormatReading(double rad, AngleUnit unit);
 // The shortest text that reads back to the same double ("1e-05" rather than
 // "1.0000000000000001e-05"): for files that people read, such as configs.
 std::string FormatShortestDouble(double x);

@@ -33,7 +33,7 @@ Eigen::Vector3d ReadPoint(const CsvTable& t, int row, const char* x, const char*
 
 }  // namespace
 
-RecordsFile ReadRecords(const std::string& path) {
+RecordsFile ReadRecords(const std::string& path, AngleUnit unit) {
   const CsvTable t = CsvTable::Read(
       path,
       {{"face", "zoom", "phi", "theta", "tool", "d", "x", "y", "z"}, {"u", "v", "set", "point"}});
@@ -54,8 +54,8 @@ RecordsFile ReadRecords(const std::string& path) {
     }
     // The zoom of an EDM row means nothing (SPEC 3), so it may be left empty.
     r.zoom = (r.tool == Tool::kEdm && t.Empty(row, "zoom")) ? 0 : ReadZoom(t, row);
-    r.phi = t.Number(row, "phi");
-    r.theta = t.Number(row, "theta");
+    r.phi = t.Angle(row, "phi", unit);
+    r.theta = t.Angle(row, "theta", unit);
     if (r.tool == Tool::kCam) {
       for (const char* column : {"u", "v"}) {
         if (!t.Has(column)) {
@@ -91,7 +91,7 @@ RecordsFile ReadRecords(const std::string& path) {
   return out;
 }
 
-void WriteRecords(const std::string& path, const std::vector<Record>& records) {
+void WriteRecords(const std::string& path, const std::vector<Record>& records, AngleUnit unit) {
   // The `point` column (SPEC 7) only when some row names a point, so that
   // files without such points keep their columns.
   bool points = false;
@@ -105,8 +105,8 @@ void WriteRecords(const std::string& path, const std::vector<Record>& records) {
     const bool unknown = !r.point.empty();
     std::vector<std::string> row = {std::to_string(r.face),
                                     std::to_string(r.zoom),
-                                    FormatDouble(r.phi),
-                                    FormatDouble(r.theta),
+                                    FormatReading(r.phi, unit),
+                                    FormatReading(r.theta, unit),
                                     cam ? "cam" : "edm",
                                     cam ? FormatDouble(r.u) : "",
                                     cam ? FormatDouble(r.v) : "",
@@ -121,7 +121,7 @@ void WriteRecords(const std::string& path, const std::vector<Record>& records) {
   w.Close();
 }
 
-PixelsFile ReadPixels(const std::string& path) {
+PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
   const CsvTable t = CsvTable::Read(
       path,
       {{"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"}, {}});
@@ -133,8 +133,8 @@ PixelsFile ReadPixels(const std::string& path) {
     p.line = t.Line(row);
     p.face = ReadFace(t, row);
     p.zoom = ReadZoom(t, row);
-    p.phi = t.Number(row, "phi");
-    p.theta = t.Number(row, "theta");
+    p.phi = t.Angle(row, "phi", unit);
+    p.theta = t.Angle(row, "theta", unit);
     p.shot = t.Text(row, "shot");
     if (p.shot.empty()) t.Fail(row, "shot", "a shot id (one per image)");
     p.target = ReadNonNegativeInt(t, row, "target", std::numeric_limits<int>::max(),
@@ -153,12 +153,13 @@ PixelsFile ReadPixels(const std::string& path) {
   return out;
 }
 
-void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels) {
+void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels,
+                 AngleUnit unit) {
   CsvWriter w(
       path, {"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"});
   for (const PixelObservation& p : pixels) {
-    w.Row({std::to_string(p.face), std::to_string(p.zoom), FormatDouble(p.phi),
-           FormatDouble(p.theta), p.shot, std::to_string(p.target), std::to_string(p.corner),
+    w.Row({std::to_string(p.face), std::to_string(p.zoom), FormatReading(p.phi, unit),
+           FormatReading(p.theta, unit), p.shot, std::to_string(p.target), std::to_string(p.corner),
            p.X_known ? FormatDouble(p.X.x()) : "", p.X_known ? FormatDouble(p.X.y()) : "",
            p.X_known ? FormatDouble(p.X.z()) : "", FormatDouble(p.uv.x()), FormatDouble(p.uv.y())});
   }

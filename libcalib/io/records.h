@@ -4,10 +4,13 @@
 // records.csv columns: face, zoom, phi, theta, tool, u, v, d, x, y, z [, set]
 //   face   1 or 2                      zoom  integer >= 0 (may be empty on edm rows -> 0)
 //   tool   edm | cam                   u, v  pixels; required on cam rows, may be empty on edm rows
-//   d      > 0 [m]                     phi, theta, x, y, z  finite [rad, m]
+//   d      > 0 [m]                     phi, theta, x, y, z  finite [`unit`, m]
 //   set    optional free label (the column may be absent)
 // pixels.csv columns: face, zoom, phi, theta, shot, target, corner, X, Y, Z, u, v
 //   shot   free label of one image     target  integer >= 0     corner  0..3
+// phi and theta are read in `unit` (data.angle_unit, default rad) and
+// stored in radians (libcalib/model/angle_unit.h); the writers write them in
+// `unit` again, so that a command echoing a user's rows keeps their unit.
 // Every violation is an InputError naming file, line and column (csv.h has the
 // shared syntax rules); each struct keeps the line it came from so that later
 // messages (critical region, outliers) can point at it.
@@ -16,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "libcalib/model/angle_unit.h"
 #include "libcalib/model/observations.h"
 
 namespace rtscalib {
@@ -24,15 +28,18 @@ struct RecordsFile {
   std::vector<Record> records;
   std::vector<std::string> notes;  // e.g. ignored extra columns
 };
-RecordsFile ReadRecords(const std::string& path);
-// Writes all columns including `set`, numbers with %.17g; u, v empty on edm rows.
-void WriteRecords(const std::string& path, const std::vector<Record>& records);
+RecordsFile ReadRecords(const std::string& path, AngleUnit unit = AngleUnit::kRad);
+// Writes all columns including `set`, numbers with %.17g (phi, theta in
+// `unit`, FormatReading); u, v empty on edm rows.
+void WriteRecords(const std::string& path, const std::vector<Record>& records,
+                  AngleUnit unit = AngleUnit::kRad);
 
 struct PixelsFile {
   std::vector<PixelObservation> pixels;
   std::vector<std::string> notes;
 };
-PixelsFile ReadPixels(const std::string& path);
-void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels);
+PixelsFile ReadPixels(const std::string& path, AngleUnit unit = AngleUnit::kRad);
+void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels,
+                 AngleUnit unit = AngleUnit::kRad);
 
 }  // namespace rtscalib

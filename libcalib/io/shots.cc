@@ -10,11 +10,12 @@
 
 namespace rtscalib {
 
-ShotsFile ReadShots(const std::string& path) {
+ShotsFile ReadShots(const std::string& path, AngleUnit unit) {
   const CsvTable t = CsvTable::Read(path, {{"face", "zoom", "phi", "theta", "image"}, {"shot"}});
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   ShotsFile out;
   out.path = path;
+  out.angle_unit = unit;
   out.notes = t.notes();
   std::map<std::string, int> line_of_shot;
   for (int row = 0; row < t.NumRows(); ++row) {
@@ -28,8 +29,8 @@ ShotsFile ReadShots(const std::string& path) {
       t.Fail(row, "zoom", "a zoom level (integer >= 0)");
     }
     s.zoom = static_cast<int>(*zoom);
-    s.phi = t.Number(row, "phi");
-    s.theta = t.Number(row, "theta");
+    s.phi = t.Angle(row, "phi", unit);
+    s.theta = t.Angle(row, "theta", unit);
     s.image = t.Text(row, "image");
     if (s.image.empty()) t.Fail(row, "image", "an image file (relative to the CSV's folder)");
     const std::filesystem::path image(s.image);

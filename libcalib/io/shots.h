@@ -3,7 +3,8 @@
 // Columns (header required, any order, `#` comments; csv.h has the syntax):
 //   face         1 or 2
 //   zoom         zoom level, integer >= 0
-//   phi, theta   control angles of the photo [rad], finite
+//   phi, theta   control angles of the photo, finite, in `unit` (data.angle_unit;
+//                stored in radians, libcalib/model/angle_unit.h)
 //   image        the image file, relative to the CSV's folder (absolute paths
 //                are taken as they are); the file must exist
 //   shot         optional shot id; default: the image file's stem
@@ -15,12 +16,14 @@
 #include <string>
 #include <vector>
 
+#include "libcalib/model/angle_unit.h"
+
 namespace rtscalib {
 
 struct PhotoShot {
   int face = 1;
   int zoom = 0;
-  double phi = 0, theta = 0;  // [rad]
+  double phi = 0, theta = 0;  // [rad], whatever unit the file gave
   std::string image;          // as written in the CSV
   std::string image_path;     // resolved against the CSV's folder
   std::string shot;           // unique id
@@ -29,10 +32,11 @@ struct PhotoShot {
 
 struct ShotsFile {
   std::string path;
+  AngleUnit angle_unit = AngleUnit::kRad;  // the unit the file gave phi, theta in
   std::vector<PhotoShot> shots;
   std::vector<std::string> notes;  // e.g. ignored extra columns
 };
 
-ShotsFile ReadShots(const std::string& path);
+ShotsFile ReadShots(const std::string& path, AngleUnit unit = AngleUnit::kRad);
 
 }  // namespace rtscalib

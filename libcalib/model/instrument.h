@@ -58,6 +58,11 @@ struct CameraTool {
   PoseBlock flange_from_cam;
   std::array<double, kNumIntrinsics> intrinsics{1000, 1000, 640, 480};
   std::array<double, kNumDistortion> distortion{};
+  // true: coefficient i is held at its value by the fit although its
+  // distortion group is enabled (the config's model.<group>.coefficients,
+  // libcalib/fit/parameterization.h decides with it); written to model.yaml
+  // as `distortion_held`, its sigma as `held`.
+  std::array<bool, kNumDistortion> distortion_held{};
   int width = 1280;
   int height = 960;
   // False when the data held no rows of this zoom (outside the critical

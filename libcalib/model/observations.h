@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "libcalib/model/angle_unit.h"
 #include "libcalib/model/targets.h"
 
 namespace rtscalib {
@@ -79,6 +80,9 @@ struct Observations {
   std::map<int, ImageSize> image_sizes;
   std::string records_source = "records";  // file names for messages
   std::string pixels_source = "pixels";
+  // The unit the files gave phi and theta in (data.angle_unit); the values
+  // above are radians whatever it was. For messages and reports.
+  AngleUnit angle_unit = AngleUnit::kRad;
 };
 
 }  // namespace rtscalib

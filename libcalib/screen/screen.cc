@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -97,10 +98,16 @@ struct Offenders {
 
 bool InAngleRange(double x) { return x >= -kTwoPi && x < 2.0 * kTwoPi; }
 
-// Why a file's angles leave [-2 pi, 4 pi): degrees or gon, told apart by the
+// Why a file's angles leave [-2 pi, 4 pi) once read in `unit`
+// (data.angle_unit). Read as radians: degrees or gon, told apart by the
 // largest value (gon reach 400) and by where face-1 zenith angles cluster
-// (horizontal is 90 degrees, 100 gon).
-std::string UnitCause(const std::vector<RowView>& rows) {
+// (horizontal is 90 degrees, 100 gon); the cause names the config key that
+// reads them so. Read in degrees or gon already: the unit is wrong too.
+std::string UnitCause(const std::vector<RowView>& rows, AngleUnit unit) {
+  if (unit != AngleUnit::kRad) {
+    return std::string("; the file's angles leave that range even read in ") + AngleUnitName(unit) +
+           " (data.angle_unit: " + AngleUnitName(unit) + "): check the key and the file";
+  }
   double max_abs = 0;
   std::vector<double> theta1;
   for (const RowView& r : rows) {
@@ -114,25 +121,35 @@ std::string UnitCause(const std::vector<RowView>& rows) {
     const double median = theta1[theta1.size() / 2];
     gon = std::fabs(median - 100.0) < std::fabs(median - 90.0);
   }
-  return gon ? "; the file's angles look like gon (SPEC 1: radians = gon * pi / 200)"
-             : "; the file's angles look like degrees (SPEC 1: radians = degrees * pi / 180)";
+  return gon ? "; the file's angles look like gon: give `data.angle_unit: gon` in the config "
+               "(--angle-unit gon for predict and detect) and they are read as gon"
+             : "; the file's angles look like degrees: give `data.angle_unit: deg` in the config "
+               "(--angle-unit deg for predict and detect) and they are read as degrees";
 }
 
-// Angle units, the phi wrap and the faces of SPEC 1.
-void CheckAngles(const std::string& file, const std::vector<RowView>& rows, bool gross_rows,
-                 ScreenFindings* out) {
+// A reading as the file wrote it (radians converted back to `unit`).
+std::string AsWritten(double rad, AngleUnit unit) {
+  if (unit == AngleUnit::kRad) return Num(rad);
+  const std::optional<double> x = ParseDouble(FormatReading(rad, unit));
+  return x ? Num(*x) : Num(rad);
+}
+
+// Angle units, the phi wrap and the faces of SPEC 1, on the readings in
+// radians (converted from data.angle_unit when read).
+void CheckAngles(const std::string& file, const std::vector<RowView>& rows, AngleUnit unit,
+                 bool gross_rows, ScreenFindings* out) {
   Offenders phi_range, theta_range, face2, face1;
   size_t face1_rows = 0, face2_rows = 0;
   std::vector<int> phi_wrapped;
   for (const RowView& r : rows) {
     const bool phi_ok = InAngleRange(r.phi), theta_ok = InAngleRange(r.theta);
-    if (!phi_ok) phi_range.Add(r.line, Num(r.phi));
-    if (!theta_ok) theta_range.Add(r.line, Num(r.theta));
+    if (!phi_ok) phi_range.Add(r.line, AsWritten(r.phi, unit));
+    if (!theta_ok) theta_range.Add(r.line, AsWritten(r.theta, unit));
     if (phi_ok && r.phi >= kTwoPi) phi_wrapped.push_back(r.line);
     if (!theta_ok) continue;
     ++(r.face == 1 ? face1_rows : face2_rows);
-    if (r.face == 2 && FaceContradictsTheta(2, r.theta)) face2.Add(r.line, Num(r.theta));
-    if (r.face == 1 && FaceContradictsTheta(1, r.theta)) face1.Add(r.line, Num(r.theta));
+    if (r.face == 2 && FaceContradictsTheta(2, r.theta)) face2.Add(r.line, AsWritten(r.theta, unit));
+    if (r.face == 1 && FaceContradictsTheta(1, r.theta)) face1.Add(r.line, AsWritten(r.theta, unit));
   }
   // A few rows against the face convention are gross errors, taken out and
   // listed by the gross-error screening (gross.h); most rows, a convention
@@ -140,9 +157,15 @@ void CheckAngles(const std::string& file, const std::vector<RowView>& rows, bool
   if (gross_rows && FewEnoughToBeGross(face1.lines.size(), face1_rows)) face1 = Offenders();
   if (gross_rows && FewEnoughToBeGross(face2.lines.size(), face2_rows)) face2 = Offenders();
   const std::string cause =
-      phi_range.Empty() && theta_range.Empty() ? std::string() : UnitCause(rows);
-  phi_range.Report(file, "phi", "a horizontal angle in radians within [-2 pi, 4 pi)" + cause, out);
-  theta_range.Report(file, "theta", "a zenith angle in radians within [-2 pi, 4 pi)" + cause, out);
+      phi_range.Empty() && theta_range.Empty() ? std::string() : UnitCause(rows, unit);
+  // "in radians" for files in radians; "(read in deg)" otherwise: the range
+  // is checked on the converted values either way.
+  const std::string as_read = unit == AngleUnit::kRad
+                                  ? std::string(" in radians")
+                                  : std::string(" (read in ") + AngleUnitName(unit) + ")";
+  const std::string range = unit == AngleUnit::kRad ? "[-2 pi, 4 pi)" : "[-2 pi, 4 pi) rad";
+  phi_range.Report(file, "phi", "a horizontal angle" + as_read + " within " + range + cause, out);
+  theta_range.Report(file, "theta", "a zenith angle" + as_read + " within " + range + cause, out);
   face2.Report(file, "theta",
                "a face-2 zenith angle in [pi, 2 pi] (SPEC 1: face 2 of the face-1 pointing "
                "(phi, theta) is (phi - pi mod 2 pi, 2 pi - theta)); this face-2 row is written "
@@ -153,12 +176,13 @@ void CheckAngles(const std::string& file, const std::vector<RowView>& rows, bool
                "reading (face 2 has theta in [pi, 2 pi]): check its face",
                out);
   if (!phi_wrapped.empty()) {
-    out->warnings.push_back(file + ": phi beyond 2 pi on " + std::to_string(phi_wrapped.size()) +
-                            " of " + std::to_string(rows.size()) + " rows (line" +
-                            (phi_wrapped.size() == 1 ? " " : "s ") +
-                            JoinInts(phi_wrapped, kListedLines) +
-                            "): readings of one turn are in [0, 2 pi) (SPEC 1); check that these "
-                            "angles are radians");
+    out->warnings.push_back(
+        file + ": phi beyond 2 pi on " + std::to_string(phi_wrapped.size()) + " of " +
+        std::to_string(rows.size()) + " rows (line" + (phi_wrapped.size() == 1 ? " " : "s ") +
+        JoinInts(phi_wrapped, kListedLines) +
+        "): readings of one turn are in [0, 2 pi) (SPEC 1); check that these angles are " +
+        (unit == AngleUnit::kRad ? std::string("radians")
+                                 : std::string(AngleUnitName(unit)) + " (data.angle_unit)"));
   }
 }
 
@@ -363,8 +387,8 @@ ScreenFindings FindDataMistakes(const Observations& obs, const std::vector<Camer
   // With the gross-error screening on (gross.h), a few offending rows are
   // its business; off, every offending row is an error here.
   const bool gross_rows = options.gross_errors.enabled;
-  CheckAngles(obs.records_source, record_rows, gross_rows, &out);
-  CheckAngles(obs.pixels_source, pixel_rows, gross_rows, &out);
+  CheckAngles(obs.records_source, record_rows, obs.angle_unit, gross_rows, &out);
+  CheckAngles(obs.pixels_source, pixel_rows, obs.angle_unit, gross_rows, &out);
   CheckPixels(obs.records_source, record_rows, cameras, options.pixel_margin_px, &out);
   CheckPixels(obs.pixels_source, pixel_rows, cameras, options.pixel_margin_px, &out);
   CheckRecordPoints(obs.records_source, obs.records, gross_rows, &out);

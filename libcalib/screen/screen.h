@@ -3,8 +3,10 @@
 // with the file, the line and the likely cause (docs/screening.md).
 //
 // Errors (the data break SPEC 1-3):
-//   - phi or theta outside [-2 pi, 4 pi): degrees or gon (the cause names
-//     which, from the values' range and where face-1 zenith angles cluster);
+//   - phi or theta outside [-2 pi, 4 pi) once converted from data.angle_unit
+//     (Observations::angle_unit): degrees or gon read as radians (the cause
+//     names which, from the values' range and where face-1 zenith angles
+//     cluster, and the `data.angle_unit: deg` / `gon` line that reads them so);
 //   - face 2 with theta < pi (written the face-1 way) and face 1 with
 //     theta > pi (a face-2 reading): SPEC 1's faces, when more than one in
 //     ten rows of the face do so (fewer are gross rows: gross.h);

@@ -66,6 +66,22 @@ TEST(DetectCommandTest, WritesPixelsAndSummaryAndRefusesToOverwrite) {
   EXPECT_THROW(app::RunDetect(args), std::runtime_error);
   args.force = true;
   EXPECT_EQ(app::RunDetect(args), 0);
+
+  // --angle-unit deg: shots.csv in degrees, pixels.csv written in degrees too
+  // (the config that reads the shots with data.angle_unit: deg reads them).
+  std::ofstream(dir / "shots_deg.csv") << "face,zoom,phi,theta,image\n1,0,45,90,photos/p1.png\n";
+  args.shots = (dir / "shots_deg.csv").string();
+  args.angle_unit = "deg";
+  ASSERT_EQ(app::RunDetect(args), 0);
+  const PixelsFile deg = ReadPixels(args.out, AngleUnit::kDeg);
+  ASSERT_EQ(deg.pixels.size(), 4u);
+  EXPECT_EQ(deg.pixels[0].phi, M_PI / 4);  // 45 deg and 90 deg are exact (angle_unit.h)
+  EXPECT_EQ(deg.pixels[0].theta, M_PI / 2);
+  std::ifstream written(args.out);
+  std::string header, row;
+  std::getline(written, header);
+  std::getline(written, row);
+  EXPECT_EQ(row.rfind("1,0,45,90,p1,", 0), 0u) << row;
   fs::remove_all(dir);
 }
 

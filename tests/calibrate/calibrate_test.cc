@@ -324,3 +324,45 @@ TEST(Calibrate, ImageSizesComeFromTheImagesOrTheConfigOrAreMarkedEstimated) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// model.radial_distortion: {coefficients: [k1, k2]} through Calibrate: k3 is
+// held at the value model.cameras gives (else 0) in every stage, and the
+// fit's list of held parameters names it.
+TEST(CalibrateDistortionChoice, UnlistedCoefficientsAreHeldAtTheirGivenValue) {
+  InstrumentModel truth = testing_scene::DhTruth(1);
+  truth.cams[0].distortion[kK1] = -0.1;
+  truth.cams[0].distortion[kK2] = 0.05;
+  truth.effects.Add(Effect::kRadialDistortion);
+  SimulatedData data = Simulate(testing_scene::PixelsOnly(truth, 3, 13, 0.2));
+  data.obs.records.clear();
+  CalibrationOptions options = ApiOptions(truth);
+  options.model.effects.Add(Effect::kRadialDistortion);
+  options.model.cameras[0].distortion = {};
+  options.model.cameras[0].distortion[kK3] = 1e-3;  // a value the user gives
+  DistortionChoice choice;
+  choice.group = Effect::kRadialDistortion;
+  choice.coefficients = {kK1, kK2};
+  options.model.distortion_choices = {choice};
+  const CalibrationResult r = Calibrate(data.obs, options);
+  EXPECT_TRUE(r.model.cams[0].distortion_held[kK3]);
+  EXPECT_EQ(r.model.cams[0].distortion[kK3], 1e-3);
+  EXPECT_EQ(r.start.cams[0].distortion[kK3], 1e-3);
+  EXPECT_NE(r.model.cams[0].distortion[kK1], 0.0);
+  EXPECT_THAT(r.fit.fixed_gauges, Contains(HasSubstr("k3 = 0.001")));
+
+  // A zoom the model has no camera for is an error naming the key.
+  choice.zooms[4] = {kK1};
+  options.model.distortion_choices = {choice};
+  try {
+    Calibrate(data.obs, options);
+    ADD_FAILURE() << "zoom 4 of a one-zoom model";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("model.radial_distortion.zooms"));
+  }
+}
+
+}  // namespace
+}  // namespace rtscalib

@@ -193,3 +193,72 @@ TEST(SelectRows, UnknownZoomThrowsOrIsSkipped) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// model.<group>.coefficients (HoldDistortion): for every distortion group,
+// kinematics and intrinsics mode, fitting only the group's first coefficient
+// (or none of it) frees exactly that in the refinement, and the diagnosis's
+// linearisation has the same free set; held coefficients are at their
+// configured start value, or 0.
+TEST(Parameterization, HeldDistortionCoefficientsAreHeldByRefinementAndDiagnosis) {
+  for (Kinematics k : {Kinematics::kDh, Kinematics::kSpherical}) {
+    const InstrumentModel baseline = Truth(k);
+    const Observations obs = SmallData(baseline);
+    for (bool fit_intrinsics : {false, true}) {
+      FitOptions fit;
+      fit.fit_intrinsics = fit_intrinsics;
+      fit.num_threads = 1;
+      for (const EffectInfo& info : EffectCatalogue()) {
+        if (info.kind != EffectKind::kDistortion) continue;
+        for (bool none : {false, true}) {
+          SCOPED_TRACE(CaseName(k, info.effect, fit_intrinsics) + (none ? ", none fitted" : ""));
+          InstrumentModel m = baseline;
+          m.effects.Add(info.effect);
+          for (int i : info.distortion_indices) m.cams[0].distortion[i] = 1e-3;
+          std::vector<CameraTool> configured(1);
+          configured[0].distortion[info.distortion_indices.back()] = 2e-4;
+          DistortionChoice choice;
+          choice.group = info.effect;
+          if (!none) choice.coefficients = {info.distortion_indices.front()};
+          HoldDistortion({choice}, configured, &m);
+
+          const std::vector<std::string> refinement = RefinementColumns(m, fit);
+          for (int i : info.distortion_indices) {
+            const std::string name = std::string("cam[0].") + kDistortionCoefficientNames[i];
+            const bool fitted = !none && i == info.distortion_indices.front();
+            EXPECT_EQ(std::count(refinement.begin(), refinement.end(), name), fitted ? 1 : 0)
+                << name;
+            EXPECT_EQ(DistortionIsFree(m, 0, i), fitted);
+            const double start = fitted ? 1e-3 : i == info.distortion_indices.back() ? 2e-4 : 0.0;
+            EXPECT_EQ(m.cams[0].distortion[i], start) << name;
+          }
+          LinearizeOptions lo;
+          lo.fit = fit;
+          const Linearization lin = Linearize(obs, m, lo);
+          EXPECT_EQ(lin.base_names, refinement);
+        }
+      }
+    }
+  }
+}
+
+TEST(Parameterization, HoldDistortionRejectsZoomsAndGroupsTheModelLacks) {
+  InstrumentModel m = Truth(Kinematics::kDh);
+  DistortionChoice choice;
+  choice.group = Effect::kRadialDistortion;
+  choice.coefficients = {kK1};
+  EXPECT_THROW(HoldDistortion({choice}, {}, &m), std::invalid_argument);  // not enabled
+  m.effects.Add(Effect::kRadialDistortion);
+  choice.zooms[3] = {kK1};
+  try {
+    HoldDistortion({choice}, {}, &m);
+    ADD_FAILURE() << "zoom 3 of a one-zoom model";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("model.radial_distortion.zooms"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace rtscalib

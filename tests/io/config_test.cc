@@ -85,6 +85,13 @@ TEST(Config, DocsFullExampleLoadsWithEveryKey) {
   EXPECT_EQ(c.model.cameras[1].intrinsics[0], 2000);
   EXPECT_EQ(c.model.cameras[1].distortion[0], -0.05);
   EXPECT_EQ(c.model.cameras[1].distortion[13], 0.0);
+  EXPECT_EQ(c.angle_unit, AngleUnit::kRad);
+  ASSERT_EQ(c.model.distortion_choices.size(), 1u);
+  const DistortionChoice& radial = c.model.distortion_choices[0];
+  EXPECT_EQ(radial.group, Effect::kRadialDistortion);
+  EXPECT_EQ(radial.coefficients, (std::vector<int>{kK1, kK2}));
+  EXPECT_EQ(radial.At(0), (std::vector<int>{kK1, kK2}));
+  EXPECT_EQ(radial.At(1), (std::vector<int>{kK1, kK2, kK3}));
   EXPECT_EQ(c.fit.loss, RobustLoss::kHuber);
   EXPECT_DOUBLE_EQ(c.fit.max_zenith_rad, 135 * M_PI / 180);
   EXPECT_EQ(c.checks.max_sigma0, 100);
@@ -561,6 +568,101 @@ TEST(Config, BoardPosesMustBeKnownOrUnknown) {
       dir.Write("ok.yaml", std::string(kSimulateOnly) + "render: {board_poses: unknown}\n");
   LoadWithRender(ok, &render);
   EXPECT_FALSE(render.board_poses_known);
+}
+
+}  // namespace
+}  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+TEST(ConfigAngleUnit, DefaultIsRadiansAndEachNameIsRead) {
+  TempDir dir;
+  dir.Write("records.csv", "x\n");
+  EXPECT_EQ(LoadConfig(dir.Write("a.yaml", "data: {records: records.csv}\n")).angle_unit,
+            AngleUnit::kRad);
+  for (AngleUnit unit : {AngleUnit::kRad, AngleUnit::kDeg, AngleUnit::kGon}) {
+    const std::string text =
+        std::string("data: {records: records.csv, angle_unit: ") + AngleUnitName(unit) + "}\n";
+    const RunConfig c = LoadConfig(dir.Write("b.yaml", text));
+    EXPECT_EQ(c.angle_unit, unit);
+    // --write-config spells it out and reads back the same.
+    const RunConfig again = LoadConfig(dir.Write("c.yaml", DumpConfig(c)));
+    EXPECT_EQ(again.angle_unit, unit);
+  }
+}
+
+TEST(ConfigAngleUnit, UnknownUnitNamesKeyExpectedValuesAndWhatCame) {
+  TempDir dir;
+  dir.Write("records.csv", "x\n");
+  const InputError e = ConfigError(dir, "data:\n  records: records.csv\n  angle_unit: degrees\n");
+  EXPECT_EQ(e.file, dir.Path("run.yaml"));
+  EXPECT_EQ(e.key, "data.angle_unit");
+  EXPECT_EQ(e.line, 3);
+  EXPECT_EQ(e.got, "degrees");
+  for (const char* name : {"rad", "deg", "gon"}) EXPECT_THAT(e.expected, HasSubstr(name));
+  EXPECT_THAT(e.what(), HasSubstr("run.yaml:3"));
+  EXPECT_THAT(e.what(), HasSubstr("data.angle_unit"));
+  EXPECT_THAT(e.what(), HasSubstr("'degrees'"));
+}
+
+}  // namespace
+}  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+TEST(ConfigDistortionChoice, ReadsAndDumpsTheCoefficientsToFit) {
+  TempDir dir;
+  const RunConfig c = LoadConfig(dir.Write(
+      "a.yaml", std::string(kSimulateOnly) +
+                    "model:\n  effects: [radial_distortion, tangential_distortion]\n"
+                    "  radial_distortion: {coefficients: [k2, k1], zooms: {2: [k1], 3: []}}\n"
+                    "  tangential_distortion: {zooms: {0: [p2]}}\n"));
+  ASSERT_EQ(c.model.distortion_choices.size(), 2u);
+  const DistortionChoice& radial = c.model.distortion_choices[0];
+  EXPECT_EQ(radial.coefficients, (std::vector<int>{kK1, kK2}));  // sorted
+  EXPECT_EQ(radial.At(2), (std::vector<int>{kK1}));
+  EXPECT_TRUE(radial.At(3).empty());
+  const DistortionChoice& tangential = c.model.distortion_choices[1];
+  EXPECT_EQ(tangential.coefficients, (std::vector<int>{kP1, kP2}));  // default: all
+  EXPECT_EQ(tangential.At(0), (std::vector<int>{kP2}));
+  // --write-config writes them and reads back the same.
+  const RunConfig again = LoadConfig(dir.Write("b.yaml", DumpConfig(c)));
+  ASSERT_EQ(again.model.distortion_choices.size(), 2u);
+  EXPECT_EQ(again.model.distortion_choices[0].zooms, radial.zooms);
+  EXPECT_EQ(again.model.distortion_choices[0].coefficients, radial.coefficients);
+  EXPECT_EQ(again.model.distortion_choices[1].zooms, tangential.zooms);
+}
+
+TEST(ConfigDistortionChoice, ErrorsNameTheKeyExpectedAndGot) {
+  TempDir dir;
+  // A coefficient of another group.
+  InputError e = ConfigError(dir, std::string(kSimulateOnly) +
+                                      "model:\n  effects: [radial_distortion]\n"
+                                      "  radial_distortion: {coefficients: [k1, p1]}\n");
+  EXPECT_EQ(e.key, "model.radial_distortion.coefficients[1]");
+  EXPECT_EQ(e.got, "p1");
+  EXPECT_THAT(e.expected, HasSubstr("k3"));
+  // The group is not in the model: the choice would be silently ignored.
+  e = ConfigError(dir, std::string(kSimulateOnly) +
+                           "model:\n  effects: [hz_eccentricity]\n"
+                           "  radial_distortion: {coefficients: [k1]}\n");
+  EXPECT_EQ(e.key, "model.radial_distortion");
+  EXPECT_THAT(e.expected, HasSubstr("radial_distortion in model.effects"));
+  // Twice the same coefficient, an unknown key, a negative zoom.
+  e = ConfigError(dir, std::string(kSimulateOnly) +
+                           "model:\n  effects: [radial_distortion]\n"
+                           "  radial_distortion: {coefficients: [k1, k1]}\n");
+  EXPECT_THAT(e.expected, HasSubstr("each coefficient once"));
+  e = ConfigError(dir, std::string(kSimulateOnly) +
+                           "model:\n  effects: [radial_distortion]\n"
+                           "  radial_distortion: {coefficient: [k1]}\n");
+  EXPECT_EQ(e.key, "model.radial_distortion.coefficient");
+  e = ConfigError(dir, std::string(kSimulateOnly) +
+                           "model:\n  effects: [radial_distortion]\n"
+                           "  radial_distortion: {zooms: {-1: [k1]}}\n");
+  EXPECT_THAT(e.expected, HasSubstr("zoom level >= 0"));
 }
 
 }  // namespace

@@ -85,8 +85,15 @@ InstrumentModel RandomModel(Kinematics k, int zooms, bool with_sigmas, unsigned 
       s.distortion.emplace_back();
       for (double& x : s.distortion.back()) x = std::abs(unif(rng)) * 1e-4;
     }
+    // Coefficients the fit did not free have no uncertainty: `held` in the
+    // file, 0 in memory (what Refine gives them).
+    for (auto& sd : s.distortion) {
+      for (int i = 0; i < kNumDistortion; ++i) {
+        if (!m.effects.Has(DistortionGroupOf(i))) sd[i] = 0.0;
+      }
+    }
     // Uncertainty that could not be computed is NaN and must survive.
-    s.distortion.back()[kTauY] = std::nan("");
+    s.distortion.back()[kK3] = std::nan("");
     for (Effect e : m.effects.List()) {
       if (!IsKinematic(e)) continue;
       const double a = 1e-12 * (1.5 + unif(rng)), b = 1e-12 * (1.5 + unif(rng));
@@ -393,6 +400,45 @@ TEST(ModelIoBoards, BoardsAndPointsRoundTrip) {
   EXPECT_EQ(r.points[0].name, "prism 1");
   EXPECT_EQ(r.points[0].x, p.x);
   EXPECT_EQ(r.points[0].sigma, p.sigma);
+}
+
+}  // namespace
+}  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// model.<group>.coefficients: the held coefficients are listed per camera
+// (`distortion_held`) and their sigma is `held` (never a number such as 0);
+// read back, the model holds the same coefficients.
+TEST(ModelIo, HeldDistortionCoefficientsAreNamedAndHaveNoSigma) {
+  TempDir dir;
+  InstrumentModel m = RandomModel(Kinematics::kDh, 2, true, 5);
+  m.cams[0].distortion_held[kK3] = true;
+  m.cams[0].distortion[kK3] = 0.0;
+  m.sigmas.distortion[0][kK3] = 0.0;
+  m.cams[1].distortion_held[kP2] = true;
+  m.sigmas.distortion[1][kP2] = 0.0;
+  // Held flags of a group not in the model mean nothing and are not written.
+  m.cams[1].distortion_held[kK4] = true;
+  WriteModelYaml(dir.Path("model.yaml"), m);
+  const YAML::Node n = YAML::LoadFile(dir.Path("model.yaml"));
+  EXPECT_EQ(n["cameras"][0]["distortion_held"].as<std::vector<std::string>>(),
+            (std::vector<std::string>{"k3"}));
+  EXPECT_EQ(n["cameras"][1]["distortion_held"].as<std::vector<std::string>>(),
+            (std::vector<std::string>{"p2"}));
+  EXPECT_EQ(n["cameras"][0]["distortion_sigma"]["k3"].as<std::string>(), "held");
+  EXPECT_EQ(n["cameras"][0]["distortion_sigma"]["k4"].as<std::string>(), "held");  // not in model
+  EXPECT_EQ(n["cameras"][0]["distortion_sigma"]["k1"].as<double>(), m.sigmas.distortion[0][kK1]);
+  EXPECT_EQ(n["cameras"][1]["distortion_sigma"]["p2"].as<std::string>(), "held");
+
+  const InstrumentModel r = ReadModelYaml(dir.Path("model.yaml"));
+  EXPECT_TRUE(r.cams[0].distortion_held[kK3]);
+  EXPECT_FALSE(r.cams[0].distortion_held[kK1]);
+  EXPECT_TRUE(r.cams[1].distortion_held[kP2]);
+  EXPECT_FALSE(r.cams[1].distortion_held[kK4]);
+  EXPECT_EQ(r.sigmas.distortion[0][kK3], 0.0);
+  EXPECT_EQ(r.sigmas.distortion[0][kK1], m.sigmas.distortion[0][kK1]);
 }
 
 }  // namespace

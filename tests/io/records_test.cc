@@ -3,8 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
+#include "libcalib/io/number_text.h"
 #include "tests/io/io_test_util.h"
 
 namespace rtscalib {
@@ -367,6 +369,137 @@ TEST(PixelsBoards, EmptyXyzMeansABoardCorner) {
   const InputError e = CatchInputError([&] { ReadPixels(bad); });
   EXPECT_EQ(e.line, 2);
   EXPECT_EQ(e.column, "X");
+}
+
+}  // namespace
+}  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// data.angle_unit (libcalib/model/angle_unit.h): readings written in degrees
+// or gon give the observations of the same readings written in radians.
+// Tolerance 1e-15 relative (the issue's): each file holds the reading with
+// 17 significant digits (exact to 0.5 ulp; the test's own scaling of the
+// radians adds 0.5-1 ulp) and the reader divides by 180 or 200 and
+// multiplies by pi (0.5 ulp each), so deg and gon differ from the radians by
+// at most ~3 ulp = 6.7e-16 relative.
+constexpr double kUnitRelTolerance = 1e-15;
+
+std::string AngleRows(double scale, const std::vector<std::pair<double, double>>& angles) {
+  std::string text = kHeader;
+  for (size_t i = 0; i < angles.size(); ++i) {
+    const bool edm = i % 2 == 0;
+    text += std::string(i % 3 == 0 ? "2" : "1") + ",1," + FormatDouble(angles[i].first * scale) +
+            "," + FormatDouble(angles[i].second * scale) +
+            (edm ? ",edm,,," : ",cam,320.5,240.25,") + "2.5,0.1,0.2,0.3,grid\n";
+  }
+  return text;
+}
+
+std::vector<std::pair<double, double>> RandomReadings(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> phi(0, 2 * M_PI), theta(0.2, 2 * M_PI - 0.2);
+  std::vector<std::pair<double, double>> out;
+  for (int i = 0; i < n; ++i) out.emplace_back(phi(rng), theta(rng));
+  // Exact corners of the circle as well.
+  out.emplace_back(0.0, M_PI / 2);
+  out.emplace_back(M_PI, 3 * M_PI / 2);
+  return out;
+}
+
+void ExpectSameReading(double rad, double other, const std::string& what) {
+  EXPECT_LE(std::fabs(other - rad), kUnitRelTolerance * std::fabs(rad)) << what;
+}
+
+TEST(RecordsAngleUnit, DegreesAndGonGiveTheRadianObservations) {
+  TempDir dir;
+  const auto angles = RandomReadings(200, 7);
+  const RecordsFile rad = ReadRecords(dir.Write("rad.csv", AngleRows(1.0, angles)));
+  const RecordsFile deg =
+      ReadRecords(dir.Write("deg.csv", AngleRows(180.0 / M_PI, angles)), AngleUnit::kDeg);
+  const RecordsFile gon =
+      ReadRecords(dir.Write("gon.csv", AngleRows(200.0 / M_PI, angles)), AngleUnit::kGon);
+  ASSERT_EQ(rad.records.size(), angles.size());
+  ASSERT_EQ(deg.records.size(), angles.size());
+  ASSERT_EQ(gon.records.size(), angles.size());
+  for (size_t i = 0; i < angles.size(); ++i) {
+    const Record &r = rad.records[i], &d = deg.records[i], &g = gon.records[i];
+    const std::string row = "row " + std::to_string(i);
+    ExpectSameReading(r.phi, d.phi, row + " phi deg");
+    ExpectSameReading(r.theta, d.theta, row + " theta deg");
+    ExpectSameReading(r.phi, g.phi, row + " phi gon");
+    ExpectSameReading(r.theta, g.theta, row + " theta gon");
+    // Everything that is not an angle is read as it is.
+    for (const Record* o : {&d, &g}) {
+      EXPECT_EQ(o->face, r.face);
+      EXPECT_EQ(o->tool, r.tool);
+      EXPECT_EQ(o->u, r.u);
+      EXPECT_EQ(o->d, r.d);
+      EXPECT_EQ(o->x, r.x);
+      EXPECT_EQ(o->line, r.line);
+    }
+  }
+}
+
+// Quarter and half turns are exact: 180 deg and 200 gon are M_PI itself, so
+// a face-1 zenith angle of a half turn stays within SPEC 1's [0, pi].
+TEST(RecordsAngleUnit, HalfAndQuarterTurnsAreExact) {
+  for (AngleUnit unit : {AngleUnit::kDeg, AngleUnit::kGon}) {
+    const double half = unit == AngleUnit::kDeg ? 180.0 : 200.0;
+    EXPECT_EQ(ReadingToRadians(half, unit), M_PI);
+    EXPECT_EQ(ReadingToRadians(half / 2, unit), M_PI / 2);
+    EXPECT_EQ(ReadingToRadians(1.5 * half, unit), 1.5 * M_PI);
+    EXPECT_EQ(ReadingToRadians(2 * half, unit), 2 * M_PI);
+    EXPECT_EQ(FormatReading(M_PI, unit), unit == AngleUnit::kDeg ? "180" : "200");
+  }
+}
+
+TEST(RecordsAngleUnit, ExactAnglesOfDegreesAndGon) {
+  TempDir dir;
+  const RecordsFile deg = ReadRecords(
+      dir.Write("deg.csv", std::string(kHeader) + "1,0,90,45,edm,,,2,0,0,1,\n"), AngleUnit::kDeg);
+  EXPECT_EQ(deg.records[0].phi, M_PI / 2);
+  EXPECT_EQ(deg.records[0].theta, M_PI / 4);
+  const RecordsFile gon = ReadRecords(
+      dir.Write("gon.csv", std::string(kHeader) + "1,0,100,300,edm,,,2,0,0,1,\n"), AngleUnit::kGon);
+  EXPECT_EQ(gon.records[0].phi, M_PI / 2);
+  EXPECT_EQ(gon.records[0].theta, 3 * M_PI / 2);
+}
+
+// predict and detect echo a user's rows in the user's unit: written back in
+// degrees or gon, the readings read back bit for bit.
+TEST(RecordsAngleUnit, WrittenBackInTheFileUnitReadsBackExactly) {
+  TempDir dir;
+  const auto angles = RandomReadings(100, 8);
+  for (AngleUnit unit : {AngleUnit::kDeg, AngleUnit::kGon}) {
+    const double scale = unit == AngleUnit::kDeg ? 180.0 / M_PI : 200.0 / M_PI;
+    const RecordsFile in = ReadRecords(dir.Write("in.csv", AngleRows(scale, angles)), unit);
+    const std::string out = dir.Path(std::string("out_") + AngleUnitName(unit) + ".csv");
+    WriteRecords(out, in.records, unit);
+    const RecordsFile back = ReadRecords(out, unit);
+    ASSERT_EQ(back.records.size(), in.records.size());
+    for (size_t i = 0; i < in.records.size(); ++i) {
+      EXPECT_EQ(back.records[i].phi, in.records[i].phi) << i;
+      EXPECT_EQ(back.records[i].theta, in.records[i].theta) << i;
+    }
+  }
+}
+
+TEST(PixelsAngleUnit, DegreesGiveTheRadianObservations) {
+  TempDir dir;
+  const std::string header = "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v\n";
+  const double phi = 1.2345678901234567, theta = 1.4142135623730951;
+  const PixelsFile rad =
+      ReadPixels(dir.Write("rad.csv", header + "1,0," + FormatDouble(phi) + "," +
+                                          FormatDouble(theta) + ",s1,3,0,1,2,3,10.5,20.5\n"));
+  const PixelsFile deg = ReadPixels(
+      dir.Write("deg.csv", header + "1,0," + FormatDouble(phi * 180 / M_PI) + "," +
+                               FormatDouble(theta * 180 / M_PI) + ",s1,3,0,1,2,3,10.5,20.5\n"),
+      AngleUnit::kDeg);
+  ExpectSameReading(rad.pixels[0].phi, deg.pixels[0].phi, "phi");
+  ExpectSameReading(rad.pixels[0].theta, deg.pixels[0].theta, "theta");
+  EXPECT_EQ(rad.pixels[0].uv, deg.pixels[0].uv);
 }
 
 }  // namespace

@@ -143,3 +143,46 @@ TEST(Shots, UnreadableFileIsAnError) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// data.angle_unit for shots.csv: degrees and gon give the photos' readings in
+// radians to 1e-15 relative (17-digit text, a division by 180 or 200 and a
+// multiplication by pi: ~3 ulp, tests/io/records_test.cc), and the file
+// keeps its unit.
+TEST(ShotsAngleUnit, DegreesAndGonGiveTheRadianReadings) {
+  TempDir dir;
+  dir.Write("a.png", "x");
+  dir.Write("b.png", "x");
+  const double phi[2] = {0.123456789012345, 5.4321098765432};
+  const double theta[2] = {1.5707963267948966, 4.6};  // face 1, face 2
+  auto file = [&](const char* name, double scale) {
+    std::string text = kHeader;
+    for (int i = 0; i < 2; ++i) {
+      char row[160];
+      std::snprintf(row, sizeof row, "%d,1,%.17g,%.17g,%s\n", i + 1, phi[i] * scale,
+                    theta[i] * scale, i == 0 ? "a.png" : "b.png");
+      text += row;
+    }
+    return dir.Write(name, text);
+  };
+  const ShotsFile rad = ReadShots(file("rad.csv", 1.0));
+  const ShotsFile deg = ReadShots(file("deg.csv", 180.0 / M_PI), AngleUnit::kDeg);
+  const ShotsFile gon = ReadShots(file("gon.csv", 200.0 / M_PI), AngleUnit::kGon);
+  EXPECT_EQ(rad.angle_unit, AngleUnit::kRad);
+  EXPECT_EQ(deg.angle_unit, AngleUnit::kDeg);
+  EXPECT_EQ(gon.angle_unit, AngleUnit::kGon);
+  constexpr double kRel = 1e-15;
+  for (int i = 0; i < 2; ++i) {
+    for (const ShotsFile* f : {&deg, &gon}) {
+      EXPECT_NEAR(f->shots[i].phi, rad.shots[i].phi, kRel * rad.shots[i].phi);
+      EXPECT_NEAR(f->shots[i].theta, rad.shots[i].theta, kRel * rad.shots[i].theta);
+      EXPECT_EQ(f->shots[i].shot, rad.shots[i].shot);
+      EXPECT_EQ(f->shots[i].face, rad.shots[i].face);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace rtscalib

@@ -110,12 +110,14 @@ TEST_F(ScreenTest, DegreesAreNamed) {
   EXPECT_EQ(f.errors[0].column, "phi");
   EXPECT_EQ(std::string(f.errors[0].what()),
             "records.csv:7: column 'phi': expected a horizontal angle in radians within "
-            "[-2 pi, 4 pi); the file's angles look like degrees (SPEC 1: radians = "
-            "degrees * pi / 180); also lines 8, 9, 10, 11, 12 and 209 more rows, got '24'");
+            "[-2 pi, 4 pi); the file's angles look like degrees: give `data.angle_unit: deg` in "
+            "the config (--angle-unit deg for predict and detect) and they are read as degrees; "
+            "also lines 8, 9, 10, 11, 12 and 209 more rows, got '24'");
   EXPECT_EQ(std::string(f.errors[1].what()),
             "records.csv:2: column 'theta': expected a zenith angle in radians within "
-            "[-2 pi, 4 pi); the file's angles look like degrees (SPEC 1: radians = "
-            "degrees * pi / 180); also lines 3, 4, 5, 6, 7 and 289 more rows, got '90'");
+            "[-2 pi, 4 pi); the file's angles look like degrees: give `data.angle_unit: deg` in "
+            "the config (--angle-unit deg for predict and detect) and they are read as degrees; "
+            "also lines 3, 4, 5, 6, 7 and 289 more rows, got '90'");
 }
 
 TEST_F(ScreenTest, GonAreNamed) {
@@ -127,8 +129,37 @@ TEST_F(ScreenTest, GonAreNamed) {
   ASSERT_EQ(f.errors.size(), 2u);
   EXPECT_EQ(std::string(f.errors[1].what()),
             "records.csv:2: column 'theta': expected a zenith angle in radians within "
-            "[-2 pi, 4 pi); the file's angles look like gon (SPEC 1: radians = gon * pi "
-            "/ 200); also lines 3, 4, 5, 6, 7 and 289 more rows, got '100'");
+            "[-2 pi, 4 pi); the file's angles look like gon: give `data.angle_unit: gon` in the "
+            "config (--angle-unit gon for predict and detect) and they are read as gon; also "
+            "lines 3, 4, 5, 6, 7 and 289 more rows, got '100'");
+}
+
+// The screening checks the readings as converted from data.angle_unit: the
+// same degrees read with `angle_unit: deg` are radians and pass.
+TEST_F(ScreenTest, ConvertedReadingsPass) {
+  for (AngleUnit unit : {AngleUnit::kDeg, AngleUnit::kGon}) {
+    Observations converted = obs;
+    converted.angle_unit = unit;  // as the reader leaves them: radians, unit noted
+    const ScreenFindings f = FindDataMistakes(converted, truth.cams, options);
+    EXPECT_THAT(Messages(f), IsEmpty()) << AngleUnitName(unit);
+  }
+}
+
+// A file still out of range once read in degrees (here: degrees of degrees)
+// names the key it was read with, and shows the values as the file has them.
+TEST_F(ScreenTest, OutOfRangeEvenInTheGivenUnitNamesTheKey) {
+  for (Record& r : obs.records) {
+    r.phi *= 180 / M_PI;
+    r.theta *= 180 / M_PI;
+  }
+  obs.angle_unit = AngleUnit::kDeg;
+  const ScreenFindings f = FindDataMistakes(obs, truth.cams, options);
+  ASSERT_EQ(f.errors.size(), 2u);
+  EXPECT_EQ(std::string(f.errors[1].what()),
+            "records.csv:2: column 'theta': expected a zenith angle (read in deg) within "
+            "[-2 pi, 4 pi) rad; the file's angles leave that range even read in deg "
+            "(data.angle_unit: deg): check the key and the file; also lines 3, 4, 5, 6, 7 and "
+            "289 more rows, got '5156.620156177409'");
 }
 
 TEST_F(ScreenTest, FaceTwoWrittenTheFaceOneWay) {
