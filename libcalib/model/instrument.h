@@ -81,6 +81,10 @@ struct ModelSigmas {
   std::vector<std::array<double, kNumIntrinsics>> intrinsics;
   std::vector<std::array<double, kNumDistortion>> distortion;
   std::array<std::array<double, 4>, kNumKinematicEffects> effect_cov{};  // 2x2 row major
+  // The fit's full joint covariance of p in the tangent coordinates and order
+  // of libcalib/fit/parameter_layout.h (held coordinates: zero rows); empty
+  // when none was computed. Written beside model.yaml as covariance.yaml.
+  Eigen::MatrixXd covariance;
 };
 
 // A board of unknown pose (SPEC 7), estimated with the instrument: its
