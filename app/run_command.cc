@@ -10,8 +10,8 @@
 #include "app/report_html.h"
 #include "app/reports.h"
 #include "app/safe_write.h"
-#include "libcalib/io/config.h"
 #include "libcalib/fit/parameter_layout.h"
+#include "libcalib/io/config.h"
 #include "libcalib/io/covariance_io.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
@@ -82,7 +82,8 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   progress.Done();
   std::cout << (args.diagnose ? DiagnosisText(result.calibration) : text);
   std::cout << "\nwritten: " << out.run_dir()
-            << "/{model.yaml, covariance.yaml, report.json, report.txt, report.html, figures/}\nshown at the top of "
+            << "/{model.yaml, covariance.yaml, report.json, report.txt, report.html, "
+               "figures/}\nshown at the top of "
             << out.root() << " (symlinks through " << out.root() << "/latest)\n";
   for (const std::string& f : kept) {
     std::cout << "kept your file " << out.root() << "/figures/" << f << "; this run's " << f

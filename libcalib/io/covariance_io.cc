@@ -48,8 +48,7 @@ void WriteCovarianceYaml(const std::string& path, const InstrumentModel& model) 
   f << "# The fit's full parameter covariance of the model.yaml beside this file\n"
        "# (docs/library.md): rows and columns in `blocks` order, tangent coordinates\n"
        "# of libcalib/fit/parameter_layout.h; `at` = the block's values in model.yaml.\n";
-  f << "format: " << kFormat << "\nversion: " << kVersion << "\nparameters: " << n
-    << "\nblocks:\n";
+  f << "format: " << kFormat << "\nversion: " << kVersion << "\nparameters: " << n << "\nblocks:\n";
   for (const LayoutBlock& b : layout) {
     f << "  - {name: " << Quoted(b.name) << ", offset: " << b.offset << ", size: " << b.size
       << ", unit: " << Quoted(b.unit) << ", at: [";
@@ -89,8 +88,8 @@ void ReadCovarianceYaml(const std::string& path, InstrumentModel* model) {
     const LayoutBlock& b = layout[k];
     const YamlNode& item = items[k];
     const YamlNode name = item.Require("name");
-    if (name.AsString() != b.name) name.Fail("'" + b.name + "' (the model's block " +
-                                             std::to_string(k) + ")");
+    if (name.AsString() != b.name)
+      name.Fail("'" + b.name + "' (the model's block " + std::to_string(k) + ")");
     const YamlNode offset = item.Require("offset");
     if (offset.AsInt() != b.offset) offset.Fail(std::to_string(b.offset));
     const YamlNode size = item.Require("size");
