@@ -1,7 +1,5 @@
 #include "libcalib/api/rtscalib.h"
 
-#include <ceres/manifold.h>
-
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
@@ -331,7 +329,9 @@ Uncertain<N> Propagate(
   const std::vector<LayoutBlock> blocks = ParameterLayout(model);
   std::vector<int> index;  // parameter indices the prediction depends on
   std::vector<Eigen::Matrix<double, N, 1>> columns;
-  InstrumentModel values = model;  // read-only copy: the accessors take a mutable model
+  // The model without its covariance (N^2 numbers): copied twice per column.
+  InstrumentModel values = model;  // also the read-only copy the accessors need
+  values.sigmas.covariance.resize(0, 0);
   for (size_t b = 0; b < blocks.size(); ++b) {
     const int u = blocks[b].use;
     if (!(u == kLayoutShared || u == use)) continue;
@@ -341,7 +341,7 @@ Uncertain<N> Propagate(
       for (int side = 0; side < 2; ++side) {
         double delta[kNumDistortion] = {};  // the largest block
         delta[i] = side == 0 ? h : -h;
-        InstrumentModel m = model;
+        InstrumentModel m = values;
         LayoutPlus(blocks[b], delta, &m);
         if (!evaluate(m, &f[side])) {
           throw PredictionError(PredictionFailure::kNonFinite,
