@@ -577,6 +577,55 @@ std::string Added(const std::vector<std::string>& before, const std::vector<std:
 
 }  // namespace
 
+Figure DifferenceFigure(const ZoomDifference& d) {
+  const int panel_w = 480;
+  const int panel_h =
+      std::max(1, static_cast<int>(std::lround(panel_w * double(d.height) / std::max(1, d.width))));
+  const int left = 30, top = 40;
+  cv::Mat img(panel_h + top + 70, panel_w + 2 * left + 110, CV_8UC3, kWhite);
+  const cv::Mat lut = ViridisLut();
+  const double vmax = std::isfinite(d.max_px) && d.max_px > 0 ? NiceNumber(d.max_px) : 1.0;
+  for (int j = 0; j < d.rows; ++j) {
+    for (int i = 0; i < d.cols; ++i) {
+      const cv::Rect r(left + i * panel_w / d.cols, top + j * panel_h / d.rows,
+                       (i + 1) * panel_w / d.cols - i * panel_w / d.cols,
+                       (j + 1) * panel_h / d.rows - j * panel_h / d.rows);
+      const double v = d.diff_px[j * d.cols + i];
+      if (!std::isfinite(v)) {
+        cv::rectangle(img, r, kHatch, cv::FILLED);
+        continue;
+      }
+      cv::rectangle(img, r, ColourOf(lut, std::min(v / vmax, 1.0)), cv::FILLED);
+      if (!d.inside[j * d.cols + i]) {
+        cv::Mat roi = img(r & cv::Rect(0, 0, img.cols, img.rows));
+        for (int k = -roi.rows; k < roi.cols; k += 6) {
+          cv::line(roi, cv::Point(k, roi.rows), cv::Point(k + roi.rows, 0), kWhite, 1, cv::LINE_AA);
+        }
+      }
+    }
+  }
+  cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
+  ColourBar(img, lut, cv::Rect(left + panel_w + 20, top, 18, panel_h), vmax, "difference [px]");
+  Put(img,
+      "zoom " + std::to_string(d.zoom) + ": RMS " + Fmt("%.3g", d.rms_px) + ", max " +
+          Fmt("%.3g", d.max_px) + " px; rotation removed " +
+          Fmt("%.3g", d.rotation_rad * 180 / M_PI * 3600) + "\"",
+      cv::Point(left, 25), 0.45);
+  Put(img, std::to_string(d.width) + " x " + std::to_string(d.height) + " px (first model's image)",
+      cv::Point(left, top + panel_h + 25), 0.42);
+  Put(img, "hatched: outside either model's valid region; grey: not predictable",
+      cv::Point(left, top + panel_h + 48), 0.42);
+  Figure f;
+  f.name = "compare_zoom" + std::to_string(d.zoom) + ".png";
+  f.section = "compare";
+  f.title = "Projection difference, zoom " + std::to_string(d.zoom);
+  f.caption =
+      "How far apart the two models project one ray, after the best rotation between "
+      "their camera frames is removed (docs/compare.md).";
+  f.image = img;
+  return f;
+}
+
 std::vector<unsigned char> EncodePng(const cv::Mat& image) {
   std::vector<unsigned char> out;
   if (image.empty() || !cv::imencode(".png", image, out) || out.empty()) {

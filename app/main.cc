@@ -88,6 +88,15 @@ int main(int argc, char** argv) {
   det->add_flag("--force", detect.force, "replace --out if it exists");
   det->add_flag("--quiet", detect.quiet, "no progress lines on stderr");
 
+  rtscalib::app::CompareArgs cmp;
+  CLI::App* cm = app.add_subcommand(
+      "compare",
+      "compare two calibrations: projection differences per zoom, parameter differences / sigma");
+  cm->add_option("a", cmp.a, "first model.yaml")->required();
+  cm->add_option("b", cmp.b, "second model.yaml")->required();
+  cm->add_option("--output", cmp.output,
+                 "also write compare.txt, compare.json and figures/ into this folder");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -99,6 +108,7 @@ int main(int argc, char** argv) {
     if (dg->parsed()) return rtscalib::app::RunDiagnose(diag);
     if (ex->parsed()) return rtscalib::app::RunExport(exp);
     if (det->parsed()) return rtscalib::app::RunDetect(detect);
+    if (cm->parsed()) return rtscalib::app::RunCompare(cmp);
     if (run.config.empty()) {
       std::cerr << app.help();
       return kExitUsage;
