@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -122,7 +123,16 @@ Eigen::VectorXd BlockDifference(const LayoutBlock& la, const InstrumentModel& a,
                                 const LayoutBlock& lb, const InstrumentModel& b) {
   const double* x = la.const_data(a);
   const double* y = lb.const_data(b);
-  Eigen::VectorXd d(la.size);
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(la.size);
+  if (std::equal(x, x + la.ambient, y)) return d;  // exactly 0, not Minus's rounding
+  // q and -q are one rotation: take the b nearer to a, or Minus would
+  // report the other way round (an angle near 2 pi).
+  double yq[4] = {0, 0, 0, 0};
+  if (la.tangent != LayoutTangent::kEuclidean) {
+    const double dot = x[0] * y[0] + x[1] * y[1] + x[2] * y[2] + x[3] * y[3];
+    for (int i = 0; i < 4; ++i) yq[i] = dot < 0 ? -y[i] : y[i];
+    y = yq;
+  }
   switch (la.tangent) {
     case LayoutTangent::kEuclidean:
       for (int i = 0; i < la.size; ++i) d[i] = y[i] - x[i];

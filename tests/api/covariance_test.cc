@@ -72,7 +72,8 @@ InstrumentModel Fit(const InstrumentModel& truth, int seed, Observations* obs_ou
 // routes), and a covariance.yaml round-trips it bit for bit (%.17g).
 TEST(FullCovariance, FitKeepsItAndTheFileRoundTripsExactly) {
   const InstrumentModel truth = Truth();
-  const InstrumentModel model = Fit(truth, 0);
+  InstrumentModel model = Fit(truth, 0);
+  model.cams[0].valid_region = {{0.25, 1.5}, {600.125, 3}, {630, 470.0625}, {2, 460}};
   const std::vector<LayoutBlock> layout = ParameterLayout(model);
   const int n = LayoutSize(layout);
   ASSERT_EQ(model.sigmas.covariance.rows(), n);
@@ -94,6 +95,7 @@ TEST(FullCovariance, FitKeepsItAndTheFileRoundTripsExactly) {
   ASSERT_TRUE(inst.HasParameterCovariance());
   ASSERT_TRUE(inst.HasFullParameterCovariance());
   EXPECT_EQ(inst.ParameterCovariance(), model.sigmas.covariance);  // exact
+  EXPECT_EQ(inst.Model().cams[0].valid_region, model.cams[0].valid_region);
   ASSERT_EQ(inst.NumParameters(), n);
 
   // Through a symlink (the output folder's top): the file beside the target.
