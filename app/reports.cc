@@ -332,18 +332,25 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
     const UncertaintyMapOptions& o = r.uncertainty_options;
     json zooms = json::array();
     for (const UncertaintyMap& m : r.uncertainty_maps) {
-      json sigma = json::array();
-      for (double x : m.sigma_px) sigma.push_back(num(x));
-      zooms.push_back({{"zoom", m.zoom},
-                       {"determined", m.determined},
-                       {"min_px", num(m.min_px)},
-                       {"median_px", num(m.median_px)},
-                       {"max_px", num(m.max_px)},
-                       {"inside_median_px", num(m.inside_median_px)},
-                       {"inside_max_px", num(m.inside_max_px)},
-                       {"cells_outside_valid_region", m.cells_outside},
-                       {"sigma_px", sigma},
-                       {"inside", std::vector<int>(m.inside.begin(), m.inside.end())}});
+      json z = {{"zoom", m.zoom}, {"determined", m.determined}};
+      if (m.determined) {
+        // Summary keys without a value (no cell inside a valid region, as
+        // for records-only data) are left out, never null.
+        auto put = [&](const char* key, double x) {
+          if (std::isfinite(x)) z[key] = x;
+        };
+        put("min_px", m.min_px);
+        put("median_px", m.median_px);
+        put("max_px", m.max_px);
+        put("inside_median_px", m.inside_median_px);
+        put("inside_max_px", m.inside_max_px);
+        z["cells_outside_valid_region"] = m.cells_outside;
+        json sigma = json::array();
+        for (double x : m.sigma_px) sigma.push_back(num(x));
+        z["sigma_px"] = sigma;
+        z["inside"] = std::vector<int>(m.inside.begin(), m.inside.end());
+      }
+      zooms.push_back(z);
     }
     j["uncertainty"] = {{"range_m", o.range_m},
                         {"phi", o.phi},

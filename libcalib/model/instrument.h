@@ -64,9 +64,9 @@ struct CameraTool {
   // regions): the values are the start's, not an estimate, have no
   // uncertainty, and nothing may be predicted with them.
   bool determined = true;
-  // Where the calibration's image points of this zoom fell: their convex
-  // hull [px] (geometry/convex_hull.h), empty when unknown (no pixels, or a
-  // model.yaml without `valid_region`). Outside it the distortion is
+  // Where the calibration's image points of this zoom (pixels.csv rows and
+  // cam records' u, v) fell: their convex hull [px] (geometry/convex_hull.h),
+  // empty when unknown (no such rows, or a model.yaml without `valid_region`). Outside it the distortion is
   // extrapolated.
   std::vector<Eigen::Vector2d> valid_region;
 };
