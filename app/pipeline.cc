@@ -91,6 +91,7 @@ PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_
   const CalibratedInstrument inst(result.calibration.model);
   result.full_covariance = inst.HasFullParameterCovariance();
   if (inst.HasParameterCovariance() && inst.NumZooms() > 0) {
+    if (progress) progress->Step("projection uncertainty maps");
     const UncertaintyMapSettings& u = settings.config.uncertainty_map;
     UncertaintyMapOptions o;
     o.range_m = u.range_m;
