@@ -66,6 +66,8 @@ Eigen::VectorXd DiagonalVariances(const InstrumentModel& m,
   put("edm.t", s.edm.t.data());
   for (Effect e : m.effects.List()) {
     if (!IsKinematic(e)) continue;
+    // The effect's own 2x2 covariance (row major); the constructor adds its
+    // off-diagonal, the one correlation model.yaml stores.
     const std::array<double, 4>& cov = s.effect_cov[static_cast<int>(e)];
     const double sd[2] = {std::sqrt(cov[0]), std::sqrt(cov[3])};
     put(Info(e).name, sd);
