@@ -381,7 +381,15 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
         << Fmt("%.3g", m.max_px) << "</td><td class=num>" << Fmt("%.3g", m.inside_max_px)
         << "</td><td class=num>" << m.cells_outside << " of " << m.cols * m.rows << "</td></tr>\n";
     }
-    o << "</table>\n" << Figures(figs, "uncertainty");
+    const UncertaintyMapOptions& u = r.uncertainty_options;
+    o << "</table>\n<p class=small>1 sigma, worst direction, of the pixel where a point at "
+      << Fmt("%g", u.range_m) << " m is seen (camera at phi " << Fmt("%.4g", u.phi) << ", theta "
+      << Fmt("%.4g", u.theta) << " rad), from the "
+      << (r.full_covariance ? "fit's full covariance" : "sigmas alone (no full covariance)")
+      << " of the zoom's camera and the kinematic chain; hatched cells lie outside the convex "
+         "hull of the calibration's image points (extrapolated). docs/output.md tells how to "
+         "read the maps.</p>\n"
+      << Figures(figs, "uncertainty");
   }
   o << "<h2 id=\"image\">Image residuals</h2>\n" << Figures(figs, "image");
   o << "<h2 id=\"histograms\">Residual distributions</h2>\n" << Figures(figs, "histograms");
