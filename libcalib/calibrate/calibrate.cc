@@ -466,7 +466,8 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   result.model = result.refined.model;
   result.fit = result.refined.fit;
   // Where each zoom's image points (pixels, and cam rows' u, v) fell:
-  // outside this hull the distortion is extrapolated (model.yaml valid_region, the uncertainty maps).
+  // outside this hull the distortion is extrapolated (model.yaml
+  // valid_region, the uncertainty maps).
   for (int z = 0; z < result.model.NumZooms(); ++z) {
     std::vector<Eigen::Vector2d> uv;
     for (const PixelObservation& p : obs.pixels) {

@@ -66,8 +66,8 @@ struct CameraTool {
   bool determined = true;
   // Where the calibration's image points of this zoom (pixels.csv rows and
   // cam records' u, v) fell: their convex hull [px] (geometry/convex_hull.h),
-  // empty when unknown (no such rows, or a model.yaml without `valid_region`). Outside it the distortion is
-  // extrapolated.
+  // empty when unknown (no such rows, or a model.yaml without
+  // `valid_region`). Outside it the distortion is extrapolated.
   std::vector<Eigen::Vector2d> valid_region;
 };
 
