@@ -26,6 +26,7 @@
 // model knows there only to first order.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <vector>
 
