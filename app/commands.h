@@ -71,4 +71,13 @@ struct DetectArgs {
 };
 int RunDetect(const DetectArgs& args);
 
+// `rtscalib compare A/model.yaml B/model.yaml [--output DIR]`
+// (app/compare_command.cc, docs/compare.md).
+struct CompareArgs {
+  std::string a, b;    // the two model.yaml files
+  std::string output;  // "" = print only
+  int cols = 24, rows = 18;
+};
+int RunCompare(const CompareArgs& args);
+
 }  // namespace rtscalib::app

@@ -10,8 +10,8 @@ namespace {
 
 // Below this share of the corner radius the outer image is extrapolated.
 constexpr double kMinRadiusFraction = 0.8;
-const char* const kDistortionNames[kNumDistortion] = {
-    "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "taux", "tauy"};
+const char* const kDistortionNames[kNumDistortion] = {"k1", "k2", "p1", "p2", "k3", "k4",   "k5",
+                                                      "k6", "s1", "s2", "s3", "s4", "taux", "tauy"};
 
 }  // namespace
 

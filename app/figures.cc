@@ -577,6 +577,55 @@ std::string Added(const std::vector<std::string>& before, const std::vector<std:
 
 }  // namespace
 
+Figure DifferenceFigure(const ZoomDifference& d) {
+  const int panel_w = 480;
+  const int panel_h =
+      std::max(1, static_cast<int>(std::lround(panel_w * double(d.height) / std::max(1, d.width))));
+  const int left = 30, top = 40;
+  cv::Mat img(panel_h + top + 70, panel_w + 2 * left + 110, CV_8UC3, kWhite);
+  const cv::Mat lut = ViridisLut();
+  const double vmax = std::isfinite(d.max_px) && d.max_px > 0 ? NiceNumber(d.max_px) : 1.0;
+  for (int j = 0; j < d.rows; ++j) {
+    for (int i = 0; i < d.cols; ++i) {
+      const cv::Rect r(left + i * panel_w / d.cols, top + j * panel_h / d.rows,
+                       (i + 1) * panel_w / d.cols - i * panel_w / d.cols,
+                       (j + 1) * panel_h / d.rows - j * panel_h / d.rows);
+      const double v = d.diff_px[j * d.cols + i];
+      if (!std::isfinite(v)) {
+        cv::rectangle(img, r, kHatch, cv::FILLED);
+        continue;
+      }
+      cv::rectangle(img, r, ColourOf(lut, std::min(v / vmax, 1.0)), cv::FILLED);
+      if (!d.inside[j * d.cols + i]) {
+        cv::Mat roi = img(r & cv::Rect(0, 0, img.cols, img.rows));
+        for (int k = -roi.rows; k < roi.cols; k += 6) {
+          cv::line(roi, cv::Point(k, roi.rows), cv::Point(k + roi.rows, 0), kWhite, 1, cv::LINE_AA);
+        }
+      }
+    }
+  }
+  cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
+  ColourBar(img, lut, cv::Rect(left + panel_w + 20, top, 18, panel_h), vmax, "difference [px]");
+  Put(img,
+      "zoom " + std::to_string(d.zoom) + ": RMS " + Fmt("%.3g", d.rms_px) + ", max " +
+          Fmt("%.3g", d.max_px) + " px; rotation removed " +
+          Fmt("%.3g", d.rotation_rad * 180 / M_PI * 3600) + "\"",
+      cv::Point(left, 25), 0.45);
+  Put(img, std::to_string(d.width) + " x " + std::to_string(d.height) + " px (first model's image)",
+      cv::Point(left, top + panel_h + 25), 0.42);
+  Put(img, "hatched: outside either model's valid region; grey: not predictable",
+      cv::Point(left, top + panel_h + 48), 0.42);
+  Figure f;
+  f.name = "compare_zoom" + std::to_string(d.zoom) + ".png";
+  f.section = "compare";
+  f.title = "Projection difference, zoom " + std::to_string(d.zoom);
+  f.caption =
+      "How far apart the two models project one ray, after the best rotation between "
+      "their camera frames is removed (docs/compare.md).";
+  f.image = img;
+  return f;
+}
+
 std::vector<unsigned char> EncodePng(const cv::Mat& image) {
   std::vector<unsigned char> out;
   if (image.empty() || !cv::imencode(".png", image, out) || out.empty()) {
@@ -645,11 +694,91 @@ Figure CoverageFigure(const ZoomCoverage& c, const Observations& obs) {
   return f;
 }
 
+// Projection uncertainty of one zoom (libcalib/api/uncertainty_map.h): the
+// 1-sigma semi-major axis per cell, hatched where the cell centre is outside
+// the valid region (the convex hull of the calibration's points, drawn as a
+// white polygon), grey where the model cannot predict.
+Figure UncertaintyFigure(const UncertaintyMap& m, const UncertaintyMapOptions& o,
+                         const CameraTool& cam, bool full) {
+  const int panel_w = 480;
+  const int panel_h =
+      std::max(1, static_cast<int>(std::lround(panel_w * double(m.height) / std::max(1, m.width))));
+  const int left = 30, top = 40;
+  cv::Mat img(panel_h + top + 70, panel_w + 2 * left + 110, CV_8UC3, kWhite);
+  const cv::Mat lut = ViridisLut();
+  const double vmax = std::isfinite(m.max_px) && m.max_px > 0 ? NiceNumber(m.max_px) : 1.0;
+  for (int j = 0; j < m.rows; ++j) {
+    for (int i = 0; i < m.cols; ++i) {
+      const cv::Rect r(left + i * panel_w / m.cols, top + j * panel_h / m.rows,
+                       (i + 1) * panel_w / m.cols - i * panel_w / m.cols,
+                       (j + 1) * panel_h / m.rows - j * panel_h / m.rows);
+      const double v = m.Cell(i, j);
+      if (!std::isfinite(v)) {
+        cv::rectangle(img, r, kHatch, cv::FILLED);
+        continue;
+      }
+      cv::rectangle(img, r, ColourOf(lut, std::min(v / vmax, 1.0)), cv::FILLED);
+      if (!m.inside[j * m.cols + i]) {
+        // Extrapolated: light diagonal strokes over the colour.
+        cv::Mat roi = img(r & cv::Rect(0, 0, img.cols, img.rows));
+        for (int k = -roi.rows; k < roi.cols; k += 6) {
+          cv::line(roi, cv::Point(k, roi.rows), cv::Point(k + roi.rows, 0), kWhite, 1, cv::LINE_AA);
+        }
+      }
+    }
+  }
+  const double sx = double(panel_w) / std::max(1, m.width),
+               sy = double(panel_h) / std::max(1, m.height);
+  if (cam.valid_region.size() >= 3) {
+    std::vector<cv::Point> hull;
+    for (const Eigen::Vector2d& p : cam.valid_region) {
+      hull.emplace_back(left + int(std::lround((p.x() + 0.5) * sx)),
+                        top + int(std::lround((p.y() + 0.5) * sy)));
+    }
+    cv::polylines(img, hull, true, kWhite, 2, cv::LINE_AA);
+  }
+  cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
+  ColourBar(img, lut, cv::Rect(left + panel_w + 20, top, 18, panel_h), vmax, "1-sigma [px]");
+  Put(img,
+      "zoom " + std::to_string(m.zoom) + ": point at " + Fmt("%g", o.range_m) + " m, min " +
+          Fmt("%.3g", m.min_px) + ", median " + Fmt("%.3g", m.median_px) + ", max " +
+          Fmt("%.3g", m.max_px) + " px",
+      cv::Point(left, 25), 0.45);
+  Put(img,
+      std::to_string(m.width) + " x " + std::to_string(m.height) + " px; pointing phi " +
+          Fmt("%.4g", o.phi) + ", theta " + Fmt("%.4g", o.theta) + " rad; " +
+          (full ? "full covariance" : "diagonal approximation (no full covariance)"),
+      cv::Point(left, top + panel_h + 25), 0.42);
+  Put(img, "hatched: outside the calibration points' hull (white); grey: not predictable",
+      cv::Point(left, top + panel_h + 48), 0.42);
+  Figure f;
+  f.name = "uncertainty_zoom" + std::to_string(m.zoom) + ".png";
+  f.section = "uncertainty";
+  f.title = "Projection uncertainty, zoom " + std::to_string(m.zoom) + ", point at " +
+            Fmt("%g", o.range_m) + " m";
+  f.caption =
+      "How far (1 sigma, worst direction, pixels) the pixel where a point at " +
+      Fmt("%g", o.range_m) +
+      " m is seen may lie from the model's prediction, from the uncertainty of this zoom's "
+      "intrinsics, distortion and camera tool and of the kinematic chain (first order, J P J^T "
+      "with the fit's full covariance). Hatched cells lie outside the convex hull of the "
+      "calibration's image points (white outline): there the distortion is extrapolated and "
+      "the number is a lower bound at best.";
+  f.image = img;
+  return f;
+}
+
 // ---------------------------------------------------------------------------
 std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   std::vector<Figure> figs;
   for (const ZoomCoverage& c : ComputeCoverage(r.obs, r.calibration.model).zooms) {
     figs.push_back(CoverageFigure(c, r.obs));
+  }
+  for (const UncertaintyMap& m : r.uncertainty_maps) {
+    if (m.determined) {
+      figs.push_back(UncertaintyFigure(m, r.uncertainty_options, r.calibration.model.cams[m.zoom],
+                                       r.full_covariance));
+    }
   }
   if (!r.calibration.diagnosis) return figs;
   const Diagnosis& d = *r.calibration.diagnosis;

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "app/pipeline.h"
+#include "libcalib/api/compare.h"
 
 namespace rtscalib::app {
 
@@ -33,6 +34,10 @@ struct Figure {
 
 // `history` = report.json's "history" array (earlier runs, oldest first).
 std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
+
+// The projection difference of one zoom between two models (`rtscalib
+// compare`, libcalib/api/compare.h) as a heat map.
+Figure DifferenceFigure(const ZoomDifference& d);
 
 // PNG bytes of a figure (for writing and for embedding).
 std::vector<unsigned char> EncodePng(const cv::Mat& image);

@@ -96,6 +96,15 @@ int main(int argc, char** argv) {
                   "| deg | gon, as the config's data.angle_unit (default rad)")
       ->check(CLI::IsMember({"rad", "deg", "gon"}));
 
+  rtscalib::app::CompareArgs cmp;
+  CLI::App* cm = app.add_subcommand(
+      "compare",
+      "compare two calibrations: projection differences per zoom, parameter differences / sigma");
+  cm->add_option("a", cmp.a, "first model.yaml")->required();
+  cm->add_option("b", cmp.b, "second model.yaml")->required();
+  cm->add_option("--output", cmp.output,
+                 "also write compare.txt, compare.json and figures/ into this folder");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -107,6 +116,7 @@ int main(int argc, char** argv) {
     if (dg->parsed()) return rtscalib::app::RunDiagnose(diag);
     if (ex->parsed()) return rtscalib::app::RunExport(exp);
     if (det->parsed()) return rtscalib::app::RunDetect(detect);
+    if (cm->parsed()) return rtscalib::app::RunCompare(cmp);
     if (run.config.empty()) {
       std::cerr << app.help();
       return kExitUsage;

@@ -1,5 +1,7 @@
 #include "app/pipeline.h"
 
+#include "libcalib/api/uncertainty_map.h"
+
 #include <stdexcept>
 #include <utility>
 
@@ -85,6 +87,22 @@ PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_
   result.calibration = Calibrate(result.obs, CalibrationOptionsOf(settings.config), progress);
   result.notes.insert(result.notes.end(), result.calibration.notes.begin(),
                       result.calibration.notes.end());
+  // Projection uncertainty per zoom (libcalib/api/uncertainty_map.h), from
+  // the fit's full covariance.
+  const CalibratedInstrument inst(result.calibration.model);
+  result.full_covariance = inst.HasFullParameterCovariance();
+  if (inst.HasParameterCovariance() && inst.NumZooms() > 0) {
+    if (progress) progress->Step("projection uncertainty maps");
+    const UncertaintyMapSettings& u = settings.config.uncertainty_map;
+    UncertaintyMapOptions o;
+    o.range_m = u.range_m;
+    o.cols = u.cols;
+    o.rows = u.rows;
+    o.phi = u.phi;
+    o.theta = u.theta;
+    result.uncertainty_options = o;
+    result.uncertainty_maps = ProjectionUncertaintyMaps(inst, o);
+  }
   return result;
 }
 

@@ -13,6 +13,7 @@
 #include "app/photo_session.h"
 #include "app/progress.h"
 #include "app/render_stage.h"
+#include "libcalib/api/uncertainty_map.h"
 #include "libcalib/calibrate/calibrate.h"
 #include "libcalib/io/config.h"
 #include "libcalib/model/instrument.h"
@@ -43,6 +44,11 @@ struct PipelineResult {
   CalibrationResult calibration;
   // Notes of reading or acquiring the observations, then the calibration's.
   std::vector<std::string> notes;
+  // Projection uncertainty per zoom (empty when the fit has no covariance),
+  // and whether it comes from the full covariance (else model.yaml's sigmas).
+  std::vector<UncertaintyMap> uncertainty_maps;
+  UncertaintyMapOptions uncertainty_options;
+  bool full_covariance = false;
 };
 
 // The observations of a config: the data files (records, pixels, and the

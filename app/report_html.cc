@@ -372,6 +372,27 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     << " mm, pixels " << Fmt("%.3g", r.calibration.fit.sigma_pixel_px) << " px; "
     << r.calibration.fit.excluded_critical << " rows in the critical regions excluded.</p>\n";
 
+  if (!r.uncertainty_maps.empty()) {
+    o << "<h2 id=\"uncertainty\">Projection uncertainty</h2>\n<table><tr><th>zoom</th><th>min "
+         "px</th><th>median px</th><th>max px</th><th>max inside the points' hull px</th><th>cells "
+         "outside</th></tr>\n";
+    for (const UncertaintyMap& m : r.uncertainty_maps) {
+      if (!m.determined) continue;
+      o << "<tr><td>" << m.zoom << "</td><td class=num>" << Fmt("%.3g", m.min_px)
+        << "</td><td class=num>" << Fmt("%.3g", m.median_px) << "</td><td class=num>"
+        << Fmt("%.3g", m.max_px) << "</td><td class=num>" << Fmt("%.3g", m.inside_max_px)
+        << "</td><td class=num>" << m.cells_outside << " of " << m.cols * m.rows << "</td></tr>\n";
+    }
+    const UncertaintyMapOptions& u = r.uncertainty_options;
+    o << "</table>\n<p class=small>1 sigma, worst direction, of the pixel where a point at "
+      << Fmt("%g", u.range_m) << " m is seen (camera at phi " << Fmt("%.4g", u.phi) << ", theta "
+      << Fmt("%.4g", u.theta) << " rad), from the "
+      << (r.full_covariance ? "fit's full covariance" : "sigmas alone (no full covariance)")
+      << " of the zoom's camera and the kinematic chain; hatched cells lie outside the convex "
+         "hull of the calibration's image points (extrapolated). docs/output.md tells how to "
+         "read the maps.</p>\n"
+      << Figures(figs, "uncertainty");
+  }
   o << "<h2 id=\"image\">Image residuals</h2>\n" << Figures(figs, "image");
   o << "<h2 id=\"histograms\">Residual distributions</h2>\n" << Figures(figs, "histograms");
   if (!r.calibration.gross_rows.empty()) {

@@ -342,6 +342,39 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                      {"reason", e.reason}});
   }
   j["gross_errors"] = gross;
+  if (!r.uncertainty_maps.empty()) {
+    // Projection uncertainty per zoom (docs/output.md); null where no value.
+    auto num = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
+    const UncertaintyMapOptions& o = r.uncertainty_options;
+    json zooms = json::array();
+    for (const UncertaintyMap& m : r.uncertainty_maps) {
+      json z = {{"zoom", m.zoom}, {"determined", m.determined}};
+      if (m.determined) {
+        // Summary keys without a value (no cell inside a valid region, as
+        // for records-only data) are left out, never null.
+        auto put = [&](const char* key, double x) {
+          if (std::isfinite(x)) z[key] = x;
+        };
+        put("min_px", m.min_px);
+        put("median_px", m.median_px);
+        put("max_px", m.max_px);
+        put("inside_median_px", m.inside_median_px);
+        put("inside_max_px", m.inside_max_px);
+        z["cells_outside_valid_region"] = m.cells_outside;
+        json sigma = json::array();
+        for (double x : m.sigma_px) sigma.push_back(num(x));
+        z["sigma_px"] = sigma;
+        z["inside"] = std::vector<int>(m.inside.begin(), m.inside.end());
+      }
+      zooms.push_back(z);
+    }
+    j["uncertainty"] = {{"range_m", o.range_m},
+                        {"phi", o.phi},
+                        {"theta", o.theta},
+                        {"cells", {o.cols, o.rows}},
+                        {"full_covariance", r.full_covariance},
+                        {"zooms", zooms}};
+  }
   j["notes"] = r.notes;
   j["history"] = HistoryJson(out);
   return j;
@@ -537,6 +570,26 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
       for (const std::string& w : cov.warnings) o << "  WARNING: " << w << "\n";
       o << "\n";
     }
+  }
+  if (!r.uncertainty_maps.empty()) {
+    const UncertaintyMapOptions& u = r.uncertainty_options;
+    o << "Projection uncertainty (1 sigma, worst direction, px) of a point at "
+      << Fmt("%g", u.range_m) << " m, pointing phi " << Fmt("%.4g", u.phi) << ", theta "
+      << Fmt("%.4g", u.theta) << " rad, " << u.cols << "x" << u.rows << " cells, "
+      << (r.full_covariance ? "full covariance" : "diagonal approximation") << ":\n";
+    o << "  zoom      min   median      max   inside: median      max   cells outside\n";
+    for (const UncertaintyMap& m : r.uncertainty_maps) {
+      if (!m.determined) {
+        o << "  " << m.zoom << ": not determined by the data\n";
+        continue;
+      }
+      char row[160];
+      std::snprintf(row, sizeof(row), "  %4d %8.3g %8.3g %8.3g   %14.3g %8.3g   %d of %d\n", m.zoom,
+                    m.min_px, m.median_px, m.max_px, m.inside_median_px, m.inside_max_px,
+                    m.cells_outside, m.cols * m.rows);
+      o << row;
+    }
+    o << "\n";
   }
   o << "Final (all observations): EDM " << stats(f.edm) << " m (n=" << f.edm.n << "), camera "
     << stats(f.cam) << " m (n=" << f.cam.n << ")";

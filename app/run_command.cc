@@ -10,7 +10,9 @@
 #include "app/report_html.h"
 #include "app/reports.h"
 #include "app/safe_write.h"
+#include "libcalib/fit/parameter_layout.h"
 #include "libcalib/io/config.h"
+#include "libcalib/io/covariance_io.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
 
@@ -58,6 +60,16 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
     f.close();
     if (!f) throw std::runtime_error("could not write " + tmp);
   });
+  // The full parameter covariance beside model.yaml (docs/library.md): the
+  // API's uncertainties use it, correlations included.
+  const InstrumentModel& fitted = result.calibration.model;
+  if (fitted.sigmas.covariance.rows() == LayoutSize(ParameterLayout(fitted)) &&
+      fitted.sigmas.covariance.rows() > 0) {
+    WriteFileAtomicWith(out.RunFile("covariance.yaml"),
+                        [&](const std::string& tmp) { WriteCovarianceYaml(tmp, fitted); });
+  } else {
+    progress.Note("no full parameter covariance (the fit computed none): no covariance.yaml");
+  }
   const nlohmann::json report = ReportJson(config, result, out);
   out.Write("report.json", report.dump(2) + "\n");
   WriteReportHtml(config, result, report, out);
@@ -70,7 +82,8 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   progress.Done();
   std::cout << (args.diagnose ? DiagnosisText(result.calibration) : text);
   std::cout << "\nwritten: " << out.run_dir()
-            << "/{model.yaml, report.json, report.txt, report.html, figures/}\nshown at the top of "
+            << "/{model.yaml, covariance.yaml, report.json, report.txt, report.html, "
+               "figures/}\nshown at the top of "
             << out.root() << " (symlinks through " << out.root() << "/latest)\n";
   for (const std::string& f : kept) {
     std::cout << "kept your file " << out.root() << "/figures/" << f << "; this run's " << f

@@ -1,14 +1,14 @@
 #include "libcalib/api/rtscalib.h"
 
-#include <ceres/manifold.h>
-
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 
 #include "libcalib/camera/opencv_model.h"
-#include "libcalib/fit/manifolds.h"
+#include "libcalib/fit/parameter_layout.h"
+#include "libcalib/io/covariance_io.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/model/kinematics.h"
 
@@ -43,107 +43,44 @@ void CheckFiniteResult(const Eigen::MatrixBase<Derived>& v, const char* what) {
   }
 }
 
-// The block kinds of the fit's parameterisation (libcalib/fit/refine.cc).
-enum class Tangent { kEuclidean, kQuaternion, kNoRoll };
-
-// Which predictions a block influences: -2 shared by all, -1 EDM only, z >= 0
-// zoom z's camera only.
-constexpr int kShared = -2;
-constexpr int kEdmOnly = -1;
-
-struct BlockAccess {
-  Tangent tangent;
-  int use;
-  std::function<double*(InstrumentModel&)> data;
-};
-
-// Block accessors, built alongside blocks_ (same order).
-std::vector<BlockAccess> Accessors(const InstrumentModel& m, std::vector<ParameterBlock>* blocks,
-                                   Eigen::VectorXd* sigma2) {
-  std::vector<BlockAccess> out;
-  std::vector<double> var;
-  int offset = 0;
+// The sigmas model.yaml states per parameter, in ParameterLayout order: the
+// diagonal approximation of P used when no full covariance came with the model.
+Eigen::VectorXd DiagonalVariances(const InstrumentModel& m,
+                                  const std::vector<LayoutBlock>& layout) {
+  Eigen::VectorXd var = Eigen::VectorXd::Zero(LayoutSize(layout));
   const ModelSigmas& s = m.sigmas;
-  auto add = [&](const std::string& name, int size, const std::string& unit, Tangent tangent,
-                 int use, std::function<double*(InstrumentModel&)> data, const double* sigmas) {
-    blocks->push_back({name, offset, size, unit});
-    out.push_back({tangent, use, std::move(data)});
-    for (int i = 0; i < size; ++i) var.push_back(sigmas ? sigmas[i] * sigmas[i] : 0.0);
-    offset += size;
-  };
-  const bool v = s.valid;
-  add(
-      "base.rotation", 3, "rad (half angle)", Tangent::kQuaternion, kShared,
-      [](InstrumentModel& x) { return x.base.q.data(); }, v ? s.base.rotation.data() : nullptr);
-  add(
-      "base.t", 3, "m", Tangent::kEuclidean, kShared,
-      [](InstrumentModel& x) { return x.base.t.data(); }, v ? s.base.t.data() : nullptr);
-  if (m.kinematics == Kinematics::kDh) {
-    for (int k = 0; k < 2; ++k) {
-      add(
-          "link" + std::to_string(k + 1), 4, "m, rad, rad, m", Tangent::kEuclidean, kShared,
-          [k](InstrumentModel& x) { return x.links[k].p.data(); }, v ? s.links[k].data() : nullptr);
+  if (!s.valid) return var;
+  auto put = [&](const std::string& name, const double* sigma) {
+    for (const LayoutBlock& b : layout) {
+      if (b.name != name) continue;
+      for (int i = 0; i < b.size; ++i) var[b.offset + i] = sigma[i] * sigma[i];
     }
+  };
+  put("base.rotation", s.base.rotation.data());
+  put("base.t", s.base.t.data());
+  if (m.kinematics == Kinematics::kDh) {
+    put("link1", s.links[0].data());
+    put("link2", s.links[1].data());
   }
-  add(
-      "edm.rotation", 2, "rad", Tangent::kNoRoll, kEdmOnly,
-      [](InstrumentModel& x) { return x.edm.q.data(); }, v ? s.edm.rotation.data() : nullptr);
-  add(
-      "edm.t", 3, "m", Tangent::kEuclidean, kEdmOnly,
-      [](InstrumentModel& x) { return x.edm.t.data(); }, v ? s.edm.t.data() : nullptr);
+  put("edm.rotation", s.edm.rotation.data());
+  put("edm.t", s.edm.t.data());
   for (Effect e : m.effects.List()) {
     if (!IsKinematic(e)) continue;
-    const int n = Info(e).num_params;
     // The effect's own 2x2 covariance (row major); the constructor adds its
     // off-diagonal, the one correlation model.yaml stores.
     const std::array<double, 4>& cov = s.effect_cov[static_cast<int>(e)];
     const double sd[2] = {std::sqrt(cov[0]), std::sqrt(cov[3])};
-    add(
-        Info(e).name, n, "SI (rad, m, 1)", Tangent::kEuclidean, kShared,
-        [e](InstrumentModel& x) { return x.EffectValue(e).data(); }, v ? sd : nullptr);
+    put(Info(e).name, sd);
   }
   for (int z = 0; z < m.NumZooms(); ++z) {
+    if (z >= static_cast<int>(s.cam_tools.size())) break;
     const std::string c = "cam[" + std::to_string(z) + "]";
-    const bool vz = v && z < static_cast<int>(s.cam_tools.size());
-    add(
-        c + ".rotation", 3, "rad (half angle)", Tangent::kQuaternion, z,
-        [z](InstrumentModel& x) { return x.cams[z].flange_from_cam.q.data(); },
-        vz ? s.cam_tools[z].rotation.data() : nullptr);
-    add(
-        c + ".t", 3, "m", Tangent::kEuclidean, z,
-        [z](InstrumentModel& x) { return x.cams[z].flange_from_cam.t.data(); },
-        vz ? s.cam_tools[z].t.data() : nullptr);
-    add(
-        c + ".intrinsics", kNumIntrinsics, "px", Tangent::kEuclidean, z,
-        [z](InstrumentModel& x) { return x.cams[z].intrinsics.data(); },
-        vz ? s.intrinsics[z].data() : nullptr);
-    add(
-        c + ".distortion", kNumDistortion, "1 (OpenCV order)", Tangent::kEuclidean, z,
-        [z](InstrumentModel& x) { return x.cams[z].distortion.data(); },
-        vz ? s.distortion[z].data() : nullptr);
+    put(c + ".rotation", s.cam_tools[z].rotation.data());
+    put(c + ".t", s.cam_tools[z].t.data());
+    put(c + ".intrinsics", s.intrinsics[z].data());
+    put(c + ".distortion", s.distortion[z].data());
   }
-  *sigma2 = Eigen::Map<const Eigen::VectorXd>(var.data(), static_cast<int>(var.size()));
-  return out;
-}
-
-// Moves one block by `delta` in the fit's tangent coordinates.
-void PlusBlock(const BlockAccess& a, int size, const double* delta, InstrumentModel* m) {
-  double* p = a.data(*m);
-  switch (a.tangent) {
-    case Tangent::kEuclidean:
-      for (int i = 0; i < size; ++i) p[i] += delta[i];
-      return;
-    case Tangent::kQuaternion: {
-      const double q[4] = {p[0], p[1], p[2], p[3]};
-      ceres::EigenQuaternionManifold().Plus(q, delta, p);
-      return;
-    }
-    case Tangent::kNoRoll: {
-      const double q[4] = {p[0], p[1], p[2], p[3]};
-      QuaternionNoRollManifold().Plus(q, delta, p);
-      return;
-    }
-  }
+  return var;
 }
 
 bool RawRay(const InstrumentModel& m, int zoom, double phi, double theta, double u, double v,
@@ -163,13 +100,24 @@ bool RawRay(const InstrumentModel& m, int zoom, double phi, double theta, double
 // ---------------------------------------------------------------------------
 
 CalibratedInstrument CalibratedInstrument::Load(const std::string& model_yaml) {
-  return CalibratedInstrument(ReadModelYaml(model_yaml));
+  InstrumentModel model = ReadModelYaml(model_yaml);
+  const std::string companion = CovariancePathFor(model_yaml);
+  std::error_code ec;
+  if (std::filesystem::exists(companion, ec)) ReadCovarianceYaml(companion, &model);
+  return CalibratedInstrument(std::move(model));
 }
 
 CalibratedInstrument::CalibratedInstrument(InstrumentModel model) : model_(std::move(model)) {
-  Eigen::VectorXd var;
-  Accessors(model_, &blocks_, &var);
-  covariance_ = var.asDiagonal();
+  const std::vector<LayoutBlock> layout = ParameterLayout(model_);
+  for (const LayoutBlock& b : layout) blocks_.push_back({b.name, b.offset, b.size, b.unit});
+  if (model_.sigmas.covariance.rows() == LayoutSize(layout) && LayoutSize(layout) > 0) {
+    // The fit's full covariance (covariance.yaml): correlations included.
+    covariance_ = model_.sigmas.covariance;
+    has_covariance_ = true;
+    full_covariance_ = true;
+    return;
+  }
+  covariance_ = DiagonalVariances(model_, layout).asDiagonal();
   for (const Effect e : model_.effects.List()) {
     if (!IsKinematic(e) || Info(e).num_params < 2 || !model_.sigmas.valid) continue;
     const ParameterBlock& b = Block(Info(e).name);
@@ -207,6 +155,7 @@ void CalibratedInstrument::SetParameterCovariance(const Eigen::MatrixXd& covaria
   }
   covariance_ = covariance;
   has_covariance_ = true;
+  full_covariance_ = true;
 }
 
 InstrumentModel CalibratedInstrument::Plus(const Eigen::VectorXd& delta) const {
@@ -214,12 +163,9 @@ InstrumentModel CalibratedInstrument::Plus(const Eigen::VectorXd& delta) const {
     throw std::invalid_argument("Plus: delta has " + std::to_string(delta.size()) +
                                 " values, the parameter vector " + std::to_string(NumParameters()));
   }
-  Eigen::VectorXd unused;
-  std::vector<ParameterBlock> blocks;
-  const auto access = Accessors(model_, &blocks, &unused);
   InstrumentModel out = model_;
-  for (size_t b = 0; b < blocks.size(); ++b) {
-    PlusBlock(access[b], blocks[b].size, delta.data() + blocks[b].offset, &out);
+  for (const LayoutBlock& b : ParameterLayout(model_)) {
+    LayoutPlus(b, delta.data() + b.offset, &out);
   }
   return out;
 }
@@ -372,8 +318,8 @@ namespace {
 // 1e-12 relative) plus eps |f| / h (rounding: 2e-7 px on a 1e3 px pixel,
 // against derivatives of ~1e3 px per radian): far below what a covariance
 // needs.
-double Step(Tangent tangent, double value) {
-  if (tangent != Tangent::kEuclidean) return 1e-6;
+double Step(LayoutTangent tangent, double value) {
+  if (tangent != LayoutTangent::kEuclidean) return 1e-6;
   return 1e-6 * std::max(1.0, std::abs(value));
 }
 
@@ -382,23 +328,23 @@ Uncertain<N> Propagate(
     const InstrumentModel& model, const Eigen::MatrixXd& covariance, int use,
     const Eigen::Matrix<double, N, 1>& value,
     const std::function<bool(const InstrumentModel&, Eigen::Matrix<double, N, 1>*)>& evaluate) {
-  std::vector<ParameterBlock> blocks;
-  Eigen::VectorXd unused;
-  const auto access = Accessors(model, &blocks, &unused);
+  const std::vector<LayoutBlock> blocks = ParameterLayout(model);
   std::vector<int> index;  // parameter indices the prediction depends on
   std::vector<Eigen::Matrix<double, N, 1>> columns;
-  InstrumentModel values = model;  // read-only copy: the accessors take a mutable model
+  // The model without its covariance (N^2 numbers): copied twice per column.
+  InstrumentModel values = model;  // also the read-only copy the accessors need
+  values.sigmas.covariance.resize(0, 0);
   for (size_t b = 0; b < blocks.size(); ++b) {
-    const int u = access[b].use;
-    if (!(u == kShared || u == use)) continue;
+    const int u = blocks[b].use;
+    if (!(u == kLayoutShared || u == use)) continue;
     for (int i = 0; i < blocks[b].size; ++i) {
-      const double h = Step(access[b].tangent, access[b].data(values)[i]);
+      const double h = Step(blocks[b].tangent, blocks[b].data(values)[i]);
       Eigen::Matrix<double, N, 1> f[2];
       for (int side = 0; side < 2; ++side) {
         double delta[kNumDistortion] = {};  // the largest block
         delta[i] = side == 0 ? h : -h;
-        InstrumentModel m = model;
-        PlusBlock(access[b], blocks[b].size, delta, &m);
+        InstrumentModel m = values;
+        LayoutPlus(blocks[b], delta, &m);
         if (!evaluate(m, &f[side])) {
           throw PredictionError(PredictionFailure::kNonFinite,
                                 "a prediction that stays defined when the model moves by its "
@@ -437,7 +383,7 @@ Uncertain<3> CalibratedInstrument::EdmPointWithUncertainty(double phi, double th
                                                            double d) const {
   RequireCovariance(has_covariance_);
   const Eigen::Vector3d x = EdmPoint(phi, theta, d);
-  return Propagate<3>(model_, covariance_, kEdmOnly, x,
+  return Propagate<3>(model_, covariance_, kLayoutEdmOnly, x,
                       [&](const InstrumentModel& m, Eigen::Vector3d* out) {
                         *out = PredictEdm(m, phi, theta, d);
                         return out->allFinite();

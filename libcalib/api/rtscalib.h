@@ -26,12 +26,13 @@
 // Uncertainty: first-order propagation
 //   covariance(prediction) = J P J^T,   J = d prediction / d p  (central differences)
 // over the model's parameter vector p (ParameterBlocks(): tangent coordinates
-// of the same manifolds the fit uses, so that the stored sigmas apply). P is
-// built from model.yaml, which today stores one sigma per parameter and no
-// correlations between parameters (only each effect's own 2x2 block): P is
-// diagonal apart from those blocks, and the answers are an APPROXIMATION that
-// ignores the fit's correlations (they can make the true uncertainty larger or
-// smaller). SetParameterCovariance takes a full P once one is available.
+// of the same manifolds the fit uses, libcalib/fit/parameter_layout.h). P is
+// the fit's full joint covariance when covariance.yaml lies beside model.yaml
+// (a run writes it; HasFullParameterCovariance()), correlations included.
+// Without it, P is built from model.yaml's one sigma per parameter (and each
+// effect's own 2x2 block): diagonal otherwise, an APPROXIMATION that ignores
+// the fit's correlations (they can make the true uncertainty larger or
+// smaller). SetParameterCovariance replaces P.
 #pragma once
 
 #include <Eigen/Core>
@@ -106,8 +107,11 @@ struct ParameterBlock {
 
 class CalibratedInstrument {
  public:
-  // Reads model.yaml (libcalib/io/model_io.h); throws InputError naming file
-  // and key for anything malformed.
+  // Reads model.yaml (libcalib/io/model_io.h) and, when present, the
+  // covariance.yaml beside it (beside the file model.yaml's symlinks resolve
+  // to, so that both come from one run; libcalib/io/covariance_io.h); throws
+  // InputError naming file and key for anything malformed, or for a
+  // covariance.yaml that belongs to another model.
   static CalibratedInstrument Load(const std::string& model_yaml);
   explicit CalibratedInstrument(InstrumentModel model);
 
@@ -153,6 +157,9 @@ class CalibratedInstrument {
   // Index of a block by name; throws std::out_of_range if there is none.
   const ParameterBlock& Block(const std::string& name) const;
   bool HasParameterCovariance() const { return has_covariance_; }
+  // Whether P is a full covariance (covariance.yaml or SetParameterCovariance),
+  // not the diagonal approximation from model.yaml's sigmas.
+  bool HasFullParameterCovariance() const { return full_covariance_; }
   const Eigen::MatrixXd& ParameterCovariance() const { return covariance_; }
   // Replaces P (NumParameters() square, symmetric); throws std::invalid_argument
   // for a wrong size or a non-finite entry.
@@ -168,6 +175,7 @@ class CalibratedInstrument {
   std::vector<ParameterBlock> blocks_;
   Eigen::MatrixXd covariance_;
   bool has_covariance_ = false;
+  bool full_covariance_ = false;
 };
 
 }  // namespace rtscalib

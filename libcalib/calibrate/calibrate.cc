@@ -13,6 +13,7 @@
 #include "libcalib/fit/start_models.h"
 #include "libcalib/fit/two_face.h"
 #include "libcalib/fit/unknowns.h"
+#include "libcalib/geometry/convex_hull.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/model/kinematics.h"
 #include "libcalib/screen/gross.h"
@@ -521,6 +522,19 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
 
   result.model = result.refined.model;
   result.fit = result.refined.fit;
+  // Where each zoom's image points (pixels, and cam rows' u, v) fell:
+  // outside this hull the distortion is extrapolated (model.yaml
+  // valid_region, the uncertainty maps).
+  for (int z = 0; z < result.model.NumZooms(); ++z) {
+    std::vector<Eigen::Vector2d> uv;
+    for (const PixelObservation& p : obs.pixels) {
+      if (p.zoom == z) uv.push_back(p.uv);
+    }
+    for (const Record& r : obs.records) {
+      if (r.tool == Tool::kCam && r.zoom == z) uv.emplace_back(r.u, r.v);
+    }
+    result.model.cams[z].valid_region = ConvexHull(std::move(uv));
+  }
   if (options.diagnose.enabled) {
     // The calibration stands without its diagnosis: a failure here becomes
     // a note, not a failed calibration.

@@ -15,6 +15,7 @@
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/cost_functions.h"
 #include "libcalib/fit/manifolds.h"
+#include "libcalib/fit/parameter_layout.h"
 #include "libcalib/fit/parameterization.h"
 #include "libcalib/fit/unknowns.h"
 
@@ -97,6 +98,39 @@ bool TangentCovariance(ceres::Problem* problem, const std::vector<const double*>
   return true;
 }
 
+// The joint covariance `c` of the free blocks (fit tangent order) in the
+// order and coordinates of ParameterLayout: T c T^T with T identity for the
+// rotations (the layout's manifolds are the fit's) and the manifold's
+// PlusJacobian for Euclidean blocks the fit held in part (SubsetManifold);
+// held blocks, boards and points get no rows (the covariance is marginal
+// over the boards and points).
+Eigen::MatrixXd LayoutCovariance(ceres::Problem* problem, const std::vector<const double*>& free,
+                                 const std::vector<int>& offsets, const Eigen::MatrixXd& c,
+                                 InstrumentModel* model) {
+  const std::vector<LayoutBlock> layout = ParameterLayout(*model);
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(LayoutSize(layout), c.rows());
+  for (const LayoutBlock& lb : layout) {
+    const double* p = lb.data(*model);
+    for (size_t b = 0; b < free.size(); ++b) {
+      if (free[b] != p) continue;
+      const int ts = problem->ParameterBlockTangentSize(p);
+      const ceres::Manifold* man = problem->GetManifold(const_cast<double*>(p));
+      if (lb.tangent != LayoutTangent::kEuclidean || !man) {
+        // Same coordinates in the fit and the layout.
+        if (ts == lb.size) t.block(lb.offset, offsets[b], ts, ts).setIdentity();
+      } else if (lb.ambient == lb.size) {
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jr(lb.size, ts);
+        man->PlusJacobian(p, jr.data());
+        t.block(lb.offset, offsets[b], lb.size, ts) = jr;
+      }
+    }
+  }
+  Eigen::MatrixXd out = t * c * t.transpose();
+  // Exactly symmetric, so that a file round-trip and J P J^T keep it so.
+  out = 0.5 * (out + out.transpose()).eval();
+  return out;
+}
+
 void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentModel* model,
                 FitSummary* summary, int num_threads) {
   std::vector<const double*> free_blocks;
@@ -110,6 +144,7 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentMo
     offsets.push_back(n);
     n += problem->ParameterBlockTangentSize(p);
   }
+  model->sigmas.covariance.resize(0, 0);
   Eigen::MatrixXd c;
   int dropped = 0;
   if (!TangentCovariance(problem, free_blocks, n, num_threads, &c, &dropped)) {
@@ -140,6 +175,7 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentMo
 
   ModelSigmas& s = model->sigmas;
   s.valid = true;
+  s.covariance = LayoutCovariance(problem, free_blocks, offsets, c, model);
   s.cam_tools.assign(model->NumZooms(), PoseSigma{});
   s.intrinsics.assign(model->NumZooms(), {});
   s.distortion.assign(model->NumZooms(), {});

@@ -738,6 +738,27 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
     ReadCount(*n, "jobs", &config.detect_jobs, 1, "detection threads");
   }
   if (const std::optional<YamlNode> n = root.Find("screen")) ReadScreen(*n, &config.screen);
+  if (const std::optional<YamlNode> report = root.Find("report")) {
+    if (const std::optional<YamlNode> n = report->Find("uncertainty_map")) {
+      UncertaintyMapSettings& u = config.uncertainty_map;
+      ReadNumber(
+          *n, "range_m", &u.range_m, [](double x) { return x > 0; }, "a range > 0 [m]");
+      if (const std::optional<YamlNode> cells = n->Find("cells")) {
+        const std::vector<double> c = cells->AsDoubles(2);
+        if (!(c[0] >= 1 && c[0] <= 1000 && c[1] >= 1 && c[1] <= 1000) || c[0] != std::floor(c[0]) ||
+            c[1] != std::floor(c[1])) {
+          cells->Fail("[columns, rows], integers 1..1000");
+        }
+        u.cols = static_cast<int>(c[0]);
+        u.rows = static_cast<int>(c[1]);
+      }
+      ReadNumber(
+          *n, "phi", &u.phi, [](double x) { return std::isfinite(x); }, "an angle [rad]");
+      ReadNumber(
+          *n, "theta", &u.theta, [](double x) { return x > 0 && x < 2 * M_PI; },
+          "a zenith angle in (0, 2 pi) [rad]");
+    }
+  }
   std::string output = "out";
   root.Read("output", &output);
   config.output_dir = Resolve(config.config_dir, output);
@@ -869,6 +890,15 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::Key << "sphere_threshold" << YAML::Value
     << Num(c.screen.gross_errors.sphere_threshold);
   e << YAML::Key << "sphere_floor_m" << YAML::Value << Num(c.screen.gross_errors.sphere_floor_m);
+  e << YAML::EndMap;
+  e << YAML::EndMap;
+  e << YAML::Key << "report" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "uncertainty_map" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  e << YAML::Key << "range_m" << YAML::Value << Num(c.uncertainty_map.range_m);
+  e << YAML::Key << "cells" << YAML::Value << YAML::Flow << YAML::BeginSeq << c.uncertainty_map.cols
+    << c.uncertainty_map.rows << YAML::EndSeq;
+  e << YAML::Key << "phi" << YAML::Value << Num(c.uncertainty_map.phi);
+  e << YAML::Key << "theta" << YAML::Value << Num(c.uncertainty_map.theta);
   e << YAML::EndMap;
   e << YAML::EndMap;
   e << YAML::Key << "output" << YAML::Value;

@@ -16,6 +16,7 @@
 // built here: `truth_from_paper` tells the caller to build it.
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <string>
@@ -32,6 +33,15 @@ namespace rtscalib {
 
 const char* FaceModeName(FaceMode m);
 const char* IntrinsicsModeName(IntrinsicsMode m);
+
+// report.uncertainty_map (docs/config.md): the projection uncertainty maps
+// of the report (libcalib/api/uncertainty_map.h).
+struct UncertaintyMapSettings {
+  double range_m = 10.0;  // ray length of the points [m]
+  int cols = 24, rows = 18;
+  double phi = 0.0;         // pointing [rad]
+  double theta = M_PI / 2;  // zenith angle [rad]
+};
 
 struct RunConfig {
   std::string config_path;   // absolute, normalised
@@ -59,6 +69,7 @@ struct RunConfig {
   bool truth_from_paper = false;
   DiagnoseOptions diagnose;
   ScreenOptions screen;
+  UncertaintyMapSettings uncertainty_map;
   std::string output_dir;          // absolute; default <config_dir>/out
   std::vector<std::string> notes;  // things worth a line in the run log
 };

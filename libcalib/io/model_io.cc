@@ -140,6 +140,11 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
     }
     e << YAML::EndMap;
   }
+  if (!cam.valid_region.empty()) {
+    e << YAML::Key << "valid_region" << YAML::Value << YAML::BeginSeq;
+    for (const Eigen::Vector2d& p : cam.valid_region) EmitNumbers(e, p.data(), 2);
+    e << YAML::EndSeq;
+  }
   e << YAML::EndMap;
 }
 
@@ -435,6 +440,12 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
       } else {
         s.intrinsics.back().fill(std::numeric_limits<double>::quiet_NaN());
         s.distortion.back().fill(std::numeric_limits<double>::quiet_NaN());
+      }
+    }
+    if (const std::optional<YamlNode> region = item.Find("valid_region")) {
+      for (const YamlNode& p : region->Items()) {
+        const std::vector<double> uv = p.AsDoubles(2);
+        cam.valid_region.emplace_back(uv[0], uv[1]);
       }
     }
     model.cams.push_back(cam);

@@ -69,6 +69,11 @@ struct CameraTool {
   // regions): the values are the start's, not an estimate, have no
   // uncertainty, and nothing may be predicted with them.
   bool determined = true;
+  // Where the calibration's image points of this zoom (pixels.csv rows and
+  // cam records' u, v) fell: their convex hull [px] (geometry/convex_hull.h),
+  // empty when unknown (no such rows, or a model.yaml without
+  // `valid_region`). Outside it the distortion is extrapolated.
+  std::vector<Eigen::Vector2d> valid_region;
 };
 
 // Standard deviations for every parameter, filled by the fit. Rotation
@@ -90,6 +95,10 @@ struct ModelSigmas {
   std::vector<std::array<double, kNumIntrinsics>> intrinsics;
   std::vector<std::array<double, kNumDistortion>> distortion;
   std::array<std::array<double, 4>, kNumKinematicEffects> effect_cov{};  // 2x2 row major
+  // The fit's full joint covariance of p in the tangent coordinates and order
+  // of libcalib/fit/parameter_layout.h (held coordinates: zero rows); empty
+  // when none was computed. Written beside model.yaml as covariance.yaml.
+  Eigen::MatrixXd covariance;
 };
 
 // A board of unknown pose (SPEC 7), estimated with the instrument: its
