@@ -52,11 +52,12 @@ void AddGrossErrors(Observations* obs) {
   }
 }
 
-void Run(benchmark::State& state, bool gross) {
+void Run(benchmark::State& state, bool gross, bool handling = true) {
   const SimulationOptions sim = Scene();
   SimulatedData data = Simulate(sim);
   if (gross) AddGrossErrors(&data.obs);
-  const CalibrationOptions options = Options(sim);
+  CalibrationOptions options = Options(sim);
+  options.screen.gross_errors.enabled = options.fit.gross_errors.enabled = handling;
   size_t taken_out = 0;
   for (auto _ : state) {
     const CalibrationResult r = Calibrate(data.obs, options);
@@ -69,6 +70,12 @@ void Run(benchmark::State& state, bool gross) {
 
 void BM_CalibrateClean(benchmark::State& state) { Run(state, false); }
 BENCHMARK(BM_CalibrateClean)->Unit(benchmark::kMillisecond);
+
+// What the gross-error handling costs a clean run.
+void BM_CalibrateCleanWithoutGrossErrorHandling(benchmark::State& state) {
+  Run(state, false, false);
+}
+BENCHMARK(BM_CalibrateCleanWithoutGrossErrorHandling)->Unit(benchmark::kMillisecond);
 
 void BM_CalibrateFivePercentGross(benchmark::State& state) { Run(state, true); }
 BENCHMARK(BM_CalibrateFivePercentGross)->Unit(benchmark::kMillisecond);
