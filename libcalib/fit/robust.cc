@@ -20,6 +20,9 @@ constexpr double kChi3Median = 1.5382, kChi2Median = 1.1774;
 // Rows per robust sigma along the distance: the median of 40 chi values
 // is good to about 10 %.
 constexpr size_t kRun = 40;
+// Iterations of the robust fit (it starts from the extraction, whose
+// error is far below a gross error's).
+constexpr int kRobustIterations = 15;
 // Robust sigmas below this fraction of the a-priori sigma are raised to it.
 constexpr double kSigmaFloor = 0.01;
 const char* const kGroupNames[3] = {"EDM rows", "camera rows", "pixels"};
@@ -145,6 +148,10 @@ RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& 
   o.loss_scale = robust.loss_scale;
   o.reestimate_sigmas = false;
   o.compute_covariance = false;
+  // The robust solution only has to tell gross rows (beyond 8 robust
+  // sigmas) from the rest, not to converge to round-off: the least-squares
+  // fit after it does that.
+  o.max_iterations = std::min(options.max_iterations, kRobustIterations);
   Refine(usable, o, model);
 
   // 3. Robust sigmas: per group (EDM rows, camera rows of a zoom, pixels of
