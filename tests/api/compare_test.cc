@@ -17,51 +17,24 @@
 #include "libcalib/io/covariance_io.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/model_io.h"
-#include "tests/fit/joint_scene.h"
+#include "tests/api/pixel_calibration.h"
 
 namespace rtscalib {
 namespace {
 
 namespace fs = std::filesystem;
-using testing_scene::AddDistortion;
-using testing_scene::DhTruth;
-using testing_scene::PixelsOnly;
 
-fs::path TestDir(const std::string& name) {
-  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "api_compare" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TestDir(const std::string& name) { return testing_api::TestDir("api_compare", name); }
 
-InstrumentModel Truth() {
-  EffectSet groups;
-  groups.Add(Effect::kRadialDistortion);
-  groups.Add(Effect::kTangentialDistortion);
-  InstrumentModel truth = DhTruth(1);
-  AddDistortion(groups, &truth);
-  return truth;
-}
+InstrumentModel Truth() { return testing_api::DistortedTruth(); }
 
 // A calibration from pixels of one seed (0.3 px noise, ~2,000 corners), with
 // its valid region as Calibrate sets it.
 InstrumentModel Fit(const InstrumentModel& truth, int seed) {
-  SimulatedData data = Simulate(PixelsOnly(truth, 3, 7000 + seed, 0.3));
-  data.obs.records.clear();
-  InitFromPixelsOptions io;
-  io.kinematics = Kinematics::kDh;
-  io.distortion.tangential = true;
-  io.cameras.resize(1);
-  io.cameras[0].width = truth.cams[0].width;
-  io.cameras[0].height = truth.cams[0].height;
-  InstrumentModel model = InitFromPixels(data.obs.pixels, io).model;
-  for (Effect e : truth.effects.List()) model.effects.Add(e);
-  FitOptions fo;
-  fo.fit_intrinsics = true;
-  const FitSummary s = Refine(data.obs, fo, &model);
-  EXPECT_TRUE(model.sigmas.valid) << s.message;
+  Observations obs;
+  InstrumentModel model = testing_api::FitFromPixels(truth, 7000 + seed, 0.3, &obs);
   std::vector<Eigen::Vector2d> uv;
-  for (const PixelObservation& p : data.obs.pixels) uv.push_back(p.uv);
+  for (const PixelObservation& p : obs.pixels) uv.push_back(p.uv);
   model.cams[0].valid_region = ConvexHull(uv);
   return model;
 }

@@ -18,53 +18,23 @@
 #include "libcalib/io/errors.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/model/kinematics.h"
-#include "tests/fit/joint_scene.h"
+#include "tests/api/pixel_calibration.h"
 
 namespace rtscalib {
 namespace {
 
 namespace fs = std::filesystem;
-using testing_scene::AddDistortion;
-using testing_scene::DhTruth;
-using testing_scene::PixelsOnly;
 
-fs::path TestDir(const std::string& name) {
-  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "api_covariance" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TestDir(const std::string& name) { return testing_api::TestDir("api_covariance", name); }
 
 constexpr double kNoisePx = 0.3;
 
-InstrumentModel Truth() {
-  EffectSet groups;
-  groups.Add(Effect::kRadialDistortion);
-  groups.Add(Effect::kTangentialDistortion);
-  InstrumentModel truth = DhTruth(1);
-  AddDistortion(groups, &truth);
-  return truth;
-}
+InstrumentModel Truth() { return testing_api::DistortedTruth(); }
 
 // One calibration from pixels of seed `seed` (joint_uncertainty_test's scene:
 // 2 boards x 3 shots x 2 faces, ~2,000 corners).
 InstrumentModel Fit(const InstrumentModel& truth, int seed, Observations* obs_out = nullptr) {
-  SimulatedData data = Simulate(PixelsOnly(truth, 3, 5000 + seed, kNoisePx));
-  data.obs.records.clear();
-  InitFromPixelsOptions io;
-  io.kinematics = Kinematics::kDh;
-  io.distortion.tangential = true;
-  io.cameras.resize(1);
-  io.cameras[0].width = truth.cams[0].width;
-  io.cameras[0].height = truth.cams[0].height;
-  InstrumentModel model = InitFromPixels(data.obs.pixels, io).model;
-  for (Effect e : truth.effects.List()) model.effects.Add(e);
-  FitOptions fo;
-  fo.fit_intrinsics = true;
-  const FitSummary s = Refine(data.obs, fo, &model);
-  EXPECT_TRUE(model.sigmas.valid) << s.message;
-  if (obs_out) *obs_out = data.obs;
-  return model;
+  return testing_api::FitFromPixels(truth, 5000 + seed, kNoisePx, obs_out);
 }
 
 // The fit fills the covariance in ParameterLayout order; its diagonal is the
