@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -575,35 +576,57 @@ std::string Added(const std::vector<std::string>& before, const std::vector<std:
   return out;
 }
 
-}  // namespace
-
-Figure DifferenceFigure(const ZoomDifference& d) {
-  const int panel_w = 480;
-  const int panel_h =
-      std::max(1, static_cast<int>(std::lround(panel_w * double(d.height) / std::max(1, d.width))));
-  const int left = 30, top = 40;
-  cv::Mat img(panel_h + top + 70, panel_w + 2 * left + 110, CV_8UC3, kWhite);
-  const cv::Mat lut = ViridisLut();
-  const double vmax = std::isfinite(d.max_px) && d.max_px > 0 ? NiceNumber(d.max_px) : 1.0;
-  for (int j = 0; j < d.rows; ++j) {
-    for (int i = 0; i < d.cols; ++i) {
-      const cv::Rect r(left + i * panel_w / d.cols, top + j * panel_h / d.rows,
-                       (i + 1) * panel_w / d.cols - i * panel_w / d.cols,
-                       (j + 1) * panel_h / d.rows - j * panel_h / d.rows);
-      const double v = d.diff_px[j * d.cols + i];
-      if (!std::isfinite(v)) {
-        cv::rectangle(img, r, kHatch, cv::FILLED);
-        continue;
-      }
-      cv::rectangle(img, r, ColourOf(lut, std::min(v / vmax, 1.0)), cv::FILLED);
-      if (!d.inside[j * d.cols + i]) {
-        cv::Mat roi = img(r & cv::Rect(0, 0, img.cols, img.rows));
-        for (int k = -roi.rows; k < roi.cols; k += 6) {
-          cv::line(roi, cv::Point(k, roi.rows), cv::Point(k + roi.rows, 0), kWhite, 1, cv::LINE_AA);
+// A heat map of cols x rows cells over a width x height image, 480 px wide:
+// cells coloured by value / vmax (viridis; vmax a nice number above `max`),
+// grey where not finite, white diagonal strokes where `inside` is false
+// (extrapolated). The figure's text goes around the panel.
+struct HeatMapPanel {
+  static constexpr int left = 30, top = 40;
+  int width = 480, height = 1;
+  cv::Mat image, lut;
+  double vmax = 1;
+  HeatMapPanel(int image_w, int image_h, int cols, int rows, double max,
+               const std::function<double(int, int)>& value,
+               const std::function<bool(int, int)>& inside) {
+    height =
+        std::max(1, static_cast<int>(std::lround(width * double(image_h) / std::max(1, image_w))));
+    image = cv::Mat(height + top + 70, width + 2 * left + 110, CV_8UC3, kWhite);
+    lut = ViridisLut();
+    vmax = std::isfinite(max) && max > 0 ? NiceNumber(max) : 1.0;
+    for (int j = 0; j < rows; ++j) {
+      for (int i = 0; i < cols; ++i) {
+        const cv::Rect r(left + i * width / cols, top + j * height / rows,
+                         (i + 1) * width / cols - i * width / cols,
+                         (j + 1) * height / rows - j * height / rows);
+        const double v = value(i, j);
+        if (!std::isfinite(v)) {
+          cv::rectangle(image, r, kHatch, cv::FILLED);
+          continue;
+        }
+        cv::rectangle(image, r, ColourOf(lut, std::min(v / vmax, 1.0)), cv::FILLED);
+        if (!inside(i, j)) {
+          cv::Mat roi = image(r & cv::Rect(0, 0, image.cols, image.rows));
+          for (int k = -roi.rows; k < roi.cols; k += 6) {
+            cv::line(roi, cv::Point(k, roi.rows), cv::Point(k + roi.rows, 0), kWhite, 1,
+                     cv::LINE_AA);
+          }
         }
       }
     }
   }
+};
+
+}  // namespace
+
+Figure DifferenceFigure(const ZoomDifference& d) {
+  const HeatMapPanel p(
+      d.width, d.height, d.cols, d.rows, d.max_px,
+      [&](int i, int j) { return d.diff_px[j * d.cols + i]; },
+      [&](int i, int j) { return bool(d.inside[j * d.cols + i]); });
+  cv::Mat img = p.image;
+  const int left = p.left, top = p.top, panel_w = p.width, panel_h = p.height;
+  const cv::Mat& lut = p.lut;
+  const double vmax = p.vmax;
   cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
   ColourBar(img, lut, cv::Rect(left + panel_w + 20, top, 18, panel_h), vmax, "difference [px]");
   Put(img,
@@ -700,33 +723,13 @@ Figure CoverageFigure(const ZoomCoverage& c, const Observations& obs) {
 // white polygon), grey where the model cannot predict.
 Figure UncertaintyFigure(const UncertaintyMap& m, const UncertaintyMapOptions& o,
                          const CameraTool& cam, bool full) {
-  const int panel_w = 480;
-  const int panel_h =
-      std::max(1, static_cast<int>(std::lround(panel_w * double(m.height) / std::max(1, m.width))));
-  const int left = 30, top = 40;
-  cv::Mat img(panel_h + top + 70, panel_w + 2 * left + 110, CV_8UC3, kWhite);
-  const cv::Mat lut = ViridisLut();
-  const double vmax = std::isfinite(m.max_px) && m.max_px > 0 ? NiceNumber(m.max_px) : 1.0;
-  for (int j = 0; j < m.rows; ++j) {
-    for (int i = 0; i < m.cols; ++i) {
-      const cv::Rect r(left + i * panel_w / m.cols, top + j * panel_h / m.rows,
-                       (i + 1) * panel_w / m.cols - i * panel_w / m.cols,
-                       (j + 1) * panel_h / m.rows - j * panel_h / m.rows);
-      const double v = m.Cell(i, j);
-      if (!std::isfinite(v)) {
-        cv::rectangle(img, r, kHatch, cv::FILLED);
-        continue;
-      }
-      cv::rectangle(img, r, ColourOf(lut, std::min(v / vmax, 1.0)), cv::FILLED);
-      if (!m.inside[j * m.cols + i]) {
-        // Extrapolated: light diagonal strokes over the colour.
-        cv::Mat roi = img(r & cv::Rect(0, 0, img.cols, img.rows));
-        for (int k = -roi.rows; k < roi.cols; k += 6) {
-          cv::line(roi, cv::Point(k, roi.rows), cv::Point(k + roi.rows, 0), kWhite, 1, cv::LINE_AA);
-        }
-      }
-    }
-  }
+  const HeatMapPanel p(
+      m.width, m.height, m.cols, m.rows, m.max_px, [&](int i, int j) { return m.Cell(i, j); },
+      [&](int i, int j) { return bool(m.inside[j * m.cols + i]); });
+  cv::Mat img = p.image;
+  const int left = p.left, top = p.top, panel_w = p.width, panel_h = p.height;
+  const cv::Mat& lut = p.lut;
+  const double vmax = p.vmax;
   const double sx = double(panel_w) / std::max(1, m.width),
                sy = double(panel_h) / std::max(1, m.height);
   if (cam.valid_region.size() >= 3) {
