@@ -60,25 +60,19 @@ ExcludedRow Excluded(const Observations& obs, const Row& row, const std::string&
 
 // Rows of each group flagged; none of a group whose flagged share exceeds
 // max_fraction (then a note).
-void Keep(const std::vector<Row>& rows, const std::vector<ExcludedRow>& flagged,
-          const GrossErrorOptions& options, const char* what, RobustFitResult* out) {
+// The group of a flagged row (0 EDM, 1 camera rows, 2 pixels) in `obs`.
+int GroupOf(const Observations& obs, const ExcludedRow& e) {
+  return e.pixel ? 2 : (obs.records[e.index].tool == Tool::kEdm ? 0 : 1);
+}
+
+void Keep(const Observations& obs, const std::vector<Row>& rows,
+          const std::vector<ExcludedRow>& flagged, const GrossErrorOptions& options,
+          const char* what, RobustFitResult* out) {
   int count[3] = {0, 0, 0}, bad[3] = {0, 0, 0};
   for (const Row& r : rows) ++count[r.group];
+  for (const ExcludedRow& e : flagged) ++bad[GroupOf(obs, e)];
   for (const ExcludedRow& e : flagged) {
-    for (const Row& r : rows) {
-      if (r.index == e.index && (r.group == 2) == e.pixel) {
-        ++bad[r.group];
-        break;
-      }
-    }
-  }
-  for (const ExcludedRow& e : flagged) {
-    int group = 2;
-    if (!e.pixel) {
-      for (const Row& r : rows) {
-        if (!(r.group == 2) && r.index == e.index) group = r.group;
-      }
-    }
+    const int group = GroupOf(obs, e);
     if (bad[group] <= options.max_fraction * count[group]) out->gross.push_back(e);
   }
   for (int g = 0; g < 3; ++g) {
@@ -122,7 +116,7 @@ RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& 
                                   "trusted region)"));
     }
   }
-  Keep(at_start, unusable, robust, "cannot be evaluated at the start", &out);
+  Keep(obs, at_start, unusable, robust, "cannot be evaluated at the start", &out);
   Observations usable = obs;
   std::vector<int> record_map, pixel_map;  // usable index -> obs index
   {
@@ -212,7 +206,7 @@ RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& 
     flagged.push_back(Excluded(usable, r, buf));
   }
   const size_t before = out.gross.size();
-  Keep(rows, flagged, robust, "beyond the limit after the robust fit", &out);
+  Keep(usable, rows, flagged, robust, "beyond the limit after the robust fit", &out);
   for (size_t k = before; k < out.gross.size(); ++k) {
     ExcludedRow& e = out.gross[k];
     e.index = e.pixel ? pixel_map[e.index] : record_map[e.index];
