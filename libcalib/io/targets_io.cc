@@ -13,6 +13,10 @@
 namespace rtscalib {
 namespace {
 
+// Bounds that no AprilTag board reaches (see ReadScene).
+constexpr long long kMaxTagsPerBoard = 48714;
+constexpr long long kMaxTagId = 999999;
+
 TargetScene ReadScene(const YamlDocument& doc, const std::map<std::string, int>* family_codes) {
   const YamlNode root = doc.Root();
   const YamlNode boards = root.Require("boards");
@@ -52,6 +56,20 @@ TargetScene ReadScene(const YamlDocument& doc, const std::map<std::string, int>*
     const YamlNode cols = item.Require("cols");
     b.cols = cols.AsInt();
     if (b.cols < 1) cols.Fail("a number of columns >= 1");
+    // Memory and the tag ids stay bounded by what a tag family can hold (the
+    // largest AprilTag family, tagStandard52h13, has 48,714 codes), not by a
+    // value in the file: rows cols and first_id + rows cols must fit.
+    const long long tags = static_cast<long long>(b.rows) * b.cols;
+    if (tags > kMaxTagsPerBoard) {
+      (b.rows >= b.cols ? rows : cols)
+          .Fail("a board of at most " + std::to_string(kMaxTagsPerBoard) +
+                " tags (the largest tag family's codes), not rows x cols = " +
+                std::to_string(b.rows) + " x " + std::to_string(b.cols));
+    }
+    if (b.first_id > kMaxTagId - tags + 1) {
+      first_id.Fail("a first_id with first_id + rows cols <= " + std::to_string(kMaxTagId + 1) +
+                    " (no tag family has more codes)");
+    }
     if (family_codes != nullptr) {
       const int codes = family_codes->at(b.family);
       if (static_cast<long long>(b.first_id) + b.NumTags() > codes) {

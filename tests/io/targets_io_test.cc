@@ -129,6 +129,14 @@ TEST(Targets, BadValuesNameKeyExpectedAndGot) {
       {"first_id: 0, rows: 1, cols: 1, tag_size: 1, spacing: 0, pose: {euler: [0, 0, 0], t: [0, "
        "0, .nan]}",
        "boards[0].pose.t[2]", "a finite number", ".nan"},
+      // Found by fuzz/targets_fuzzer (corpus/targets/huge_ids.yaml): rows x
+      // cols overflowed int and the id range left it.
+      {"first_id: 2147483000, rows: 100000, cols: 100000, tag_size: 1, spacing: 0",
+       "boards[0].rows", "not rows x cols = 100000 x 100000", "100000"},
+      {"first_id: 0, rows: 300, cols: 200, tag_size: 1, spacing: 0", "boards[0].rows",
+       "a board of at most 48714 tags", "300"},
+      {"first_id: 2147483000, rows: 2, cols: 2, tag_size: 1, spacing: 0", "boards[0].first_id",
+       "first_id + rows cols <= 1000000", "2147483000"},
   };
   for (const Case& c : cases) {
     const InputError e = TargetsError(head + c.fields + "}\n");
