@@ -1,5 +1,7 @@
 #include "libcalib/io/targets_io.h"
 
+#include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -42,6 +44,13 @@ TargetScene ReadScene(const YamlDocument& doc, const std::map<std::string, int>*
     TagBoard b;
     const YamlNode family = item.Require("family");
     b.family = family.AsString();
+    // A family is a name (tag36h11, tagStandard41h12): letters, digits and
+    // '_', so that it is written back without quoting (WriteTargets).
+    const bool name = !b.family.empty() && b.family.size() <= 64 &&
+                      std::all_of(b.family.begin(), b.family.end(), [](char c) {
+                        return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+                      });
+    if (!name) family.Fail("a tag family name (letters, digits, '_'), e.g. tag36h11");
     if (family_codes != nullptr && family_codes->count(b.family) == 0) {
       std::vector<std::string> known;
       for (const auto& entry : *family_codes) known.push_back(entry.first);

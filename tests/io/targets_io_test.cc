@@ -142,6 +142,11 @@ TEST(Targets, BadValuesNameKeyExpectedAndGot) {
     const InputError e = TargetsError(head + c.fields + "}\n");
     ExpectKeyError(e, c.key, 2, c.expected, c.got);
   }
+  // Found by the replayed targets fuzzer (mutation 419 of seed 1): a family
+  // with a comma was accepted and written back unquoted, as another key.
+  ExpectKeyError(TargetsError("boards:\n  - family: (ta, g25hT9\n    first_id: 0\n    rows: 1\n"
+                              "    cols: 1\n    tag_size: 1\n    spacing: 0\n"),
+                 "boards[0].family", 2, "a tag family name", "(ta, g25hT9");
 }
 
 TEST(Targets, OverlappingIdRangesNameBothBoards) {
