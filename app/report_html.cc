@@ -367,10 +367,9 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   }
   o << "</table>\n<p class=small>Refinement "
     << (r.calibration.fit.converged ? "converged" : "did NOT converge") << " in "
-    << r.calibration.fit.iterations << " iterations; fitted sigmas: EDM "
-    << Mm(r.calibration.fit.sigma_edm_m) << " mm, camera " << Mm(r.calibration.fit.sigma_cam_m)
-    << " mm, pixels " << Fmt("%.3g", r.calibration.fit.sigma_pixel_px) << " px; "
-    << r.calibration.fit.excluded_critical << " rows in the critical regions excluded.</p>\n";
+    << r.calibration.fit.iterations << " iterations; " << r.calibration.fit.excluded_critical
+    << " rows in the critical regions excluded. " << Esc(FitSigmasText(r.calibration.fit))
+    << "</p>\n";
 
   if (!r.uncertainty_maps.empty()) {
     o << "<h2 id=\"uncertainty\">Projection uncertainty</h2>\n<table><tr><th>zoom</th><th>min "

@@ -120,6 +120,8 @@ json FitJson(const FitSummary& f) {
           {"sigma_edm_m", f.sigma_edm_m},
           {"sigma_cam_m", f.sigma_cam_m},
           {"sigma_pixel_px", f.sigma_pixel_px},
+          {"sigma_pixel_px_per_zoom", f.sigma_pixel_px_zoom},
+          {"covariance_clusters", f.covariance_clusters},
           {"fixed_gauges", f.fixed_gauges},
           {"strong_correlations", corr},
           {"downweighted", f.downweighted},
@@ -605,8 +607,29 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     for (const auto& [pair, rho] : r.calibration.fit.strong_correlations)
       o << "  " << pair << "  rho = " << Fmt("%+.3f", rho) << "\n";
   }
+  o << FitSigmasText(r.calibration.fit) << "\n";
   o << GrossRowsText(r);
   for (const std::string& n : r.notes) o << "note: " << n << "\n";
+  return o.str();
+}
+
+std::string FitSigmasText(const FitSummary& fit) {
+  std::ostringstream o;
+  o << "A-posteriori sigmas: EDM " << Fmt("%.3g", fit.sigma_edm_m * 1e3) << " mm, camera "
+    << Fmt("%.3g", fit.sigma_cam_m * 1e3) << " mm, pixels " << Fmt("%.3g", fit.sigma_pixel_px)
+    << " px";
+  std::string zooms;
+  for (size_t z = 0; z < fit.sigma_pixel_px_zoom.size(); ++z) {
+    if (fit.sigma_pixel_px_zoom[z] <= 0) continue;
+    zooms += (zooms.empty() ? "" : ", ") + std::string("zoom ") + std::to_string(z) + " " +
+             Fmt("%.3g", fit.sigma_pixel_px_zoom[z]);
+  }
+  if (!zooms.empty()) o << " (" << zooms << ")";
+  o << "; covariance: "
+    << (fit.covariance_clusters > 0
+            ? "cluster-robust over " + std::to_string(fit.covariance_clusters) +
+                  " clusters (fit.covariance_clusters), never below the independent-error one."
+            : std::string("independent errors of these sigmas."));
   return o.str();
 }
 

@@ -17,6 +17,10 @@ std::string ReportText(const RunConfig& config, const PipelineResult& result);
 // The rows taken out as gross errors, a line each (the first 50), for
 // report.txt and report.html; empty when there are none.
 std::string GrossRowsText(const PipelineResult& result);
+// The refinement's a-posteriori sigmas (pixels per zoom) and how the
+// covariance treats correlated errors, one sentence for report.txt and
+// report.html.
+std::string FitSigmasText(const FitSummary& fit);
 
 // Key figures of earlier runs, read back from their report.json (for the
 // ladder of errors across runs).

@@ -43,6 +43,8 @@ struct DistortionChoice {
   }
 };
 
+enum class CovarianceClusters { kShot, kTag, kNone };
+
 struct FitOptions {
   double sigma_edm_m = 1e-5;      // a-priori sigma of an EDM point coordinate
   double sigma_cam_m = 1e-5;      // a-priori sigma of a camera-record coordinate
@@ -63,6 +65,12 @@ struct FitOptions {
   double max_zenith_rad = 135.0 * M_PI / 180.0;
   int num_threads = 2;
   bool compute_covariance = true;
+  // Which observations' errors the covariance lets be correlated
+  // (refine.cc, TangentCovariance): kShot = the pixels of one photo (a
+  // detector's errors are: blur, exposure, sampling; each record is alone),
+  // kNone = the classical covariance from the sigmas alone (independent
+  // errors). Config: fit.covariance_clusters.
+  CovarianceClusters covariance_clusters = CovarianceClusters::kShot;
   // Read by Calibrate (not by Refine, which fits what it is given).
   GrossErrorOptions gross_errors;
   bool verbose = false;

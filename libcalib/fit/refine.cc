@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -48,7 +49,116 @@ struct ResidualRef {
   ceres::ResidualBlockId id;
   ObsGroup group;
   std::vector<int> indices;  // into records or pixels
+  int slot = 0;              // its variance component (VarianceSlot)
 };
+
+// The variance components: EDM points, camera points and the pixels of each
+// zoom level apart (a detector's noise depends on the zoom: the rendered
+// demo's corners scatter 0.013, 0.016 and 0.031 px at zooms 0, 1, 2).
+constexpr int kPixelSlots = 2;  // slots 2 + zoom
+int VarianceSlot(ObsGroup group, int zoom) {
+  return group == ObsGroup::kPixel ? kPixelSlots + std::max(zoom, 0) : static_cast<int>(group);
+}
+std::vector<double> AprioriSigmas(const FitOptions& options, int num_zooms) {
+  std::vector<double> sigma(kPixelSlots + std::max(num_zooms, 1), options.sigma_pixel_px);
+  sigma[0] = options.sigma_edm_m;
+  sigma[1] = options.sigma_cam_m;
+  return sigma;
+}
+
+// The clusters of observations whose errors may be correlated (the
+// cluster-robust covariance, FitOptions::covariance_clusters): every record
+// alone; the pixels of one photo together (kShot: a detector's errors share
+// the photo's blur, exposure and sampling; the corners of one tag share its
+// quad fit) or the pixels of one tag over all photos of its zoom (kTag: a
+// detector's bias that follows the tag). `clusters[i][k]` is the cluster of
+// refs[i]'s k-th observation.
+std::vector<std::vector<int>> AssignClusters(const Observations& obs,
+                                             const std::vector<ResidualRef>& refs,
+                                             CovarianceClusters by) {
+  std::map<std::tuple<std::string, int, int>, int> key_cluster;
+  std::vector<std::vector<int>> out(refs.size());
+  int next = 0;
+  for (size_t i = 0; i < refs.size(); ++i) {
+    for (int index : refs[i].indices) {
+      if (refs[i].group != ObsGroup::kPixel) {
+        out[i].push_back(next++);
+        continue;
+      }
+      const PixelObservation& p = obs.pixels[index];
+      const auto key = by == CovarianceClusters::kTag ? std::make_tuple(std::string(), p.zoom, p.target)
+                                                      : std::make_tuple(p.shot, p.zoom, 0);
+      const auto [it, added] = key_cluster.emplace(key, next);
+      if (added) ++next;
+      out[i].push_back(it->second);
+    }
+  }
+  return out;
+}
+
+// The cluster-robust part of TangentCovariance (see there): returns the
+// number of clusters and replaces `cov` by its widened version. `scale`,
+// `eig`, `inv` are the Jacobi scaling and the eigen-decomposition of the
+// scaled J^T J with its pseudo-inverse eigenvalues.
+int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residuals,
+                  const std::vector<ResidualRef>& refs,
+                  const std::vector<std::vector<int>>& clusters, ceres::Problem* problem,
+                  const Eigen::VectorXd& scale,
+                  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& eig,
+                  const Eigen::VectorXd& inv, Eigen::MatrixXd* cov) {
+  const int n = j.num_cols;
+  // Scores per cluster, g_c = J_c^T r_c, in the scaled coordinates.
+  int num_clusters = 0;
+  for (const std::vector<int>& of_ref : clusters) {
+    for (int c : of_ref) num_clusters = std::max(num_clusters, c + 1);
+  }
+  std::vector<Eigen::VectorXd> score(num_clusters);
+  std::vector<std::vector<int>> touched(num_clusters);
+  int row = 0;
+  for (size_t i = 0; i < refs.size(); ++i) {
+    const int rows = problem->GetCostFunctionForResidualBlock(refs[i].id)->num_residuals();
+    const int per_obs = rows / static_cast<int>(clusters[i].size());  // 2 (pixel) or 3 (record)
+    for (int r = row; r < row + rows; ++r) {
+      const int cluster = clusters[i][(r - row) / per_obs];
+      Eigen::VectorXd& g = score[cluster];
+      if (g.size() == 0) g = Eigen::VectorXd::Zero(n);
+      for (int a = j.rows[r]; a < j.rows[r + 1]; ++a) {
+        const int c = j.cols[a];
+        touched[cluster].push_back(c);
+        g[c] += j.values[a] * scale[c] * residuals[r];
+      }
+    }
+    row += rows;
+  }
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n, n);
+  int used = 0;
+  for (int c = 0; c < num_clusters; ++c) {
+    if (score[c].size() == 0) continue;
+    ++used;
+    std::vector<int>& t = touched[c];
+    std::sort(t.begin(), t.end());
+    t.erase(std::unique(t.begin(), t.end()), t.end());
+    for (int a : t) {
+      for (int b : t) m(a, b) += score[c][a] * score[c][b];
+    }
+  }
+  if (used < 2) return used;
+  m *= static_cast<double>(used) / (used - 1);
+  // In the eigenbasis of the scaled J^T J, whitened: W = L^-1/2 V^T M V L^-1/2
+  // is the sandwich relative to the independent-error covariance (identity).
+  const Eigen::VectorXd half = inv.cwiseSqrt();
+  const Eigen::MatrixXd w =
+      half.asDiagonal() * (eig.eigenvectors().transpose() * m * eig.eigenvectors()) *
+      half.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> we(w);
+  if (we.info() != Eigen::Success) return used;
+  const Eigen::VectorXd excess = (we.eigenvalues().array() - 1.0).max(0.0).matrix();
+  const Eigen::MatrixXd widen_white = we.eigenvectors() * excess.asDiagonal() *
+                                      we.eigenvectors().transpose();
+  const Eigen::MatrixXd back = eig.eigenvectors() * half.asDiagonal();
+  *cov += scale.asDiagonal() * (back * widen_white * back.transpose()) * scale.asDiagonal();
+  return used;
+}
 
 // Covariance of `blocks` in their tangent spaces: the pseudo-inverse of
 // J^T J (J whitened, after the robust loss's reweighting), as
@@ -60,15 +170,37 @@ struct ResidualRef {
 // units (pixels, metres, radians) do not decide which directions count as
 // undetermined: eigenvalues below 1e-14 of the largest are dropped and
 // counted in `dropped`.
+//
+// With `refs` (the cluster-robust covariance, FitOptions::covariance_clusters)
+// the result is the sandwich C M C (Liang & Zeger 1986) with C the
+// pseudo-inverse above and M = G/(G-1) sum_c g_c g_c^T, g_c = J_c^T r_c over
+// the whitened rows of cluster c (G clusters): the scatter of the clusters'
+// scores measured from the residuals instead of assumed from the sigmas, so
+// that errors correlated within a cluster (a photo's detector bias) count
+// once per cluster, not once per row. For independent errors of the assumed
+// sigmas it equals C (E[g g^T] = J_c^T J_c). It is taken where it is larger:
+// the final covariance is C + V diag(max(0, l_i - 1)) V^T ... in the whitened
+// metric of C (l_i the eigenvalues of C^-1/2 C M C C^-1/2), so that no
+// direction is claimed more precise than the independent-error covariance
+// says (few clusters make the sandwich noisy; it can fall below C by chance).
 bool TangentCovariance(ceres::Problem* problem, const std::vector<const double*>& blocks, int n,
-                       int num_threads, Eigen::MatrixXd* cov, int* dropped) {
+                       int num_threads, const std::vector<ResidualRef>* refs,
+                       const std::vector<std::vector<int>>* clusters, Eigen::MatrixXd* cov,
+                       int* dropped, int* num_clusters) {
   ceres::Problem::EvaluateOptions eo;
   for (const double* p : blocks) eo.parameter_blocks.push_back(const_cast<double*>(p));
+  if (refs) {
+    for (const ResidualRef& ref : *refs) eo.residual_blocks.push_back(ref.id);
+  }
   eo.apply_loss_function = true;
   eo.num_threads = num_threads;
   ceres::CRSMatrix j;
+  std::vector<double> residuals;
   if (n == 0) return false;
-  if (!problem->Evaluate(eo, nullptr, nullptr, nullptr, &j) || j.num_cols != n) return false;
+  if (!problem->Evaluate(eo, nullptr, refs ? &residuals : nullptr, nullptr, &j) ||
+      j.num_cols != n) {
+    return false;
+  }
   Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(n, n);
   for (int r = 0; r < j.num_rows; ++r) {
     for (int a = j.rows[r]; a < j.rows[r + 1]; ++a) {
@@ -95,6 +227,9 @@ bool TangentCovariance(ceres::Problem* problem, const std::vector<const double*>
   *cov = scale.asDiagonal() *
          (eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose()) *
          scale.asDiagonal();
+  if (refs) {
+    *num_clusters = ClusterRobust(j, residuals, *refs, *clusters, problem, scale, eig, inv, cov);
+  }
   return true;
 }
 
@@ -131,7 +266,9 @@ Eigen::MatrixXd LayoutCovariance(ceres::Problem* problem, const std::vector<cons
   return out;
 }
 
-void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentModel* model,
+void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks,
+                const std::vector<ResidualRef>* refs,
+                const std::vector<std::vector<int>>* clusters, InstrumentModel* model,
                 FitSummary* summary, int num_threads) {
   std::vector<const double*> free_blocks;
   for (const auto& [p, name] : blocks) {
@@ -147,7 +284,8 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks, InstrumentMo
   model->sigmas.covariance.resize(0, 0);
   Eigen::MatrixXd c;
   int dropped = 0;
-  if (!TangentCovariance(problem, free_blocks, n, num_threads, &c, &dropped)) {
+  if (!TangentCovariance(problem, free_blocks, n, num_threads, refs, clusters, &c, &dropped,
+                         &summary->covariance_clusters)) {
     summary->message += " covariance could not be computed;";
     return;
   }
@@ -271,7 +409,8 @@ ceres::LossFunction* MakeLoss(const FitOptions& options) {
 // components and the robust-loss report.
 std::unique_ptr<ceres::Problem> BuildProblem(const Observations& obs,
                                              const std::vector<ObservationGroup>& groups,
-                                             const Parameterization& param, const double sigma[3],
+                                             const Parameterization& param,
+                                             const std::vector<double>& sigma,
                                              const FitOptions& options, bool with_bounds,
                                              InstrumentModel* m, std::vector<ResidualRef>* refs) {
   ceres::Problem::Options popt;
@@ -279,11 +418,11 @@ std::unique_ptr<ceres::Problem> BuildProblem(const Observations& obs,
   auto problem = std::make_unique<ceres::Problem>(popt);
   refs->clear();
   for (const ObservationGroup& g : groups) {
-    const double inv_sigma = 1.0 / sigma[static_cast<int>(g.kind)];
+    const int slot = VarianceSlot(g.kind, g.zoom);
     std::vector<double*> blocks;
-    ceres::CostFunction* cost = MakeGroupCost(obs, g, inv_sigma, param, m, &blocks);
+    ceres::CostFunction* cost = MakeGroupCost(obs, g, 1.0 / sigma[slot], param, m, &blocks);
     refs->push_back(
-        {problem->AddResidualBlock(cost, MakeLoss(options), blocks), g.kind, g.indices});
+        {problem->AddResidualBlock(cost, MakeLoss(options), blocks), g.kind, g.indices, slot});
   }
   param.Apply(problem.get(), with_bounds);
   return problem;
@@ -322,19 +461,21 @@ ceres::Solver::Options SolverOptions(const ceres::Problem& problem, const FitOpt
 // share n_g / n of the parameters several groups see. Updates `sigma`;
 // returns whether any sigma moved by more than 5 % (another round is needed).
 bool ReestimateSigmas(ceres::Problem* problem, const std::vector<ResidualRef>& refs,
-                      double sigma[3]) {
-  double sum2[3] = {0, 0, 0};
-  int count[3] = {0, 0, 0};
+                      std::vector<double>* sigmas) {
+  std::vector<double>& sigma = *sigmas;
+  const int slots = static_cast<int>(sigma.size());
+  std::vector<double> sum2(slots, 0.0), exclusive(slots, 0.0);
+  std::vector<int> count(slots, 0);
   std::map<ceres::ResidualBlockId, int> group_of;
   for (const ResidualRef& ref : refs) {
     double cost = 0;
     problem->EvaluateResidualBlock(ref.id, false, &cost, nullptr, nullptr);
-    sum2[static_cast<int>(ref.group)] += 2.0 * cost;
-    count[static_cast<int>(ref.group)] +=
+    sum2[ref.slot] += 2.0 * cost;
+    count[ref.slot] +=
         (ref.group == ObsGroup::kPixel ? 2 : 3) * static_cast<int>(ref.indices.size());
-    group_of[ref.id] = static_cast<int>(ref.group);
+    group_of[ref.id] = ref.slot;
   }
-  double exclusive[3] = {0, 0, 0}, shared = 0;
+  double shared = 0;
   std::vector<double*> blocks;
   problem->GetParameterBlocks(&blocks);
   for (double* b : blocks) {
@@ -350,15 +491,16 @@ bool ReestimateSigmas(ceres::Problem* problem, const std::vector<ResidualRef>& r
       shared += size;
     }
   }
-  const int n_obs = count[0] + count[1] + count[2];
+  int n_obs = 0;
+  for (int c : count) n_obs += c;
   bool changed = false;
-  for (int g = 0; g < 3; ++g) {
+  for (int g = 0; g < slots; ++g) {
     if (count[g] == 0) continue;
     const double params = exclusive[g] + shared * count[g] / std::max(n_obs, 1);
     const double redundancy = std::max(0.05 * count[g], count[g] - params);
     const double f = std::sqrt(sum2[g] / redundancy);
     // Never shrink below a floor that would make exact data ill-posed.
-    const double floor = g == 2 ? 1e-9 : 1e-15;
+    const double floor = g >= kPixelSlots ? 1e-9 : 1e-15;
     const double next = std::max(sigma[g] * f, floor);
     if (std::abs(next / sigma[g] - 1.0) > 0.05) changed = true;
     sigma[g] = next;
@@ -386,7 +528,8 @@ std::vector<std::string> Downweighted(ceres::Problem* problem, const std::vector
 
 // The solver's outcome and the final sigmas, into the summary.
 void Summarize(const ceres::Solver::Summary& solver_summary, const ceres::Problem& problem,
-               const double sigma[3], const FitOptions& options, FitSummary* summary) {
+               const std::vector<double>& sigma, const std::vector<ResidualRef>& refs,
+               const FitOptions& options, FitSummary* summary) {
   summary->converged = solver_summary.termination_type == ceres::CONVERGENCE ||
                        solver_summary.termination_type == ceres::USER_SUCCESS;
   summary->iterations = static_cast<int>(solver_summary.iterations.size());
@@ -395,9 +538,21 @@ void Summarize(const ceres::Solver::Summary& solver_summary, const ceres::Proble
   summary->num_parameters = problem.NumParameters();
   summary->sigma_edm_m = sigma[0];
   summary->sigma_cam_m = sigma[1];
-  summary->sigma_pixel_px = sigma[2];
+  // Pixels: per zoom, and pooled (the root mean square over the pixels).
+  std::vector<int> count(sigma.size(), 0);
+  for (const ResidualRef& ref : refs) count[ref.slot] += static_cast<int>(ref.indices.size());
+  summary->sigma_pixel_px_zoom.assign(sigma.size() - kPixelSlots, 0.0);
+  double sum2 = 0;
+  int n = 0;
+  for (size_t g = kPixelSlots; g < sigma.size(); ++g) {
+    if (count[g] == 0) continue;
+    summary->sigma_pixel_px_zoom[g - kPixelSlots] = sigma[g];
+    sum2 += count[g] * sigma[g] * sigma[g];
+    n += count[g];
+  }
+  summary->sigma_pixel_px = n > 0 ? std::sqrt(sum2 / n) : options.sigma_pixel_px;
   summary->sigma0_records = sigma[0] / options.sigma_edm_m;
-  summary->sigma0_pixels = sigma[2] / options.sigma_pixel_px;
+  summary->sigma0_pixels = summary->sigma_pixel_px / options.sigma_pixel_px;
   summary->message += " " + solver_summary.message;
 }
 
@@ -430,7 +585,7 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   const std::vector<ObservationGroup> groups =
       GroupObservations(obs, rows, options.loss != RobustLoss::kNone);
 
-  double sigma[3] = {options.sigma_edm_m, options.sigma_cam_m, options.sigma_pixel_px};
+  std::vector<double> sigma = AprioriSigmas(options, m.NumZooms());
   const int rounds = options.reestimate_sigmas ? 4 : 1;
   ceres::Solver::Summary solver_summary;
   std::vector<ResidualRef> refs;
@@ -463,23 +618,25 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
                            " m around the start) imposed: " + names + " left its window;";
         with_bounds = true;
         m = start;
-        sigma[0] = options.sigma_edm_m;
-        sigma[1] = options.sigma_cam_m;
-        sigma[2] = options.sigma_pixel_px;
+        sigma = AprioriSigmas(options, m.NumZooms());
         round = -1;  // start over, bounded
         continue;
       }
     }
     if (!options.reestimate_sigmas) break;
-    if (!ReestimateSigmas(problem.get(), refs, sigma)) break;
+    if (!ReestimateSigmas(problem.get(), refs, &sigma)) break;
   }
 
-  Summarize(solver_summary, *problem, sigma, options, &summary);
+  Summarize(solver_summary, *problem, sigma, refs, options, &summary);
   if (options.loss != RobustLoss::kNone) {
     summary.downweighted = Downweighted(problem.get(), refs, obs, options);
   }
   if (options.compute_covariance) {
-    FillSigmas(problem.get(), FreeBlocks(param, *problem), &m, &summary, options.num_threads);
+    const bool clustered = options.covariance_clusters != CovarianceClusters::kNone;
+    std::vector<std::vector<int>> clusters;
+    if (clustered) clusters = AssignClusters(obs, refs, options.covariance_clusters);
+    FillSigmas(problem.get(), FreeBlocks(param, *problem), clustered ? &refs : nullptr,
+               &clusters, &m, &summary, options.num_threads);
   }
   for (EstimatedBoard& b : m.boards) b.board.ref_from_board = b.pose.ToRigid();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

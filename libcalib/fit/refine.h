@@ -27,6 +27,11 @@ struct FitSummary {
   int excluded_critical = 0;
   double sigma0_records = 1, sigma0_pixels = 1;                     // a-posteriori / a-priori sigma
   double sigma_edm_m = 0, sigma_cam_m = 0, sigma_pixel_px = 0;      // a-posteriori sigmas
+  // The pixels' a-posteriori sigma per zoom (0 where a zoom has no pixels);
+  // sigma_pixel_px is their root mean square over the pixels.
+  std::vector<double> sigma_pixel_px_zoom;
+  // Clusters of the cluster-robust covariance (0: independent errors).
+  int covariance_clusters = 0;
   std::vector<std::string> fixed_gauges;                            // human-readable
   std::vector<std::pair<std::string, double>> strong_correlations;  // "a ~ b", rho
   std::vector<std::string> downweighted;  // robust loss: observations down-weighted

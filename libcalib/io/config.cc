@@ -37,6 +37,9 @@ const Names<AngleUnit> kAngleUnitChoices = {{AngleUnitName(AngleUnit::kRad), Ang
                                             {AngleUnitName(AngleUnit::kGon), AngleUnit::kGon}};
 const Names<RobustLoss> kLossNames = {
     {"none", RobustLoss::kNone}, {"huber", RobustLoss::kHuber}, {"cauchy", RobustLoss::kCauchy}};
+const Names<CovarianceClusters> kClusterNames = {{"shot", CovarianceClusters::kShot},
+                                                 {"tag", CovarianceClusters::kTag},
+                                                 {"none", CovarianceClusters::kNone}};
 
 template <typename E>
 const std::string& NameOf(const Names<E>& names, E value) {
@@ -355,6 +358,7 @@ void ReadFit(const YamlNode& m, FitOptions* out) {
     out->num_threads = x;
   }
   m.Read("covariance", &out->compute_covariance);
+  m.ReadEnum("covariance_clusters", kClusterNames, &out->covariance_clusters);
   m.Read("verbose", &out->verbose);
 }
 
@@ -860,6 +864,8 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::EndMap;
   e << YAML::Key << "threads" << YAML::Value << f.num_threads;
   e << YAML::Key << "covariance" << YAML::Value << f.compute_covariance;
+  e << YAML::Key << "covariance_clusters" << YAML::Value
+    << NameOf(kClusterNames, f.covariance_clusters);
   e << YAML::Key << "verbose" << YAML::Value << f.verbose;
   e << YAML::EndMap;
 
