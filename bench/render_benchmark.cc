@@ -8,9 +8,13 @@
 #include <Eigen/Geometry>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <memory>
+#include <opencv2/imgcodecs.hpp>
 
 #include "detect/detector.h"
+#include "detect/photos.h"
+#include "libcalib/io/shots.h"
 #include "render/headless.h"
 #include "render/scene_renderer.h"
 #include "render/shots.h"
@@ -96,6 +100,63 @@ BENCHMARK(BM_Detect)
     ->Args({2, 1})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()  // llvmpipe and OpenCV threads included
+    ->UseRealTime();
+
+// A user's photo folder read back and detected (detect/photos.h, as
+// `rtscalib detect` and `data.shots` do): 16 PNG photos of the board (8-bit
+// grey, from slightly different poses) at 1280 x 960 (size 0) or
+// 2592 x 1944 (size 1, a 5 MP camera: the same view at 2.025x the focal
+// length), decoded and detected by `jobs` threads.
+void BM_DetectPhotos(benchmark::State& state) {
+  Display();
+  Fixture f;
+  const bool large = state.range(0) != 0;
+  if (large) {
+    const double k = 2592.0 / 1280.0;
+    f.cam.width = 2592;
+    f.cam.height = 1944;
+    f.cam.intrinsics = {1000.0 * k, 1000.0 * k, 1295.7, 971.8};
+  }
+  char dir[] = "/tmp/rtscalib-bench-XXXXXX";
+  if (::mkdtemp(dir) == nullptr) {
+    state.SkipWithError("mkdtemp failed");
+    return;
+  }
+  {
+    SceneRenderer renderer(f.scene);
+    std::ofstream csv(std::string(dir) + "/shots.csv");
+    csv << "face,zoom,phi,theta,image\n";
+    for (int i = 0; i < 16; ++i) {
+      Rigid3 pose = f.pose;
+      pose.translation.x() += 0.002 * i;
+      const std::string name = "p" + std::to_string(i) + ".png";
+      cv::imwrite(std::string(dir) + "/" + name, renderer.Render(pose, f.cam, i + 1));
+      csv << "1,0,0.1,1.5," << name << "\n";
+    }
+  }
+  const ShotsFile shots = ReadShots(std::string(dir) + "/shots.csv");
+  detect::PhotoDetectionOptions options;
+  options.jobs = static_cast<int>(state.range(1));
+  options.progress = false;
+  size_t tags = 0;
+  for (auto _ : state) {
+    const detect::PhotoDetectionResult r = detect::DetectPhotos(shots, f.scene, options);
+    tags = 0;
+    for (const detect::PhotoDetection& p : r.photos) tags += p.tags.size();
+  }
+  std::filesystem::remove_all(dir);
+  state.counters["tags"] = static_cast<double>(tags);
+  state.counters["images/s"] = benchmark::Counter(
+      static_cast<double>(state.iterations() * shots.shots.size()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_DetectPhotos)
+    ->ArgNames({"5MP", "jobs"})
+    ->Args({0, 1})
+    ->Args({0, 2})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
     ->UseRealTime();
 
 // The whole shot pipeline: render, encode and write 16 PNGs, in `jobs`
