@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -149,6 +150,38 @@ Eigen::VectorXd BlockDifference(const LayoutBlock& la, const InstrumentModel& a,
   return d;
 }
 
+// The first joint's zero offset and height (link1's gamma_offset and d) are
+// gauges of a dh model: they rotate and lift the base frame about its z axis
+// and nothing else (kinematics.h: Rz(joint + gamma) with t_z = d, and Rz, t_z
+// commute with the joint), so the fit holds them at their starting values,
+// which differ between two fits. base * [Rz(gamma), (0, 0, d)] with gamma =
+// d = 0 is the same instrument; both models are put into that gauge before
+// their parameters are compared. The base's covariance is unchanged: its
+// rotation tangent is global (q -> exp(delta) q), unaffected by a constant
+// right factor, and its translation moves by R (0, 0, d) with d's variance 0.
+// Only when the model holds them (no variance in its covariance).
+bool FirstJointOffsetsHeld(const CalibratedInstrument& instrument) {
+  const InstrumentModel& m = instrument.Model();
+  if (m.kinematics != Kinematics::kDh || !instrument.HasParameterCovariance()) return false;
+  const Eigen::MatrixXd& c = instrument.ParameterCovariance();
+  for (const LayoutBlock& b : ParameterLayout(m)) {
+    if (b.name != "link1") continue;
+    return c(b.offset + kDhD, b.offset + kDhD) == 0 &&
+           c(b.offset + kDhGamma, b.offset + kDhGamma) == 0;
+  }
+  return false;
+}
+
+void MoveFirstJointOffsetsIntoBase(InstrumentModel* m) {
+  std::array<double, 4>& link = m->links[0].p;
+  const Rigid3 offset{
+      Eigen::AngleAxisd(link[kDhGamma], Eigen::Vector3d::UnitZ()).toRotationMatrix(),
+      Eigen::Vector3d(0, 0, link[kDhD])};
+  m->base = PoseBlock::FromRigid(m->base.ToRigid() * offset);
+  link[kDhGamma] = 0;
+  link[kDhD] = 0;
+}
+
 }  // namespace
 
 std::string CompareOptions::Check() const {
@@ -177,6 +210,15 @@ Comparison CompareInstruments(const CalibratedInstrument& a, const CalibratedIns
   }
   Comparison out;
   out.full_covariance = a.HasFullParameterCovariance() && b.HasFullParameterCovariance();
+  InstrumentModel gauge_a = ma, gauge_b = mb;
+  if (FirstJointOffsetsHeld(a) && FirstJointOffsetsHeld(b)) {
+    MoveFirstJointOffsetsIntoBase(&gauge_a);
+    MoveFirstJointOffsetsIntoBase(&gauge_b);
+    out.notes.push_back(
+        "link1's d and gamma_offset are gauges both fits held at their starting values: they "
+        "were moved into the base frame (base Rz(gamma) Tz(d)) before the parameters were "
+        "compared");
+  }
   for (int z = 0; z < ma.NumZooms(); ++z) {
     out.zooms.push_back(CompareZoom(ma.cams[z], mb.cams[z], z, o));
   }
@@ -192,9 +234,9 @@ Comparison CompareInstruments(const CalibratedInstrument& a, const CalibratedIns
       out.notes.push_back("'" + ba.name + "' is only in the first model");
       continue;
     }
-    const Eigen::VectorXd d = BlockDifference(ba, ma, *bb, mb);
-    const double* xa = ba.const_data(ma);
-    const double* xb = bb->const_data(mb);
+    const Eigen::VectorXd d = BlockDifference(ba, gauge_a, *bb, gauge_b);
+    const double* xa = ba.const_data(gauge_a);
+    const double* xb = bb->const_data(gauge_b);
     for (int i = 0; i < ba.size; ++i) {
       ParameterDifference p;
       p.block = ba.name;
