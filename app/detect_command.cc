@@ -24,7 +24,7 @@ int RunDetect(const DetectArgs& args) {
           "' exists; rtscalib does not overwrite files you have (use --force)");
     }
   }
-  const std::map<std::string, int> families = detect::FamilyCodeCounts();
+  const std::map<std::string, int> families = detect::DetectableCodeCounts();
   const TargetScene targets = ReadTargets(args.targets, &families);
   const ShotsFile shots = ReadShots(args.shots, AngleUnitArg("detect", args.angle_unit));
   for (const std::string& note : shots.notes) std::cerr << "detect: note: " << note << "\n";

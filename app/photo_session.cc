@@ -19,7 +19,7 @@ PhotoSessionSummary LoadPhotoSession(const std::string& shots_path, const std::s
   out.shots_path = shots_path;
   out.targets_path = targets_path;
   out.jobs = jobs;
-  const std::map<std::string, int> families = detect::FamilyCodeCounts();
+  const std::map<std::string, int> families = detect::DetectableCodeCounts();
   const TargetScene targets = ReadTargets(targets_path, &families);
   const ShotsFile shots = ReadShots(shots_path, angle_unit);
   for (const std::string& n : shots.notes) progress->Note(n);
@@ -48,7 +48,7 @@ PhotoSessionSummary LoadPhotoSession(const std::string& shots_path, const std::s
     for (const detect::DetectedTag& tag : p.tags) {
       const TagBoard& board = targets.boards[tag.board];
       const std::array<Eigen::Vector3d, 4> corners = board.CornersInBoard(tag.id - board.first_id);
-      for (int k = 0; k < 4; ++k) {
+      for (int k = 0; k < board.CornersPerTarget(); ++k) {
         PixelObservation o;
         o.face = s.face;
         o.zoom = s.zoom;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <exception>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <stdexcept>
@@ -15,6 +16,8 @@
 #include <opencv2/core.hpp>
 
 #include "detect/photo_image.h"
+#include "detect/point_boards.h"
+#include "detect/tag_family.h"
 #include "libcalib/io/csv.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/number_text.h"
@@ -70,6 +73,27 @@ void KeepBoardTags(const std::vector<TagDetection>& detections, const TargetScen
             [](const DetectedTag& a, const DetectedTag& b) { return a.id < b.id; });
 }
 
+// The inner corners of the ChArUco and chessboards (point_boards.h), one
+// DetectedTag each (all four corners the same point), merged in id order.
+void KeepPointBoards(const cv::Mat& gray, const TargetScene& targets, int face,
+                     PhotoDetection* photo) {
+  bool added = false;
+  for (size_t b = 0; b < targets.boards.size(); ++b) {
+    const TagBoard& board = targets.boards[b];
+    if (!board.IsPointBoard()) continue;
+    const PointBoardDetection found = DetectPointBoard(gray, board, face);
+    if (found.misoriented) ++photo->misoriented_boards;
+    for (const auto& [k, uv] : found.corners) {
+      photo->tags.push_back({static_cast<int>(b), board.first_id + k, {uv, uv, uv, uv}, true});
+      added = true;
+    }
+  }
+  if (added) {
+    std::sort(photo->tags.begin(), photo->tags.end(),
+              [](const DetectedTag& a, const DetectedTag& b) { return a.id < b.id; });
+  }
+}
+
 // Limits OpenCV's thread pool for the lifetime of the object.
 class CvThreads {
  public:
@@ -90,6 +114,12 @@ std::string PhotoDetectionOptions::Check() const {
   return "";
 }
 
+std::map<std::string, int> DetectableCodeCounts() {
+  std::map<std::string, int> out = FamilyCodeCounts();
+  for (const auto& [name, markers] : ArucoDictionaryMarkerCounts()) out["aruco:" + name] = markers;
+  return out;
+}
+
 PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& targets,
                                   const PhotoDetectionOptions& options) {
   if (const std::string msg = options.Check(); !msg.empty()) {
@@ -101,11 +131,13 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
   int tags_of_boards = 0;
   for (const TagBoard& b : targets.boards) {
     tags_of_boards += b.NumTags();
+    if (b.IsPointBoard()) continue;  // OpenCV's detectors (point_boards.h)
     if (std::find(detector_options.families.begin(), detector_options.families.end(), b.family) ==
         detector_options.families.end()) {
       detector_options.families.push_back(b.family);
     }
   }
+  const bool any_tags = !detector_options.families.empty();
 
   const int n = static_cast<int>(shots.shots.size());
   PhotoDetectionResult result;
@@ -121,7 +153,8 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
   std::exception_ptr first_error;
 
   auto work = [&] {
-    TagDetector detector(detector_options);
+    std::unique_ptr<TagDetector> detector;
+    if (any_tags) detector = std::make_unique<TagDetector>(detector_options);
     while (!stop) {
       const int i = next++;
       if (i >= n) break;
@@ -148,7 +181,10 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
         photo.channels = image.channels;
         photo.bit_depth = image.bit_depth;
         photo.tags_of_boards = tags_of_boards;
-        KeepBoardTags(detector.Detect(image.gray), targets, options.keep_unrefined, &photo);
+        if (detector) {
+          KeepBoardTags(detector->Detect(image.gray), targets, options.keep_unrefined, &photo);
+        }
+        KeepPointBoards(image.gray, targets, shot.face, &photo);
         done[i] = 1;
       } catch (...) {
         std::lock_guard<std::mutex> lock(mutex);
@@ -203,6 +239,12 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
   if (first_error) std::rethrow_exception(first_error);
 
   for (int i = 0; i < n; ++i) {
+    if (result.photos[i].misoriented_boards > 0) {
+      result.warnings.push_back(
+          Where(shots, i) + ": " + std::to_string(result.photos[i].misoriented_boards) +
+          " chessboard(s) found turned sideways or mirrored, not used (in face 1 a chessboard's "
+          "rows must run along the image's rows; detect/point_boards.h)");
+    }
     if (result.photos[i].tags.empty()) {
       const PhotoDetection& p = result.photos[i];
       std::string why = "no tag of the boards found";
@@ -227,7 +269,7 @@ void WriteDetectedPixels(const std::string& path, const ShotsFile& shots,
     for (const DetectedTag& tag : p.tags) {
       const TagBoard& board = targets.boards[tag.board];
       const std::array<Eigen::Vector3d, 4> corners = board.CornersInBoard(tag.id - board.first_id);
-      for (int k = 0; k < 4; ++k) {
+      for (int k = 0; k < board.CornersPerTarget(); ++k) {
         std::string x, y, z;
         if (board.pose_known) {
           const Eigen::Vector3d X = board.ref_from_board * corners[k];

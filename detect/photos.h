@@ -29,6 +29,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -50,7 +51,10 @@ struct PhotoDetectionOptions {
 struct DetectedTag {
   int board = 0;                      // index in TargetScene::boards
   int id = 0;                         // tag id = pixels.csv `target`
-  std::array<Eigen::Vector2d, 4> uv;  // TargetCorner order, OpenCV pixels
+  // TargetCorner order, OpenCV pixels; a point board's inner corner
+  // (ChArUco, chessboard: TagBoard::CornersPerTarget() == 1) is uv[0], the
+  // others repeat it.
+  std::array<Eigen::Vector2d, 4> uv;
   bool refined = true;
 };
 
@@ -62,6 +66,7 @@ struct PhotoDetection {
   int unrefined = 0;      // board tags whose refinement failed (dropped unless keep_unrefined)
   int not_on_boards = 0;  // detections of families/ids of no board (dropped)
   int duplicates = 0;     // detections of a tag seen twice in this photo (dropped)
+  int misoriented_boards = 0;  // chessboards found in no orientation a face allows (point_boards.h)
   // Refined vs libapriltag corners over the kept refined tags [px].
   double shift_rms_px = 0, shift_max_px = 0;
   int refined_corners = 0;
@@ -72,6 +77,11 @@ struct PhotoDetectionResult {
   std::vector<std::string> warnings;   // "shots.csv:7: image a.png: no tag of the boards found"
   double seconds = 0;                  // wall time
 };
+
+// What DetectPhotos can find, for ReadTargets's `family_codes`: the AprilTag
+// families with their numbers of codes (tag_family.h) and OpenCV's ArUco
+// dictionaries as "aruco:<name>" with their numbers of markers.
+std::map<std::string, int> DetectableCodeCounts();
 
 // Detects every photo of `shots`. Throws InputError (naming shots.csv's line
 // and the image) for unreadable images and for image sizes that differ within

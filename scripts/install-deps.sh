@@ -6,6 +6,8 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libceres-dev libopencv-dev
+  # detect/ uses OpenCV's aruco module (ChArUco boards); libopencv-dev pulls it in, named here
+  libopencv-contrib-dev
   libvtk9-dev libapriltag-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev

@@ -13,6 +13,7 @@
 #include "libcalib/fit/parameterization.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/number_text.h"
+#include "libcalib/io/targets_io.h"
 #include "libcalib/io/yaml_reader.h"
 
 namespace rtscalib {
@@ -309,13 +310,29 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
   if (!model.boards.empty()) {
     e << YAML::Key << "boards" << YAML::Value << YAML::BeginSeq;
     for (const EstimatedBoard& b : model.boards) {
+      // The layout in targets.yaml's keys (targets_io.h), read back by ReadBoardLayout.
       e << YAML::BeginMap;
-      e << YAML::Key << "family" << YAML::Value << b.board.family;
-      e << YAML::Key << "first_id" << YAML::Value << b.board.first_id;
-      e << YAML::Key << "rows" << YAML::Value << b.board.rows;
-      e << YAML::Key << "cols" << YAML::Value << b.board.cols;
-      e << YAML::Key << "tag_size" << YAML::Value << Num(b.board.tag_size);
-      e << YAML::Key << "spacing" << YAML::Value << Num(b.board.spacing);
+      const TagBoard& layout = b.board;
+      if (layout.kind == BoardKind::kAprilTag) {
+        e << YAML::Key << "family" << YAML::Value << layout.family;
+      } else if (layout.kind == BoardKind::kCharuco) {
+        e << YAML::Key << "type" << YAML::Value << "charuco";
+        e << YAML::Key << "dictionary" << YAML::Value << layout.family;
+      } else {
+        e << YAML::Key << "type" << YAML::Value << "chessboard";
+      }
+      e << YAML::Key << "first_id" << YAML::Value << layout.first_id;
+      e << YAML::Key << "rows" << YAML::Value << layout.rows;
+      e << YAML::Key << "cols" << YAML::Value << layout.cols;
+      if (layout.IsPointBoard()) {
+        e << YAML::Key << "square_size" << YAML::Value << Num(layout.square_size);
+        if (layout.kind == BoardKind::kCharuco) {
+          e << YAML::Key << "marker_size" << YAML::Value << Num(layout.marker_size);
+        }
+      } else {
+        e << YAML::Key << "tag_size" << YAML::Value << Num(layout.tag_size);
+        e << YAML::Key << "spacing" << YAML::Value << Num(layout.spacing);
+      }
       e << YAML::Key << "ref_from_board" << YAML::Value;
       EmitPose(e, b.pose, s.valid ? &b.sigma : nullptr);
       e << YAML::EndMap;
@@ -453,22 +470,7 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
   if (const std::optional<YamlNode> boards = root.Find("boards")) {
     for (const YamlNode& item : boards->Items()) {
       EstimatedBoard b;
-      const YamlNode family = item.Require("family");
-      b.board.family = family.AsString();
-      b.board.first_id = item.Require("first_id").AsInt();
-      for (auto [key, value] : {std::pair<const char*, int*>{"rows", &b.board.rows},
-                                std::pair<const char*, int*>{"cols", &b.board.cols}}) {
-        const YamlNode n = item.Require(key);
-        *value = n.AsInt();
-        if (*value <= 0) n.Fail(std::string("a number of ") + key + " > 0");
-      }
-      const YamlNode tag = item.Require("tag_size");
-      b.board.tag_size = tag.AsDouble();
-      if (!(b.board.tag_size > 0)) tag.Fail("a tag size > 0 [m]");
-      const YamlNode spacing = item.Require("spacing");
-      b.board.spacing = spacing.AsDouble();
-      if (!(b.board.spacing >= 0)) spacing.Fail("a spacing >= 0 [m]");
-      if (b.board.first_id < 0) item.Require("first_id").Fail("a tag id >= 0");
+      b.board = ReadBoardLayout(item);  // targets.yaml's rules (targets_io.h)
       b.pose = ReadPose(item.Require("ref_from_board"), with_sigma, &b.sigma);
       b.board.ref_from_board = b.pose.ToRigid();
       b.board.pose_known = false;  // estimated, not surveyed

@@ -15,9 +15,141 @@
 namespace rtscalib {
 namespace {
 
+// ArUco dictionaries in the family_codes map (targets_io.h).
+const std::string kArucoPrefix = "aruco:";
+
 // Bounds that no AprilTag board reaches (see ReadScene).
 constexpr long long kMaxTagsPerBoard = 48714;
 constexpr long long kMaxTagId = 999999;
+
+const std::vector<std::pair<std::string, BoardKind>> kKinds = {
+    {"apriltag", BoardKind::kAprilTag},
+    {"charuco", BoardKind::kCharuco},
+    {"chessboard", BoardKind::kChessboard}};
+
+// The keys of a board of each kind (besides `type` and `pose`).
+std::vector<const char*> KeysOf(BoardKind kind) {
+  switch (kind) {
+    case BoardKind::kCharuco:
+      return {"dictionary", "first_id", "rows", "cols", "square_size", "marker_size"};
+    case BoardKind::kChessboard:
+      return {"first_id", "rows", "cols", "square_size"};
+    case BoardKind::kAprilTag:
+      break;
+  }
+  return {"family", "first_id", "rows", "cols", "tag_size", "spacing"};
+}
+
+// A name (tag36h11, tagStandard41h12, DICT_4X4_50): letters, digits and '_',
+// so that it is written back without quoting (WriteTargets).
+std::string ReadName(const YamlNode& node, const std::string& what) {
+  const std::string text = node.AsString();
+  const bool name = !text.empty() && text.size() <= 64 &&
+                    std::all_of(text.begin(), text.end(), [](char c) {
+                      return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+                    });
+  if (!name) node.Fail(what);
+  return text;
+}
+
+double ReadLength(const YamlNode& item, const char* key, bool zero_ok, const std::string& what) {
+  const YamlNode node = item.Require(key);
+  const double x = node.AsDouble();
+  if (!(zero_ok ? x >= 0 : x > 0)) node.Fail(what);
+  return x;
+}
+
+}  // namespace
+
+TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>* family_codes) {
+  TagBoard b;
+  item.ReadEnum("type", kKinds, &b.kind);
+  if (b.kind == BoardKind::kAprilTag) {
+    const YamlNode family = item.Require("family");
+    b.family = ReadName(family, "a tag family name (letters, digits, '_'), e.g. tag36h11");
+    if (family_codes != nullptr && family_codes->count(b.family) == 0) {
+      std::vector<std::string> known;
+      for (const auto& entry : *family_codes) known.push_back(entry.first);
+      family.FailChoice(known);
+    }
+  } else if (b.kind == BoardKind::kCharuco) {
+    const YamlNode dictionary = item.Require("dictionary");
+    b.family = ReadName(dictionary, "an ArUco dictionary name (letters, digits, '_'), e.g. DICT_4X4_50");
+    if (family_codes != nullptr && family_codes->count(kArucoPrefix + b.family) == 0) {
+      std::vector<std::string> known;
+      for (const auto& entry : *family_codes) {
+        if (entry.first.rfind(kArucoPrefix, 0) == 0) known.push_back(entry.first.substr(kArucoPrefix.size()));
+      }
+      dictionary.FailChoice(known);
+    }
+  } else {
+    b.family = "chessboard";
+  }
+  const YamlNode first_id = item.Require("first_id");
+  b.first_id = first_id.AsInt();
+  if (b.first_id < 0) first_id.Fail("a tag id >= 0");
+  const int min_squares = b.IsPointBoard() ? 2 : 1;
+  const YamlNode rows = item.Require("rows");
+  b.rows = rows.AsInt();
+  if (b.rows < min_squares) {
+    rows.Fail(b.IsPointBoard() ? "a number of rows of squares >= 2" : "a number of rows >= 1");
+  }
+  const YamlNode cols = item.Require("cols");
+  b.cols = cols.AsInt();
+  if (b.cols < min_squares) {
+    cols.Fail(b.IsPointBoard() ? "a number of columns of squares >= 2"
+                               : "a number of columns >= 1");
+  }
+  // Memory and the tag ids stay bounded by what a tag family can hold (the
+  // largest AprilTag family, tagStandard52h13, has 48,714 codes), not by a
+  // value in the file: rows cols and first_id + rows cols must fit.
+  const long long tags = static_cast<long long>(b.rows) * b.cols;
+  if (tags > kMaxTagsPerBoard) {
+    (b.rows >= b.cols ? rows : cols)
+        .Fail("a board of at most " + std::to_string(kMaxTagsPerBoard) +
+              " tags (the largest tag family's codes), not rows x cols = " +
+              std::to_string(b.rows) + " x " + std::to_string(b.cols));
+  }
+  if (b.first_id > kMaxTagId - tags + 1) {
+    first_id.Fail("a first_id with first_id + rows cols <= " + std::to_string(kMaxTagId + 1) +
+                  " (no tag family has more codes)");
+  }
+  if (family_codes != nullptr && b.kind == BoardKind::kCharuco) {
+    // The markers fill the white squares: rows cols / 2 of them, ids 0, 1, ...
+    const int codes = family_codes->at(kArucoPrefix + b.family);
+    if (b.rows * b.cols / 2 > codes) {
+      rows.Fail("a board whose " + std::to_string(b.rows * b.cols / 2) +
+                " markers (rows cols / 2) fit in " + b.family + "'s " + std::to_string(codes) +
+                " codes");
+    }
+  }
+  if (family_codes != nullptr && b.kind == BoardKind::kAprilTag) {
+    const int codes = family_codes->at(b.family);
+    if (static_cast<long long>(b.first_id) + b.NumTags() > codes) {
+      first_id.Fail("a first_id with first_id + rows cols <= " + std::to_string(codes) +
+                    " (the codes of " + b.family + "; this board needs ids " +
+                    std::to_string(b.first_id) + ".." +
+                    std::to_string(static_cast<long long>(b.first_id) + b.NumTags() - 1) + ")");
+    }
+  }
+  if (b.kind == BoardKind::kAprilTag) {
+    b.tag_size = ReadLength(item, "tag_size", false, "a tag size > 0 [m]");
+    b.spacing = ReadLength(item, "spacing", true, "a spacing >= 0 [m]");
+  } else {
+    b.square_size = ReadLength(item, "square_size", false, "a square size > 0 [m]");
+  }
+  if (b.kind == BoardKind::kCharuco) {
+    const YamlNode marker = item.Require("marker_size");
+    b.marker_size = marker.AsDouble();
+    if (!(b.marker_size > 0 && b.marker_size < b.square_size)) {
+      marker.Fail("a marker size > 0 and < square_size (" + FormatDouble(b.square_size) +
+                  ") [m]");
+    }
+  }
+  return b;
+}
+
+namespace {
 
 TargetScene ReadScene(const YamlDocument& doc, const std::map<std::string, int>* family_codes) {
   const YamlNode root = doc.Root();
@@ -27,9 +159,9 @@ TargetScene ReadScene(const YamlDocument& doc, const std::map<std::string, int>*
   // correct key missing.
   for (const YamlNode& item : boards.Items()) {
     if (!item.IsMap()) item.Fail("a board (a mapping)");
-    for (const char* key : {"family", "first_id", "rows", "cols", "tag_size", "spacing"}) {
-      item.Find(key);
-    }
+    BoardKind kind = BoardKind::kAprilTag;
+    item.ReadEnum("type", kKinds, &kind);
+    for (const char* key : KeysOf(kind)) item.Find(key);
     if (const std::optional<YamlNode> pose = item.Find("pose"); pose && pose->IsMap()) {
       pose->Find("euler");
       pose->Find("t");
@@ -41,59 +173,8 @@ TargetScene ReadScene(const YamlDocument& doc, const std::map<std::string, int>*
   TargetScene scene;
   std::vector<YamlNode> first_id_nodes;
   for (const YamlNode& item : boards.Items()) {
-    TagBoard b;
-    const YamlNode family = item.Require("family");
-    b.family = family.AsString();
-    // A family is a name (tag36h11, tagStandard41h12): letters, digits and
-    // '_', so that it is written back without quoting (WriteTargets).
-    const bool name = !b.family.empty() && b.family.size() <= 64 &&
-                      std::all_of(b.family.begin(), b.family.end(), [](char c) {
-                        return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
-                      });
-    if (!name) family.Fail("a tag family name (letters, digits, '_'), e.g. tag36h11");
-    if (family_codes != nullptr && family_codes->count(b.family) == 0) {
-      std::vector<std::string> known;
-      for (const auto& entry : *family_codes) known.push_back(entry.first);
-      family.FailChoice(known);
-    }
+    TagBoard b = ReadBoardLayout(item, family_codes);
     const YamlNode first_id = item.Require("first_id");
-    b.first_id = first_id.AsInt();
-    if (b.first_id < 0) first_id.Fail("a tag id >= 0");
-    const YamlNode rows = item.Require("rows");
-    b.rows = rows.AsInt();
-    if (b.rows < 1) rows.Fail("a number of rows >= 1");
-    const YamlNode cols = item.Require("cols");
-    b.cols = cols.AsInt();
-    if (b.cols < 1) cols.Fail("a number of columns >= 1");
-    // Memory and the tag ids stay bounded by what a tag family can hold (the
-    // largest AprilTag family, tagStandard52h13, has 48,714 codes), not by a
-    // value in the file: rows cols and first_id + rows cols must fit.
-    const long long tags = static_cast<long long>(b.rows) * b.cols;
-    if (tags > kMaxTagsPerBoard) {
-      (b.rows >= b.cols ? rows : cols)
-          .Fail("a board of at most " + std::to_string(kMaxTagsPerBoard) +
-                " tags (the largest tag family's codes), not rows x cols = " +
-                std::to_string(b.rows) + " x " + std::to_string(b.cols));
-    }
-    if (b.first_id > kMaxTagId - tags + 1) {
-      first_id.Fail("a first_id with first_id + rows cols <= " + std::to_string(kMaxTagId + 1) +
-                    " (no tag family has more codes)");
-    }
-    if (family_codes != nullptr) {
-      const int codes = family_codes->at(b.family);
-      if (static_cast<long long>(b.first_id) + b.NumTags() > codes) {
-        first_id.Fail("a first_id with first_id + rows cols <= " + std::to_string(codes) +
-                      " (the codes of " + b.family + "; this board needs ids " +
-                      std::to_string(b.first_id) + ".." +
-                      std::to_string(static_cast<long long>(b.first_id) + b.NumTags() - 1) + ")");
-      }
-    }
-    const YamlNode tag_size = item.Require("tag_size");
-    b.tag_size = tag_size.AsDouble();
-    if (!(b.tag_size > 0)) tag_size.Fail("a tag size > 0 [m]");
-    const YamlNode spacing = item.Require("spacing");
-    b.spacing = spacing.AsDouble();
-    if (!(b.spacing >= 0)) spacing.Fail("a spacing >= 0 [m]");
     b.pose_known = false;
     if (const std::optional<YamlNode> pose = item.Find("pose")) {
       if (!pose->IsMap()) pose->Fail("a pose {euler: [a, b, g], t: [x, y, z]}");
@@ -140,9 +221,25 @@ void WriteTargets(const std::string& path, const TargetScene& scene, bool with_p
   }
   o << "boards:\n";
   for (const TagBoard& b : scene.boards) {
-    o << "  - {family: " << b.family << ", first_id: " << b.first_id << ", rows: " << b.rows
-      << ", cols: " << b.cols << ", tag_size: " << FormatDouble(b.tag_size)
-      << ", spacing: " << FormatDouble(b.spacing);
+    o << "  - {";
+    switch (b.kind) {
+      case BoardKind::kAprilTag:
+        o << "family: " << b.family;
+        break;
+      case BoardKind::kCharuco:
+        o << "type: charuco, dictionary: " << b.family;
+        break;
+      case BoardKind::kChessboard:
+        o << "type: chessboard";
+        break;
+    }
+    o << ", first_id: " << b.first_id << ", rows: " << b.rows << ", cols: " << b.cols;
+    if (b.IsPointBoard()) {
+      o << ", square_size: " << FormatDouble(b.square_size);
+      if (b.kind == BoardKind::kCharuco) o << ", marker_size: " << FormatDouble(b.marker_size);
+    } else {
+      o << ", tag_size: " << FormatDouble(b.tag_size) << ", spacing: " << FormatDouble(b.spacing);
+    }
     if (with_poses && b.pose_known) {
       const Eigen::Vector3d e = EulerFromRotation(b.ref_from_board.rotation);
       const Eigen::Vector3d& t = b.ref_from_board.translation;

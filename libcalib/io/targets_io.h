@@ -4,6 +4,16 @@
 //     - {family: tag36h11, first_id: 0, rows: 6, cols: 8, tag_size: 0.06, spacing: 0.015}
 //     - {family: tag36h11, first_id: 48, rows: 6, cols: 8, tag_size: 0.06, spacing: 0.015,
 //        pose: {euler: [a, b, g], t: [x, y, z]}}   # surveyed ref_from_board
+//     - {type: charuco, dictionary: DICT_4X4_50, first_id: 100, rows: 5, cols: 7,
+//        square_size: 0.04, marker_size: 0.03}
+//     - {type: chessboard, first_id: 200, rows: 6, cols: 9, square_size: 0.025}
+//
+// `type` is apriltag (the default), charuco or chessboard. ChArUco and
+// chessboards are boards of points (libcalib/model/targets.h): rows x cols
+// squares (>= 2 each) of square_size [m]; their targets are the inner corners,
+// first_id + k, corner 0. ChArUco: dictionary is OpenCV's predefined
+// dictionary name, marker_size < square_size [m]; the markers' ids are
+// OpenCV's (0, 1, ... in the board's white squares) and are not targets.
 //
 // Per board: family (a tag family name), first_id (integer >= 0), rows and
 // cols (integers >= 1), tag_size (> 0 [m], the detection quad's edge, for
@@ -28,7 +38,16 @@ namespace rtscalib {
 
 // `family_codes`, when given, maps the tag families the caller can detect to
 // their number of codes: other families are errors, and so are ids beyond a
-// family's last code. (libcalib knows no tag family; detect/ does.)
+// family's last code. ArUco dictionaries (ChArUco) are in it as
+// "aruco:<name>" with their number of markers. (libcalib knows no tag family;
+// detect/ does: detect::DetectableCodeCounts().)
+class YamlNode;
+
+// One board's layout (everything but its pose) from a targets.yaml or
+// model.yaml board mapping, with the rules above; errors name the key.
+TagBoard ReadBoardLayout(const YamlNode& item,
+                         const std::map<std::string, int>* family_codes = nullptr);
+
 TargetScene ReadTargets(const std::string& path,
                         const std::map<std::string, int>* family_codes = nullptr);
 // The same for YAML text; messages name it `name`.

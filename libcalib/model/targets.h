@@ -25,30 +25,57 @@
 
 namespace rtscalib {
 
+// The kinds of board (targets.yaml `type`). An AprilTag board's targets are
+// its tags, four corners each. ChArUco and chessboards (OpenCV's detectors)
+// are boards of points: `rows` x `cols` squares of `square_size`, whose
+// (rows - 1) x (cols - 1) inner corners are the targets, one corner (0)
+// each: target first_id + k for inner corner k = r (cols - 1) + c at
+// ((c + 1) square_size, (r + 1) square_size, 0), r from the board's top row,
+// c from its left column (ChArUco: k is OpenCV's charuco corner id; the
+// top-left square is black, as cv::aruco::CharucoBoard draws it).
+enum class BoardKind { kAprilTag, kCharuco, kChessboard };
+
 struct TagBoard {
-  std::string family = "tag36h11";
+  BoardKind kind = BoardKind::kAprilTag;
+  std::string family = "tag36h11";  // ChArUco: the ArUco dictionary (DICT_4X4_50, ...)
   int first_id = 0;
   int rows = 3;
   int cols = 4;
-  double tag_size = 0.08;  // edge of the black square [m]
-  double spacing = 0.02;   // white gap between neighbouring tags [m]
+  double tag_size = 0.08;  // edge of the black square [m] (AprilTag)
+  double spacing = 0.02;   // white gap between neighbouring tags [m] (AprilTag)
+  double square_size = 0;  // [m] (ChArUco, chessboard)
+  double marker_size = 0;  // [m] (ChArUco)
   Rigid3 ref_from_board;
   bool pose_known = true;
 
-  int NumTags() const { return rows * cols; }
+  bool IsPointBoard() const { return kind != BoardKind::kAprilTag; }
+  // Corners per target: 4 for a tag, 1 for a point board's inner corner.
+  int CornersPerTarget() const { return IsPointBoard() ? 1 : 4; }
+  int NumTags() const { return IsPointBoard() ? (rows - 1) * (cols - 1) : rows * cols; }
   int LastId() const { return first_id + NumTags() - 1; }
   bool HasId(int id) const { return id >= first_id && id <= LastId(); }
-  // The four corners of tag `index` (0 .. NumTags-1) in the board frame.
+  // The four corners of tag `index` (0 .. NumTags-1) in the board frame; for
+  // a point board all four are its inner corner `index`.
   std::array<Eigen::Vector3d, 4> CornersInBoard(int index) const {
+    if (IsPointBoard()) {
+      const int r = index / (cols - 1), c = index % (cols - 1);
+      const Eigen::Vector3d p(square_size * (c + 1), square_size * (r + 1), 0);
+      return {p, p, p, p};
+    }
     const int r = index / cols, c = index % cols;
     const double x0 = (tag_size + spacing) * c, y0 = (tag_size + spacing) * r;
     return {Eigen::Vector3d(x0, y0 + tag_size, 0), Eigen::Vector3d(x0 + tag_size, y0 + tag_size, 0),
             Eigen::Vector3d(x0 + tag_size, y0, 0), Eigen::Vector3d(x0, y0, 0)};
   }
+  // Width and height of the printed pattern [m].
+  double Width() const {
+    return IsPointBoard() ? cols * square_size : cols * tag_size + (cols - 1) * spacing;
+  }
+  double Height() const {
+    return IsPointBoard() ? rows * square_size : rows * tag_size + (rows - 1) * spacing;
+  }
   Eigen::Vector3d CentreInRef() const {
-    const double w = cols * tag_size + (cols - 1) * spacing;
-    const double h = rows * tag_size + (rows - 1) * spacing;
-    return ref_from_board * Eigen::Vector3d(w / 2, h / 2, 0);
+    return ref_from_board * Eigen::Vector3d(Width() / 2, Height() / 2, 0);
   }
 };
 
@@ -66,7 +93,7 @@ struct TargetScene {
     for (const TagBoard& b : boards) {
       for (int i = 0; i < b.NumTags(); ++i) {
         const auto corners = b.CornersInBoard(i);
-        for (int k = 0; k < 4; ++k)
+        for (int k = 0; k < b.CornersPerTarget(); ++k)
           out.push_back({b.first_id + i, k, b.ref_from_board * corners[k]});
       }
     }

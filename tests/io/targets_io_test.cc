@@ -184,3 +184,72 @@ TEST(Targets, UnreadableOrInvalidYamlIsAnError) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// ChArUco and chessboards (targets.h, targets_io.h): boards of points whose
+// targets are the inner corners first_id + k, k = r (cols - 1) + c.
+TEST(Targets, CharucoAndChessboardsAreBoardsOfInnerCorners) {
+  const std::string text =
+      "boards:\n"
+      "  - {type: charuco, dictionary: DICT_4X4_50, first_id: 100, rows: 5, cols: 7, "
+      "square_size: 0.04, marker_size: 0.03}\n"
+      "  - {type: chessboard, first_id: 200, rows: 6, cols: 9, square_size: 0.025,\n"
+      "     pose: {euler: [0.1, 0.2, 0.3], t: [1, 2, 3]}}\n"
+      "  - {family: tag36h11, first_id: 0, rows: 2, cols: 2, tag_size: 0.06, spacing: 0.01}\n";
+  const TargetScene s = ParseTargets(text, kName);
+  ASSERT_EQ(s.boards.size(), 3u);
+  const TagBoard& c = s.boards[0];
+  EXPECT_EQ(c.kind, BoardKind::kCharuco);
+  EXPECT_EQ(c.family, "DICT_4X4_50");
+  EXPECT_EQ(c.NumTags(), 4 * 6);
+  EXPECT_EQ(c.CornersPerTarget(), 1);
+  EXPECT_FALSE(c.pose_known);
+  // Inner corner k = 7: row 1, column 1 of the inner corners.
+  EXPECT_TRUE(c.CornersInBoard(7)[0].isApprox(Eigen::Vector3d(0.08, 0.08, 0)));
+  EXPECT_DOUBLE_EQ(c.Width(), 0.28);
+  const TagBoard& b = s.boards[1];
+  EXPECT_EQ(b.kind, BoardKind::kChessboard);
+  EXPECT_EQ(b.NumTags(), 5 * 8);
+  EXPECT_TRUE(b.pose_known);
+  EXPECT_TRUE(b.CornersInBoard(9)[0].isApprox(Eigen::Vector3d(0.05, 0.05, 0)));
+  EXPECT_EQ(s.AllCorners().size(), 24u + 40u + 16u);  // one per point target, four per tag
+
+  // Written and read back: the same boards.
+  TempDir dir;
+  const std::string path = dir.Path("t.yaml");
+  WriteTargets(path, s);
+  const TargetScene again = ReadTargets(path);
+  ASSERT_EQ(again.boards.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(again.boards[i].kind, s.boards[i].kind);
+    EXPECT_EQ(again.boards[i].family, s.boards[i].family);
+    EXPECT_EQ(again.boards[i].square_size, s.boards[i].square_size);
+    EXPECT_EQ(again.boards[i].marker_size, s.boards[i].marker_size);
+    EXPECT_EQ(again.boards[i].pose_known, s.boards[i].pose_known);
+  }
+}
+
+TEST(Targets, PointBoardErrorsNameTheKey) {
+  const std::string head = "boards:\n  - {";
+  ExpectKeyError(TargetsError(head + "type: charucco, first_id: 0}\n"), "boards[0].type", 2,
+                 "one of apriltag, charuco, chessboard", "charucco");
+  // An AprilTag key on a chessboard is a typo of the chessboard's keys.
+  EXPECT_EQ(TargetsError(head + "type: chessboard, first_id: 0, rows: 3, cols: 4, "
+                                "square_size: 0.02, tag_size: 0.02}\n")
+                .key,
+            "boards[0].tag_size");
+  ExpectKeyError(TargetsError(head + "type: chessboard, first_id: 0, rows: 1, cols: 4, "
+                                     "square_size: 0.02}\n"),
+                 "boards[0].rows", 2, "a number of rows of squares >= 2", "1");
+  ExpectKeyError(TargetsError(head + "type: charuco, dictionary: DICT_4X4_50, first_id: 0, rows: 3, "
+                                     "cols: 4, square_size: 0.02, marker_size: 0.02}\n"),
+                 "boards[0].marker_size", 2, "a marker size > 0 and < square_size", "0.02");
+  ExpectKeyError(TargetsError(head + "type: charuco, dictionary: 'DICT 4X4', first_id: 0, rows: 3, "
+                                     "cols: 4, square_size: 0.02, marker_size: 0.01}\n"),
+                 "boards[0].dictionary", 2, "an ArUco dictionary name", "DICT 4X4");
+}
+
+}  // namespace
+}  // namespace rtscalib

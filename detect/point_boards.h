@@ -1,0 +1,46 @@
+// ChArUco and chessboards (TagBoard::IsPointBoard, libcalib/model/targets.h)
+// found in a photo by OpenCV's own detectors: cv::aruco::detectMarkers +
+// cv::aruco::interpolateCornersCharuco for ChArUco,
+// cv::findChessboardCornersSB (CALIB_CB_ACCURACY) for chessboards. Pixel
+// positions in OpenCV's convention, which is SPEC 2's (pixel (i, j) centred
+// at (i, j)).
+//
+// Targets: inner corner k = r (cols - 1) + c of the board (targets.h), as
+// pixels.csv target first_id + k, corner 0. ChArUco's corner ids are k
+// (OpenCV's CharucoBoard: id 0 at the top-left inner corner of the upright
+// printed board, row by row). A chessboard has no identity, only a grid:
+// its orientation is fixed from the instrument's geometry, never from a
+// model: the camera does not roll, so in face 1 the board's rows run to
+// the image's right and its columns down, and in face 2 (the telescope
+// transited) the board appears turned by 180 degrees; a grid whose
+// orientation is neither (a board hung sideways) is not used and counted.
+// A chessboard is only found whole (all inner corners in the photo).
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "libcalib/model/targets.h"
+
+namespace rtscalib::detect {
+
+struct PointBoardDetection {
+  std::vector<std::pair<int, Eigen::Vector2d>> corners;  // inner corner k, pixel
+  bool misoriented = false;  // chessboard found, but in no orientation the faces allow
+};
+
+// `gray` is CV_8UC1; `face` 1 or 2 (chessboard orientation). Throws
+// std::invalid_argument for a ChArUco dictionary OpenCV does not know or
+// one with too few markers for the board.
+PointBoardDetection DetectPointBoard(const cv::Mat& gray, const TagBoard& board, int face);
+
+// OpenCV's predefined ArUco dictionaries by name (DICT_4X4_50, ...) with
+// their numbers of markers.
+std::map<std::string, int> ArucoDictionaryMarkerCounts();
+
+}  // namespace rtscalib::detect

@@ -1,0 +1,231 @@
+// ChArUco and chessboards through OpenCV's detectors (detect/point_boards.h):
+// photos synthesized exactly (synthetic_photo.h, SPEC 2 pixels) from the
+// printed board, the detected inner corners against their exact images, the
+// target numbering (first_id + k, k = r (cols - 1) + c from the board's top
+// left) and the chessboard's orientation rule per face; then a photo folder
+// through DetectPhotos and WriteDetectedPixels (one corner per target).
+#include "detect/point_boards.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <opencv2/aruco.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "detect/photos.h"
+#include "libcalib/io/csv.h"
+#include "libcalib/io/errors.h"
+#include "libcalib/io/targets_io.h"
+#include "tests/detect/synthetic_photo.h"
+
+namespace rtscalib::detect {
+namespace {
+
+using testing::MakeHomography;
+using testing::PrintedTag;
+
+// The printed board as one code image of `cells` per square (0 = ink,
+// 255 = paper): square (r, c) black when r + c is even (the top-left square
+// is black, as cv::aruco::CharucoBoard draws it); ChArUco markers, 1 bit a
+// cell, centred in the white squares in row-major order with ids 0, 1, ...
+PrintedTag PrintBoard(const TagBoard& b, int cells) {
+  cv::Mat code(b.rows * cells, b.cols * cells, CV_8UC1, cv::Scalar(255));
+  cv::Ptr<cv::aruco::Dictionary> dict;
+  if (b.kind == BoardKind::kCharuco) {
+    dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50);
+  }
+  int marker = 0;
+  for (int r = 0; r < b.rows; ++r) {
+    for (int c = 0; c < b.cols; ++c) {
+      const cv::Rect square(c * cells, r * cells, cells, cells);
+      if ((r + c) % 2 == 0) {
+        code(square).setTo(0);
+      } else if (dict) {
+        const int bits = dict->markerSize + 2;  // with the black border
+        cv::Mat m;
+        cv::aruco::drawMarker(dict, marker++, bits, m, 1);
+        const int offset = (cells - bits) / 2;
+        m.copyTo(code(cv::Rect(c * cells + offset, r * cells + offset, bits, bits)));
+      }
+    }
+  }
+  PrintedTag t;
+  t.code = code;
+  t.width_at_border = code.cols;
+  t.border_offset = 0;
+  t.size = b.Width();
+  return t;
+}
+
+TagBoard Charuco() {
+  TagBoard b;
+  b.kind = BoardKind::kCharuco;
+  b.family = "DICT_4X4_50";
+  b.first_id = 100;
+  b.rows = 5;
+  b.cols = 7;
+  b.square_size = 0.04;
+  b.marker_size = 0.03;  // 6 of 8 cells
+  return b;
+}
+
+TagBoard Chessboard() {
+  TagBoard b;
+  b.kind = BoardKind::kChessboard;
+  b.family = "chessboard";
+  b.first_id = 200;
+  b.rows = 6;
+  b.cols = 9;
+  b.square_size = 0.025;
+  return b;
+}
+
+struct Photo {
+  cv::Mat image;
+  Eigen::Matrix3d image_from_board;
+};
+
+// The board seen through a homography: centred in a 1280 x 960 image,
+// `scale` px per metre, turned by `angle` in the image, a slight perspective.
+Photo Synthesize(const TagBoard& b, int cells, double scale, double angle) {
+  const PrintedTag t = PrintBoard(b, cells);
+  Photo p;
+  p.image_from_board = MakeHomography(b.Width(), {640.3, 480.6}, scale, angle, 0.3, -0.2);
+  const cv::Mat coverage = testing::RenderCoverage({t}, p.image_from_board, 1280, 960);
+  p.image = testing::ToPixels(coverage, CV_8UC1, cv::Scalar(30), cv::Scalar(220));
+  return p;
+}
+
+struct Errors {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  double rms = 0, max = 0;
+  int n = 0;
+};
+
+Errors Compare(const TagBoard& b, const Photo& p, const PointBoardDetection& d) {
+  Errors e;
+  double sum = 0;
+  for (const auto& [k, uv] : d.corners) {
+    const Eigen::Vector3d x = b.CornersInBoard(k)[0];
+    const Eigen::Vector2d exact = testing::Project(p.image_from_board, x.head<2>());
+    const double err = (uv - exact).norm();
+    e.mean += (uv - exact) / static_cast<double>(d.corners.size());
+    sum += err * err;
+    e.max = std::max(e.max, err);
+    ++e.n;
+  }
+  e.rms = e.n ? std::sqrt(sum / e.n) : 0.0;
+  return e;
+}
+
+TEST(PointBoards, CharucoCornersAreOpenCvsIdsAtTheirExactImages) {
+  const TagBoard b = Charuco();
+  for (const double angle : {0.05, M_PI - 0.1}) {  // upright (face 1) and turned (face 2)
+    const Photo p = Synthesize(b, 8, 2600.0, angle);
+    const PointBoardDetection d = DetectPointBoard(p.image, b, angle > 1 ? 2 : 1);
+    const Errors e = Compare(b, p, d);
+    std::cout << "charuco, angle " << angle << ": " << e.n << " corners, mean "
+              << e.mean.transpose() << " px, RMS " << e.rms
+              << " px, max " << e.max << " px\n";
+    // All (rows - 1) (cols - 1) inner corners, each where its id says: a
+    // wrong id would be a square (104 px) away. OpenCV's corner refinement
+    // on exact synthetic photos: measured 0.01-0.03 px RMS; 0.1 px RMS and
+    // 0.3 px max (SPEC 2 pixel centres: a half-pixel convention error would
+    // be 0.7 px) are the limits.
+    EXPECT_EQ(e.n, b.NumTags());
+    EXPECT_LT(e.rms, 0.1);
+    EXPECT_LT(e.max, 0.3);
+  }
+}
+
+TEST(PointBoards, ChessboardOrientationFollowsTheFace) {
+  const TagBoard b = Chessboard();
+  for (const auto& [angle, face] : std::vector<std::pair<double, int>>{{0.08, 1}, {M_PI + 0.05, 2}}) {
+    const Photo p = Synthesize(b, 1, 3000.0, angle);
+    const PointBoardDetection d = DetectPointBoard(p.image, b, face);
+    const Errors e = Compare(b, p, d);
+    std::cout << "chessboard, face " << face << ": " << e.n << " corners, RMS " << e.rms
+              << " px, max " << e.max << " px\n";
+    EXPECT_FALSE(d.misoriented);
+    EXPECT_EQ(e.n, b.NumTags());
+    EXPECT_LT(e.rms, 0.1);
+    EXPECT_LT(e.max, 0.3);
+  }
+  // Turned by 90 degrees: no face shows a board like that; not used.
+  const Photo sideways = Synthesize(b, 1, 3000.0, M_PI / 2);
+  const PointBoardDetection d = DetectPointBoard(sideways.image, b, 1);
+  EXPECT_TRUE(d.misoriented);
+  EXPECT_TRUE(d.corners.empty());
+}
+
+TEST(PointBoards, PhotoFolderGivesOneCornerPerTarget) {
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / ("rtscalib_point_boards_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  cv::imwrite((dir / "c.png").string(), Synthesize(Charuco(), 8, 2600.0, 0.05).image);
+  cv::imwrite((dir / "s.png").string(), Synthesize(Chessboard(), 1, 3000.0, M_PI + 0.05).image);
+  std::ofstream(dir / "shots.csv") << "face,zoom,phi,theta,image\n1,0,0.1,1.5,c.png\n2,0,3.3,4.8,s.png\n";
+  std::ofstream(dir / "targets.yaml")
+      << "boards:\n"
+         "  - {type: charuco, dictionary: DICT_4X4_50, first_id: 100, rows: 5, cols: 7, "
+         "square_size: 0.04, marker_size: 0.03}\n"
+         "  - {type: chessboard, first_id: 200, rows: 6, cols: 9, square_size: 0.025}\n";
+  const ShotsFile shots = ReadShots((dir / "shots.csv").string());
+  const TargetScene targets = ReadTargets((dir / "targets.yaml").string());
+  ASSERT_EQ(targets.boards.size(), 2u);
+  EXPECT_EQ(targets.boards[0].NumTags(), 24);
+  EXPECT_EQ(targets.boards[1].NumTags(), 40);
+  PhotoDetectionOptions options;
+  options.progress = false;
+  const PhotoDetectionResult r = DetectPhotos(shots, targets, options);
+  ASSERT_EQ(r.photos.size(), 2u);
+  EXPECT_EQ(r.photos[0].tags.size(), 24u);
+  EXPECT_EQ(r.photos[1].tags.size(), 40u);
+  EXPECT_TRUE(r.warnings.empty());
+  WriteDetectedPixels((dir / "pixels.csv").string(), shots, targets, r);
+  const CsvTable t = CsvTable::Read((dir / "pixels.csv").string(),
+                                    {{"shot", "target", "corner", "u", "v"}, {}});
+  EXPECT_EQ(t.NumRows(), 64);
+  for (int i = 0; i < t.NumRows(); ++i) EXPECT_EQ(t.Integer(i, "corner"), 0);
+  EXPECT_EQ(t.Integer(0, "target"), 100);
+  EXPECT_EQ(t.Integer(24, "target"), 200);
+  std::filesystem::remove_all(dir);
+}
+
+// targets.yaml is read against what the detector can find: ArUco
+// dictionaries OpenCV knows, and enough markers for the board.
+TEST(PointBoards, DictionaryAndMarkerCountAreCheckedWhenReadingTargets) {
+  const std::map<std::string, int> codes = DetectableCodeCounts();
+  EXPECT_EQ(codes.at("aruco:DICT_4X4_50"), 50);
+  EXPECT_EQ(codes.at("tag36h11"), 587);
+  auto error = [&](const std::string& board) {
+    try {
+      ParseTargets("boards:\n  - {" + board + "}\n", "targets.yaml", &codes);
+    } catch (const InputError& e) {
+      return std::make_pair(e.key, std::string(e.what()));
+    }
+    return std::make_pair(std::string(), std::string());
+  };
+  const auto unknown = error(
+      "type: charuco, dictionary: DICT_9X9_50, first_id: 0, rows: 3, cols: 4, square_size: 0.02, "
+      "marker_size: 0.01");
+  EXPECT_EQ(unknown.first, "boards[0].dictionary");
+  EXPECT_NE(unknown.second.find("DICT_4X4_50"), std::string::npos) << unknown.second;
+  const auto too_big = error(
+      "type: charuco, dictionary: DICT_4X4_50, first_id: 0, rows: 12, cols: 12, square_size: 0.02, "
+      "marker_size: 0.01");
+  EXPECT_EQ(too_big.first, "boards[0].rows");
+  EXPECT_NE(too_big.second.find("72 markers"), std::string::npos) << too_big.second;
+  // An AprilTag board cannot name an ArUco dictionary as its family.
+  EXPECT_EQ(error("family: DICT_4X4_50, first_id: 0, rows: 1, cols: 1, tag_size: 0.1, spacing: 0")
+                .first,
+            "boards[0].family");
+}
+
+}  // namespace
+}  // namespace rtscalib::detect
