@@ -95,8 +95,8 @@ bool StartsNumber(const std::string& s, size_t i) {
   const auto digit = [&](size_t k) {
     return k < s.size() && std::isdigit(static_cast<unsigned char>(s[k]));
   };
-  return digit(i) ||
-         ((s[i] == '-' || s[i] == '.') && (digit(i + 1) || (s[i + 1] == '.' && digit(i + 2))));
+  return digit(i) || ((s[i] == '-' || s[i] == '.') && digit(i + 1)) ||
+         (s[i] == '-' && i + 1 < s.size() && s[i + 1] == '.' && digit(i + 2));
 }
 
 // The texts agree, numbers to within a few units in the last place.
@@ -112,6 +112,13 @@ bool SameUpToRounding(const std::string& a, const std::string& b) {
       char* end_b = nullptr;
       const double x = std::strtod(a.c_str() + i, &end_a);
       const double y = std::strtod(b.c_str() + j, &end_b);
+      // Something that looked like a number but is none (strtod took
+      // nothing): compare it as text, else the loop would not advance (a
+      // 10-minute libFuzzer run hung here on "..015").
+      if (end_a == a.c_str() + i || end_b == b.c_str() + j) {
+        if (a[i++] != b[j++]) return false;
+        continue;
+      }
       if (!(std::abs(x - y) <= kUlps * std::max({1.0, std::abs(x), std::abs(y)})) && x != y)
         return false;
       i = static_cast<size_t>(end_a - a.c_str());
