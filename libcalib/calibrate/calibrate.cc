@@ -499,10 +499,7 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
     for (std::string& n : found.notes) result.notes.push_back(std::move(n));
   }
   if (!result.gross_rows.empty()) {
-    std::sort(result.gross_rows.begin(), result.gross_rows.end(),
-              [](const ExcludedRow& a, const ExcludedRow& b) {
-                return a.pixel != b.pixel ? !a.pixel : a.index < b.index;
-              });
+    std::sort(result.gross_rows.begin(), result.gross_rows.end());
     const std::string n = "gross errors: " + std::to_string(result.gross_rows.size()) +
                           " rows taken out (listed in the report with their lines and reasons)";
     result.notes.push_back(n);

@@ -211,9 +211,7 @@ RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& 
     ExcludedRow& e = out.gross[k];
     e.index = e.pixel ? pixel_map[e.index] : record_map[e.index];
   }
-  std::sort(out.gross.begin(), out.gross.end(), [](const ExcludedRow& a, const ExcludedRow& b) {
-    return a.pixel != b.pixel ? !a.pixel : a.index < b.index;
-  });
+  std::sort(out.gross.begin(), out.gross.end());
   return out;
 }
 

@@ -69,10 +69,7 @@ void WriteCovarianceYaml(const std::string& path, const InstrumentModel& model) 
 void ReadCovarianceYaml(const std::string& path, InstrumentModel* model) {
   const YamlDocument doc = YamlDocument::Load(path);
   const YamlNode root = doc.Root();
-  const YamlNode format = root.Require("format");
-  if (format.AsString() != kFormat) format.Fail(kFormat);
-  const YamlNode version = root.Require("version");
-  if (version.AsInt() != kVersion) version.Fail("version " + std::to_string(kVersion));
+  root.RequireFormat(kFormat, kVersion);
   const std::vector<LayoutBlock> layout = ParameterLayout(*model);
   const int n = LayoutSize(layout);
   const YamlNode count = root.Require("parameters");

@@ -366,10 +366,7 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
 InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) {
   const YamlDocument doc = YamlDocument::Load(path);
   const YamlNode root = doc.Root();
-  const YamlNode format = root.Require("format");
-  if (format.AsString() != kFormat) format.Fail(kFormat);
-  const YamlNode version = root.Require("version");
-  if (version.AsInt() != kVersion) version.Fail("version " + std::to_string(kVersion));
+  root.RequireFormat(kFormat, kVersion);
 
   ModelMetadata meta;
   if (const std::optional<YamlNode> m = root.Find("metadata")) {

@@ -180,6 +180,13 @@ YamlNode YamlNode::Require(const std::string& key) const {
   return *child;
 }
 
+void YamlNode::RequireFormat(const std::string& format, int version) const {
+  const YamlNode f = Require("format");
+  if (f.AsString() != format) f.Fail(format);
+  const YamlNode v = Require("version");
+  if (v.AsInt() != version) v.Fail("version " + std::to_string(version));
+}
+
 std::vector<YamlNode::Entry> YamlNode::Entries() const {
   RequireMap();
   std::vector<Entry> out;

@@ -52,6 +52,9 @@ class YamlNode {
   std::optional<YamlNode> Find(const std::string& key) const;
   // Like Find, but the key must be present.
   YamlNode Require(const std::string& key) const;
+  // A file type's header: `format: <format>` and `version: <version>` must
+  // be present and equal (model.yaml, covariance.yaml).
+  void RequireFormat(const std::string& format, int version) const;
   // Reads the child at `key` into *value if present; returns whether it was.
   bool Read(const std::string& key, double* value) const;
   bool Read(const std::string& key, int* value) const;

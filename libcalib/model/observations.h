@@ -61,6 +61,12 @@ struct ExcludedRow {
   int index = 0;       // into Observations::pixels or ::records as given
   int line = 0;
   std::string reason;
+
+  // The order they are listed in: records first, then pixels, each in
+  // their order as given.
+  bool operator<(const ExcludedRow& o) const {
+    return pixel != o.pixel ? !pixel : index < o.index;
+  }
 };
 
 // Width and height of one zoom's images [px], from the photos (SPEC 7: never

@@ -176,9 +176,7 @@ std::vector<ExcludedRow> FindGrossRows(const Observations& obs, const GrossScree
     ScreenSphere(rows, "camera row (zoom " + std::to_string(zoom) + ")", obs.records, options,
                  &out);
   ScreenFaces(obs.pixels, true, &out);
-  std::sort(out.begin(), out.end(), [](const ExcludedRow& a, const ExcludedRow& b) {
-    return a.pixel != b.pixel ? !a.pixel : a.index < b.index;
-  });
+  std::sort(out.begin(), out.end());
   return out;
 }
 
