@@ -476,7 +476,9 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
     InstrumentModel robust = result.start;
     RobustFitResult found;
     try {
-      found = FindGrossErrorsByFit(used, result.fit_options, options.fit.gross_errors, &robust);
+      // Rows the screening took out make more likely: straight to the robust fit.
+      found = FindGrossErrorsByFit(used, result.fit_options, options.fit.gross_errors, &robust,
+                                   !result.gross_rows.empty());
     } catch (const std::exception& e) {
       // The least-squares stages below meet the same cause and report it
       // with the rows (validate.h).

@@ -165,7 +165,8 @@ std::string GrossErrorOptions::Check() const {
 }
 
 RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& options,
-                                     const GrossErrorOptions& robust, InstrumentModel* model) {
+                                     const GrossErrorOptions& robust, InstrumentModel* model,
+                                     bool suspect) {
   const std::string problem = robust.Check();
   if (!problem.empty()) throw std::invalid_argument(problem);
   RobustFitResult out;
@@ -214,7 +215,7 @@ RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& 
   std::vector<Row> rows;
   std::vector<ExcludedRow> flagged;
   bool least_squares_clean = false;
-  try {
+  if (!suspect && out.gross.empty()) try {
     FitOptions o = options;
     o.loss = RobustLoss::kNone;
     o.reestimate_sigmas = false;

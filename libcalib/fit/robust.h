@@ -48,8 +48,10 @@ struct RobustFitResult {
 };
 
 // `model` is the start; it is left at the robust solution. Throws what
-// Refine throws.
+// Refine throws. `suspect`: gross rows were already found (by the
+// screening), so the least-squares trial of step 2 is skipped.
 RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& options,
-                                     const GrossErrorOptions& robust, InstrumentModel* model);
+                                     const GrossErrorOptions& robust, InstrumentModel* model,
+                                     bool suspect = false);
 
 }  // namespace rtscalib
