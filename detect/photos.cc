@@ -20,6 +20,7 @@
 #include "detect/tag_family.h"
 #include "libcalib/io/csv.h"
 #include "libcalib/io/errors.h"
+#include "libcalib/io/targets_io.h"
 #include "libcalib/io/number_text.h"
 
 namespace rtscalib::detect {
@@ -116,7 +117,7 @@ std::string PhotoDetectionOptions::Check() const {
 
 std::map<std::string, int> DetectableCodeCounts() {
   std::map<std::string, int> out = FamilyCodeCounts();
-  for (const auto& [name, markers] : ArucoDictionaryMarkerCounts()) out["aruco:" + name] = markers;
+  for (const auto& [name, markers] : ArucoDictionaryMarkerCounts()) out[ArucoCodesKey(name)] = markers;
   return out;
 }
 

@@ -15,7 +15,7 @@
 namespace rtscalib {
 namespace {
 
-// ArUco dictionaries in the family_codes map (targets_io.h).
+// ArUco dictionaries in the family_codes map (ArucoCodesKey).
 const std::string kArucoPrefix = "aruco:";
 
 // Bounds that no AprilTag board reaches (see ReadScene).
@@ -61,6 +61,8 @@ double ReadLength(const YamlNode& item, const char* key, bool zero_ok, const std
 
 }  // namespace
 
+std::string ArucoCodesKey(const std::string& dictionary) { return kArucoPrefix + dictionary; }
+
 TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>* family_codes) {
   TagBoard b;
   item.ReadEnum("type", kKinds, &b.kind);
@@ -75,7 +77,7 @@ TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>*
   } else if (b.kind == BoardKind::kCharuco) {
     const YamlNode dictionary = item.Require("dictionary");
     b.family = ReadName(dictionary, "an ArUco dictionary name (letters, digits, '_'), e.g. DICT_4X4_50");
-    if (family_codes != nullptr && family_codes->count(kArucoPrefix + b.family) == 0) {
+    if (family_codes != nullptr && family_codes->count(ArucoCodesKey(b.family)) == 0) {
       std::vector<std::string> known;
       for (const auto& entry : *family_codes) {
         if (entry.first.rfind(kArucoPrefix, 0) == 0) known.push_back(entry.first.substr(kArucoPrefix.size()));
@@ -116,7 +118,7 @@ TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>*
   }
   if (family_codes != nullptr && b.kind == BoardKind::kCharuco) {
     // The markers fill the white squares: rows cols / 2 of them, ids 0, 1, ...
-    const int codes = family_codes->at(kArucoPrefix + b.family);
+    const int codes = family_codes->at(ArucoCodesKey(b.family));
     if (b.rows * b.cols / 2 > codes) {
       rows.Fail("a board whose " + std::to_string(b.rows * b.cols / 2) +
                 " markers (rows cols / 2) fit in " + b.family + "'s " + std::to_string(codes) +

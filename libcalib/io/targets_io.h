@@ -43,6 +43,9 @@ namespace rtscalib {
 // detect/ does: detect::DetectableCodeCounts().)
 class YamlNode;
 
+// The key of an ArUco dictionary in `family_codes` ("aruco:<name>").
+std::string ArucoCodesKey(const std::string& dictionary);
+
 // One board's layout (everything but its pose) from a targets.yaml or
 // model.yaml board mapping, with the rules above; errors name the key.
 TagBoard ReadBoardLayout(const YamlNode& item,
