@@ -14,6 +14,7 @@
 #include "libcalib/fit/manifolds.h"
 #include "libcalib/fit/parameter_layout.h"
 #include "libcalib/geometry/convex_hull.h"
+#include "libcalib/model/gauge.h"
 
 namespace rtscalib {
 namespace {
@@ -172,16 +173,6 @@ bool FirstJointOffsetsHeld(const CalibratedInstrument& instrument) {
   return false;
 }
 
-void MoveFirstJointOffsetsIntoBase(InstrumentModel* m) {
-  std::array<double, 4>& link = m->links[0].p;
-  const Rigid3 offset{
-      Eigen::AngleAxisd(link[kDhGamma], Eigen::Vector3d::UnitZ()).toRotationMatrix(),
-      Eigen::Vector3d(0, 0, link[kDhD])};
-  m->base = PoseBlock::FromRigid(m->base.ToRigid() * offset);
-  link[kDhGamma] = 0;
-  link[kDhD] = 0;
-}
-
 }  // namespace
 
 std::string CompareOptions::Check() const {
@@ -212,8 +203,8 @@ Comparison CompareInstruments(const CalibratedInstrument& a, const CalibratedIns
   out.full_covariance = a.HasFullParameterCovariance() && b.HasFullParameterCovariance();
   InstrumentModel gauge_a = ma, gauge_b = mb;
   if (FirstJointOffsetsHeld(a) && FirstJointOffsetsHeld(b)) {
-    MoveFirstJointOffsetsIntoBase(&gauge_a);
-    MoveFirstJointOffsetsIntoBase(&gauge_b);
+    SetFirstJointOffsets(0, 0, &gauge_a);
+    SetFirstJointOffsets(0, 0, &gauge_b);
     out.notes.push_back(
         "link1's d and gamma_offset are gauges both fits held at their starting values: they "
         "were moved into the base frame (base Rz(gamma) Tz(d)) before the parameters were "

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "libcalib/model/gauge.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib {
@@ -60,12 +61,9 @@ std::vector<std::string> StartUnknowns(const Observations& obs, const UsedRows& 
                                        const DataFacts& facts, InstrumentModel* model) {
   std::vector<std::string> notes;
   InstrumentModel& m = *model;
-  if (!facts.known_positions) {
-    const InstrumentModel ideal = IdealModel(m.kinematics, 0, CameraTool());
-    m.base = ideal.base;
-    m.links[0].p[kDhD] = ideal.links[0].p[kDhD];
-    m.links[0].p[kDhGamma] = ideal.links[0].p[kDhGamma];
-  }
+  // The start re-expressed, not overwritten: its boards, points and tools
+  // stay consistent with its base (libcalib/model/gauge.h).
+  if (!facts.known_positions) ToIdealBaseFrame(&m);
 
   // Boards: the corners of each unknown board per shot.
   struct ShotCorners {

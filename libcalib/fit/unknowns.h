@@ -25,9 +25,10 @@ namespace rtscalib {
 // Makes the model hold every board of obs.targets without a pose that a
 // used pixel sees, and every point a used record names, with the starting
 // values above; boards and points the model already holds keep their values.
-// When `facts` say no position is known, first puts the base (and, dh, link
-// 1's held d and gamma_offset) at the ideal base frame (SPEC 7), so that the
-// starts are expressed in it. Returns notes for the run log. Throws
+// When `facts` say no position is known, first re-expresses the start in the
+// instrument's ideal base frame (SPEC 7; ToIdealBaseFrame,
+// libcalib/model/gauge.h: base and, dh, link 1's held d and gamma_offset
+// at their ideal values), so that the starts are expressed in it. Returns notes for the run log. Throws
 // std::invalid_argument naming the file and line for a pixel whose target is
 // on no board, and for a board no shot sees with a usable pose.
 std::vector<std::string> StartUnknowns(const Observations& obs, const UsedRows& rows,
