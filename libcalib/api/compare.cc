@@ -151,26 +151,125 @@ Eigen::VectorXd BlockDifference(const LayoutBlock& la, const InstrumentModel& a,
   return d;
 }
 
-// The first joint's zero offset and height (link1's gamma_offset and d) are
-// gauges of a dh model: they rotate and lift the base frame about its z axis
-// and nothing else (kinematics.h: Rz(joint + gamma) with t_z = d, and Rz, t_z
-// commute with the joint), so the fit holds them at their starting values,
-// which differ between two fits. base * [Rz(gamma), (0, 0, d)] with gamma =
-// d = 0 is the same instrument; both models are put into that gauge before
-// their parameters are compared. The base's covariance is unchanged: its
-// rotation tangent is global (q -> exp(delta) q), unaffected by a constant
-// right factor, and its translation moves by R (0, 0, d) with d's variance 0.
-// Only when the model holds them (no variance in its covariance).
-bool FirstJointOffsetsHeld(const CalibratedInstrument& instrument) {
-  const InstrumentModel& m = instrument.Model();
-  if (m.kinematics != Kinematics::kDh || !instrument.HasParameterCovariance()) return false;
-  const Eigen::MatrixXd& c = instrument.ParameterCovariance();
-  for (const LayoutBlock& b : ParameterLayout(m)) {
-    if (b.name != "link1") continue;
-    return c(b.offset + kDhD, b.offset + kDhD) == 0 &&
-           c(b.offset + kDhGamma, b.offset + kDhGamma) == 0;
+// Both models put into one gauge before their parameters are compared: a
+// gauge a fit held moves what depends on it, so the same instrument fitted
+// in two gauges would show as differences far beyond the sigmas. The
+// re-expressions are libcalib/model/gauge.h's (the same instrument, other
+// parameter values); each model's covariance follows them (J P J^T).
+struct Gauged {
+  InstrumentModel model;
+  Eigen::MatrixXd cov;  // ParameterLayout order; empty without one
+  std::vector<LayoutBlock> layout;
+  const LayoutBlock* Block(const std::string& name) const {
+    for (const LayoutBlock& b : layout) {
+      if (b.name == name) return &b;
+    }
+    return nullptr;
   }
-  return false;
+  // Held by the fit: every coordinate `index` of block `name` has variance 0
+  // (false without a covariance: nothing is known to be held).
+  bool Held(const std::string& name, std::initializer_list<int> index = {}) const {
+    const LayoutBlock* b = Block(name);
+    if (!b || cov.rows() == 0) return false;
+    std::vector<int> idx(index);
+    if (idx.empty()) {
+      for (int i = 0; i < b->size; ++i) idx.push_back(i);
+    }
+    for (int i : idx) {
+      if (cov(b->offset + i, b->offset + i) != 0) return false;
+    }
+    return true;
+  }
+  // cov <- J cov J^T for J = identity but `r` on the rows of block `name`.
+  void Transform(const std::string& name, const Eigen::MatrixXd& r) {
+    const LayoutBlock* b = Block(name);
+    if (!b || cov.rows() == 0) return;
+    cov.middleRows(b->offset, b->size) = r * cov.middleRows(b->offset, b->size);
+    cov.middleCols(b->offset, b->size) = cov.middleCols(b->offset, b->size) * r.transpose();
+  }
+  void Hold(const std::string& name) { Transform(name, Eigen::MatrixXd::Zero(3, 3)); }
+};
+
+Gauged MakeGauged(const CalibratedInstrument& x) {
+  Gauged g{x.Model(), x.HasParameterCovariance() ? x.ParameterCovariance() : Eigen::MatrixXd(),
+           ParameterLayout(x.Model())};
+  return g;
+}
+
+// Reference frames. A fit with no known position holds the base at the
+// instrument's ideal base frame (SPEC 7); one with known positions fits the
+// base in their frame. When only one of the two holds its base, the other
+// is re-expressed in its own ideal base frame (ToIdealBaseFrame): there the
+// base is the gauge (its rows held) and everything else is frame-free, but
+// for axis_wobble's phase, which turns with the frame about z
+// (gauge.h; its 2 x 2 block turns with it).
+void ToIdealBaseFrameOf(Gauged* g) {
+  const Rigid3 new_from_old = ToIdealBaseFrame(&g->model);
+  g->Hold("base.rotation");
+  g->Hold("base.t");
+  const Eigen::Matrix3d& r = new_from_old.rotation;
+  const double psi = std::atan2(r(1, 0) - r(0, 1), r(0, 0) + r(1, 1));
+  Eigen::Matrix2d turn;
+  turn << std::cos(psi), std::sin(psi), -std::sin(psi), std::cos(psi);
+  g->Transform(Info(Effect::kAxisWobble).name, turn);
+}
+
+// dh link 2 is held at its start (the tools absorb it); two fits that
+// started from different values hold different link 2s and their tools
+// differ by M = M2_a^-1 M2_b (gauge.h, SetSecondLink). b's tools are
+// re-expressed with a's link 2: tool' = M tool, so the tangents of the
+// camera rotations (q -> exp(delta) q: delta' = R_M delta) and the tool
+// translations (t' = R_M t + t_M) turn by R_M; the EDM's no-roll tangent
+// (q -> q exp(delta)) is unchanged.
+void SetSecondLinkOf(const DhLink& link, Gauged* g) {
+  const InstrumentModel before = g->model;
+  SetSecondLink(link, &g->model);
+  const Eigen::Matrix3d r =
+      g->model.edm.ToRigid().rotation * before.edm.ToRigid().rotation.transpose();
+  g->Transform("edm.t", r);
+  for (int z = 0; z < g->model.NumZooms(); ++z) {
+    g->Transform("cam[" + std::to_string(z) + "].rotation", r);
+    g->Transform("cam[" + std::to_string(z) + "].t", r);
+  }
+}
+
+std::vector<std::string> IntoOneGauge(Gauged* a, Gauged* b) {
+  std::vector<std::string> notes;
+  const bool ideal_a = a->Held("base.rotation") && a->Held("base.t");
+  const bool ideal_b = b->Held("base.rotation") && b->Held("base.t");
+  if (ideal_a != ideal_b) {
+    ToIdealBaseFrameOf(ideal_a ? b : a);
+    notes.push_back(std::string("the ") + (ideal_a ? "first" : "second") +
+                    " fit knew no position, so its reference frame is the instrument's ideal "
+                    "base frame (SPEC 7); the " +
+                    (ideal_a ? "second" : "first") +
+                    " was re-expressed in its own ideal base frame before the parameters were "
+                    "compared, and the base (the frame itself) is not compared");
+  }
+  // The first joint's zero offset and height (link1's gamma_offset and d)
+  // are gauges of a dh model the fit holds at their starting values; they go
+  // into the base (gamma = d = 0, SetFirstJointOffsets). The base's
+  // covariance is unchanged: its rotation tangent is global (q -> exp(delta)
+  // q), unaffected by a constant right factor, and its translation moves by
+  // R (0, 0, d) with d's variance 0.
+  const std::initializer_list<int> offsets = {kDhD, kDhGamma};
+  if (a->model.kinematics == Kinematics::kDh && b->model.kinematics == Kinematics::kDh &&
+      a->Held("link1", offsets) && b->Held("link1", offsets)) {
+    SetFirstJointOffsets(0, 0, &a->model);
+    SetFirstJointOffsets(0, 0, &b->model);
+    notes.push_back(
+        "link1's d and gamma_offset are gauges both fits held at their starting values: they "
+        "were moved into the base frame (base Rz(gamma) Tz(d)) before the parameters were "
+        "compared");
+  }
+  if (a->model.kinematics == Kinematics::kDh && b->model.kinematics == Kinematics::kDh &&
+      a->Held("link2") && b->Held("link2") && a->model.links[1].p != b->model.links[1].p) {
+    SetSecondLinkOf(a->model.links[1], b);
+    notes.push_back(
+        "link2 is a gauge both fits held, at different values: the second model's tools were "
+        "re-expressed with the first's link2 before the parameters were compared");
+  }
+  return notes;
 }
 
 }  // namespace
@@ -201,20 +300,15 @@ Comparison CompareInstruments(const CalibratedInstrument& a, const CalibratedIns
   }
   Comparison out;
   out.full_covariance = a.HasFullParameterCovariance() && b.HasFullParameterCovariance();
-  InstrumentModel gauge_a = ma, gauge_b = mb;
-  if (FirstJointOffsetsHeld(a) && FirstJointOffsetsHeld(b)) {
-    SetFirstJointOffsets(0, 0, &gauge_a);
-    SetFirstJointOffsets(0, 0, &gauge_b);
-    out.notes.push_back(
-        "link1's d and gamma_offset are gauges both fits held at their starting values: they "
-        "were moved into the base frame (base Rz(gamma) Tz(d)) before the parameters were "
-        "compared");
-  }
+  Gauged ga = MakeGauged(a), gb = MakeGauged(b);
+  for (const std::string& note : IntoOneGauge(&ga, &gb)) out.notes.push_back(note);
+  const InstrumentModel& gauge_a = ga.model;
+  const InstrumentModel& gauge_b = gb.model;
   for (int z = 0; z < ma.NumZooms(); ++z) {
     out.zooms.push_back(CompareZoom(ma.cams[z], mb.cams[z], z, o));
   }
   const std::vector<LayoutBlock> la = ParameterLayout(ma), lb = ParameterLayout(mb);
-  const bool sa = a.HasParameterCovariance(), sb = b.HasParameterCovariance();
+  const bool sa = ga.cov.rows() > 0, sb = gb.cov.rows() > 0;
   double sum = 0;
   for (const LayoutBlock& ba : la) {
     const LayoutBlock* bb = nullptr;
@@ -237,8 +331,8 @@ Comparison CompareInstruments(const CalibratedInstrument& a, const CalibratedIns
       p.a = euclid ? xa[i] : 0.0;
       p.b = euclid ? xb[i] : d[i];
       p.difference = d[i];
-      const double va = sa ? a.ParameterCovariance()(ba.offset + i, ba.offset + i) : 0.0;
-      const double vb = sb ? b.ParameterCovariance()(bb->offset + i, bb->offset + i) : 0.0;
+      const double va = sa ? ga.cov(ba.offset + i, ba.offset + i) : 0.0;
+      const double vb = sb ? gb.cov(bb->offset + i, bb->offset + i) : 0.0;
       p.sigma = std::sqrt(std::max(va, 0.0) + std::max(vb, 0.0));
       p.has_sigma = p.sigma > 0 && std::isfinite(p.sigma);
       p.normalised = p.has_sigma ? p.difference / p.sigma : 0.0;

@@ -17,6 +17,8 @@
 #include "libcalib/io/covariance_io.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/model_io.h"
+#include "libcalib/model/gauge.h"
+#include "libcalib/fit/parameter_layout.h"
 #include "tests/api/pixel_calibration.h"
 
 namespace rtscalib {
@@ -72,6 +74,47 @@ TEST(Compare, HeldFirstJointOffsetsAreAGaugeNotADifference) {
     EXPECT_NEAR(p.difference, 0.0, 1e-12) << p.block << "[" << p.index << "]";
   }
   EXPECT_LT(c.mean_square_normalised, 1e-6);
+}
+
+// A fit with no known position is in the instrument's ideal base frame
+// (SPEC 7: its base held there), one with known positions in their frame.
+// The same instrument in both frames (and with another held link 2, which
+// the tools take up) is no difference: compare re-expresses the one with the
+// free base in its ideal base frame (libcalib/model/gauge.h) and moves the
+// tools' covariance with them. Before, the base alone differed by thousands
+// of sigma. Tolerance: round-off of the pose products, 1e-10 of parameters
+// of order 1 (the frames are metres apart).
+TEST(Compare, TheIdealBaseFrameAndASurveyedFrameAreOneInstrument) {
+  const InstrumentModel a = Fit(Truth(), 0);
+  InstrumentModel b = a;
+  b.base = PoseBlock::FromRigid(Rigid3::FromEuler({0.01, -0.02, 0.7}, {3, -4, 1.5}) *
+                                b.base.ToRigid());
+  ToIdealBaseFrame(&b);
+  SetSecondLink(DhLink{{1e-3, 2e-3, -1e-3, 5e-4}}, &b);
+  // b as a fit without known positions would give it: base held.
+  for (const LayoutBlock& block : ParameterLayout(b)) {
+    if (block.name != "base.rotation" && block.name != "base.t") continue;
+    b.sigmas.covariance.middleRows(block.offset, block.size).setZero();
+    b.sigmas.covariance.middleCols(block.offset, block.size).setZero();
+  }
+  const std::string pa = Save(a, "frames_a"), pb = Save(b, "frames_b");
+  for (const bool swap : {false, true}) {
+    const CalibratedInstrument ia = CalibratedInstrument::Load(swap ? pb : pa);
+    const CalibratedInstrument ib = CalibratedInstrument::Load(swap ? pa : pb);
+    const Comparison c = CompareInstruments(ia, ib);
+    std::string notes;
+    for (const std::string& n : c.notes) notes += n + "\n";
+    EXPECT_NE(notes.find("ideal base frame"), std::string::npos) << notes;
+    EXPECT_NE(notes.find("link2 is a gauge"), std::string::npos) << notes;
+    for (const ParameterDifference& p : c.parameters) {
+      EXPECT_NEAR(p.difference, 0.0, 1e-10) << p.block << "[" << p.index << "]";
+      if (p.block == "base.rotation" || p.block == "base.t") {
+        EXPECT_FALSE(p.has_sigma);
+      }
+    }
+    EXPECT_LT(c.mean_square_normalised, 1e-6);
+    EXPECT_GE(c.num_normalised, 17);  // link1 alpha, a; the camera's 6 + 4 + 5 fitted
+  }
 }
 
 TEST(Compare, AModelWithItselfDiffersByExactlyZero) {
