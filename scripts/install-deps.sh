@@ -16,6 +16,8 @@ packages=(
   xvfb xauth libgl1-mesa-dri libglx-mesa0 mesa-utils
   # headless browser: scripts/render-report.sh checks report.html in it
   chromium
+  # tests/independent: photos from a renderer written from SPEC.md alone
+  python3-numpy python3-opencv python3-yaml
 )
 
 missing=()
