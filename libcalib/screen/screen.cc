@@ -69,22 +69,31 @@ std::vector<RowView> RowsOf(const std::vector<PixelObservation>& pixels) {
 }
 
 // The rows of one file that fail one check; reported once, at the first.
+// Several rows may share a line (the corners of one photo of shots.csv):
+// lines are listed once each.
 struct Offenders {
-  std::vector<int> lines;
+  std::vector<int> lines;  // distinct, in the order met
+  std::set<int> seen;
+  size_t rows = 0;
   std::string first_got;
   void Add(int line, const std::string& got) {
-    if (lines.empty()) first_got = got;
-    lines.push_back(line);
+    if (rows++ == 0) first_got = got;
+    if (seen.insert(line).second) lines.push_back(line);
   }
-  bool Empty() const { return lines.empty(); }
-  // "; also line 7" / "; also lines 7, 9, 12 and 40 more rows"
+  bool Empty() const { return rows == 0; }
+  // "; also line 7" / "; also lines 7, 9, 12 and 40 more rows" / "; also
+  // lines 3, 4, 5, 6, 7 and 74 more lines (5,204 rows in all)"
   std::string Also() const {
     if (lines.size() < 2) return "";
     std::string out = lines.size() == 2 ? "; also line " : "; also lines ";
     const size_t listed = std::min(lines.size() - 1, kListedLines);
     for (size_t i = 1; i <= listed; ++i) out += (i > 1 ? ", " : "") + std::to_string(lines[i]);
     if (lines.size() - 1 > listed) {
-      out += " and " + std::to_string(lines.size() - 1 - listed) + " more rows";
+      const size_t more = lines.size() - 1 - listed;
+      out += rows == lines.size()
+                 ? " and " + std::to_string(more) + " more rows"
+                 : " and " + std::to_string(more) + " more lines (" + std::to_string(rows) +
+                       " rows in all)";
     }
     return out;
   }
@@ -154,8 +163,8 @@ void CheckAngles(const std::string& file, const std::vector<RowView>& rows, Angl
   // A few rows against the face convention are gross errors, taken out and
   // listed by the gross-error screening (gross.h); most rows, a convention
   // mistake.
-  if (gross_rows && FewEnoughToBeGross(face1.lines.size(), face1_rows)) face1 = Offenders();
-  if (gross_rows && FewEnoughToBeGross(face2.lines.size(), face2_rows)) face2 = Offenders();
+  if (gross_rows && FewEnoughToBeGross(face1.rows, face1_rows)) face1 = Offenders();
+  if (gross_rows && FewEnoughToBeGross(face2.rows, face2_rows)) face2 = Offenders();
   const std::string cause =
       phi_range.Empty() && theta_range.Empty() ? std::string() : UnitCause(rows, unit);
   // "in radians" for files in radians; "(read in deg)" otherwise: the range
@@ -217,7 +226,7 @@ void CheckPixels(const std::string& file, const std::vector<RowView>& rows,
     }
     // Swapped pixels spread over the image leave it on many rows (a quarter
     // of a 4:3 image); one or two rows outside are mistakes of their own.
-    const size_t outside = std::max(u_out.lines.size(), v_out.lines.size());
+    const size_t outside = std::max(u_out.rows, v_out.rows);
     const bool swapped = outside >= kMinSwappedRows &&
                          outside * kSwappedFractionInverse >= us.size() && w != h &&
                          AllFit(us, h, margin) && AllFit(vs, w, margin);
@@ -285,9 +294,9 @@ void CheckRecordPoints(const std::string& file, const std::vector<Record>& recor
     millimetres = millimetres && distance / kMmPerM <= bound(r.d);
   }
   // A few such rows are gross errors (gross.h's sphere test lists them).
-  if (far.Empty() || (gross_rows && FewEnoughToBeGross(far.lines.size(), records.size()))) return;
+  if (far.Empty() || (gross_rows && FewEnoughToBeGross(far.rows, records.size()))) return;
   const std::string cause =
-      millimetres && far.lines.size() * 2 > records.size()
+      millimetres && far.rows * 2 > records.size()
           ? "; the coordinates look like millimetres (SPEC 1: metres)"
           : "; x, y, z or d is wrong (a mistyped coordinate, another reference frame?)";
   far.Report(file, "x",

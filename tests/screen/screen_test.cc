@@ -271,6 +271,32 @@ TEST_F(ScreenTest, OneMistypedPointInRecordsIsAGrossRow) {
                                                     "distance d says"));
 }
 
+// The corners of one photo share its line of shots.csv: a mistake in the
+// photos' readings lists each line once and counts the rows apart (it
+// listed "2, 2, 2, 2, 2 and 5198 more rows" before).
+TEST_F(ScreenTest, RowsOfOneLineAreListedOnce) {
+  obs.records.clear();
+  obs.pixels_source = "shots.csv";
+  for (int line = 2; line < 12; ++line) {
+    for (int corner = 0; corner < 4; ++corner) {
+      PixelObservation p;
+      p.line = line;
+      p.phi = 30.0 + line;  // degrees
+      p.theta = 90.0;
+      p.corner = corner;
+      p.uv = {640, 480};
+      obs.pixels.push_back(p);
+    }
+  }
+  const ScreenFindings f = FindDataMistakes(obs, truth.cams, options);
+  ASSERT_EQ(f.errors.size(), 2u);
+  EXPECT_EQ(std::string(f.errors[0].what()),
+            "shots.csv:2: column 'phi': expected a horizontal angle in radians within "
+            "[-2 pi, 4 pi); the file's angles look like degrees: give `data.angle_unit: deg` in "
+            "the config (--angle-unit deg for predict and detect) and they are read as degrees; "
+            "also lines 3, 4, 5, 6, 7 and 4 more lines (40 rows in all), got '32'");
+}
+
 TEST_F(ScreenTest, KnownPointsBeyondTheExtent) {
   PixelObservation p;
   p.line = 2;
