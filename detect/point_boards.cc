@@ -121,6 +121,18 @@ std::map<std::string, int> ArucoDictionaryMarkerCounts() {
   return out;
 }
 
+std::vector<cv::Mat> CharucoMarkerImages(const TagBoard& board) {
+  const cv::Ptr<cv::aruco::CharucoBoard> charuco = MakeCharuco(board);
+  const int bits = charuco->dictionary->markerSize + 2;
+  std::vector<cv::Mat> out;
+  for (const int id : charuco->ids) {
+    cv::Mat code;
+    cv::aruco::drawMarker(charuco->dictionary, id, bits, code, /*borderBits=*/1);
+    out.push_back(code);
+  }
+  return out;
+}
+
 PointBoardDetection DetectPointBoard(const cv::Mat& gray, const TagBoard& board, int face) {
   switch (board.kind) {
     case BoardKind::kCharuco:

@@ -43,4 +43,13 @@ PointBoardDetection DetectPointBoard(const cv::Mat& gray, const TagBoard& board,
 // their numbers of markers.
 std::map<std::string, int> ArucoDictionaryMarkerCounts();
 
+// The markers of a ChArUco board as cv::aruco::CharucoBoard::create makes
+// them (what DetectPointBoard looks for): marker i sits in the i-th white
+// square counted row by row from the top-left (square (r, c) is white when
+// r + c is odd), centred, `marker_size` wide; entry i is its printed image,
+// the dictionary code of the board's i-th marker id with a black border of
+// one bit, one pixel per bit (CV_8UC1, 0 = ink, 255 = paper, side
+// markerSize + 2). Throws like DetectPointBoard.
+std::vector<cv::Mat> CharucoMarkerImages(const TagBoard& board);
+
 }  // namespace rtscalib::detect
