@@ -6,6 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "detect/point_boards.h"
 #include "detect/tag_family.h"
 
 namespace rtscalib::render {
@@ -50,7 +51,129 @@ void AxisBreakpoints(int count, double start0, double pitch, double bit, int cod
   texel->push_back(t);
 }
 
+// Texels per bit for a texture of bits_x x bits_y bits (TagTextureOptions).
+int ChoosePixelsPerBit(int bits_x, int bits_y, const TagTextureOptions& options,
+                       const std::string& what) {
+  int ppb = options.pixels_per_bit;
+  if (ppb == 0) {
+    ppb = options.max_pixels_per_bit;
+    while (ppb > 1 && std::max(bits_x, bits_y) * ppb > options.max_texture_size) ppb /= 2;
+  }
+  if (std::max(bits_x, bits_y) * ppb > options.max_texture_size) {
+    throw std::invalid_argument(what + ": " + std::to_string(bits_x) + " x " +
+                                std::to_string(bits_y) + " bits at " + std::to_string(ppb) +
+                                " texel(s) per bit exceed max_texture_size " +
+                                std::to_string(options.max_texture_size));
+  }
+  return ppb;
+}
+
+// Paper everywhere, `code` (0 = ink, anything else = paper, one pixel per bit)
+// at texel (x, y), scaled by ppb (nearest neighbour), in the options' levels.
+void PaintCode(const cv::Mat& code, int x, int y, int ppb, const TagTextureOptions& options,
+               cv::Mat* image) {
+  cv::Mat lut(1, 256, CV_8UC1, cv::Scalar(options.white));
+  lut.at<uint8_t>(0) = options.black;
+  cv::Mat levels, scaled;
+  cv::LUT(code, lut, levels);
+  cv::resize(levels, scaled, cv::Size(), ppb, ppb, cv::INTER_NEAREST);
+  scaled.copyTo((*image)(cv::Rect(x, y, scaled.cols, scaled.rows)));
+}
+
+void CheckPointBoard(const TagBoard& board) {
+  if (board.rows < 2 || board.cols < 2 || !(board.square_size > 0)) {
+    throw std::invalid_argument(
+        "TagBoard: a ChArUco or chessboard needs rows, cols >= 2 and square_size > 0");
+  }
+  if (board.kind == BoardKind::kCharuco &&
+      !(board.marker_size > 0 && board.marker_size < board.square_size)) {
+    throw std::invalid_argument("TagBoard: a ChArUco board needs 0 < marker_size < square_size");
+  }
+}
+
+// ChArUco and chessboards (see the header): squares of square_bits bits, a
+// ChArUco marker gap_bits from its square's top-left corner.
+TagTexture MakePointBoardTexture(const TagBoard& board, const TagTextureOptions& options) {
+  CheckPointBoard(board);
+  const bool charuco = board.kind == BoardKind::kCharuco;
+  const double s = board.square_size;
+  std::vector<cv::Mat> markers;
+  int marker_bits = 0, gap_bits = 0, square_bits = kChessboardBitsPerSquare;
+  double gap = 0;
+  if (charuco) {
+    markers = detect::CharucoMarkerImages(board);
+    marker_bits = markers.front().cols;
+    gap = (s - board.marker_size) / 2;
+    gap_bits = std::max(1, static_cast<int>(std::lround(gap * marker_bits / board.marker_size)));
+    square_bits = marker_bits + 2 * gap_bits;
+  }
+  TagTexture tex;
+  tex.bit_size = charuco ? board.marker_size / marker_bits : s / kChessboardBitsPerSquare;
+  const double margin = options.margin < 0 ? s : options.margin;
+  const int margin_bits =
+      margin > 0 ? std::max(1, static_cast<int>(std::ceil(margin / tex.bit_size - 1e-9))) : 0;
+  const int bits_x = 2 * margin_bits + board.cols * square_bits;
+  const int bits_y = 2 * margin_bits + board.rows * square_bits;
+  const int ppb = ChoosePixelsPerBit(bits_x, bits_y, options, "TagBoard");
+  tex.pixels_per_bit = ppb;
+
+  const int t0 = margin_bits * ppb, sq = square_bits * ppb;
+  auto axis = [&](int squares, std::vector<double>* b, std::vector<double>* t) {
+    if (margin_bits > 0) {
+      b->push_back(-margin);
+      t->push_back(0);
+    }
+    for (int k = 0; k < squares; ++k) {
+      if (k == 0 || charuco) {
+        b->push_back(k * s);
+        t->push_back(t0 + k * sq);
+      }
+      if (charuco) {
+        b->push_back(k * s + gap);
+        t->push_back(t0 + k * sq + gap_bits * ppb);
+        b->push_back(k * s + gap + board.marker_size);
+        t->push_back(t0 + k * sq + (gap_bits + marker_bits) * ppb);
+      }
+    }
+    b->push_back(squares * s);
+    t->push_back(t0 + squares * sq);
+    if (margin_bits > 0) {
+      b->push_back(squares * s + margin);
+      t->push_back(2 * t0 + squares * sq);
+    }
+  };
+  axis(board.cols, &tex.x_board, &tex.x_texel);
+  axis(board.rows, &tex.y_board, &tex.y_texel);
+
+  tex.image = cv::Mat(bits_y * ppb, bits_x * ppb, CV_8UC1, cv::Scalar(options.white));
+  size_t marker = 0;
+  for (int r = 0; r < board.rows; ++r) {
+    for (int c = 0; c < board.cols; ++c) {
+      const int x = t0 + c * sq, y = t0 + r * sq;
+      if ((r + c) % 2 == 0) {
+        tex.image(cv::Rect(x, y, sq, sq)).setTo(options.black);
+      } else if (charuco) {
+        PaintCode(markers.at(marker++), x + gap_bits * ppb, y + gap_bits * ppb, ppb, options,
+                  &tex.image);
+      }
+    }
+  }
+  return tex;
+}
+
 }  // namespace
+
+double PrintedBitSize(const TagBoard& board) {
+  switch (board.kind) {
+    case BoardKind::kAprilTag:
+      return board.tag_size / detect::GetTagFamilyInfo(board.family).width_at_border;
+    case BoardKind::kCharuco:
+      return board.marker_size / detect::CharucoMarkerImages(board).front().cols;
+    case BoardKind::kChessboard:
+      break;
+  }
+  return board.square_size / kChessboardBitsPerSquare;
+}
 
 std::string TagTextureOptions::Check() const {
   if (pixels_per_bit != 0 && !IsPowerOfTwo(pixels_per_bit)) {
@@ -72,6 +195,10 @@ Eigen::Vector2d TagTexture::TexelFromBoard(double x, double y) const {
 }
 
 BoardRect PrintedArea(const TagBoard& board, double margin) {
+  if (board.IsPointBoard()) {
+    const double m = margin < 0 ? board.square_size : margin;
+    return {-m, board.Width() + m, -m, board.Height() + m};
+  }
   const detect::TagFamilyInfo info = detect::GetTagFamilyInfo(board.family);
   const double bit = board.tag_size / info.width_at_border;
   const double m = margin < 0 ? bit : margin;
@@ -86,6 +213,7 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
   if (const std::string msg = options.Check(); !msg.empty()) {
     throw std::invalid_argument("TagTextureOptions: " + msg);
   }
+  if (board.IsPointBoard()) return MakePointBoardTexture(board, options);
   if (board.rows < 1 || board.cols < 1 || !(board.tag_size > 0) || board.spacing < 0) {
     throw std::invalid_argument("TagBoard: expected rows, cols >= 1, tag_size > 0, spacing >= 0");
   }
@@ -122,17 +250,7 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
 
   const int bits_x = 2 * margin_bits + board.cols * code_bits + (board.cols - 1) * gap_bits;
   const int bits_y = 2 * margin_bits + board.rows * code_bits + (board.rows - 1) * gap_bits;
-  int ppb = options.pixels_per_bit;
-  if (ppb == 0) {
-    ppb = options.max_pixels_per_bit;
-    while (ppb > 1 && std::max(bits_x, bits_y) * ppb > options.max_texture_size) ppb /= 2;
-  }
-  if (std::max(bits_x, bits_y) * ppb > options.max_texture_size) {
-    throw std::invalid_argument("TagBoard: " + std::to_string(bits_x) + " x " +
-                                std::to_string(bits_y) + " bits at " + std::to_string(ppb) +
-                                " texel(s) per bit exceed max_texture_size " +
-                                std::to_string(options.max_texture_size));
-  }
+  const int ppb = ChoosePixelsPerBit(bits_x, bits_y, options, "TagBoard");
   tex.pixels_per_bit = ppb;
 
   AxisBreakpoints(board.cols, -off * bit, pitch, bit, code_bits, gap_bits, margin_bits, margin, ppb,
@@ -144,16 +262,9 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
   const int step = (code_bits + gap_bits) * ppb;
   for (int i = 0; i < board.NumTags(); ++i) {
     const int r = i / board.cols, c = i % board.cols;
-    cv::Mat code = detect::TagCodeImage(family.get(), board.first_id + i);
-    cv::Mat levels;
-    cv::Mat lut(1, 256, CV_8UC1, cv::Scalar(options.white));
-    lut.at<uint8_t>(0) = options.black;
-    cv::LUT(code, lut, levels);
-    code = levels;
-    cv::Mat scaled;
-    cv::resize(code, scaled, cv::Size(), ppb, ppb, cv::INTER_NEAREST);
-    const int x = margin_bits * ppb + c * step, y = margin_bits * ppb + r * step;
-    scaled.copyTo(tex.image(cv::Rect(x, y, scaled.cols, scaled.rows)));
+    PaintCode(detect::TagCodeImage(family.get(), board.first_id + i),
+              margin_bits * ppb + c * step, margin_bits * ppb + r * step, ppb, options,
+              &tex.image);
   }
   return tex;
 }
