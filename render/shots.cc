@@ -15,6 +15,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <regex>
 #include <set>
@@ -23,6 +24,8 @@
 #include <thread>
 
 #include <opencv2/imgcodecs.hpp>
+
+#include "detect/point_boards.h"
 
 namespace rtscalib::render {
 namespace fs = std::filesystem;
@@ -304,7 +307,7 @@ RenderShotsResult RenderShots(const TargetScene& scene, const std::vector<Shot>&
             t.status == TagStatus::kOutside || t.status == TagStatus::kOccluded) {
           continue;
         }
-        for (int c = 0; c < 4; ++c) {
+        for (int c = 0; c < t.corners; ++c) {
           if (!t.in_image[c]) continue;
           ex << s.face << "," << s.zoom << "," << Num(s.phi) << "," << Num(s.theta) << "," << s.id
              << "," << t.id << "," << c << "," << Num(t.X[c].x()) << "," << Num(t.X[c].y()) << ","
@@ -435,11 +438,16 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
     throw std::invalid_argument("shots: " + m);
   detect::DetectorOptions dopt = options.detector;
   dopt.families.clear();
+  bool point_boards = false;
   for (const TagBoard& b : scene.boards) {
+    point_boards = point_boards || b.IsPointBoard();
+    if (b.IsPointBoard()) continue;  // OpenCV's detectors (detect/point_boards.h)
     if (std::find(dopt.families.begin(), dopt.families.end(), b.family) == dopt.families.end()) {
       dopt.families.push_back(b.family);
     }
   }
+  // A scene of point boards alone needs no AprilTag detector.
+  const bool tags = !dopt.families.empty() || !point_boards;
   if (dopt.families.empty()) dopt.families = options.detector.families;
 
   const int n = static_cast<int>(shots.size());
@@ -452,7 +460,8 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
   Progress progress("detect", n, options.progress);
   auto work = [&]() {
     try {
-      detect::TagDetector detector(dopt);
+      std::unique_ptr<detect::TagDetector> detector;
+      if (tags) detector = std::make_unique<detect::TagDetector>(dopt);
       for (int i = next++; i < n; i = next++) {
         {
           std::lock_guard<std::mutex> lock(mutex);
@@ -468,13 +477,28 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
                                    std::to_string(s.cam.width) + "x" +
                                    std::to_string(s.cam.height));
         }
-        const std::vector<detect::TagDetection> dets = detector.Detect(img);
+        std::vector<detect::TagDetection> dets;
+        if (detector) dets = detector->Detect(img);
+        // Inner corners of ChArUco and chessboards as detections of their
+        // board's family, all four corners the point (tag_matching.h).
+        for (const TagBoard& b : scene.boards) {
+          if (!b.IsPointBoard()) continue;
+          for (const auto& [k, uv] : detect::DetectPointBoard(img, b, s.face).corners) {
+            detect::TagDetection d;
+            d.family = b.family;
+            d.id = b.first_id + k;
+            d.corners = {uv, uv, uv, uv};
+            d.apriltag_corners = d.corners;
+            d.refined = true;
+            dets.push_back(d);
+          }
+        }
         const std::vector<ExpectedTag> expected =
             ExpectTags(scene, s.ref_from_cam, s.cam, options.visibility);
         ShotStats& stats = result.stats[i];
         stats.shot = s.id;
         for (const MatchedTag& m : MatchDetections(dets, expected, options.match, &stats)) {
-          for (int c = 0; c < 4; ++c) {
+          for (int c = 0; c < m.corners; ++c) {
             PixelObservation p;
             p.face = s.face;
             p.zoom = s.zoom;

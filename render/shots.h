@@ -7,7 +7,8 @@
 //   exact.csv       pixels.csv columns (SPEC 3: face, zoom, phi, theta, shot,
 //                   target, corner, X, Y, Z, u, v) plus `status`: the exact
 //                   projection (ProjectToPixel) of every corner that
-//                   lands in the image, of every tag that faces the camera and
+//                   lands in the image, of every tag (inner corner of a point
+//                   board: corner 0 only) that faces the camera and
 //                   is not occluded; `status` is the tag's TagStatus
 //                   (visible / border / grazing / small), so exact.csv with
 //                   status = visible lists what DetectShots should find.
@@ -97,14 +98,16 @@ struct DetectShotsOptions {
 };
 
 struct DetectShotsResult {
-  std::vector<PixelObservation> pixels;  // shot order, then detection order, corners 0..3
+  std::vector<PixelObservation> pixels;  // shot order, then detection order, corners 0..3 (0)
   std::vector<ShotStats> stats;          // one per shot, in shot order
   ShotStats total;                       // sums over the shots
 };
 
-// Detects the tags in image_dir/<shot id>.png for every shot, keeps the
-// detections of visible tags (tag_matching.h) and returns them as pixel
-// observations of the scene's corners. Throws std::runtime_error when an image
+// Detects the tags in image_dir/<shot id>.png for every shot (AprilTags with
+// detect::TagDetector, the inner corners of ChArUco and chessboards with
+// detect::DetectPointBoard, chessboards oriented by the shot's face), keeps
+// the detections of visible targets (tag_matching.h) and returns them as
+// pixel observations of the scene's corners (one per inner corner). Throws std::runtime_error when an image
 // is missing or unreadable (naming it).
 DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>& shots,
                               const std::string& image_dir, const DetectShotsOptions& options);

@@ -5,7 +5,6 @@
 #include <map>
 #include <utility>
 
-#include "detect/tag_family.h"
 #include "libcalib/camera/opencv_model.h"
 #include "render/tag_texture.h"
 
@@ -80,11 +79,36 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
     occluders.push_back({b.ref_from_board, b.ref_from_board.Inverse(), PrintedArea(b)});
   }
   const double max_angle = options.max_view_angle_deg * M_PI / 180.0;
+  const double m = options.border_margin_px;
+  auto inner = [&](const Eigen::Vector2d& px) {
+    return px.x() >= m - 0.5 && px.x() <= cam.width - 0.5 - m && px.y() >= m - 0.5 &&
+           px.y() <= cam.height - 0.5 - m;
+  };
+  // The pixel of reference point X, where the projection is valid: in front
+  // of the camera, and where the distortion does not fold the image (the
+  // pixel must back-project onto the same ray).
+  auto project = [&](const Eigen::Vector3d& X, Eigen::Vector2d* uv) {
+    const Eigen::Vector3d p = cam_from_ref * X;
+    if (!(p.z() > 0)) return false;
+    double px[2];
+    ProjectToPixel(k, d, p.data(), px);
+    double xn, yn;
+    if (!(std::isfinite(px[0]) && std::isfinite(px[1]) && UndistortPixel(k, d, px, &xn, &yn) &&
+          std::abs(xn - p.x() / p.z()) + std::abs(yn - p.y() / p.z()) < 1e-7)) {
+      return false;
+    }
+    *uv = Eigen::Vector2d(px[0], px[1]);
+    return true;
+  };
 
   std::vector<ExpectedTag> out;
   for (int bi = 0; bi < static_cast<int>(scene.boards.size()); ++bi) {
     const TagBoard& board = scene.boards[bi];
-    const int wab = detect::GetTagFamilyInfo(board.family).width_at_border;
+    const int num_corners = board.CornersPerTarget();
+    // Code bits per edge length on the board: a tag's quad edge, or the
+    // square edges around an inner corner.
+    const double edge = board.IsPointBoard() ? board.square_size : board.tag_size;
+    const double bits_per_edge = edge / PrintedBitSize(board);
     // The printed side faces the board's -z (targets.h).
     const Eigen::Vector3d printed_normal = -board.ref_from_board.rotation.col(2);
     const bool facing = (centre - board.ref_from_board.translation).dot(printed_normal) > 0;
@@ -93,47 +117,64 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
       t.board = bi;
       t.id = board.first_id + i;
       t.family = board.family;
+      t.corners = num_corners;
       const auto corners = board.CornersInBoard(i);
       bool behind = false, any_in = false, all_inner = true, failed = false;
-      for (int c = 0; c < 4; ++c) {
+      for (int c = 0; c < num_corners; ++c) {
         t.X[c] = board.ref_from_board * corners[c];
-        const Eigen::Vector3d p = cam_from_ref * t.X[c];
         const Eigen::Vector3d to_cam = (centre - t.X[c]).normalized();
         t.view_angle =
             std::max(t.view_angle, std::acos(std::clamp(to_cam.dot(printed_normal), -1.0, 1.0)));
-        if (!(p.z() > 0)) {
+        if (!((cam_from_ref * t.X[c]).z() > 0)) {
           behind = true;
           continue;
         }
-        double px[2];
-        ProjectToPixel(k, d, p.data(), px);
-        // A projection is only valid where the distortion does not fold the
-        // image: the pixel must back-project onto the same ray.
-        double xn, yn;
-        const bool valid = std::isfinite(px[0]) && std::isfinite(px[1]) &&
-                           UndistortPixel(k, d, px, &xn, &yn) &&
-                           std::abs(xn - p.x() / p.z()) + std::abs(yn - p.y() / p.z()) < 1e-7;
-        if (!valid) {
+        if (!project(t.X[c], &t.uv[c])) {
           failed = true;
           continue;
         }
         t.projected[c] = true;
-        t.uv[c] = Eigen::Vector2d(px[0], px[1]);
+        const Eigen::Vector2d& px = t.uv[c];
         t.in_image[c] =
-            px[0] >= -0.5 && px[0] < cam.width - 0.5 && px[1] >= -0.5 && px[1] < cam.height - 0.5;
+            px.x() >= -0.5 && px.x() < cam.width - 0.5 && px.y() >= -0.5 && px.y() < cam.height - 0.5;
         any_in = any_in || t.in_image[c];
-        const double m = options.border_margin_px;
-        all_inner = all_inner && px[0] >= m - 0.5 && px[0] <= cam.width - 0.5 - m &&
-                    px[1] >= m - 0.5 && px[1] <= cam.height - 0.5 - m;
+        all_inner = all_inner && inner(px);
       }
       if (!behind && !failed) {
-        double min_edge = 1e300;
-        for (int c = 0; c < 4; ++c)
-          min_edge = std::min(min_edge, (t.uv[(c + 1) % 4] - t.uv[c]).norm());
-        t.bit_px = min_edge / wab;
+        if (board.IsPointBoard()) {
+          // The corners of the four squares around the inner corner: all
+          // inside the margin, and the squares' edges give the bit size.
+          double min_edge = 1e300;
+          for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+              if (dx == 0 && dy == 0) continue;
+              Eigen::Vector2d uv;
+              const Eigen::Vector3d n =
+                  board.ref_from_board * (corners[0] + edge * Eigen::Vector3d(dx, dy, 0));
+              if (!project(n, &uv)) {
+                all_inner = false;
+                continue;
+              }
+              all_inner = all_inner && inner(uv);
+              if (dx == 0 || dy == 0) min_edge = std::min(min_edge, (uv - t.uv[0]).norm());
+            }
+          }
+          t.bit_px = min_edge < 1e300 ? min_edge / bits_per_edge : 0.0;
+        } else {
+          double min_edge = 1e300;
+          for (int c = 0; c < 4; ++c)
+            min_edge = std::min(min_edge, (t.uv[(c + 1) % 4] - t.uv[c]).norm());
+          t.bit_px = min_edge / bits_per_edge;
+        }
+      }
+      for (int c = num_corners; c < 4; ++c) {  // a point target repeats its corner
+        t.X[c] = t.X[0];
+        t.uv[c] = t.uv[0];
+        t.projected[c] = t.projected[0];
+        t.in_image[c] = t.in_image[0];
       }
       bool occluded = false;
-      for (int c = 0; c < 4 && !occluded; ++c) {
+      for (int c = 0; c < num_corners && !occluded; ++c) {
         for (int o = 0; o < static_cast<int>(occluders.size()) && !occluded; ++o) {
           occluded = o != bi && Blocks(occluders[o], centre, t.X[c]);
         }
@@ -235,7 +276,7 @@ std::vector<MatchedTag> MatchDetections(const std::vector<detect::TagDetection>&
       continue;
     }
     double worst = 0, sq = 0;
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < t.corners; ++c) {
       const double e = (det.corners[c] - t.uv[c]).norm();
       worst = std::max(worst, e);
       sq += e * e;
@@ -246,11 +287,12 @@ std::vector<MatchedTag> MatchDetections(const std::vector<detect::TagDetection>&
     }
     MatchedTag m;
     m.id = t.id;
+    m.corners = t.corners;
     m.X = t.X;
     m.uv = det.corners;
     out.push_back(m);
     ++stats->found;
-    stats->corners_kept += 4;
+    stats->corners_kept += t.corners;
     sum_sq += sq;
     stats->max_error_px = std::max(stats->max_error_px, worst);
   }

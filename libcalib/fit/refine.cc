@@ -107,40 +107,57 @@ int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residual
                   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& eig,
                   const Eigen::VectorXd& inv, Eigen::MatrixXd* cov) {
   const int n = j.num_cols;
-  // Scores per cluster, g_c = J_c^T r_c, in the scaled coordinates.
+  // Scores per cluster, g_c = J_c^T r_c, in the scaled coordinates, one
+  // cluster at a time: the residual rows are first sorted by cluster
+  // (counting sort, stable), so that memory is two ints per row instead of
+  // one dense score per cluster (a million records, each its own cluster,
+  // held 224 MB of scores).
   int num_clusters = 0;
   for (const std::vector<int>& of_ref : clusters) {
     for (int c : of_ref) num_clusters = std::max(num_clusters, c + 1);
   }
-  std::vector<Eigen::VectorXd> score(num_clusters);
-  std::vector<std::vector<int>> touched(num_clusters);
+  std::vector<int> cluster_of_row(j.num_rows, -1);
   int row = 0;
   for (size_t i = 0; i < refs.size(); ++i) {
     const int rows = problem->GetCostFunctionForResidualBlock(refs[i].id)->num_residuals();
     const int per_obs = rows / static_cast<int>(clusters[i].size());  // 2 (pixel) or 3 (record)
-    for (int r = row; r < row + rows; ++r) {
-      const int cluster = clusters[i][(r - row) / per_obs];
-      Eigen::VectorXd& g = score[cluster];
-      if (g.size() == 0) g = Eigen::VectorXd::Zero(n);
-      for (int a = j.rows[r]; a < j.rows[r + 1]; ++a) {
-        const int c = j.cols[a];
-        touched[cluster].push_back(c);
-        g[c] += j.values[a] * scale[c] * residuals[r];
-      }
-    }
+    for (int r = row; r < row + rows; ++r) cluster_of_row[r] = clusters[i][(r - row) / per_obs];
     row += rows;
   }
+  std::vector<int> start(num_clusters + 1, 0);
+  for (int c : cluster_of_row) {
+    if (c >= 0) ++start[c + 1];
+  }
+  for (int c = 0; c < num_clusters; ++c) start[c + 1] += start[c];
+  std::vector<int> rows_by_cluster(start.back());
+  {
+    std::vector<int> next(start.begin(), start.end() - 1);
+    for (int r = 0; r < j.num_rows; ++r) {
+      if (cluster_of_row[r] >= 0) rows_by_cluster[next[cluster_of_row[r]]++] = r;
+    }
+  }
   Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+  std::vector<int> touched;
   int used = 0;
   for (int c = 0; c < num_clusters; ++c) {
-    if (score[c].size() == 0) continue;
+    if (start[c] == start[c + 1]) continue;
     ++used;
-    std::vector<int>& t = touched[c];
-    std::sort(t.begin(), t.end());
-    t.erase(std::unique(t.begin(), t.end()), t.end());
-    for (int a : t) {
-      for (int b : t) m(a, b) += score[c][a] * score[c][b];
+    touched.clear();
+    for (int k = start[c]; k < start[c + 1]; ++k) {
+      const int r = rows_by_cluster[k];
+      for (int a = j.rows[r]; a < j.rows[r + 1]; ++a) {
+        const int col = j.cols[a];
+        touched.push_back(col);
+        g[col] += j.values[a] * scale[col] * residuals[r];
+      }
     }
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    for (int a : touched) {
+      for (int b : touched) m(a, b) += g[a] * g[b];
+    }
+    for (int a : touched) g[a] = 0;
   }
   if (used < 2) return used;
   m *= static_cast<double>(used) / (used - 1);

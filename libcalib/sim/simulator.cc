@@ -168,9 +168,10 @@ BoardView ViewOfBoard(const TagBoard& b, int index, const Eigen::Vector3d& origi
   BoardView v;
   v.board = index;
   const double dist = (b.CentreInRef() - origin).norm();
-  v.board_u = std::atan2(0.5 * (b.cols * b.tag_size + (b.cols - 1) * b.spacing), dist);
-  v.board_v = std::atan2(0.5 * (b.rows * b.tag_size + (b.rows - 1) * b.spacing), dist);
-  v.tag = std::atan2(0.5 * b.tag_size, dist);
+  v.board_u = std::atan2(0.5 * b.Width(), dist);
+  v.board_v = std::atan2(0.5 * b.Height(), dist);
+  // A point board's "tag" is its square (an inner corner with its squares).
+  v.tag = std::atan2(0.5 * (b.IsPointBoard() ? b.square_size : b.tag_size), dist);
   v.fov_u = std::atan2(0.5 * cam.width, cam.intrinsics[0]);
   v.fov_v = std::atan2(0.5 * cam.height, cam.intrinsics[1]);
   return v;
