@@ -2,10 +2,14 @@
 
 #include "libcalib/api/uncertainty_map.h"
 
+#include <map>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
+#include "detect/photos.h"
 #include "libcalib/io/records.h"
+#include "libcalib/io/targets_io.h"
 #include "libcalib/sim/simulator.h"
 
 namespace rtscalib::app {
@@ -38,6 +42,7 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
     if (!config.pixels_path.empty()) {
       PixelsFile f = ReadPixels(config.pixels_path, config.angle_unit);
       obs.pixels = std::move(f.pixels);
+      obs.image_sizes = std::move(f.image_sizes);
       obs.pixels_source = config.pixels_path;
       for (const std::string& n : f.notes) progress->Note(n);
       result->notes.insert(result->notes.end(), f.notes.begin(), f.notes.end());
@@ -46,6 +51,11 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
       result->photos = LoadPhotoSession(config.shots_path, config.targets_path, config.detect_jobs,
                                         &obs, progress, config.angle_unit);
       for (const std::string& w : result->photos.warnings) result->notes.push_back("warning: " + w);
+    } else if (!config.targets_path.empty()) {
+      // The boards of pixels.csv rows with empty X, Y, Z (SPEC 7), e.g. what
+      // `rtscalib detect` wrote from the photos.
+      const std::map<std::string, int> families = detect::DetectableCodeCounts();
+      obs.targets = ReadTargets(config.targets_path, &families);
     }
     return obs;
   }

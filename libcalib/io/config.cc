@@ -212,13 +212,17 @@ void ReadData(const YamlNode& m, const std::string& config_dir, RunConfig* out) 
     }
   }
   m.ReadEnum("angle_unit", kAngleUnitChoices, &out->angle_unit);
-  // A photo session needs its boards and vice versa (SPEC 7).
-  if (out->shots_path.empty() != out->targets_path.empty()) {
-    const char* given = out->shots_path.empty() ? "targets" : "shots";
-    const char* missing = out->shots_path.empty() ? "shots" : "targets";
-    const YamlNode n = *m.Find(given);
-    n.Fail(std::string("data.") + missing + " next to data." + given +
-           " (the photos and the boards they show come together)");
+  // Photos need their boards (SPEC 7); boards need what sees them: the
+  // photos, or pixels.csv rows whose empty X, Y, Z name their corners (what
+  // `rtscalib detect` writes).
+  if (!out->shots_path.empty() && out->targets_path.empty()) {
+    m.Find("shots")->Fail("data.targets next to data.shots (the photos and the boards they show "
+                          "come together)");
+  }
+  if (!out->targets_path.empty() && out->shots_path.empty() && out->pixels_path.empty()) {
+    m.Find("targets")->Fail(
+        "data.shots or data.pixels next to data.targets (the boards are seen in photos, or in "
+        "pixels.csv rows with empty X, Y, Z)");
   }
 }
 

@@ -1,6 +1,7 @@
 #include "libcalib/io/records.h"
 
 #include <limits>
+#include <map>
 
 #include "libcalib/io/csv.h"
 #include "libcalib/io/errors.h"
@@ -124,10 +125,19 @@ void WriteRecords(const std::string& path, const std::vector<Record>& records, A
 PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
   const CsvTable t = CsvTable::Read(
       path,
-      {{"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"}, {}});
+      {{"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"},
+       {"width", "height"}});
   PixelsFile out;
   out.notes = t.notes();
   out.pixels.reserve(t.NumRows());
+  if (t.Has("width") != t.Has("height") && t.NumRows() > 0) {
+    const char* given = t.Has("width") ? "width" : "height";
+    t.Fail(0, given,
+           std::string("a '") + (t.Has("width") ? "height" : "width") + "' column beside '" +
+               given + "' (the image size: both columns or neither)");
+  }
+  const bool sizes = t.Has("width") && t.Has("height");
+  std::map<int, int> size_line;  // zoom -> the line its size was first read from
   for (int row = 0; row < t.NumRows(); ++row) {
     PixelObservation p;
     p.line = t.Line(row);
@@ -148,6 +158,24 @@ PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
       p.X = ReadPoint(t, row, "X", "Y", "Z");
     }
     p.uv = {t.Number(row, "u"), t.Number(row, "v")};
+    if (sizes && !(t.Empty(row, "width") && t.Empty(row, "height"))) {
+      constexpr int kMaxSide = 1 << 20;
+      const ImageSize size{
+          ReadNonNegativeInt(t, row, "width", kMaxSide, "an image width in pixels (1 .. 2^20)"),
+          ReadNonNegativeInt(t, row, "height", kMaxSide, "an image height in pixels (1 .. 2^20)")};
+      if (size.width == 0) t.Fail(row, "width", "an image width in pixels (1 .. 2^20)");
+      if (size.height == 0) t.Fail(row, "height", "an image height in pixels (1 .. 2^20)");
+      const auto [it, first] = out.image_sizes.emplace(p.zoom, size);
+      if (first) {
+        size_line[p.zoom] = p.line;
+      } else if (it->second.width != size.width || it->second.height != size.height) {
+        t.Fail(row, it->second.width != size.width ? "width" : "height",
+               "the image size " + std::to_string(it->second.width) + "x" +
+                   std::to_string(it->second.height) + " of zoom " + std::to_string(p.zoom) +
+                   " (line " + std::to_string(size_line[p.zoom]) +
+                   "; one camera per zoom level, SPEC 2)");
+      }
+    }
     out.pixels.push_back(std::move(p));
   }
   return out;

@@ -16,6 +16,7 @@
 // messages (critical region, outliers) can point at it.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -34,8 +35,13 @@ RecordsFile ReadRecords(const std::string& path, AngleUnit unit = AngleUnit::kRa
 void WriteRecords(const std::string& path, const std::vector<Record>& records,
                   AngleUnit unit = AngleUnit::kRad);
 
+// pixels.csv (SPEC 3, SPEC 7) with the optional columns `width`, `height`
+// that `rtscalib detect` writes: the size of the image a row was seen in,
+// read from the photo (SPEC 7: sizes are never guessed from the points).
+// Both or neither; a row may leave both empty; one size per zoom level.
 struct PixelsFile {
   std::vector<PixelObservation> pixels;
+  std::map<int, ImageSize> image_sizes;  // per zoom, from `width`, `height`
   std::vector<std::string> notes;
 };
 PixelsFile ReadPixels(const std::string& path, AngleUnit unit = AngleUnit::kRad);

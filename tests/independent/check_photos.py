@@ -18,7 +18,8 @@ This script renders the session, then checks what a user would get:
      axis-aligned edges to 1/4 px, an RMS of up to 0.072 px).
   2. The photo folder calibrated without the hidden effect: the diagnosis
      ranks hz_eccentricity first and gives its config line.
-  3. With the effect (the config line's model): per-zoom fx, fy, cx, cy and
+  3. With the effect (the config line's model), from the detected pixels.csv
+     and targets.yaml (image sizes from its width, height): per-zoom fx, fy, cx, cy and
      the effect's e, phi_e against the truth, normalised by the stated
      sigmas: each below 4 and their mean square below 4 (measured 1.1;
      1 if the sigmas are right; a sigma off by 2x fails).
@@ -55,12 +56,11 @@ def run(cmd):
     subprocess.run(cmd, check=True)
 
 
-def write_config(path, data_dir, effects, output):
+def write_config(path, data, effects, output):
     with open(path, "w") as f:
         f.write(
             "data:\n"
-            f"  shots: {data_dir}/shots.csv\n"
-            f"  targets: {data_dir}/targets.yaml\n"
+            + "".join(f"  {key}: {value}\n" for key, value in data.items()) +
             "model:\n"
             "  kinematics: dh\n"
             f"  effects: [{', '.join(effects)}]\n"
@@ -103,7 +103,9 @@ def main():
 
     # 2. The diagnosis names the hidden effect.
     base_effects = ["radial_distortion", "tangential_distortion"]
-    write_config(os.path.join(work, "plain.yaml"), photos, base_effects, "out_plain")
+    write_config(os.path.join(work, "plain.yaml"),
+                 {"shots": f"{photos}/shots.csv", "targets": f"{photos}/targets.yaml"},
+                 base_effects, "out_plain")
     run([rtscalib, "--config", os.path.join(work, "plain.yaml")])
     ranking = json.load(open(os.path.join(work, "out_plain", "report.json")))["diagnosis"]["ranking"]
     first = ranking[0] if ranking else {}
@@ -111,10 +113,18 @@ def main():
           and "hz_eccentricity" in first.get("config_line", ""),
           f"diagnosis ranks first: {first.get('effect')} ({first.get('config_line')})")
 
-    # 3. With the effect: intrinsics and the effect against the truth.
-    write_config(os.path.join(work, "hz.yaml"), photos, base_effects + ["hz_eccentricity"],
-                 "out_hz")
+    # 3. With the effect: intrinsics and the effect against the truth. From
+    # the detected pixels this time (SPEC 7: empty X, Y, Z are corners of
+    # the boards of data.targets), the other path a user may take; the image
+    # sizes come from detect's width, height columns.
+    write_config(os.path.join(work, "hz.yaml"),
+                 {"pixels": detected, "targets": f"{photos}/targets.yaml"},
+                 base_effects + ["hz_eccentricity"], "out_hz")
     run([rtscalib, "--config", os.path.join(work, "hz.yaml")])
+    sizes = json.load(open(os.path.join(work, "out_hz", "report.json")))["image_sizes"]
+    check(all(s["source"] == "images" and [s["width"], s["height"]] == truth["image_size"]
+              for s in sizes.values()),
+          f"image sizes from the photos, through pixels.csv: {sizes}")
     model_path = os.path.join(work, "out_hz", "model.yaml")
     model = yaml.safe_load(open(model_path))
     normalised = []

@@ -557,6 +557,24 @@ TEST(Config, ShotsWithoutTargetsNameTheMissingKey) {
   EXPECT_THAT(e.what(), HasSubstr("data.targets next to data.shots"));
 }
 
+// SPEC 7: pixels.csv rows with empty X, Y, Z are corners of the boards of
+// data.targets (what `rtscalib detect` writes): pixels and targets without
+// photos are a whole data set; targets alone are not.
+TEST(Config, TargetsGoWithShotsOrPixels) {
+  TempDir dir;
+  dir.Write("pixels.csv", "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v\n");
+  dir.Write("records.csv", "face,zoom,phi,theta,tool,u,v,d,x,y,z\n");
+  dir.Write("targets.yaml", "boards: []\n");
+  const RunConfig c = LoadConfig(dir.Write("run.yaml",
+                                           "data: {pixels: pixels.csv, targets: targets.yaml}\n"));
+  EXPECT_EQ(c.targets_path, dir.Path("targets.yaml"));
+  EXPECT_TRUE(c.shots_path.empty());
+  const InputError e = ConfigError(dir, "data: {records: records.csv, targets: targets.yaml}\n");
+  EXPECT_EQ(e.key, "data.targets");
+  EXPECT_THAT(e.what(), HasSubstr("data.shots or data.pixels next to data.targets (the boards "
+                                  "are seen in photos, or in pixels.csv rows with empty X, Y, Z)"));
+}
+
 TEST(Config, BoardPosesMustBeKnownOrUnknown) {
   TempDir dir;
   render::RenderSettings render;

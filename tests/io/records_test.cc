@@ -371,6 +371,42 @@ TEST(PixelsBoards, EmptyXyzMeansABoardCorner) {
   EXPECT_EQ(e.column, "X");
 }
 
+// The image size columns `rtscalib detect` writes (SPEC 7: sizes come from
+// the images): one size per zoom; both columns or neither.
+TEST(PixelsBoards, ImageSizesComeWithTheRows) {
+  TempDir dir;
+  const std::string header = "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v,width,height\n";
+  const PixelsFile f = ReadPixels(dir.Write("pixels.csv", header +
+                                                              "1,0,0.5,1.5,s1,48,2,,,,100,200,1280,960\n"
+                                                              "1,1,0.5,1.5,s2,48,2,,,,100,200,2592,1944\n"
+                                                              "1,1,0.5,1.5,s3,48,2,,,,100,200,,\n"));
+  ASSERT_EQ(f.image_sizes.size(), 2u);
+  EXPECT_EQ(f.image_sizes.at(0).width, 1280);
+  EXPECT_EQ(f.image_sizes.at(1).height, 1944);
+  EXPECT_TRUE(ReadPixels(dir.Write("plain.csv", std::string(kPixelsHeader) + "1,0,0,1,s,1,0,0,0,0,1,1\n"))
+                  .image_sizes.empty());
+
+  const InputError other = CatchInputError([&] {
+    ReadPixels(dir.Write("two.csv", header + "1,0,0.5,1.5,s1,48,2,,,,100,200,1280,960\n"
+                                             "1,0,0.5,1.5,s2,48,2,,,,100,200,1280,720\n"));
+  });
+  EXPECT_EQ(other.line, 3);
+  EXPECT_EQ(other.column, "height");
+  EXPECT_THAT(other.what(), HasSubstr("expected the image size 1280x960 of zoom 0 (line 2; one "
+                                      "camera per zoom level, SPEC 2), got '720'"));
+  const InputError half = CatchInputError([&] {
+    ReadPixels(dir.Write("half.csv", "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v,width\n"
+                                     "1,0,0.5,1.5,s1,48,2,,,,100,200,1280\n"));
+  });
+  EXPECT_EQ(half.column, "width");
+  EXPECT_THAT(half.what(), HasSubstr("a 'height' column beside 'width' (the image size: both "
+                                     "columns or neither)"));
+  const InputError zero = CatchInputError([&] {
+    ReadPixels(dir.Write("zero.csv", header + "1,0,0.5,1.5,s1,48,2,,,,100,200,0,960\n"));
+  });
+  EXPECT_EQ(zero.column, "width");
+}
+
 }  // namespace
 }  // namespace rtscalib
 
