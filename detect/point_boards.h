@@ -1,9 +1,9 @@
 // ChArUco and chessboards (TagBoard::IsPointBoard, libcalib/model/targets.h)
 // found in a photo by OpenCV's own detectors: cv::aruco::detectMarkers +
 // cv::aruco::interpolateCornersCharuco for ChArUco,
-// cv::findChessboardCornersSB (CALIB_CB_ACCURACY) for chessboards. Pixel
-// positions in OpenCV's convention, which is SPEC 2's (pixel (i, j) centred
-// at (i, j)).
+// cv::findChessboardCornersSB for chessboards, both followed by
+// cv::cornerSubPix to the saddle points. Pixel positions in OpenCV's
+// convention, which is SPEC 2's (pixel (i, j) centred at (i, j)).
 //
 // Targets: inner corner k = r (cols - 1) + c of the board (targets.h), as
 // pixels.csv target first_id + k, corner 0. ChArUco's corner ids are k

@@ -66,7 +66,23 @@ struct DistortionMap {
   }
 };
 
-DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor) {
+// The camera of the supersampled image: k x k pixels for every pixel of
+// `cam`, over the same field (u_k + 1/2 = k (u + 1/2), docs/rendering.md).
+CameraTool Supersampled(const CameraTool& cam, int k) {
+  CameraTool fine = cam;
+  fine.width = cam.width * k;
+  fine.height = cam.height * k;
+  fine.intrinsics[0] = k * cam.intrinsics[0];
+  fine.intrinsics[1] = k * cam.intrinsics[1];
+  fine.intrinsics[2] = k * (cam.intrinsics[2] + 0.5) - 0.5;
+  fine.intrinsics[3] = k * (cam.intrinsics[3] + 0.5) - 0.5;
+  return fine;
+}
+
+// The map of `cam` at `supersample` k: from every pixel of the supersampled
+// distorted image (Supersampled(cam, k)) to the supersampled ideal canvas.
+DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
+                                 double max_canvas_factor) {
   DistortionMap m;
   m.intrinsics = cam.intrinsics;
   m.distortion = cam.distortion;
@@ -75,14 +91,15 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor
   m.identity = !HasDistortion(cam);
   m.canvas = {cam.width, cam.height, 0, 0};
   if (m.identity) return m;
+  const CameraTool fine = Supersampled(cam, supersample);
 
-  const double fx = cam.intrinsics[0], fy = cam.intrinsics[1];
-  const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
+  const double fx = fine.intrinsics[0], fy = fine.intrinsics[1];
+  const double cx = fine.intrinsics[2], cy = fine.intrinsics[3];
   // Ideal pixel of output pixel (u, v); NaN where back-projection fails.
   auto ideal = [&](double u, double v) {
     const double pixel[2] = {u, v};
     double xn, yn;
-    if (UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
+    if (UndistortPixel(fine.intrinsics.data(), fine.distortion.data(), pixel, &xn, &yn) &&
         std::isfinite(xn) && std::isfinite(yn)) {
       return cv::Vec2d(fx * xn + cx, fy * yn + cy);
     }
@@ -90,20 +107,20 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor
     return cv::Vec2d(nan, nan);
   };
   // Exact back-projection of every pixel costs ~0.5 s at 1280 x 960. The map is
-  // smooth, so it is solved on a grid of kStep pixels and interpolated
-  // bilinearly; every cell is checked at its centre and solved pixel by pixel
-  // when interpolation is off by more than kTolerance there (strong or
-  // failing distortion near the rim).
-  constexpr int kStep = 4;
-  constexpr double kTolerance = 1e-3;  // px, far below the corner accuracy
-  const int gw = (cam.width - 1 + kStep - 1) / kStep + 1,
-            gh = (cam.height - 1 + kStep - 1) / kStep + 1;
-  auto node_u = [&](int i) { return std::min(i * kStep, cam.width - 1); };
-  auto node_v = [&](int j) { return std::min(j * kStep, cam.height - 1); };
-  cv::Mat ideal_u(cam.height, cam.width, CV_64FC1), ideal_v(cam.height, cam.width, CV_64FC1);
+  // smooth, so it is solved on a grid of kStep (supersampled) pixels and
+  // interpolated bilinearly; every cell is checked at its centre and solved
+  // pixel by pixel when interpolation is off by more than kTolerance there
+  // (strong or failing distortion near the rim).
+  const int kStep = 4 * supersample;  // the same grid nodes whatever the supersampling
+  constexpr double kTolerance = 1e-3;  // supersampled px, far below the corner accuracy
+  const int gw = (fine.width - 1 + kStep - 1) / kStep + 1,
+            gh = (fine.height - 1 + kStep - 1) / kStep + 1;
+  auto node_u = [&](int i) { return std::min(i * kStep, fine.width - 1); };
+  auto node_v = [&](int j) { return std::min(j * kStep, fine.height - 1); };
+  cv::Mat ideal_u(fine.height, fine.width, CV_64FC1), ideal_v(fine.height, fine.width, CV_64FC1);
   if (gw < 2 || gh < 2) {  // a single row or column of pixels: no cells
-    for (int v = 0; v < cam.height; ++v) {
-      for (int u = 0; u < cam.width; ++u) {
+    for (int v = 0; v < fine.height; ++v) {
+      for (int u = 0; u < fine.width; ++u) {
         const cv::Vec2d p = ideal(u, v);
         ideal_u.at<double>(v, u) = p[0];
         ideal_v.at<double>(v, u) = p[1];
@@ -145,13 +162,13 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor
 
   // Canvas: the bounding box of all ideal pixels (+2 px for bilinear support),
   // clipped to max_canvas_factor times the image around the image itself.
-  double umin = 0, umax = cam.width - 1, vmin = 0, vmax = cam.height - 1;
-  const double lim_u0 = -(max_canvas_factor - 1) / 2 * cam.width;
-  const double lim_u1 = cam.width - 1 - lim_u0;
-  const double lim_v0 = -(max_canvas_factor - 1) / 2 * cam.height;
-  const double lim_v1 = cam.height - 1 - lim_v0;
-  for (int v = 0; v < cam.height; ++v) {
-    for (int u = 0; u < cam.width; ++u) {
+  double umin = 0, umax = fine.width - 1, vmin = 0, vmax = fine.height - 1;
+  const double lim_u0 = -(max_canvas_factor - 1) / 2 * fine.width;
+  const double lim_u1 = fine.width - 1 - lim_u0;
+  const double lim_v0 = -(max_canvas_factor - 1) / 2 * fine.height;
+  const double lim_v1 = fine.height - 1 - lim_v0;
+  for (int v = 0; v < fine.height; ++v) {
+    for (int u = 0; u < fine.width; ++u) {
       const double iu = ideal_u.at<double>(v, u), iv = ideal_v.at<double>(v, u);
       if (!(iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1)) continue;
       umin = std::min(umin, iu);
@@ -165,10 +182,10 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, double max_canvas_factor
   m.canvas.width = static_cast<int>(std::ceil(umax) + 2 - m.canvas.u0) + 1;
   m.canvas.height = static_cast<int>(std::ceil(vmax) + 2 - m.canvas.v0) + 1;
 
-  m.map_x.create(cam.height, cam.width, CV_32FC1);
-  m.map_y.create(cam.height, cam.width, CV_32FC1);
-  for (int v = 0; v < cam.height; ++v) {
-    for (int u = 0; u < cam.width; ++u) {
+  m.map_x.create(fine.height, fine.width, CV_32FC1);
+  m.map_y.create(fine.height, fine.width, CV_32FC1);
+  for (int v = 0; v < fine.height; ++v) {
+    for (int u = 0; u < fine.width; ++u) {
       const double iu = ideal_u.at<double>(v, u), iv = ideal_v.at<double>(v, u);
       const bool ok = iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1;
       m.map_x.at<float>(v, u) = ok ? static_cast<float>(iu - m.canvas.u0) : -10.f;
@@ -274,13 +291,15 @@ struct SceneRenderer::Impl {
   // recent first: a shot list alternating between zooms must not rebuild them.
   std::list<DistortionMap> maps;
   static constexpr size_t kMaxMaps = 8;
-  cv::Mat canvas;     // CV_32FC1 ideal image after downsampling
-  cv::Mat distorted;  // CV_32FC1
+  cv::Mat canvas;     // CV_32FC1 ideal image (supersampled when distorted)
+  cv::Mat distorted;  // CV_32FC1, supersampled
+  cv::Mat output;     // CV_32FC1, distorted and box-averaged
 
   void Build();
-  // Renders the ideal image of `cam`'s intrinsics on `canvas` into `out`.
+  // Renders the ideal image of `cam`'s intrinsics on `canvas` (in `cam`'s
+  // pixels) at `box` times its size and box-averages it back into `out`.
   void RenderCanvas(const Rigid3& ref_from_cam, const CameraTool& cam, const Canvas& canvas,
-                    cv::Mat* out);
+                    int box, cv::Mat* out);
 };
 
 void SceneRenderer::Impl::Build() {
@@ -407,8 +426,8 @@ void SceneRenderer::Impl::Build() {
 }
 
 void SceneRenderer::Impl::RenderCanvas(const Rigid3& ref_from_cam, const CameraTool& cam,
-                                       const Canvas& cv_canvas, cv::Mat* out) {
-  const int k = options.supersample;
+                                       const Canvas& cv_canvas, int box, cv::Mat* out) {
+  const int k = box;
   const int w = cv_canvas.width * k, h = cv_canvas.height * k;
   out->create(cv_canvas.height, cv_canvas.width, CV_32FC1);
 
@@ -503,7 +522,8 @@ const RenderOptions& SceneRenderer::options() const { return impl_->options; }
 
 cv::Mat SceneRenderer::RenderPinhole(const Rigid3& ref_from_cam, const CameraTool& cam) {
   cv::Mat out;
-  impl_->RenderCanvas(ref_from_cam, cam, Canvas{cam.width, cam.height, 0, 0}, &out);
+  impl_->RenderCanvas(ref_from_cam, cam, Canvas{cam.width, cam.height, 0, 0},
+                      impl_->options.supersample, &out);
   return out;
 }
 
@@ -514,18 +534,33 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
   auto it = std::find_if(im.maps.begin(), im.maps.end(),
                          [&](const DistortionMap& m) { return m.Matches(cam); });
   if (it == im.maps.end()) {
-    im.maps.push_front(BuildDistortionMap(cam, o.max_canvas_factor));
+    im.maps.push_front(BuildDistortionMap(cam, o.supersample, o.max_canvas_factor));
     if (im.maps.size() > Impl::kMaxMaps) im.maps.pop_back();
   } else if (it != im.maps.begin()) {
     im.maps.splice(im.maps.begin(), im.maps, it);
   }
   const DistortionMap& map = im.maps.front();
-  im.RenderCanvas(ref_from_cam, cam, map.canvas, &im.canvas);
   cv::Mat* img = &im.canvas;
-  if (!map.identity) {
+  if (map.identity) {
+    im.RenderCanvas(ref_from_cam, cam, map.canvas, o.supersample, &im.canvas);
+  } else {
+    // Distorted: the supersampled ideal canvas is resampled at the
+    // supersampled pixels, then box-averaged, so that every output pixel is
+    // the mean of k x k samples over its own area. Resampling the
+    // box-averaged image instead (one bilinear sample per output pixel)
+    // makes each edge's blur depend on the map's sub-pixel phase, which
+    // drifts slowly over the image: gradient-based corner detectors
+    // (cv::cornerSubPix) then moved ChArUco and chessboard corners by up to
+    // 0.04 px with the position in the image (docs/rendering.md).
+    im.RenderCanvas(ref_from_cam, Supersampled(cam, o.supersample), map.canvas, 1, &im.canvas);
     RemapBilinear(im.canvas, map.map_x, map.map_y, static_cast<float>(o.background),
                   &im.distorted);
-    img = &im.distorted;
+    if (o.supersample > 1) {
+      cv::resize(im.distorted, im.output, cv::Size(cam.width, cam.height), 0, 0, cv::INTER_AREA);
+      img = &im.output;
+    } else {
+      img = &im.distorted;
+    }
   }
   if (o.blur_sigma > 0) cv::GaussianBlur(*img, *img, cv::Size(), o.blur_sigma, o.blur_sigma);
   if (o.exposure != 1.0) *img *= o.exposure;

@@ -107,6 +107,68 @@ TEST(ShotsTest, RenderInWorkersThenDetect) {
   EXPECT_TRUE(matched);
 }
 
+// ChArUco and chessboards through the same shots: one exact.csv row and one
+// observation (corner 0) per inner corner, chessboards oriented by the
+// shot's face.
+TEST(ShotsTest, PointBoardsRenderAndDetect) {
+  EnsureDisplay();
+  TargetScene scene;
+  TagBoard charuco;
+  charuco.kind = BoardKind::kCharuco;
+  charuco.family = "DICT_5X5_50";
+  charuco.first_id = 100;
+  charuco.rows = 5;
+  charuco.cols = 7;
+  charuco.square_size = 0.04;
+  charuco.marker_size = 0.03;
+  charuco.ref_from_board.translation = Eigen::Vector3d(-0.3, -0.1, 0.6);
+  TagBoard chessboard;
+  chessboard.kind = BoardKind::kChessboard;
+  chessboard.family = "chessboard";
+  chessboard.first_id = 200;
+  chessboard.rows = 6;
+  chessboard.cols = 9;
+  chessboard.square_size = 0.025;
+  chessboard.ref_from_board.translation = Eigen::Vector3d(0.03, -0.075, 0.6);
+  scene.boards = {charuco, chessboard};
+  const CameraTool cam = TestCamera(true);
+  std::vector<Shot> shots;
+  for (int face : {1, 2}) {
+    Shot s;
+    s.face = face;
+    s.id = "f" + std::to_string(face);
+    s.cam = cam;
+    s.ref_from_cam = AimAt(Eigen::Vector3d(0.02, 0, 0), Eigen::Vector3d(-0.02, 0, 0.6), 640, 480,
+                           face == 2 ? M_PI + 0.03 : 0.03, cam);
+    shots.push_back(s);
+  }
+  TempDir dir("point_boards");
+  RenderShotsOptions options;
+  options.out_dir = dir.str();
+  options.progress = false;
+  const RenderShotsResult r = RenderShots(scene, shots, options);
+  EXPECT_EQ(r.exact_corners, 2 * (24 + 40));
+  const std::vector<std::string> exact = Lines(dir / "exact.csv");
+  for (size_t i = 1; i < exact.size(); ++i) {
+    EXPECT_NE(exact[i].find(",0,"), std::string::npos) << exact[i];
+    EXPECT_NE(exact[i].find(",visible"), std::string::npos) << exact[i];
+  }
+  DetectShotsOptions dopt;
+  dopt.progress = false;
+  const DetectShotsResult d = DetectShots(scene, shots, dir.str(), dopt);
+  EXPECT_EQ(d.total.expected, 2 * (24 + 40));
+  EXPECT_EQ(d.total.found, d.total.expected);
+  EXPECT_EQ(d.total.corners_kept, d.total.found);
+  ASSERT_EQ(d.pixels.size(), static_cast<size_t>(d.total.found));
+  for (const PixelObservation& p : d.pixels) EXPECT_EQ(p.corner, 0);
+  // Measured 0.06 px; a chessboard numbered from the wrong end would be
+  // whole squares off and dropped as mismatched.
+  EXPECT_EQ(d.total.mismatched, 0);
+  EXPECT_LE(d.total.rms_error_px, 0.1);
+  std::printf("point boards through DetectShots: %d of %d corners, RMS %.4f px, max %.4f px\n",
+              d.total.found, d.total.expected, d.total.rms_error_px, d.total.max_error_px);
+}
+
 TEST(ShotsTest, ShardsMergeIntoTheUnshardedOutput) {
   EnsureDisplay();
   const TargetScene scene = SceneOf(FrontBoard(2, 3, 2.0));

@@ -78,6 +78,54 @@ TEST(ExpectTagsTest, OccludedByANearerBoard) {
   EXPECT_EQ(tags.back().status, TagStatus::kVisible);  // the near tag itself
 }
 
+// ChArUco and chessboards: one target per inner corner, its corner
+// repeated; border and small judged by the four squares around it.
+TEST(ExpectTagsTest, PointBoardsHaveOneCornerPerTarget) {
+  TagBoard charuco;
+  charuco.kind = BoardKind::kCharuco;
+  charuco.family = "DICT_4X4_50";
+  charuco.first_id = 100;
+  charuco.rows = 5;
+  charuco.cols = 7;
+  charuco.square_size = 0.04;
+  charuco.marker_size = 0.03;  // 6 bits of 5 mm
+  charuco.ref_from_board.translation = Eigen::Vector3d(-0.14, -0.1, 1.0);
+  TagBoard chessboard;
+  chessboard.kind = BoardKind::kChessboard;
+  chessboard.family = "chessboard";
+  chessboard.first_id = 200;
+  chessboard.rows = 6;
+  chessboard.cols = 9;
+  chessboard.square_size = 0.04;  // 8 bits of 5 mm
+  chessboard.ref_from_board.translation = Eigen::Vector3d(-0.18, -0.12, 1.0);
+  const CameraTool cam = TestCamera(false);
+  for (const TagBoard& board : {charuco, chessboard}) {
+    const TargetScene scene = SceneOf(board);
+    const std::vector<ExpectedTag> home = ExpectTags(scene, Rigid3(), cam);
+    ASSERT_EQ(static_cast<int>(home.size()), board.NumTags());
+    EXPECT_EQ(Count(home, TagStatus::kVisible), board.NumTags()) << board.family;
+    for (const ExpectedTag& t : home) {
+      EXPECT_EQ(t.corners, 1);
+      EXPECT_EQ(t.family, board.family);
+      EXPECT_NEAR(t.bit_px, 1000 * 0.005 / 1.0, 0.1);  // 5 mm bits at 1 m, fx = 1000
+      for (int c = 1; c < 4; ++c) {
+        EXPECT_EQ(t.X[c], t.X[0]);
+        EXPECT_EQ(t.uv[c], t.uv[0]);
+      }
+    }
+    EXPECT_NEAR((home[0].X[0] - board.ref_from_board * board.CornersInBoard(0)[0]).norm(), 0,
+                1e-15);
+    // The inner corner 8 px inside the image edge: its squares reach beyond.
+    const Eigen::Vector3d first = home[0].X[0];
+    const Rigid3 cut = AimAt(Eigen::Vector3d::Zero(), first, 12, 400, 0, cam);
+    const std::vector<ExpectedTag> at_edge = ExpectTags(scene, cut, cam);
+    EXPECT_EQ(at_edge[0].status, TagStatus::kBorder) << board.family;
+    EXPECT_GT(Count(at_edge, TagStatus::kVisible), 0);
+    const Rigid3 far = AimAt(Eigen::Vector3d(0, 0, -2), board.CentreInRef(), 640, 480, 0, cam);
+    EXPECT_EQ(Count(ExpectTags(scene, far, cam), TagStatus::kSmall), board.NumTags());
+  }
+}
+
 // Rendered and detected: tags at the image border and at grazing angles are
 // skipped and counted; every kept corner is a correct one.
 void ExpectOnlyGoodCorners(const TargetScene& scene, const Rigid3& pose, const CameraTool& cam,

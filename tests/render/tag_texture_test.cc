@@ -5,6 +5,9 @@
 
 #include <cmath>
 
+#include <opencv2/aruco/charuco.hpp>
+
+#include "detect/point_boards.h"
 #include "detect/tag_family.h"
 
 namespace rtscalib::render {
@@ -154,6 +157,157 @@ TEST(TagTextureTest, PrintedAreaMatchesTheTexture) {
   EXPECT_NEAR(r.x_max, tex.x_max(), 1e-12);
   EXPECT_NEAR(r.y_min, tex.y_min(), 1e-12);
   EXPECT_NEAR(r.y_max, tex.y_max(), 1e-12);
+}
+
+// ChArUco and chessboards (docs/photos.md): square (r, c) is
+// [c s, (c + 1) s] x [r s, (r + 1) s], black when r + c is even.
+TagBoard PointBoard(BoardKind kind, int rows, int cols, double square, double marker = 0) {
+  TagBoard b;
+  b.kind = kind;
+  b.family = kind == BoardKind::kCharuco ? "DICT_4X4_50" : "chessboard";
+  b.rows = rows;
+  b.cols = cols;
+  b.square_size = square;
+  b.marker_size = marker;
+  return b;
+}
+
+// Every square's corners land exactly on texel boundaries at multiples of
+// pixels_per_bit (so the inner corners, the targets, stay put through the
+// first mipmap levels); each square is uniformly black or white next to the
+// corner, the top-left one black.
+void ExpectExactSquares(const TagBoard& board, const TagTexture& tex) {
+  const double s = board.square_size;
+  for (int r = 0; r <= board.rows; ++r) {
+    for (int c = 0; c <= board.cols; ++c) {
+      const Eigen::Vector2d t = tex.TexelFromBoard(c * s, r * s);
+      EXPECT_NEAR(t.x(), std::round(t.x()), 1e-9) << r << "," << c;
+      EXPECT_NEAR(t.y(), std::round(t.y()), 1e-9) << r << "," << c;
+      EXPECT_EQ(std::lround(t.x()) % tex.pixels_per_bit, 0);
+      EXPECT_EQ(std::lround(t.y()) % tex.pixels_per_bit, 0);
+      // The texels just inside the four squares around the point.
+      for (int dr : {-1, 0}) {
+        for (int dc : {-1, 0}) {
+          const int sr = r + dr, sc = c + dc;
+          const bool on_board = sr >= 0 && sc >= 0 && sr < board.rows && sc < board.cols;
+          const uint8_t expected = on_board && (sr + sc) % 2 == 0 ? 0 : 255;
+          EXPECT_EQ(TexelAt(tex, t, dc + 0.5, dr + 0.5), expected)
+              << "square " << sr << "," << sc << " at its corner " << r << "," << c;
+        }
+      }
+    }
+  }
+}
+
+TEST(TagTextureTest, ChessboardSquaresLandOnTexelBoundaries) {
+  const TagBoard board = PointBoard(BoardKind::kChessboard, 6, 9, 0.025);
+  const TagTexture tex = MakeTagTexture(board);
+  EXPECT_EQ(tex.pixels_per_bit, 16);
+  EXPECT_DOUBLE_EQ(tex.bit_size, 0.025 / kChessboardBitsPerSquare);
+  ExpectExactSquares(board, tex);
+  // A white margin of one square around 9 x 6 squares.
+  EXPECT_EQ(tex.image.cols, (2 + 9) * kChessboardBitsPerSquare * 16);
+  EXPECT_EQ(tex.image.rows, (2 + 6) * kChessboardBitsPerSquare * 16);
+  EXPECT_NEAR(tex.x_min(), -0.025, 1e-12);
+  EXPECT_NEAR(tex.x_max(), 10 * 0.025, 1e-12);
+  EXPECT_NEAR(tex.y_max(), 7 * 0.025, 1e-12);
+  // Only the squares' outline and the margin are breakpoints.
+  EXPECT_EQ(tex.x_board.size(), 4u);
+  const BoardRect r = PrintedArea(board);
+  EXPECT_NEAR(r.x_min, tex.x_min(), 1e-12);
+  EXPECT_NEAR(r.x_max, tex.x_max(), 1e-12);
+  EXPECT_NEAR(r.y_min, tex.y_min(), 1e-12);
+  EXPECT_NEAR(r.y_max, tex.y_max(), 1e-12);
+}
+
+// The ChArUco texture against OpenCV's own board: the squares exact, and
+// every marker, bit for bit at its bit centres, where CharucoBoard::create
+// puts it (objPoints, ids) and as CharucoBoard::draw prints it.
+TEST(TagTextureTest, CharucoIsOpenCvsBoard) {
+  // 5 x 7 squares of 4 cm, 3 cm markers (6 bits of 5 mm, margins of 1 bit).
+  // An even number of rows too: OpenCV's legacy boards of even rows differ.
+  for (int rows : {5, 4}) {
+    const TagBoard board = PointBoard(BoardKind::kCharuco, rows, 7, 0.04, 0.03);
+    const TagTexture tex = MakeTagTexture(board);
+    EXPECT_DOUBLE_EQ(tex.bit_size, 0.005);
+    ExpectExactSquares(board, tex);
+    const BoardRect area = PrintedArea(board);
+    EXPECT_NEAR(area.x_min, tex.x_min(), 1e-12);
+    EXPECT_NEAR(area.y_max, tex.y_max(), 1e-12);
+
+    const cv::Ptr<cv::aruco::CharucoBoard> cv_board = cv::aruco::CharucoBoard::create(
+        board.cols, board.rows, 0.04f, 0.03f,
+        cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50));
+    const std::vector<cv::Mat> codes = detect::CharucoMarkerImages(board);
+    ASSERT_EQ(codes.size(), cv_board->ids.size());
+    ASSERT_EQ(static_cast<int>(codes.size()), board.rows * board.cols / 2);
+    for (size_t i = 0; i < codes.size(); ++i) {
+      // objPoints: top-left, top-right, bottom-right, bottom-left (y down).
+      const cv::Point3f top_left = cv_board->objPoints[i][0];
+      const double bit = tex.bit_size;
+      for (int r = 0; r < codes[i].rows; ++r) {
+        for (int c = 0; c < codes[i].cols; ++c) {
+          const Eigen::Vector2d t =
+              tex.TexelFromBoard(top_left.x + (c + 0.5) * bit, top_left.y + (r + 0.5) * bit);
+          ASSERT_EQ(TexelAt(tex, t, 0, 0), codes[i].at<uint8_t>(r, c))
+              << "marker " << i << " (id " << cv_board->ids[i] << ") bit " << r << "," << c;
+        }
+      }
+      // The marker's corners on texel boundaries (objPoints are floats:
+      // 1e-3 texel is 3e-7 m here).
+      const Eigen::Vector2d t0 = tex.TexelFromBoard(top_left.x, top_left.y);
+      EXPECT_NEAR(t0.x(), std::round(t0.x()), 1e-3);
+      EXPECT_NEAR(t0.y(), std::round(t0.y()), 1e-3);
+    }
+
+    // CharucoBoard::draw at 48 px per square (6 px per marker bit, so that
+    // OpenCV's integer layout is exact): every pixel, sampled at its centre
+    // in the texture.
+    const int px = 48;
+    cv::Mat drawn;
+    cv_board->draw(cv::Size(board.cols * px, board.rows * px), drawn, 0, 1);
+    int differ = 0;
+    for (int v = 0; v < drawn.rows; ++v) {
+      for (int u = 0; u < drawn.cols; ++u) {
+        const double s = board.square_size / px;
+        const Eigen::Vector2d t = tex.TexelFromBoard((u + 0.5) * s, (v + 0.5) * s);
+        differ += TexelAt(tex, t, 0, 0) != drawn.at<uint8_t>(v, u);
+      }
+    }
+    EXPECT_EQ(differ, 0) << "rows " << rows;
+  }
+}
+
+// A marker gap that is no whole number of bits stays exact: the gap is
+// stretched, the squares and the marker bits are not.
+TEST(TagTextureTest, CharucoMarkerOfAnyProportion) {
+  const TagBoard board = PointBoard(BoardKind::kCharuco, 3, 4, 0.05, 0.0371);
+  const TagTexture tex = MakeTagTexture(board);
+  ExpectExactSquares(board, tex);
+  EXPECT_NEAR(tex.bit_size, 0.0371 / 6, 1e-15);
+  const std::vector<cv::Mat> codes = detect::CharucoMarkerImages(board);
+  // Marker 0 sits in square (0, 1), centred.
+  const double x0 = 0.05 + (0.05 - 0.0371) / 2, y0 = (0.05 - 0.0371) / 2;
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      const Eigen::Vector2d t =
+          tex.TexelFromBoard(x0 + (c + 0.5) * tex.bit_size, y0 + (r + 0.5) * tex.bit_size);
+      EXPECT_EQ(TexelAt(tex, t, 0, 0), codes[0].at<uint8_t>(r, c)) << r << "," << c;
+    }
+  }
+}
+
+TEST(TagTextureTest, RejectsUnprintablePointBoards) {
+  EXPECT_THROW(MakeTagTexture(PointBoard(BoardKind::kChessboard, 1, 9, 0.025)),
+               std::invalid_argument);
+  EXPECT_THROW(MakeTagTexture(PointBoard(BoardKind::kCharuco, 5, 7, 0.04, 0.04)),
+               std::invalid_argument);
+  TagBoard unknown = PointBoard(BoardKind::kCharuco, 5, 7, 0.04, 0.03);
+  unknown.family = "DICT_9X9_50";
+  EXPECT_THROW(MakeTagTexture(unknown), std::invalid_argument);
+  // DICT_4X4_50 has 50 markers; 11 x 11 squares need 60.
+  EXPECT_THROW(MakeTagTexture(PointBoard(BoardKind::kCharuco, 11, 11, 0.04, 0.03)),
+               std::invalid_argument);
 }
 
 }  // namespace
