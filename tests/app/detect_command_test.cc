@@ -48,11 +48,13 @@ TEST(DetectCommandTest, WritesPixelsAndSummaryAndRefusesToOverwrite) {
   args.quiet = true;
   ASSERT_EQ(app::RunDetect(args), 0);
   ASSERT_TRUE(fs::exists(args.out + ".summary.csv"));
-  // A posed board: X, Y, Z filled, so the SPEC 3 reader takes the file (the
-  // extra width/height columns with a note).
+  // A posed board: X, Y, Z filled, so the SPEC 3 reader takes the file; the
+  // width/height columns give the image size (SPEC 7).
   const PixelsFile pixels = ReadPixels(args.out);
   ASSERT_EQ(pixels.pixels.size(), 4u);
-  EXPECT_EQ(pixels.notes.size(), 1u);
+  EXPECT_TRUE(pixels.notes.empty());
+  ASSERT_EQ(pixels.image_sizes.size(), 1u);
+  EXPECT_GT(pixels.image_sizes.begin()->second.width, 0);
   for (int k = 0; k < 4; ++k) {
     const PixelObservation& p = pixels.pixels[k];
     EXPECT_EQ(p.shot, "p1");
