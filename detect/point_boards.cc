@@ -4,6 +4,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <opencv2/imgproc.hpp>
 
@@ -44,12 +45,21 @@ cv::Ptr<cv::aruco::CharucoBoard> MakeCharuco(const TagBoard& board) {
 }
 
 // cv::cornerSubPix to the saddle points of the squares' corners, in SPEC 2
-// pixels whatever the start. Window: a quarter of `square_px` (the smallest
-// distance between neighbouring corners of a row, one square), 2..10 px,
-// so that it holds the four squares' edges near the corner and not the next
-// corners (or a ChArUco marker's edges beyond the square's margin).
-void RefineSaddles(const cv::Mat& gray, double square_px, std::vector<cv::Point2f>* corners) {
-  const int half = square_px < 1e9 ? std::clamp(static_cast<int>(square_px / 4), 2, 10) : 5;
+// pixels whatever the start. `square_px` is the smallest distance between
+// neighbouring corners of a row (one square; 1e9 when unknown), `clear` the
+// fraction of a square around a corner that holds nothing but the four
+// squares' edges (a ChArUco marker starts (square - marker) / 2 from its
+// square's edge). Window half size: a quarter of the square, and one pixel
+// less than the clear part, 2..10 px: the gradients of anything else in the
+// window (the next corners, a marker's edges) pull the saddle (a 7.5 cm /
+// 5.6 cm ChArUco board rendered at 64 px squares: 0.11 px RMS with a 10 px
+// window reaching into the markers, 0.077 px with 7 px; docs/photos.md).
+void RefineSaddles(const cv::Mat& gray, double square_px, double clear,
+                   std::vector<cv::Point2f>* corners) {
+  int half = 5;
+  if (square_px < 1e9) {
+    half = std::clamp(static_cast<int>(std::min(square_px / 4, clear * square_px - 1)), 2, 10);
+  }
   cv::cornerSubPix(gray, *corners, cv::Size(half, half), cv::Size(-1, -1),
                    cv::TermCriteria(cv::TermCriteria::MAX_ITER | cv::TermCriteria::EPS, 100, 1e-4));
 }
@@ -80,7 +90,8 @@ PointBoardDetection DetectCharuco(const cv::Mat& gray, const TagBoard& board) {
       }
     }
   }
-  RefineSaddles(gray, square_px, &corners);
+  RefineSaddles(gray, square_px, (board.square_size - board.marker_size) / (2 * board.square_size),
+                &corners);
   for (size_t i = 0; i < ids.size(); ++i) {
     out.corners.emplace_back(ids[i], Eigen::Vector2d(corners[i].x, corners[i].y));
   }
@@ -92,7 +103,7 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
   std::vector<cv::Point2f> grid;
   PointBoardDetection out;
   // Without CALIB_CB_ACCURACY: its corners were 0.13 px RMS off on rendered
-  // photos and cost 0.3 s more per 1280 x 960 image; cornerSubPix from
+  // photos and it cost 0.3 s more per 1280 x 960 image; cornerSubPix from
   // either start converges to the same saddles, 0.06 px RMS
   // (tests/render/point_boards_test.cc, docs/photos.md).
   if (!cv::findChessboardCornersSB(gray, cv::Size(nc, nr), grid,
@@ -106,7 +117,7 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
       square_px = std::min(square_px, static_cast<double>(cv::norm(grid[k + 1] - grid[k])));
     }
   }
-  RefineSaddles(gray, square_px, &grid);
+  RefineSaddles(gray, square_px, 1.0, &grid);
   // Directions of the grid's rows (along k) and columns in the image.
   auto at = [&](int r, int c) { return Eigen::Vector2d(grid[r * nc + c].x, grid[r * nc + c].y); };
   const Eigen::Vector2d along_row = at(0, nc - 1) - at(0, 0);

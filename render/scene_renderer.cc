@@ -57,12 +57,15 @@ struct DistortionMap {
   std::array<double, kNumDistortion> distortion{};
   int width = 0, height = 0;
   bool identity = true;
-  Canvas canvas;
-  cv::Mat map_x, map_y;  // CV_32FC1, output pixel -> canvas pixel (-1: none)
+  int supersample = 1;
+  Canvas canvas;  // in supersampled pixels (Supersampled(cam, supersample))
+  // CV_32FC1, output pixel -> supersampled canvas pixel of its ideal point
+  // (-10: none, its back-projection failed or lies beyond the canvas cap).
+  cv::Mat map_x, map_y;
 
-  bool Matches(const CameraTool& cam) const {
+  bool Matches(const CameraTool& cam, int k) const {
     return cam.intrinsics == intrinsics && cam.distortion == distortion && cam.width == width &&
-           cam.height == height;
+           cam.height == height && k == supersample;
   }
 };
 
@@ -79,8 +82,6 @@ CameraTool Supersampled(const CameraTool& cam, int k) {
   return fine;
 }
 
-// The map of `cam` at `supersample` k: from every pixel of the supersampled
-// distorted image (Supersampled(cam, k)) to the supersampled ideal canvas.
 DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
                                  double max_canvas_factor) {
   DistortionMap m;
@@ -88,18 +89,18 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
   m.distortion = cam.distortion;
   m.width = cam.width;
   m.height = cam.height;
+  m.supersample = supersample;
   m.identity = !HasDistortion(cam);
   m.canvas = {cam.width, cam.height, 0, 0};
   if (m.identity) return m;
-  const CameraTool fine = Supersampled(cam, supersample);
 
-  const double fx = fine.intrinsics[0], fy = fine.intrinsics[1];
-  const double cx = fine.intrinsics[2], cy = fine.intrinsics[3];
+  const double fx = cam.intrinsics[0], fy = cam.intrinsics[1];
+  const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
   // Ideal pixel of output pixel (u, v); NaN where back-projection fails.
   auto ideal = [&](double u, double v) {
     const double pixel[2] = {u, v};
     double xn, yn;
-    if (UndistortPixel(fine.intrinsics.data(), fine.distortion.data(), pixel, &xn, &yn) &&
+    if (UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
         std::isfinite(xn) && std::isfinite(yn)) {
       return cv::Vec2d(fx * xn + cx, fy * yn + cy);
     }
@@ -107,20 +108,20 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
     return cv::Vec2d(nan, nan);
   };
   // Exact back-projection of every pixel costs ~0.5 s at 1280 x 960. The map is
-  // smooth, so it is solved on a grid of kStep (supersampled) pixels and
-  // interpolated bilinearly; every cell is checked at its centre and solved
-  // pixel by pixel when interpolation is off by more than kTolerance there
-  // (strong or failing distortion near the rim).
-  const int kStep = 4 * supersample;  // the same grid nodes whatever the supersampling
-  constexpr double kTolerance = 1e-3;  // supersampled px, far below the corner accuracy
-  const int gw = (fine.width - 1 + kStep - 1) / kStep + 1,
-            gh = (fine.height - 1 + kStep - 1) / kStep + 1;
-  auto node_u = [&](int i) { return std::min(i * kStep, fine.width - 1); };
-  auto node_v = [&](int j) { return std::min(j * kStep, fine.height - 1); };
-  cv::Mat ideal_u(fine.height, fine.width, CV_64FC1), ideal_v(fine.height, fine.width, CV_64FC1);
+  // smooth, so it is solved on a grid of kStep pixels and interpolated
+  // bilinearly; every cell is checked at its centre and solved pixel by pixel
+  // when interpolation is off by more than kTolerance there (strong or
+  // failing distortion near the rim).
+  constexpr int kStep = 4;
+  constexpr double kTolerance = 1e-3;  // px, far below the corner accuracy
+  const int gw = (cam.width - 1 + kStep - 1) / kStep + 1,
+            gh = (cam.height - 1 + kStep - 1) / kStep + 1;
+  auto node_u = [&](int i) { return std::min(i * kStep, cam.width - 1); };
+  auto node_v = [&](int j) { return std::min(j * kStep, cam.height - 1); };
+  cv::Mat ideal_u(cam.height, cam.width, CV_64FC1), ideal_v(cam.height, cam.width, CV_64FC1);
   if (gw < 2 || gh < 2) {  // a single row or column of pixels: no cells
-    for (int v = 0; v < fine.height; ++v) {
-      for (int u = 0; u < fine.width; ++u) {
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
         const cv::Vec2d p = ideal(u, v);
         ideal_u.at<double>(v, u) = p[0];
         ideal_v.at<double>(v, u) = p[1];
@@ -160,15 +161,18 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
     }
   });
 
-  // Canvas: the bounding box of all ideal pixels (+2 px for bilinear support),
-  // clipped to max_canvas_factor times the image around the image itself.
-  double umin = 0, umax = fine.width - 1, vmin = 0, vmax = fine.height - 1;
-  const double lim_u0 = -(max_canvas_factor - 1) / 2 * fine.width;
-  const double lim_u1 = fine.width - 1 - lim_u0;
-  const double lim_v0 = -(max_canvas_factor - 1) / 2 * fine.height;
-  const double lim_v1 = fine.height - 1 - lim_v0;
-  for (int v = 0; v < fine.height; ++v) {
-    for (int u = 0; u < fine.width; ++u) {
+  // Canvas: the bounding box of all ideal pixels, clipped to
+  // max_canvas_factor times the image around the image itself, in
+  // supersampled pixels (u_k = k (u + 1/2) - 1/2), plus 2 of them: the
+  // supersamples lie up to 1/2 - 1/(2k) output pixels beyond the pixel
+  // centres, and bilinear sampling needs one more.
+  double umin = 0, umax = cam.width - 1, vmin = 0, vmax = cam.height - 1;
+  const double lim_u0 = -(max_canvas_factor - 1) / 2 * cam.width;
+  const double lim_u1 = cam.width - 1 - lim_u0;
+  const double lim_v0 = -(max_canvas_factor - 1) / 2 * cam.height;
+  const double lim_v1 = cam.height - 1 - lim_v0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
       const double iu = ideal_u.at<double>(v, u), iv = ideal_v.at<double>(v, u);
       if (!(iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1)) continue;
       umin = std::min(umin, iu);
@@ -177,44 +181,73 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
       vmax = std::max(vmax, iv);
     }
   }
-  m.canvas.u0 = std::floor(umin) - 2;
-  m.canvas.v0 = std::floor(vmin) - 2;
-  m.canvas.width = static_cast<int>(std::ceil(umax) + 2 - m.canvas.u0) + 1;
-  m.canvas.height = static_cast<int>(std::ceil(vmax) + 2 - m.canvas.v0) + 1;
+  const int k = supersample;
+  auto fine = [k](double x) { return k * (x + 0.5) - 0.5; };
+  m.canvas.u0 = std::floor(fine(umin - 0.5)) - 2;
+  m.canvas.v0 = std::floor(fine(vmin - 0.5)) - 2;
+  m.canvas.width = static_cast<int>(std::ceil(fine(umax + 0.5)) + 2 - m.canvas.u0) + 1;
+  m.canvas.height = static_cast<int>(std::ceil(fine(vmax + 0.5)) + 2 - m.canvas.v0) + 1;
 
-  m.map_x.create(fine.height, fine.width, CV_32FC1);
-  m.map_y.create(fine.height, fine.width, CV_32FC1);
-  for (int v = 0; v < fine.height; ++v) {
-    for (int u = 0; u < fine.width; ++u) {
+  m.map_x.create(cam.height, cam.width, CV_32FC1);
+  m.map_y.create(cam.height, cam.width, CV_32FC1);
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
       const double iu = ideal_u.at<double>(v, u), iv = ideal_v.at<double>(v, u);
       const bool ok = iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1;
-      m.map_x.at<float>(v, u) = ok ? static_cast<float>(iu - m.canvas.u0) : -10.f;
-      m.map_y.at<float>(v, u) = ok ? static_cast<float>(iv - m.canvas.v0) : -10.f;
+      m.map_x.at<float>(v, u) = ok ? static_cast<float>(fine(iu) - m.canvas.u0) : -10.f;
+      m.map_y.at<float>(v, u) = ok ? static_cast<float>(fine(iv) - m.canvas.v0) : -10.f;
     }
   }
   return m;
 }
 
-// Bilinear resampling of `canvas` (CV_32FC1) at (map_x, map_y), exact in the
-// coordinates: cv::remap rounds them to 1/32 px (INTER_BITS), an error that
-// stays constant along an edge wherever the map's fractional part drifts
-// slowly and so moved detected corners systematically by up to 0.008 px
-// (it fitted zoom 2's fx 27-43 ppm off on every seed). Samples outside the
-// canvas take `background` (BORDER_CONSTANT).
-void RemapBilinear(const cv::Mat& canvas, const cv::Mat& map_x, const cv::Mat& map_y,
-                   float background, cv::Mat* out) {
+// The distorted image: every output pixel is the mean of k x k samples of the
+// supersampled ideal `canvas` (CV_32FC1), one per supersampled pixel of its
+// area, at (u + (a + 1/2)/k - 1/2, v + (b + 1/2)/k - 1/2) for a, b = 0..k-1,
+// each taken bilinearly at the ideal point of its position. Around the ideal
+// point (map_x, map_y) of the pixel centre, those samples lie at offsets
+// a - (k - 1)/2, b - (k - 1)/2 canvas pixels (up to the distortion's
+// change of scale across one pixel, a few percent: second order, symmetric),
+// and the mean of bilinear samples at such offsets is exactly one bilinear
+// sample of the canvas box-filtered over k x k pixels (separably: the mean of
+// two linear interpolations one pixel apart is the linear interpolation of
+// the two-pixel means). So: a k x k box filter, then one bilinear sample per
+// output pixel at the map's position (+1/2 for even k, where the box's centre
+// lies between pixels), at the position as computed (a float, ~1e-4 px).
+// cv::remap rounds positions to 1/32 px (INTER_BITS), an error that stays
+// constant along an edge wherever the map's fractional part drifts slowly: it
+// moved detected corners systematically by up to 0.008 px and fitted zoom 2's
+// fx 27-43 ppm off on every seed. Box-averaging down to the output size first
+// and sampling that (the interpolation then spans output pixels) makes each
+// edge's profile depend on the map's sub-pixel phase, which drifts slowly
+// over the image: gradient-based corner detectors (cv::cornerSubPix) then
+// moved ChArUco and chessboard corners by up to 0.04 px with the position in
+// the image. Pixels without an ideal point, and samples outside the canvas,
+// take `background`.
+// `box` is scratch space (reused between calls: no page faults per image).
+void SampleDistorted(const cv::Mat& canvas, const cv::Mat& map_x, const cv::Mat& map_y, int k,
+                     float background, cv::Mat* box_out, cv::Mat* out) {
   out->create(map_x.size(), CV_32FC1);
-  const int w = canvas.cols, h = canvas.rows;
+  cv::blur(canvas, *box_out, cv::Size(k, k), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+  const cv::Mat& box = *box_out;
+  // cv::blur's anchor is pixel k/2 of the window: the box centred on pixel
+  // i lies at i - 1/2 for even k.
+  const float shift = k % 2 == 0 ? 0.5f : 0.0f;
+  const int w = box.cols, h = box.rows;
   cv::parallel_for_(cv::Range(0, map_x.rows), [&](const cv::Range& rows) {
     auto at = [&](int x, int y) {
-      return x >= 0 && y >= 0 && x < w && y < h ? canvas.at<float>(y, x) : background;
+      return x >= 0 && y >= 0 && x < w && y < h ? box.at<float>(y, x) : background;
     };
     for (int v = rows.start; v < rows.end; ++v) {
       const float* mx = map_x.ptr<float>(v);
       const float* my = map_y.ptr<float>(v);
       float* dst = out->ptr<float>(v);
       for (int u = 0; u < map_x.cols; ++u) {
-        const double x = mx[u], y = my[u];
+        if (mx[u] < -5) {  // no ideal point
+          dst[u] = background;
+          continue;
+        }
+        const double x = mx[u] + shift, y = my[u] + shift;
         const double fx = std::floor(x), fy = std::floor(y);
         const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
         if (x0 < -1 || y0 < -1 || x0 >= w || y0 >= h) {
@@ -292,8 +325,8 @@ struct SceneRenderer::Impl {
   std::list<DistortionMap> maps;
   static constexpr size_t kMaxMaps = 8;
   cv::Mat canvas;     // CV_32FC1 ideal image (supersampled when distorted)
-  cv::Mat distorted;  // CV_32FC1, supersampled
-  cv::Mat output;     // CV_32FC1, distorted and box-averaged
+  cv::Mat box;        // CV_32FC1, the supersampled canvas box-filtered
+  cv::Mat distorted;  // CV_32FC1
 
   void Build();
   // Renders the ideal image of `cam`'s intrinsics on `canvas` (in `cam`'s
@@ -484,6 +517,14 @@ void SceneRenderer::Impl::RenderCanvas(const Rigid3& ref_from_cam, const CameraT
   // bottom-up rows to image rows.
   const float scale = 1.0f / (k * k);
   cv::parallel_for_(cv::Range(0, cv_canvas.height), [&](const cv::Range& rows) {
+    if (k == 1) {  // no averaging (the distorted path averages after sampling)
+      for (int r = rows.start; r < rows.end; ++r) {
+        const unsigned char* src = rgba + static_cast<size_t>(h - 1 - r) * w * 4;
+        float* dst = out->ptr<float>(r);
+        for (int c = 0; c < cv_canvas.width; ++c) dst[c] = src[4 * c];
+      }
+      return;
+    }
     std::vector<int> acc(cv_canvas.width);
     for (int r = rows.start; r < rows.end; ++r) {
       std::fill(acc.begin(), acc.end(), 0);
@@ -532,7 +573,7 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
   Impl& im = *impl_;
   const RenderOptions& o = im.options;
   auto it = std::find_if(im.maps.begin(), im.maps.end(),
-                         [&](const DistortionMap& m) { return m.Matches(cam); });
+                         [&](const DistortionMap& m) { return m.Matches(cam, o.supersample); });
   if (it == im.maps.end()) {
     im.maps.push_front(BuildDistortionMap(cam, o.supersample, o.max_canvas_factor));
     if (im.maps.size() > Impl::kMaxMaps) im.maps.pop_back();
@@ -544,23 +585,12 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
   if (map.identity) {
     im.RenderCanvas(ref_from_cam, cam, map.canvas, o.supersample, &im.canvas);
   } else {
-    // Distorted: the supersampled ideal canvas is resampled at the
-    // supersampled pixels, then box-averaged, so that every output pixel is
-    // the mean of k x k samples over its own area. Resampling the
-    // box-averaged image instead (one bilinear sample per output pixel)
-    // makes each edge's blur depend on the map's sub-pixel phase, which
-    // drifts slowly over the image: gradient-based corner detectors
-    // (cv::cornerSubPix) then moved ChArUco and chessboard corners by up to
-    // 0.04 px with the position in the image (docs/rendering.md).
+    // Distorted: the ideal canvas at the supersampled size, each output pixel
+    // the mean of its k x k samples through the map (SampleDistorted).
     im.RenderCanvas(ref_from_cam, Supersampled(cam, o.supersample), map.canvas, 1, &im.canvas);
-    RemapBilinear(im.canvas, map.map_x, map.map_y, static_cast<float>(o.background),
-                  &im.distorted);
-    if (o.supersample > 1) {
-      cv::resize(im.distorted, im.output, cv::Size(cam.width, cam.height), 0, 0, cv::INTER_AREA);
-      img = &im.output;
-    } else {
-      img = &im.distorted;
-    }
+    SampleDistorted(im.canvas, map.map_x, map.map_y, o.supersample,
+                    static_cast<float>(o.background), &im.box, &im.distorted);
+    img = &im.distorted;
   }
   if (o.blur_sigma > 0) cv::GaussianBlur(*img, *img, cv::Size(), o.blur_sigma, o.blur_sigma);
   if (o.exposure != 1.0) *img *= o.exposure;

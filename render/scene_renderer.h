@@ -6,12 +6,14 @@
 //      matrix built from fx, fy, cx, cy (pixel (0,0) = centre of the top-left
 //      pixel, camera x = +u, y = +v down, z forward), at `supersample` times
 //      the size, on a canvas that covers every ray the distorted image sees;
-//   2. box (area) downsampling by `supersample`;
-//   3. lens distortion: for every output pixel the ideal pixel is found with
-//      UndistortPixel and sampled bilinearly (cv::remap);
+//   2. lens distortion, at the supersampled size: for every supersampled
+//      pixel the ideal pixel is found with UndistortPixel and sampled
+//      bilinearly at its exact coordinates (no distortion: nothing to do);
+//   3. box (area) downsampling by `supersample`;
 //   4. exposure gain, optional Gaussian blur, optional Gaussian noise, 8 bit.
-// The boards are textured rectangles (tag_texture.h) with linear, mipmapped
-// texture filtering; only their printed (-z) side is drawn.
+// The boards (AprilTag, ChArUco or chessboards) are textured rectangles
+// (tag_texture.h) with linear, mipmapped texture filtering; only their
+// printed (-z) side is drawn.
 //
 // One SceneRenderer owns one offscreen VTK render window reused across calls;
 // not thread-safe. It needs an X display (headless.h) for its whole lifetime.

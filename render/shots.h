@@ -107,8 +107,8 @@ struct DetectShotsResult {
 // detect::TagDetector, the inner corners of ChArUco and chessboards with
 // detect::DetectPointBoard, chessboards oriented by the shot's face), keeps
 // the detections of visible targets (tag_matching.h) and returns them as
-// pixel observations of the scene's corners (one per inner corner). Throws std::runtime_error when an image
-// is missing or unreadable (naming it).
+// pixel observations of the scene's corners (one per inner corner). Throws
+// std::runtime_error when an image is missing or unreadable (naming it).
 DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>& shots,
                               const std::string& image_dir, const DetectShotsOptions& options);
 

@@ -135,8 +135,8 @@ std::vector<ExpectedTag> ExpectTags(const TargetScene& scene, const Rigid3& ref_
         }
         t.projected[c] = true;
         const Eigen::Vector2d& px = t.uv[c];
-        t.in_image[c] =
-            px.x() >= -0.5 && px.x() < cam.width - 0.5 && px.y() >= -0.5 && px.y() < cam.height - 0.5;
+        t.in_image[c] = px.x() >= -0.5 && px.x() < cam.width - 0.5 && px.y() >= -0.5 &&
+                        px.y() < cam.height - 0.5;
         any_in = any_in || t.in_image[c];
         all_inner = all_inner && inner(px);
       }

@@ -9,15 +9,17 @@
 // the issues' bounds). 104 values per calibration, correlated within a seed
 // (fx ~ fy, k1 ~ k2): ~50 independent ones, whose mean square has a standard
 // deviation of ~0.2, so [0.5, 2] is wide of chance and fails a sigma off by
-// 1.5x. Measured (Release): with records 1.38, photos alone 0.94; before
-// the renderer resampled at exact coordinates and the covariance knew the
-// photos' clusters, 12.2 with the records (the full demo grid). The
+// 1.5x. Measured (Release): with records 0.93, photos alone 0.64 (1.38 and
+// 0.94 before the renderer distorted at the supersampled size,
+// docs/rendering.md; 12.2 with the records before it resampled at exact
+// coordinates and the covariance knew the photos' clusters). The
 // photo-only models' held-out predictions (other pointings) against the
-// truth's: 0.0014 px RMS, against a detection noise of 0.020 px.
+// truth's: 0.0013 px RMS, against a detection noise of 0.020 px.
 // The photo-only models' kinematics (link 1's alpha and a), camera tools and
 // board poses against the truth put into the fit's gauge (the ideal base
-// frame, libcalib/model/gauge.h): 176 values, mean square 0.71 (link 1 0.73,
-// tools 0.66, boards 0.74), same bounds.
+// frame, libcalib/model/gauge.h): 176 values, mean square 0.56 (link 1 0.32,
+// tools 0.66, boards 0.51), same bounds: conservative sigmas, see the
+// closing figures of docs/refinement.md.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
