@@ -207,11 +207,7 @@ void ToIdealBaseFrameOf(Gauged* g) {
   const Rigid3 new_from_old = ToIdealBaseFrame(&g->model);
   g->Hold("base.rotation");
   g->Hold("base.t");
-  const Eigen::Matrix3d& r = new_from_old.rotation;
-  const double psi = std::atan2(r(1, 0) - r(0, 1), r(0, 0) + r(1, 1));
-  Eigen::Matrix2d turn;
-  turn << std::cos(psi), std::sin(psi), -std::sin(psi), std::cos(psi);
-  g->Transform(Info(Effect::kAxisWobble).name, turn);
+  g->Transform(Info(Effect::kAxisWobble).name, AxisWobbleMap(new_from_old));
 }
 
 // dh link 2 is held at its start (the tools absorb it); two fits that

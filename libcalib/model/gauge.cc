@@ -20,6 +20,14 @@ Rigid3 FirstJointOffsets(double d, double gamma) {
 
 }  // namespace
 
+Eigen::Matrix2d AxisWobbleMap(const Rigid3& new_from_old) {
+  const Eigen::Matrix3d& r = new_from_old.rotation;
+  const double psi = std::atan2(r(1, 0) - r(0, 1), r(0, 0) + r(1, 1));
+  Eigen::Matrix2d map;
+  map << std::cos(psi), std::sin(psi), -std::sin(psi), std::cos(psi);
+  return map;
+}
+
 void ChangeReferenceFrame(const Rigid3& new_from_old, InstrumentModel* m) {
   if (m->effects.Has(Effect::kAxisWobble)) {
     const Eigen::Matrix3d& r = new_from_old.rotation;
@@ -29,11 +37,9 @@ void ChangeReferenceFrame(const Rigid3& new_from_old, InstrumentModel* m) {
           std::to_string(std::acos(std::max(-1.0, r(2, 2))) * 180.0 / M_PI) +
           " degrees from the old one's, which would reverse the wobble's sense");
     }
-    const double psi = std::atan2(r(1, 0) - r(0, 1), r(0, 0) + r(1, 1));
     std::array<double, 2>& w = m->EffectValue(Effect::kAxisWobble);
-    const double w0 = w[0], w1 = w[1];
-    w[0] = w0 * std::cos(psi) + w1 * std::sin(psi);
-    w[1] = w1 * std::cos(psi) - w0 * std::sin(psi);
+    const Eigen::Vector2d turned = AxisWobbleMap(new_from_old) * Eigen::Vector2d(w[0], w[1]);
+    w = {turned.x(), turned.y()};
   }
   m->base = PoseBlock::FromRigid(new_from_old * m->base.ToRigid());
   for (EstimatedBoard& b : m->boards) {

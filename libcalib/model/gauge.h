@@ -33,10 +33,17 @@
 // uncertainties across gauges decide what carries over (libcalib/api/compare.cc).
 #pragma once
 
+#include <Eigen/Core>
+
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/instrument.h"
 
 namespace rtscalib {
+
+// The linear map of axis_wobble's [w0, w1] under `new_from_old` (above):
+// [[cos psi, sin psi], [-sin psi, cos psi]], psi its turn about z. A
+// covariance of [w0, w1] maps with it too.
+Eigen::Matrix2d AxisWobbleMap(const Rigid3& new_from_old);
 
 // Moves `m` into the reference frame ref' given by `new_from_old`.
 // Throws std::invalid_argument when axis_wobble is enabled and the two
