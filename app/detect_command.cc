@@ -7,6 +7,7 @@
 #include "app/safe_write.h"
 #include "detect/photos.h"
 #include "detect/tag_family.h"
+#include "libcalib/io/records.h"
 #include "libcalib/io/shots.h"
 #include "libcalib/io/targets_io.h"
 
@@ -38,7 +39,10 @@ int RunDetect(const DetectArgs& args) {
   const Existing existing = args.force ? Existing::kReplace : Existing::kKeep;
   WriteFileAtomicWith(
       args.out,
-      [&](const std::string& tmp) { detect::WriteDetectedPixels(tmp, shots, targets, result); },
+      [&](const std::string& tmp) {
+        WritePixels(tmp, detect::PixelObservationsOf(shots, targets, result), shots.angle_unit,
+                    detect::ImageSizesOf(shots, result));
+      },
       existing);
   WriteFileAtomicWith(
       summary_path,
@@ -54,9 +58,9 @@ int RunDetect(const DetectArgs& args) {
     std::snprintf(size, sizeof size, "%dx%d", p.width, p.height);
     std::snprintf(found, sizeof found, "%zu/%d", p.tags.size(), p.tags_of_boards);
     std::printf("%-24s %11s %9s %8zu %9.3f\n", shots.shots[i].shot.c_str(), size, found,
-                4 * p.tags.size(), p.shift_rms_px);
+                static_cast<size_t>(p.corners), p.shift_rms_px);
     tags += static_cast<int>(p.tags.size());
-    corners += 4 * static_cast<int>(p.tags.size());
+    corners += p.corners;
     unrefined += p.unrefined;
     not_on_boards += p.not_on_boards;
     duplicates += p.duplicates;

@@ -42,6 +42,12 @@ int RunExport(const ExportArgs& args) {
     for (int z = 0; z < model.NumZooms(); ++z) {
       files.push_back(dir / OpenCvCameraFileName(z));
     }
+  } else if (model.kinematics == Kinematics::kNone &&
+             (args.format == "urdf" || args.format == "surveyor")) {
+    throw std::invalid_argument("export: " + args.model +
+                                " is a camera-only calibration (kinematics: none): it has no "
+                                "kinematic chain or surveyor's constants; --format opencv "
+                                "exports its cameras");
   } else if (args.format == "urdf") {
     files.push_back(dir / "instrument.urdf");
   } else if (args.format == "surveyor") {

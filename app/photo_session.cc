@@ -38,32 +38,14 @@ PhotoSessionSummary LoadPhotoSession(const std::string& shots_path, const std::s
   out.warnings = det.warnings;
 
   if (obs->pixels.empty()) obs->pixels_source = shots_path;
+  const std::vector<PixelObservation> pixels = detect::PixelObservationsOf(shots, targets, det);
+  obs->pixels.insert(obs->pixels.end(), pixels.begin(), pixels.end());
+  for (const auto& [zoom, size] : detect::ImageSizesOf(shots, det)) obs->image_sizes[zoom] = size;
   double shift_sq = 0;
   int refined_corners = 0;
   for (size_t i = 0; i < shots.shots.size(); ++i) {
     const PhotoShot& s = shots.shots[i];
     const detect::PhotoDetection& p = det.photos[i];
-    // DetectPhotos has already refused photos of one zoom with different sizes.
-    obs->image_sizes[s.zoom] = ImageSize{p.width, p.height};
-    for (const detect::DetectedTag& tag : p.tags) {
-      const TagBoard& board = targets.boards[tag.board];
-      const std::array<Eigen::Vector3d, 4> corners = board.CornersInBoard(tag.id - board.first_id);
-      for (int k = 0; k < board.CornersPerTarget(); ++k) {
-        PixelObservation o;
-        o.face = s.face;
-        o.zoom = s.zoom;
-        o.phi = s.phi;
-        o.theta = s.theta;
-        o.shot = s.shot;
-        o.target = tag.id;
-        o.corner = k;
-        o.X_known = board.pose_known;
-        if (board.pose_known) o.X = board.ref_from_board * corners[k];
-        o.uv = tag.uv[k];
-        o.line = s.line;
-        obs->pixels.push_back(o);
-      }
-    }
     PhotoSessionSummary::Photo ph;
     ph.line = s.line;
     ph.shot = s.shot;
@@ -77,7 +59,7 @@ PhotoSessionSummary LoadPhotoSession(const std::string& shots_path, const std::s
     ph.shift_rms_px = p.shift_rms_px;
     out.photos.push_back(ph);
     out.tags += ph.tags;
-    out.corners += 4 * ph.tags;
+    out.corners += p.corners;
     out.photos_without_tags += p.tags.empty() ? 1 : 0;
     out.unrefined += p.unrefined;
     out.not_on_boards += p.not_on_boards;

@@ -42,7 +42,7 @@ struct PhotoSessionSummary {
   double shift_rms_px = 0, shift_max_px = 0;
   double seconds = 0, images_per_second = 0;
   int jobs = 1;
-  std::vector<std::string> warnings;  // e.g. "shots.csv:7: image a.png: no tag of the boards found"
+  std::vector<std::string> warnings;  // e.g. "shots.csv:7: image a.png: no target of the boards found ..."
 };
 
 // Reads shots.csv and targets.yaml, detects every photo with `jobs` threads

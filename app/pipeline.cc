@@ -71,8 +71,8 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
   result->truth = sim.truth;
   progress->Note(std::to_string(data.obs.records.size()) + " records, " +
                  std::to_string(data.obs.pixels.size()) + " pixel observations");
-  if (settings.render.enabled && !sim.targets.boards.empty()) {
-    result->render = RenderSession(settings.render, sim.truth, sim.targets, data.obs.pixels,
+  if (settings.render.enabled && (!sim.targets.boards.empty() || !sim.placements.empty())) {
+    result->render = RenderSession(settings.render, sim.truth, sim.Scenes(), data.obs.pixels,
                                    work_dir + "/photos", progress);
     if (!result->render.note.empty()) result->notes.push_back(result->render.note);
     if (result->render.ran) {

@@ -35,7 +35,7 @@ InputError RowError(const std::string& file, int line, const PredictionError& e,
     case PredictionFailure::kUntrustedPoint:
       return InputError::File(file, line, "columns X, Y, Z", e.expected, e.got);
     case PredictionFailure::kNoSuchBoard:
-      return InputError::File(file, line, "columns target, corner", e.expected, e.got);
+      return InputError::File(file, line, "columns target, corner, placement", e.expected, e.got);
     case PredictionFailure::kNonFinite:
       break;
   }
@@ -123,16 +123,19 @@ int RunPredict(const PredictArgs& args) {
   out.reserve(in.pixels.size());
   for (PixelObservation& p : in.pixels) {
     try {
-      // SPEC 7: empty X, Y, Z = a corner of a board the model estimated.
+      // SPEC 7: empty X, Y, Z = a corner of a board the model estimated, as
+      // it stood in the row's placement (SPEC 7.1).
       p.uv = p.X_known ? instrument.Pixel(p.zoom, p.phi, p.theta, p.X)
-                       : instrument.BoardCornerPixel(p.zoom, p.phi, p.theta, p.target, p.corner);
+                       : instrument.BoardCornerPixel(p.zoom, p.phi, p.theta, p.target, p.corner,
+                                                     p.placement);
       out.push_back(p);
     } catch (const PredictionError& e) {
       bad.Add(p.line, e);
     }
   }
   WriteFileAtomicWith(
-      args.out, [&](const std::string& tmp) { WritePixels(tmp, out, unit); }, existing);
+      args.out, [&](const std::string& tmp) { WritePixels(tmp, out, unit, in.image_sizes); },
+      existing);
   bad.Report(in.pixels.size());
   std::cerr << "predict: " << out.size() << " pixel rows -> " << args.out << "\n";
   return 0;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <tuple>
 
 #include "libcalib/io/csv.h"
@@ -17,13 +18,19 @@
 namespace rtscalib::app {
 
 RenderStageResult RenderSession(const render::RenderSettings& settings,
-                                const InstrumentModel& truth, const TargetScene& scene,
+                                const InstrumentModel& truth, const PlacedScenes& scenes,
                                 const std::vector<PixelObservation>& exact,
                                 const std::string& image_dir, Progress* progress) {
   RenderStageResult out;
   out.image_dir = image_dir;
+  const bool placements = scenes.size() > 1 || !scenes.count("");
+  if (placements && settings.board_poses_known) {
+    throw std::invalid_argument(
+        "render.board_poses: known with simulate.placements: a surveyed board does not move "
+        "between placements (SPEC 7.1); leave render.board_poses out");
+  }
 #ifndef RTSCALIB_WITH_RENDER
-  (void)settings, (void)truth, (void)scene, (void)exact, (void)progress;
+  (void)settings, (void)truth, (void)scenes, (void)exact, (void)progress;
   out.note = "this build has no renderer (RTSCALIB_WITH_RENDER=OFF): exact projections used";
   return out;
 #else
@@ -38,6 +45,7 @@ RenderStageResult RenderSession(const render::RenderSettings& settings,
     s.phi = p.phi;
     s.theta = p.theta;
     s.id = p.shot;
+    s.placement = p.placement;
     s.ref_from_cam = RefFromCam(truth, p.zoom, p.phi, p.theta);
     s.cam = truth.cams.at(p.zoom);
     shots.push_back(s);
@@ -56,7 +64,7 @@ RenderStageResult RenderSession(const render::RenderSettings& settings,
   ro.render.noise_sigma = settings.noise_sigma;
   ro.render.blur_sigma = settings.blur_sigma;
   ro.render.exposure = settings.exposure;
-  const render::RenderShotsResult rendered = render::RenderShots(scene, shots, ro);
+  const render::RenderShotsResult rendered = render::RenderShots(scenes, shots, ro);
   out.render_seconds = rendered.seconds;
 
   // RenderShots wrote shots.csv (SPEC 7 columns plus `index`); the boards as a
@@ -64,14 +72,21 @@ RenderStageResult RenderSession(const render::RenderSettings& settings,
   namespace fs = std::filesystem;
   out.shots_path = (fs::path(image_dir) / render::ShotsTableName(0, 1)).string();
   out.targets_path = (fs::path(image_dir) / "targets.yaml").string();
+  // The boards' layout is every placement's; their poses are the placements'.
+  const TargetScene& scene = scenes.begin()->second;
   WriteTargets(out.targets_path, scene, settings.board_poses_known,
                settings.board_poses_known
                    ? "Boards of the rendered session, with their (true) surveyed poses."
-                   : "Boards of the rendered session; their poses are estimated with the "
-                     "instrument\n(the truth is in truth_targets.yaml).");
-  WriteTargets((fs::path(image_dir) / "truth_targets.yaml").string(), scene, true,
-               "The boards' true poses of the rendered session (for tests; a user has no such "
-               "file).");
+                   : placements ? "Boards of the rendered session, moved between placements "
+                                  "(shots.csv's placement); their poses are estimated with the "
+                                  "instrument."
+                                : "Boards of the rendered session; their poses are estimated with "
+                                  "the instrument\n(the truth is in truth_targets.yaml).");
+  if (!placements) {
+    WriteTargets((fs::path(image_dir) / "truth_targets.yaml").string(), scene, true,
+                 "The boards' true poses of the rendered session (for tests; a user has no such "
+                 "file).");
+  }
   out.ran = true;
   out.shots = static_cast<int>(shots.size());
   return out;

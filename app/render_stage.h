@@ -2,10 +2,12 @@
 // are rendered with VTK as its camera would see them (render/) and written as
 // a photo session exactly as a user's instrument would give it (SPEC 7):
 //   <image_dir>/<shot>.png          the photos
-//   <image_dir>/shots.csv           face, zoom, phi, theta, image, shot (+ index)
+//   <image_dir>/shots.csv           face, zoom, phi, theta, image, shot (+ index),
+//                                   placement when the boards moved (SPEC 7.1)
 //   <image_dir>/targets.yaml        the boards; poses only with
-//                                   render.board_poses: known
-//   <image_dir>/truth_targets.yaml  the boards with their true poses (for tests)
+//                                   render.board_poses: known (never with placements)
+//   <image_dir>/truth_targets.yaml  the boards with their true poses (for tests;
+//                                   without placements only)
 //   <image_dir>/exact.csv           the exact projections (for tests)
 // The session is then read back through the same code as `data.shots`
 // (app/photo_session.h), so that the calibration sees what it would see from
@@ -34,11 +36,14 @@ struct RenderStageResult {
   std::string shots_path, targets_path;  // the written session (empty when not rendered)
 };
 
-// Renders every shot in `exact` (shot id, zoom, face, phi, theta) with the
-// truth's camera poses and writes the session into image_dir. Without VTK in
-// the build, returns ran = false with a note.
+// Renders every shot in `exact` (shot id, zoom, face, phi, theta, placement)
+// with the truth's camera poses, each seeing its placement's scene, and
+// writes the session into image_dir. Throws std::invalid_argument for
+// surveyed board poses (render.board_poses: known) with several placements:
+// a surveyed board does not move. Without VTK in the build, returns ran =
+// false with a note.
 RenderStageResult RenderSession(const render::RenderSettings& settings,
-                                const InstrumentModel& truth, const TargetScene& scene,
+                                const InstrumentModel& truth, const PlacedScenes& scenes,
                                 const std::vector<PixelObservation>& exact,
                                 const std::string& image_dir, Progress* progress);
 

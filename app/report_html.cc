@@ -368,7 +368,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   o << "</table>\n<p class=small>Refinement "
     << (r.calibration.fit.converged ? "converged" : "did NOT converge") << " in "
     << r.calibration.fit.iterations << " iterations; " << r.calibration.fit.excluded_critical
-    << " rows in the critical regions excluded. " << Esc(FitSigmasText(r.calibration.fit))
+    << " rows in the critical regions excluded. " << Esc(FitSigmasText(r.calibration.fit, !r.obs.records.empty()))
     << "</p>\n";
 
   if (!r.uncertainty_maps.empty()) {

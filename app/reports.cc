@@ -54,22 +54,28 @@ json LinksJson(const InstrumentModel& m) {
 
 json ModelJson(const InstrumentModel& m) {
   const bool s = m.sigmas.valid;
-  json j = {{"kinematics", KinematicsName(m.kinematics)},
-            {"effects", m.effects.Names()},
-            {"base", PoseJson(m.base, s ? &m.sigmas.base : nullptr)},
-            {"links", LinksJson(m)},
-            {"edm", PoseJson(m.edm, s ? &m.sigmas.edm : nullptr, m.edm_determined)}};
+  const bool chain = m.kinematics != Kinematics::kNone;
+  json j = {{"kinematics", KinematicsName(m.kinematics)}, {"effects", m.effects.Names()}};
+  // A camera-only model (SPEC 7.1) estimated no chain: nothing of it is
+  // written as if it had been.
+  if (chain) {
+    j["base"] = PoseJson(m.base, s ? &m.sigmas.base : nullptr);
+    j["links"] = LinksJson(m);
+    j["edm"] = PoseJson(m.edm, s ? &m.sigmas.edm : nullptr, m.edm_determined);
+  }
   json cams = json::array();
   for (int z = 0; z < m.NumZooms(); ++z) {
     const CameraTool& c = m.cams[z];
     json cj = {{"zoom", z},
-               {"tool",
-                PoseJson(c.flange_from_cam,
-                         s && z < (int)m.sigmas.cam_tools.size() ? &m.sigmas.cam_tools[z] : nullptr,
-                         c.determined)},
                {"intrinsics", c.intrinsics},
                {"distortion", c.distortion},
                {"determined", c.determined}};
+    if (chain) {
+      cj["tool"] = PoseJson(
+          c.flange_from_cam,
+          s && z < (int)m.sigmas.cam_tools.size() ? &m.sigmas.cam_tools[z] : nullptr,
+          c.determined);
+    }
     if (s && c.determined && z < (int)m.sigmas.intrinsics.size())
       cj["intrinsics_sigma"] = m.sigmas.intrinsics[z];
     // Coefficients of enabled groups held by model.<group>.coefficients:
@@ -97,8 +103,52 @@ json ModelJson(const InstrumentModel& m) {
     eff[info.name] = ej;
   }
   j["effect_values"] = eff;
+  // SPEC 7 / 7.1: the estimated board poses, one per board and placement
+  // (camera-only: and zoom, in that zoom's camera frame).
+  json boards = json::array();
+  for (const EstimatedBoard& b : m.boards) {
+    json bj = {{"board", b.board.first_id},
+               {"name", b.Name()},
+               {"frame", chain ? "ref_from_board" : "cam_from_board"},
+               {"pose", PoseJson(b.pose, s ? &b.sigma : nullptr)}};
+    if (!b.placement.empty()) bj["placement"] = b.placement;
+    if (b.zoom >= 0) bj["zoom"] = b.zoom;
+    boards.push_back(bj);
+  }
+  j["boards"] = boards;
   return j;
 }
+
+}  // namespace
+
+std::string BoardsText(const InstrumentModel& m) {
+  if (m.boards.empty()) return "";
+  const bool chain = m.kinematics != Kinematics::kNone;
+  std::ostringstream o;
+  o << "Boards of unknown pose, one pose per board and placement ("
+    << (chain ? "ref_from_board" : "cam_from_board, each zoom's camera frame")
+    << "; t [m], Euler a, b, g [deg], +- 1 sigma)\n";
+  for (const EstimatedBoard& b : m.boards) {
+    const Eigen::Vector3d e = b.pose.Euler() * 180.0 / M_PI;
+    char row[320];
+    if (m.sigmas.valid) {
+      std::snprintf(row, sizeof row,
+                    "  %-32s t %+.4f %+.4f %+.4f (+- %.1e %.1e %.1e)  euler %+.3f %+.3f %+.3f "
+                    "(+- %.1e %.1e %.1e)\n",
+                    b.Name().c_str(), b.pose.t[0], b.pose.t[1], b.pose.t[2], b.sigma.t[0],
+                    b.sigma.t[1], b.sigma.t[2], e[0], e[1], e[2], b.sigma.euler[0] * 180 / M_PI,
+                    b.sigma.euler[1] * 180 / M_PI, b.sigma.euler[2] * 180 / M_PI);
+    } else {
+      std::snprintf(row, sizeof row, "  %-32s t %+.4f %+.4f %+.4f  euler %+.3f %+.3f %+.3f\n",
+                    b.Name().c_str(), b.pose.t[0], b.pose.t[1], b.pose.t[2], e[0], e[1], e[2]);
+    }
+    o << row;
+  }
+  o << "\n";
+  return o.str();
+}
+
+namespace {
 
 json ErrorsJson(const ModelErrors& e) {
   return {
@@ -468,24 +518,34 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     }
     o << "\n";
   }
-  o << "Table 5 - refined model, method B [m]\n  tool        e_optimized             "
-       "e_optimized,cross       e_optimized,full\n";
-  const Table5& t = r.calibration.table5;
-  auto row5 = [&](const char* name, const ErrorStats& a, const ErrorStats& b, const ErrorStats& c) {
-    o << "  " << std::left << std::setw(10) << name << std::right << stats(a) << "   "
-      << (t.has_cross ? stats(b) : std::string("       n/a         ")) << "   " << stats(c) << "\n";
-  };
-  row5("EDM", t.reduced.edm, t.cross.edm, t.full.edm);
-  row5("camera", t.reduced.cam, t.cross.cam, t.full.cam);
-  row5("compound", t.reduced.compound, t.cross.compound, t.full.compound);
-  o << "  (reduced set: " << t.reduced_rows << " records; full set: " << t.full_rows
-    << " records)\n\n";
+  const bool camera_only = r.calibration.model.kinematics == Kinematics::kNone;
+  if (!r.obs.records.empty()) {
+    o << "Table 5 - refined model, method B [m]\n  tool        e_optimized             "
+         "e_optimized,cross       e_optimized,full\n";
+    const Table5& t = r.calibration.table5;
+    auto row5 = [&](const char* name, const ErrorStats& a, const ErrorStats& b,
+                    const ErrorStats& c) {
+      o << "  " << std::left << std::setw(10) << name << std::right << stats(a) << "   "
+        << (t.has_cross ? stats(b) : std::string("       n/a         ")) << "   " << stats(c)
+        << "\n";
+    };
+    row5("EDM", t.reduced.edm, t.cross.edm, t.full.edm);
+    row5("camera", t.reduced.cam, t.cross.cam, t.full.cam);
+    row5("compound", t.reduced.compound, t.cross.compound, t.full.compound);
+    o << "  (reduced set: " << t.reduced_rows << " records; full set: " << t.full_rows
+      << " records)\n\n";
+  }
   if (r.calibration.model.kinematics == Kinematics::kDh) {
     dh_table(r.calibration.model, "Table 6 - refined DH parameters");
     o << "\n";
   }
-  transforms(r.calibration.model, "Table 7 - refined base and tool transforms");
-  o << "\n";
+  if (camera_only) {
+    o << "Camera-only calibration (kinematics none): no kinematic chain, base or camera tool "
+         "was estimated\n\n";
+  } else {
+    transforms(r.calibration.model, "Table 7 - refined base and tool transforms");
+    o << "\n";
+  }
   if (r.calibration.model.sigmas.valid) {
     o << "Intrinsics per zoom (fx, fy, cx, cy [px] +- sigma)\n";
     for (int z = 0; z < r.calibration.model.NumZooms(); ++z) {
@@ -521,6 +581,7 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     }
     o << "\n";
   }
+  o << BoardsText(r.calibration.model);
   if (r.calibration.faces && r.calibration.faces->valid) {
     o << "Two-face check (one model per face)\n  collimation "
       << Fmt("%.2f", r.calibration.faces->collimation * kArcsec) << "\"  tilting axis "
@@ -593,31 +654,45 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     }
     o << "\n";
   }
-  o << "Final (all observations): EDM " << stats(f.edm) << " m (n=" << f.edm.n << "), camera "
-    << stats(f.cam) << " m (n=" << f.cam.n << ")";
+  o << "Final (all observations): ";
+  if (!r.obs.records.empty()) {
+    o << "EDM " << stats(f.edm) << " m (n=" << f.edm.n << "), camera " << stats(f.cam)
+      << " m (n=" << f.cam.n << ")" << (f.pixels.n > 0 ? ", " : "");
+  }
   if (f.pixels.n > 0)
-    o << ", pixels rms " << Fmt("%.3f", f.pixels.rms_px) << " px (n=" << f.pixels.n << ")";
+    o << "pixels rms " << Fmt("%.3f", f.pixels.rms_px) << " px (n=" << f.pixels.n << ")";
   o << "\nRefinement: " << (r.calibration.fit.converged ? "converged" : "NOT converged") << " in "
     << r.calibration.fit.iterations << " iterations, " << Fmt("%.3f", r.calibration.fit.seconds)
     << " s; excluded (critical region): " << r.calibration.fit.excluded_critical << "\n";
   o << "Gauge freedoms held:\n";
   for (const std::string& g : r.calibration.fit.fixed_gauges) o << "  - " << g << "\n";
   if (!r.calibration.fit.strong_correlations.empty()) {
+    // Board poses of many placements each correlate with the principal
+    // point (as in any camera calibration): the first ones show the pattern,
+    // report.json lists them all.
+    constexpr size_t kListed = 16;
+    const auto& pairs = r.calibration.fit.strong_correlations;
     o << "Strongly correlated parameters (|rho| > 0.95):\n";
-    for (const auto& [pair, rho] : r.calibration.fit.strong_correlations)
-      o << "  " << pair << "  rho = " << Fmt("%+.3f", rho) << "\n";
+    for (size_t i = 0; i < std::min(pairs.size(), kListed); ++i)
+      o << "  " << pairs[i].first << "  rho = " << Fmt("%+.3f", pairs[i].second) << "\n";
+    if (pairs.size() > kListed) {
+      o << "  ... and " << pairs.size() - kListed << " more pairs (report.json fit.strong_correlations)\n";
+    }
   }
-  o << FitSigmasText(r.calibration.fit) << "\n";
+  o << FitSigmasText(r.calibration.fit, !r.obs.records.empty()) << "\n";
   o << GrossRowsText(r);
   for (const std::string& n : r.notes) o << "note: " << n << "\n";
   return o.str();
 }
 
-std::string FitSigmasText(const FitSummary& fit) {
+std::string FitSigmasText(const FitSummary& fit, bool records) {
   std::ostringstream o;
-  o << "A-posteriori sigmas: EDM " << Fmt("%.3g", fit.sigma_edm_m * 1e3) << " mm, camera "
-    << Fmt("%.3g", fit.sigma_cam_m * 1e3) << " mm, pixels " << Fmt("%.3g", fit.sigma_pixel_px)
-    << " px";
+  o << "A-posteriori sigmas: ";
+  if (records) {
+    o << "EDM " << Fmt("%.3g", fit.sigma_edm_m * 1e3) << " mm, camera "
+      << Fmt("%.3g", fit.sigma_cam_m * 1e3) << " mm, ";
+  }
+  o << "pixels " << Fmt("%.3g", fit.sigma_pixel_px) << " px";
   std::string zooms;
   for (size_t z = 0; z < fit.sigma_pixel_px_zoom.size(); ++z) {
     if (fit.sigma_pixel_px_zoom[z] <= 0) continue;

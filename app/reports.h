@@ -19,8 +19,11 @@ std::string ReportText(const RunConfig& config, const PipelineResult& result);
 std::string GrossRowsText(const PipelineResult& result);
 // The refinement's a-posteriori sigmas (pixels per zoom) and how the
 // covariance treats correlated errors, one sentence for report.txt and
-// report.html.
-std::string FitSigmasText(const FitSummary& fit);
+// report.html; `records` false leaves out the EDM and camera-record sigmas.
+std::string FitSigmasText(const FitSummary& fit, bool records = true);
+// The estimated board poses (SPEC 7, one per board and placement, SPEC
+// 7.1) with their sigmas, a line each; empty when there are none.
+std::string BoardsText(const InstrumentModel& model);
 
 // Key figures of earlier runs, read back from their report.json (for the
 // ladder of errors across runs).

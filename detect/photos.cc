@@ -53,6 +53,10 @@ void KeepBoardTags(const std::vector<TagDetection>& detections, const TargetScen
   for (const auto& [d, board] : on_board) {
     if (count[d->id] > 1) {
       ++photo->duplicates;
+      if (std::find(photo->duplicate_ids.begin(), photo->duplicate_ids.end(), d->id) ==
+          photo->duplicate_ids.end()) {
+        photo->duplicate_ids.push_back(d->id);
+      }
       continue;
     }
     if (!d->refined) {
@@ -84,6 +88,7 @@ void KeepPointBoards(const cv::Mat& gray, const TargetScene& targets, int face,
     if (!board.IsPointBoard()) continue;
     const PointBoardDetection found = DetectPointBoard(gray, board, face);
     if (found.misoriented) ++photo->misoriented_boards;
+    if (found.duplicated) ++photo->duplicate_boards;
     for (const auto& [k, uv] : found.corners) {
       photo->tags.push_back({static_cast<int>(b), board.first_id + k, {uv, uv, uv, uv}, true});
       added = true;
@@ -186,6 +191,9 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
           KeepBoardTags(detector->Detect(image.gray), targets, options.keep_unrefined, &photo);
         }
         KeepPointBoards(image.gray, targets, shot.face, &photo);
+        for (const DetectedTag& tag : photo.tags) {
+          photo.corners += targets.boards[tag.board].CornersPerTarget();
+        }
         done[i] = 1;
       } catch (...) {
         std::lock_guard<std::mutex> lock(mutex);
@@ -246,9 +254,20 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
           " chessboard(s) found turned sideways or mirrored, not used (in face 1 a chessboard's "
           "rows must run along the image's rows; detect/point_boards.h)");
     }
+    if (result.photos[i].duplicate_boards > 0) {
+      result.warnings.push_back(Where(shots, i) + ": a chessboard found twice (two printed copies, "
+                                                  "or a reflection), not used: neither can be "
+                                                  "told from the other");
+    }
+    if (!result.photos[i].duplicate_ids.empty()) {
+      std::string ids;
+      for (int id : result.photos[i].duplicate_ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+      result.warnings.push_back(Where(shots, i) + ": tag(s) " + ids +
+                                " seen twice (two printed copies?), not used");
+    }
     if (result.photos[i].tags.empty()) {
       const PhotoDetection& p = result.photos[i];
-      std::string why = "no tag of the boards found";
+      std::string why = "no target of the boards found (no tag, ChArUco corner or whole chessboard)";
       if (p.unrefined + p.not_on_boards + p.duplicates > 0) {
         why += " (dropped: " + std::to_string(p.unrefined) + " unrefined, " +
                std::to_string(p.not_on_boards) + " not on a board, " +
@@ -260,33 +279,50 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
   return result;
 }
 
-void WriteDetectedPixels(const std::string& path, const ShotsFile& shots,
-                         const TargetScene& targets, const PhotoDetectionResult& result) {
-  CsvWriter w(path, {"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u",
-                     "v", "width", "height"});
-  for (size_t i = 0; i < shots.shots.size(); ++i) {
-    const PhotoShot& s = shots.shots[i];
-    const PhotoDetection& p = result.photos[i];
-    for (const DetectedTag& tag : p.tags) {
-      const TagBoard& board = targets.boards[tag.board];
-      const std::array<Eigen::Vector3d, 4> corners = board.CornersInBoard(tag.id - board.first_id);
-      for (int k = 0; k < board.CornersPerTarget(); ++k) {
-        std::string x, y, z;
-        if (board.pose_known) {
-          const Eigen::Vector3d X = board.ref_from_board * corners[k];
-          x = FormatDouble(X.x());
-          y = FormatDouble(X.y());
-          z = FormatDouble(X.z());
-        }
-        w.Row({std::to_string(s.face), std::to_string(s.zoom),
-               FormatReading(s.phi, shots.angle_unit), FormatReading(s.theta, shots.angle_unit),
-               s.shot, std::to_string(tag.id), std::to_string(k), x, y, z,
-               FormatDouble(tag.uv[k].x()), FormatDouble(tag.uv[k].y()), std::to_string(p.width),
-               std::to_string(p.height)});
-      }
+void AppendPixelObservations(const PhotoShot& shot, const TargetScene& targets,
+                             const std::vector<DetectedTag>& tags,
+                             std::vector<PixelObservation>* out) {
+  for (const DetectedTag& tag : tags) {
+    const TagBoard& board = targets.boards[tag.board];
+    const std::array<Eigen::Vector3d, 4> corners = board.CornersInBoard(tag.id - board.first_id);
+    for (int k = 0; k < board.CornersPerTarget(); ++k) {
+      PixelObservation o;
+      o.face = shot.face;
+      o.zoom = shot.zoom;
+      o.phi = shot.phi;
+      o.theta = shot.theta;
+      o.has_reading = shot.has_reading;
+      o.shot = shot.shot;
+      o.placement = shot.placement;
+      o.focus_distance = shot.focus_distance;
+      o.target = tag.id;
+      o.corner = k;
+      o.X_known = board.pose_known;
+      if (board.pose_known) o.X = board.ref_from_board * corners[k];
+      o.uv = tag.uv[k];
+      o.line = shot.line;
+      out->push_back(o);
     }
   }
-  w.Close();
+}
+
+std::vector<PixelObservation> PixelObservationsOf(const ShotsFile& shots,
+                                                  const TargetScene& targets,
+                                                  const PhotoDetectionResult& result) {
+  std::vector<PixelObservation> out;
+  for (size_t i = 0; i < shots.shots.size(); ++i) {
+    AppendPixelObservations(shots.shots[i], targets, result.photos[i].tags, &out);
+  }
+  return out;
+}
+
+std::map<int, ImageSize> ImageSizesOf(const ShotsFile& shots, const PhotoDetectionResult& result) {
+  std::map<int, ImageSize> out;
+  for (size_t i = 0; i < shots.shots.size(); ++i) {
+    const PhotoDetection& p = result.photos[i];
+    if (p.width > 0 && p.height > 0) out[shots.shots[i].zoom] = ImageSize{p.width, p.height};
+  }
+  return out;
 }
 
 void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
@@ -303,7 +339,7 @@ void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
     w.Row({std::to_string(s.line), s.shot, s.image, std::to_string(s.face), std::to_string(s.zoom),
            std::to_string(p.width), std::to_string(p.height), std::to_string(p.channels),
            std::to_string(p.bit_depth), std::to_string(p.tags.size()),
-           std::to_string(p.tags_of_boards), std::to_string(4 * p.tags.size()),
+           std::to_string(p.tags_of_boards), std::to_string(p.corners),
            std::to_string(p.refined_corners), std::to_string(p.unrefined),
            std::to_string(p.not_on_boards), std::to_string(p.duplicates), rms, max});
   }

@@ -15,7 +15,9 @@
 //     libapriltag's (RMS and max). Both estimate the same corner, so a large
 //     shift means one of them went wrong (a smudge on an edge, heavy blur);
 //     typically 0.1-0.3 px;
-//   * a photo in which no tag was found is a warning naming its line and file.
+//   * a photo in which no target was found (no tag, no ChArUco corner, no
+//     chessboard), and one in which a tag or a chessboard was found twice,
+//     is a warning naming its line and file.
 // Image sizes are read from the images (never guessed); a photo whose size
 // differs from the first photo of the same zoom is an InputError naming both.
 //
@@ -35,6 +37,7 @@
 
 #include "detect/detector.h"
 #include "libcalib/io/shots.h"
+#include "libcalib/model/observations.h"
 #include "libcalib/model/targets.h"
 
 namespace rtscalib::detect {
@@ -63,9 +66,12 @@ struct PhotoDetection {
   int channels = 0, bit_depth = 0;  // of the file
   int tags_of_boards = 0;           // all tags of all boards
   std::vector<DetectedTag> tags;    // kept, by id
+  int corners = 0;                  // of the kept targets: 4 per tag, 1 per inner corner
   int unrefined = 0;      // board tags whose refinement failed (dropped unless keep_unrefined)
   int not_on_boards = 0;  // detections of families/ids of no board (dropped)
   int duplicates = 0;     // detections of a tag seen twice in this photo (dropped)
+  std::vector<int> duplicate_ids;  // those tags' ids
+  int duplicate_boards = 0;  // chessboards found twice in this photo (dropped, point_boards.h)
   int misoriented_boards = 0;  // chessboards found in no orientation a face allows (point_boards.h)
   // Refined vs libapriltag corners over the kept refined tags [px].
   double shift_rms_px = 0, shift_max_px = 0;
@@ -74,7 +80,7 @@ struct PhotoDetection {
 
 struct PhotoDetectionResult {
   std::vector<PhotoDetection> photos;  // one per shot, shots.csv order
-  std::vector<std::string> warnings;   // "shots.csv:7: image a.png: no tag of the boards found"
+  std::vector<std::string> warnings;   // "shots.csv:7: image a.png: no target of the boards found ..."
   double seconds = 0;                  // wall time
 };
 
@@ -89,15 +95,24 @@ std::map<std::string, int> DetectableCodeCounts();
 PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& targets,
                                   const PhotoDetectionOptions& options);
 
-// pixels.csv (SPEC 3) of the kept tags: face, zoom, phi, theta, shot, target,
-// corner, X, Y, Z, u, v, width, height; X, Y, Z are the corner in the
-// reference frame for boards with a known pose and empty otherwise (SPEC 7);
-// width, height are the image size (an extra column for readers of SPEC 3);
-// phi, theta in the unit shots.csv gave them in (ShotsFile::angle_unit), so
-// that the config that reads the shots reads these pixels too.
-// Rows in shots.csv order, then by tag id, corners 0..3.
-void WriteDetectedPixels(const std::string& path, const ShotsFile& shots,
-                         const TargetScene& targets, const PhotoDetectionResult& result);
+// The one conversion of detected targets into pixel observations (for the
+// calibration of a photo session, `rtscalib detect`'s pixels.csv and the
+// renderer's checks): per target, one observation per corner (4 for a tag,
+// 1 for a point board's inner corner, TagBoard::CornersPerTarget) with the
+// photo's face, zoom, reading (has_reading), shot id, placement, focus
+// distance and shots.csv line; X = the corner in the reference frame for a
+// board with a pose (X_known), unknown for a board without one (SPEC 7).
+// `tags` index into `targets.boards` (DetectedTag::board).
+void AppendPixelObservations(const PhotoShot& shot, const TargetScene& targets,
+                             const std::vector<DetectedTag>& tags,
+                             std::vector<PixelObservation>* out);
+// Every photo's kept targets (AppendPixelObservations), in shots.csv order,
+// then by target id, corners 0..3.
+std::vector<PixelObservation> PixelObservationsOf(const ShotsFile& shots,
+                                                  const TargetScene& targets,
+                                                  const PhotoDetectionResult& result);
+// The image size of every zoom's photos (DetectPhotos checked that they agree).
+std::map<int, ImageSize> ImageSizesOf(const ShotsFile& shots, const PhotoDetectionResult& result);
 
 // One row per photo: line, shot, image, face, zoom, width, height, channels,
 // bit_depth, tags_found, tags_of_boards, corners, refined_corners, unrefined,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 #include <opencv2/imgproc.hpp>
 
@@ -106,10 +107,43 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
   // photos and it cost 0.3 s more per 1280 x 960 image; cornerSubPix from
   // either start converges to the same saddles, 0.06 px RMS
   // (tests/render/point_boards_test.cc, docs/photos.md).
-  if (!cv::findChessboardCornersSB(gray, cv::Size(nc, nr), grid,
-                                   cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE) ||
-      static_cast<int>(grid.size()) != nc * nr) {
-    return out;
+  // The sector-based detector first; on real photos it misses a few boards
+  // that the classic quad-based one finds (OpenCV's left11.jpg: blur and a
+  // steep view), so that one is tried next. Either grid is refined below.
+  const cv::Size size(nc, nr);
+  bool found = cv::findChessboardCornersSB(gray, size, grid,
+                                           cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
+  if (!found) {
+    grid.clear();
+    found = cv::findChessboardCorners(
+        gray, size, grid, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+  }
+  if (!found || static_cast<int>(grid.size()) != nc * nr) return out;
+  // A second copy: the found board masked out (its hull, grown by one
+  // square, filled with the photo's mean grey) and the photo searched again
+  // (the fast non-exhaustive search: a second whole board would be as clear).
+  {
+    std::vector<cv::Point2f> hull_f;
+    cv::convexHull(grid, hull_f);
+    const cv::Point2f centre = std::accumulate(hull_f.begin(), hull_f.end(), cv::Point2f(0, 0)) *
+                               (1.0f / static_cast<float>(hull_f.size()));
+    double step = 1e9;
+    for (int k = 0; k + 1 < nc * nr; ++k) {
+      if (k % nc != nc - 1) step = std::min(step, static_cast<double>(cv::norm(grid[k + 1] - grid[k])));
+    }
+    std::vector<cv::Point> hull;
+    for (const cv::Point2f& p : hull_f) {
+      const cv::Point2f out_dir = p - centre;
+      const float len = std::max(1e-3f, static_cast<float>(cv::norm(out_dir)));
+      hull.emplace_back(p + out_dir * static_cast<float>(1.5 * step / len));
+    }
+    cv::Mat masked = gray.clone();
+    cv::fillConvexPoly(masked, hull, cv::Scalar(cv::mean(gray)[0]));
+    std::vector<cv::Point2f> second;
+    if (cv::findChessboardCornersSB(masked, size, second, cv::CALIB_CB_NORMALIZE_IMAGE)) {
+      out.duplicated = true;
+      return out;
+    }
   }
   double square_px = 1e9;
   for (int k = 0; k + 1 < nc * nr; ++k) {
@@ -122,18 +156,47 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
   auto at = [&](int r, int c) { return Eigen::Vector2d(grid[r * nc + c].x, grid[r * nc + c].y); };
   const Eigen::Vector2d along_row = at(0, nc - 1) - at(0, 0);
   const Eigen::Vector2d down_cols = at(nr - 1, 0) - at(0, 0);
-  // Face 1: rows to the right (+u), columns down (+v); face 2: turned by 180
-  // degrees. A grid returned the other way round is reversed (OpenCV may
-  // start at either end); anything else is a board seen sideways.
-  const double sign = face == 2 ? -1.0 : 1.0;
-  const bool mostly_horizontal = std::abs(along_row.x()) > std::abs(along_row.y());
-  if (!mostly_horizontal || along_row.x() * down_cols.y() - along_row.y() * down_cols.x() <= 0) {
-    out.misoriented = true;  // sideways, or mirrored (a print seen from its back)
-    return out;
+  // A grid numbered as a print seen from its back (rows turning the other
+  // way round, image v pointing down) is mirrored.
+  const bool mirrored = along_row.x() * down_cols.y() - along_row.y() * down_cols.x() <= 0;
+  const double sign = face == 2 ? -1.0 : 1.0;  // face 2: the image turned by 180 degrees
+  bool reverse_rows = false, reverse_all = false;
+  if (board.pose_known) {
+    // A surveyed board's numbering is its print's: the camera does not roll,
+    // so in face 1 its rows run to the right (+u) and its columns down, in
+    // face 2 turned by 180 degrees. A grid returned the other way round is
+    // reversed (OpenCV may start at either end); anything else is a board
+    // seen sideways or mirrored, not used.
+    const bool mostly_horizontal = std::abs(along_row.x()) > std::abs(along_row.y());
+    if (!mostly_horizontal || mirrored) {
+      out.misoriented = true;
+      return out;
+    }
+    reverse_all = sign * along_row.x() < 0;
+  } else {
+    // A board whose pose is estimated (per placement, SPEC 7.1) may hang or
+    // be held in any orientation: its pose absorbs the numbering of its grid,
+    // as in OpenCV's calibrateCamera. The numbering is made proper (seen from
+    // the front: a mirrored grid has its rows reversed) and, of the two
+    // proper ones turned by 180 degrees, the one whose rows run at an image
+    // angle in [-45, 135) degrees in face 1 (turned by 180 in face 2) is
+    // kept, so that every photo of one placement from one instrument (which
+    // does not roll) numbers the grid alike; upright and sideways boards lie
+    // far from the boundaries.
+    reverse_rows = mirrored;
+    Eigen::Vector2d row = reverse_rows ? Eigen::Vector2d(-along_row) : along_row;
+    row *= sign;
+    const double angle = std::atan2(row.y(), row.x()) * 180.0 / M_PI;
+    reverse_all = !(angle >= -45.0 && angle < 135.0);
   }
-  const bool reverse = sign * along_row.x() < 0;
   for (int k = 0; k < nc * nr; ++k) {
-    const cv::Point2f& p = grid[reverse ? nc * nr - 1 - k : k];
+    int r = k / nc, c = k % nc;
+    if (reverse_rows) c = nc - 1 - c;
+    if (reverse_all) {
+      r = nr - 1 - r;
+      c = nc - 1 - c;
+    }
+    const cv::Point2f& p = grid[r * nc + c];
     out.corners.emplace_back(k, Eigen::Vector2d(p.x, p.y));
   }
   return out;

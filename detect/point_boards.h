@@ -8,13 +8,18 @@
 // Targets: inner corner k = r (cols - 1) + c of the board (targets.h), as
 // pixels.csv target first_id + k, corner 0. ChArUco's corner ids are k
 // (OpenCV's CharucoBoard: id 0 at the top-left inner corner of the upright
-// printed board, row by row). A chessboard has no identity, only a grid:
-// its orientation is fixed from the instrument's geometry, never from a
-// model: the camera does not roll, so in face 1 the board's rows run to
-// the image's right and its columns down, and in face 2 (the telescope
-// transited) the board appears turned by 180 degrees; a grid whose
-// orientation is neither (a board hung sideways) is not used and counted.
-// A chessboard is only found whole (all inner corners in the photo).
+// printed board, row by row). A chessboard has no identity, only a grid.
+// A surveyed chessboard (pose given) is numbered as printed, its
+// orientation fixed from the instrument's geometry, never from a model: the
+// camera does not roll, so in face 1 the board's rows run to the image's
+// right and its columns down, and in face 2 (the telescope transited) the
+// board appears turned by 180 degrees; a grid whose orientation is neither
+// (a board hung sideways) is not used and counted. A chessboard whose pose
+// is estimated (SPEC 7.1) may be seen in any orientation: its pose absorbs
+// the numbering (point_boards.cc says which of the grid's numberings is
+// kept). A chessboard is only found whole (all inner corners in the photo),
+// and only once: after it is found, the photo is searched again with the
+// board masked out, and a second board makes the detection void.
 #pragma once
 
 #include <Eigen/Core>
@@ -32,6 +37,9 @@ namespace rtscalib::detect {
 struct PointBoardDetection {
   std::vector<std::pair<int, Eigen::Vector2d>> corners;  // inner corner k, pixel
   bool misoriented = false;  // chessboard found, but in no orientation the faces allow
+  // A chessboard found twice in the photo (two printed copies, or a board
+  // and its reflection): neither can be told from the other, none is used.
+  bool duplicated = false;
 };
 
 // `gray` is CV_8UC1; `face` 1 or 2 (chessboard orientation). Throws

@@ -25,6 +25,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "detect/photos.h"
 #include "detect/point_boards.h"
 
 namespace rtscalib::render {
@@ -32,6 +33,7 @@ namespace fs = std::filesystem;
 namespace {
 
 const char kShotsHeader[] = "index,shot,face,zoom,phi,theta,image";
+const char kShotsPlacementHeader[] = "index,shot,face,zoom,phi,theta,image,placement";
 const char kExactHeader[] = "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v,status";
 
 std::string Num(double v) {
@@ -78,16 +80,19 @@ class Progress {
   std::chrono::steady_clock::time_point start_, last_;
 };
 
-// Renders `indices` of `shots` into out_dir; calls done(index) after each image.
-void RenderIndices(const TargetScene& scene, const std::vector<Shot>& shots,
+// Renders `indices` of `shots` into out_dir; calls done(index) after each
+// image. One SceneRenderer per placement, built when first needed.
+void RenderIndices(const PlacedScenes& scenes, const std::vector<Shot>& shots,
                    const std::vector<int>& indices, const RenderShotsOptions& options,
                    const std::function<void(int)>& done) {
   HeadlessDisplay display(options.headless);
-  SceneRenderer renderer(scene, options.render);
+  std::map<std::string, std::unique_ptr<SceneRenderer>> renderers;
   const std::vector<int> params = {cv::IMWRITE_PNG_COMPRESSION, options.png_compression};
   for (int i : indices) {
     const Shot& s = shots[i];
-    const cv::Mat img = renderer.Render(s.ref_from_cam, s.cam, static_cast<std::uint64_t>(i));
+    std::unique_ptr<SceneRenderer>& renderer = renderers[s.placement];
+    if (!renderer) renderer = std::make_unique<SceneRenderer>(scenes.at(s.placement), options.render);
+    const cv::Mat img = renderer->Render(s.ref_from_cam, s.cam, static_cast<std::uint64_t>(i));
     const std::string path = (fs::path(options.out_dir) / ImageName(s)).string();
     if (!cv::imwrite(path, img, params)) throw std::runtime_error("could not write " + path);
     done(i);
@@ -109,7 +114,7 @@ bool WriteAll(int fd, const std::string& s) {
 // Forks `jobs` workers over `indices`; worker k takes every jobs-th index
 // starting at k. Each reports "ok <index>" or "error <message>" lines on its
 // own pipe.
-void RenderInWorkers(const TargetScene& scene, const std::vector<Shot>& shots,
+void RenderInWorkers(const PlacedScenes& scenes, const std::vector<Shot>& shots,
                      const std::vector<int>& indices, const RenderShotsOptions& options,
                      Progress* progress) {
   const int jobs = std::min<int>(options.jobs, static_cast<int>(indices.size()));
@@ -148,7 +153,7 @@ void RenderInWorkers(const TargetScene& scene, const std::vector<Shot>& shots,
         ::setenv("LP_NUM_THREADS", lp_threads.c_str(), 0);
         std::vector<int> mine;
         for (size_t j = k; j < indices.size(); j += jobs) mine.push_back(indices[j]);
-        RenderIndices(scene, shots, mine, options,
+        RenderIndices(scenes, shots, mine, options,
                       [&](int i) { WriteAll(fds[1], "ok " + std::to_string(i) + "\n"); });
       } catch (const std::exception& e) {
         std::string msg = e.what();
@@ -225,6 +230,15 @@ std::vector<std::string> SplitCsvLine(const std::string& line) {
   return out;
 }
 
+// The scene board holding target `id` (tag ids are unique within a scene:
+// ExpectTags keys its tags by id).
+int BoardIndexOf(const TargetScene& scene, int id) {
+  for (size_t b = 0; b < scene.boards.size(); ++b) {
+    if (scene.boards[b].HasId(id)) return static_cast<int>(b);
+  }
+  throw std::logic_error("DetectShots: matched target " + std::to_string(id) + " is on no board");
+}
+
 }  // namespace
 
 std::string CheckShots(const std::vector<Shot>& shots) {
@@ -235,6 +249,8 @@ std::string CheckShots(const std::vector<Shot>& shots) {
     if (!ValidId(s.id))
       return where + "id: expected letters, digits, '_', '-', '.' (no leading '.')";
     if (!ids.insert(s.id).second) return where + "id: duplicated";
+    if (!s.placement.empty() && !ValidId(s.placement))
+      return where + "placement: expected letters, digits, '_', '-', '.' (no leading '.')";
     if (s.face != 1 && s.face != 2)
       return where + "face: expected 1 or 2, got " + std::to_string(s.face);
     if (s.zoom < 0) return where + "zoom: expected >= 0, got " + std::to_string(s.zoom);
@@ -279,11 +295,24 @@ std::string ExactTableName(int shard, int num_shards) {
 
 RenderShotsResult RenderShots(const TargetScene& scene, const std::vector<Shot>& shots,
                               const RenderShotsOptions& options) {
+  return RenderShots(PlacedScenes{{"", scene}}, shots, options);
+}
+
+RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot>& shots,
+                              const RenderShotsOptions& options) {
   if (const std::string m = options.Check(); !m.empty()) {
     throw std::invalid_argument("RenderShotsOptions: " + m);
   }
   if (const std::string m = CheckShots(shots); !m.empty())
     throw std::invalid_argument("shots: " + m);
+  bool placements = false;
+  for (const Shot& s : shots) {
+    if (!scenes.count(s.placement)) {
+      throw std::invalid_argument("shots: shot " + s.id + " has placement '" + s.placement +
+                                  "', which has no scene");
+    }
+    placements = placements || !s.placement.empty();
+  }
   fs::create_directories(options.out_dir);
 
   std::vector<int> indices;
@@ -296,12 +325,15 @@ RenderShotsResult RenderShots(const TargetScene& scene, const std::vector<Shot>&
   {
     std::ofstream st(fs::path(options.out_dir) / ShotsTableName(options.shard, options.num_shards));
     std::ofstream ex(fs::path(options.out_dir) / ExactTableName(options.shard, options.num_shards));
-    st << kShotsHeader << "\n";
+    st << (placements ? kShotsPlacementHeader : kShotsHeader) << "\n";
     ex << kExactHeader << "\n";
     for (int i : indices) {
       const Shot& s = shots[i];
       st << i << "," << s.id << "," << s.face << "," << s.zoom << "," << Num(s.phi) << ","
-         << Num(s.theta) << "," << ImageName(s) << "\n";
+         << Num(s.theta) << "," << ImageName(s);
+      if (placements) st << "," << s.placement;
+      st << "\n";
+      const TargetScene& scene = scenes.at(s.placement);
       for (const ExpectedTag& t : ExpectTags(scene, s.ref_from_cam, s.cam, options.visibility)) {
         if (t.status == TagStatus::kBehind || t.status == TagStatus::kBackFacing ||
             t.status == TagStatus::kOutside || t.status == TagStatus::kOccluded) {
@@ -330,11 +362,11 @@ RenderShotsResult RenderShots(const TargetScene& scene, const std::vector<Shot>&
   Progress progress(what, static_cast<int>(indices.size()), options.progress);
   if (options.jobs == 1 || indices.size() == 1) {
     int done = 0;
-    RenderIndices(scene, shots, indices, options, [&](int) { progress.Update(++done); });
+    RenderIndices(scenes, shots, indices, options, [&](int) { progress.Update(++done); });
   } else {
     // One display for all workers; each worker's HeadlessDisplay adopts it.
     HeadlessDisplay display(options.headless);
-    RenderInWorkers(scene, shots, indices, options, &progress);
+    RenderInWorkers(scenes, shots, indices, options, &progress);
   }
   result.rendered = static_cast<int>(indices.size());
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -382,18 +414,25 @@ void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& 
   // Rows keyed by shot index; exact rows follow their shot.
   std::map<int, std::string> shot_rows;
   std::map<int, std::vector<std::string>> exact_rows;
+  std::string header;  // the shards' shots.csv header (with or without placement)
   for (const auto& [k, t] : found) {
     std::map<std::string, int> index_of_shot;
     std::ifstream in(t.shots);
     std::string line;
     std::getline(in, line);
-    if (line != kShotsHeader)
+    if ((line != kShotsHeader && line != kShotsPlacementHeader) ||
+        (!header.empty() && line != header)) {
       throw std::runtime_error("MergeShards: unexpected header in " + t.shots);
+    }
+    header = line;
+    const size_t columns = line == kShotsHeader ? 7 : 8;
     while (std::getline(in, line)) {
       if (line.empty()) continue;
       const std::vector<std::string> cells = SplitCsvLine(line);
-      if (cells.size() != 7)
+      if (cells.size() != columns &&
+          !(columns == 8 && cells.size() == 7 && !line.empty() && line.back() == ',')) {
         throw std::runtime_error("MergeShards: bad row in " + t.shots + ": " + line);
+      }
       const int index = std::stoi(cells[0]);
       if (shot_rows.count(index) != 0) {
         throw std::runtime_error("MergeShards: shot index " + cells[0] + " appears in two shards");
@@ -420,7 +459,7 @@ void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& 
     }
   }
   std::ofstream st(fs::path(out_dir) / "shots.csv"), ex(fs::path(out_dir) / "exact.csv");
-  st << kShotsHeader << "\n";
+  st << (header.empty() ? kShotsHeader : header.c_str()) << "\n";
   ex << kExactHeader << "\n";
   for (const auto& [index, row] : shot_rows) st << row << "\n";
   for (const auto& [index, rows] : exact_rows) {
@@ -497,21 +536,21 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
             ExpectTags(scene, s.ref_from_cam, s.cam, options.visibility);
         ShotStats& stats = result.stats[i];
         stats.shot = s.id;
+        std::vector<detect::DetectedTag> kept;
         for (const MatchedTag& m : MatchDetections(dets, expected, options.match, &stats)) {
-          for (int c = 0; c < m.corners; ++c) {
-            PixelObservation p;
-            p.face = s.face;
-            p.zoom = s.zoom;
-            p.phi = s.phi;
-            p.theta = s.theta;
-            p.shot = s.id;
-            p.target = m.id;
-            p.corner = c;
-            p.X = m.X[c];
-            p.uv = m.uv[c];
-            per_shot[i].push_back(p);
-          }
+          detect::DetectedTag tag;
+          tag.board = BoardIndexOf(scene, m.id);
+          tag.id = m.id;
+          tag.uv = m.uv;
+          kept.push_back(tag);
         }
+        PhotoShot photo;
+        photo.face = s.face;
+        photo.zoom = s.zoom;
+        photo.phi = s.phi;
+        photo.theta = s.theta;
+        photo.shot = s.id;
+        detect::AppendPixelObservations(photo, scene, kept, &per_shot[i]);
         const int d = ++done;
         std::lock_guard<std::mutex> lock(mutex);
         progress.Update(d);

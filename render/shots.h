@@ -3,7 +3,9 @@
 //
 // RenderShots writes into `out_dir`:
 //   <shot id>.png   8-bit grey image of each shot
-//   shots.csv       index, shot, face, zoom, phi, theta, image
+//   shots.csv       index, shot, face, zoom, phi, theta, image [, placement]
+//                   (placement when the shots have placements, SPEC 7.1: each
+//                   shot sees the scene of its placement)
 //   exact.csv       pixels.csv columns (SPEC 3: face, zoom, phi, theta, shot,
 //                   target, corner, X, Y, Z, u, v) plus `status`: the exact
 //                   projection (ProjectToPixel) of every corner that
@@ -42,6 +44,7 @@ struct Shot {
   int zoom = 0;
   double phi = 0, theta = 0;  // control angles [rad]
   std::string id;             // unique; the image is <id>.png ([A-Za-z0-9_.-], no leading '.')
+  std::string placement;      // SPEC 7.1: which scene it sees ("" = the one placement)
   Rigid3 ref_from_cam;        // the camera's true pose for this shot
   CameraTool cam;             // intrinsics, distortion, size (pose block unused)
 };
@@ -74,6 +77,11 @@ std::string CheckShots(const std::vector<Shot>& shots);
 // options or shots, std::runtime_error when a worker fails (its message
 // included), DisplayError when no display can be had.
 RenderShotsResult RenderShots(const TargetScene& scene, const std::vector<Shot>& shots,
+                              const RenderShotsOptions& options);
+// The same for shots of several placements (SPEC 7.1): each shot sees
+// scenes.at(shot.placement); std::invalid_argument when a shot's placement
+// has no scene.
+RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot>& shots,
                               const RenderShotsOptions& options);
 
 // The tables' file names for a shard ("shots.csv" when num_shards == 1).

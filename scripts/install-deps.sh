@@ -18,6 +18,9 @@ packages=(
   chromium
   # tests/independent: photos from a renderer written from SPEC.md alone
   python3-numpy python3-opencv python3-yaml
+  # OpenCV's own sample photos of a real camera (examples/data/left*.jpg):
+  # configs/bench.yaml and tests/app/opencv_sample_photos_test.cc
+  opencv-doc
 )
 
 missing=()

@@ -221,6 +221,12 @@ void CheckInImage(const CameraTool& cam, int zoom, double u, double v, const cha
 }  // namespace
 
 Eigen::Vector3d CalibratedInstrument::EdmPoint(double phi, double theta, double d) const {
+  if (model_.kinematics == Kinematics::kNone) {
+    throw PredictionError(PredictionFailure::kNotDetermined,
+                          "a model with kinematics (this one is camera-only, kinematics none: "
+                          "it has no EDM)",
+                          "edm");
+  }
   if (!model_.edm_determined) {
     throw PredictionError(PredictionFailure::kNotDetermined,
                           "a tool the model determines (the calibration data had no EDM rows)",
@@ -256,12 +262,19 @@ Eigen::Vector3d CalibratedInstrument::CameraPoint(int zoom, double phi, double t
   return x;
 }
 
-Eigen::Vector3d CalibratedInstrument::BoardCorner(int target, int corner) const {
-  const EstimatedBoard* b = model_.BoardOf(target);
+Eigen::Vector3d CalibratedInstrument::BoardCorner(int target, int corner,
+                                                  const std::string& placement, int zoom) const {
+  const EstimatedBoard* b = model_.BoardOf(target, placement, zoom);
   if (!b) {
+    std::string where = "target " + std::to_string(target);
+    if (!placement.empty()) where += " at placement '" + placement + "'";
+    if (zoom >= 0 && model_.kinematics == Kinematics::kNone) {
+      where += " at zoom " + std::to_string(zoom);
+    }
     throw PredictionError(PredictionFailure::kNoSuchBoard,
-                          "a tag of a board the model estimated (model.yaml boards)",
-                          "target " + std::to_string(target));
+                          "a tag of a board the model estimated there (model.yaml boards, with "
+                          "their placement)",
+                          where);
   }
   if (corner < 0 || corner > 3) {
     throw PredictionError(PredictionFailure::kNoSuchBoard, "a corner 0..3", std::to_string(corner));
@@ -270,8 +283,9 @@ Eigen::Vector3d CalibratedInstrument::BoardCorner(int target, int corner) const 
 }
 
 Eigen::Vector2d CalibratedInstrument::BoardCornerPixel(int zoom, double phi, double theta,
-                                                       int target, int corner) const {
-  return Pixel(zoom, phi, theta, BoardCorner(target, corner));
+                                                       int target, int corner,
+                                                       const std::string& placement) const {
+  return Pixel(zoom, phi, theta, BoardCorner(target, corner, placement, zoom));
 }
 
 Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,

@@ -134,13 +134,17 @@ class CalibratedInstrument {
   Eigen::Vector2d Pixel(int zoom, double phi, double theta, const Eigen::Vector3d& x_ref) const;
   // SPEC 7: corner `corner` (0..3) of tag `target` of a board the model
   // estimated (ref_from_board * TagBoard::CornersInBoard), in the reference
-  // frame; throws PredictionError (kNoSuchBoard) when no estimated board
-  // holds the tag or the corner is not 0..3.
-  Eigen::Vector3d BoardCorner(int target, int corner) const;
+  // frame, as the board stood in `placement` (SPEC 7.1; "" for a session
+  // without placements) and, for a camera-only model whose board poses are
+  // per zoom, as zoom `zoom` saw it (-1: a pose of every zoom); throws
+  // PredictionError (kNoSuchBoard) when no estimated board pose holds the
+  // tag there or the corner is not 0..3.
+  Eigen::Vector3d BoardCorner(int target, int corner, const std::string& placement = "",
+                              int zoom = -1) const;
   // The pixel at which zoom level `zoom` sees that corner
-  // (= Pixel(zoom, phi, theta, BoardCorner(target, corner))).
-  Eigen::Vector2d BoardCornerPixel(int zoom, double phi, double theta, int target,
-                                   int corner) const;
+  // (= Pixel(zoom, phi, theta, BoardCorner(target, corner, placement, zoom))).
+  Eigen::Vector2d BoardCornerPixel(int zoom, double phi, double theta, int target, int corner,
+                                   const std::string& placement = "") const;
 
   // The same with first-order covariances (header). The ray's value is
   // [origin; direction] (6 values: metres, then unitless). Throw

@@ -1,6 +1,8 @@
 #include "libcalib/calibrate/calibrate.h"
 
 #include <algorithm>
+#include <cmath>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -97,6 +99,102 @@ void CheckImageSizes(const Observations& obs, const CalibrationOptions& options)
           std::to_string(size.width) + " x " + std::to_string(size.height) + " px in the photos");
     }
   }
+}
+
+// What the configured kinematics need from the data, checked before anything
+// is fitted, so that a session that cannot determine what the config asks
+// for gets an error naming the key or the row, never a model.
+//   none (camera-only, SPEC 7.1): no records, no kinematic effect, no known
+//     position (each board pose is estimated in its zoom's camera frame),
+//     and a camera that did not turn within a placement (readings of one
+//     placement and zoom agree to kSameReadingRad);
+//   dh, spherical: every row has a reading, and pixels alone determine a
+//     chain only when some placement of a board is seen from two readings
+//     or some position is known (a board seen from one reading per
+//     placement gives each photo its own board pose: nothing ties the
+//     camera poses to phi and theta).
+void CheckDataFitTheKinematics(const Observations& obs, const CalibrationOptions& options) {
+  const Kinematics k = options.model.kinematics;
+  const std::string name = KinematicsName(k);
+  if (k == Kinematics::kNone) {
+    if (!obs.records.empty()) {
+      throw std::invalid_argument(
+          "model.kinematics: none is a camera-only calibration (SPEC 7.1) and takes no records, "
+          "but " + obs.records_source + " has " + std::to_string(obs.records.size()) +
+          " rows: leave data.records out, or choose model.kinematics: dh or spherical");
+    }
+    for (Effect e : options.model.effects.List()) {
+      if (IsKinematic(e)) {
+        throw std::invalid_argument(std::string("model.effects: ") + Info(e).name +
+                                    " is an effect of the instrument's axes or EDM; "
+                                    "model.kinematics: none (camera-only) has neither: keep the "
+                                    "distortion effects only");
+      }
+    }
+    // Readings of one placement and zoom: 1e-5 rad (2") is far beyond an
+    // instrument's reading noise and far below any deliberate turn.
+    constexpr double kSameReadingRad = 1e-5;
+    std::map<std::pair<std::string, int>, const PixelObservation*> first;
+    for (const PixelObservation& p : obs.pixels) {
+      if (p.X_known) {
+        throw InputError::Cell(
+            obs.pixels_source, p.line, "X",
+            "a corner of a board without a pose (model.kinematics: none estimates every board's "
+            "pose in the camera frame; a surveyed position has no meaning there)",
+            "a known position");
+      }
+      if (!p.has_reading) continue;
+      const auto [it, inserted] = first.emplace(std::make_pair(p.placement, p.zoom), &p);
+      const PixelObservation& q = *it->second;
+      if (!inserted && (std::abs(p.phi - q.phi) > kSameReadingRad ||
+                        std::abs(p.theta - q.theta) > kSameReadingRad)) {
+        throw InputError::Cell(
+            obs.pixels_source, p.line, "phi",
+            "the reading of line " + std::to_string(q.line) + " (same placement '" + p.placement +
+                "' and zoom " + std::to_string(p.zoom) +
+                "): with model.kinematics: none the camera must not turn within a placement; "
+                "give each photo its own placement, or use model.kinematics: dh or spherical",
+            "a reading that differs by " +
+                std::to_string(std::max(std::abs(p.phi - q.phi), std::abs(p.theta - q.theta))) +
+                " rad");
+      }
+    }
+    return;
+  }
+  for (const PixelObservation& p : obs.pixels) {
+    if (!p.has_reading) {
+      throw InputError::Cell(obs.pixels_source, p.line, "phi",
+                             "the instrument's readings phi and theta (model.kinematics: " + name +
+                                 " needs them; leave them empty only with model.kinematics: "
+                                 "none, a camera-only calibration)",
+                             "");
+    }
+  }
+  if (!obs.records.empty() || obs.pixels.empty()) return;
+  bool known = false;
+  std::map<std::pair<int, std::string>, std::set<std::pair<double, double>>> readings;
+  for (const PixelObservation& p : obs.pixels) {
+    bool surveyed = p.X_known;
+    int board = -1;
+    for (const TagBoard& b : obs.targets.boards) {
+      if (!b.HasId(p.target)) continue;
+      surveyed = surveyed || b.pose_known;
+      board = b.first_id;
+    }
+    known = known || surveyed;
+    if (!surveyed) readings[{board, p.placement}].insert({p.phi, p.theta});
+  }
+  if (known) return;
+  for (const auto& [key, seen] : readings) {
+    if (seen.size() >= 2) return;
+  }
+  throw std::invalid_argument(
+      "model.kinematics: " + name + " cannot be determined from " + obs.pixels_source +
+      ": every placement of every board (" + std::to_string(readings.size()) +
+      ") is seen from one reading only, so each photo has its own board pose and nothing ties "
+      "the camera to phi and theta; photograph one placement from several readings (turn the "
+      "instrument), add records or a surveyed board, or choose model.kinematics: none for a "
+      "camera-only calibration");
 }
 
 // Sets every zoom's width and height in `model` from the photos or the
@@ -460,6 +558,7 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   if (!problem.empty()) throw std::invalid_argument("calibration options: " + problem);
 
   CheckImageSizes(obs, options);
+  CheckDataFitTheKinematics(obs, options);
   CalibrationResult result;
   const std::vector<std::string> screening =
       ScreenObservations(obs, options.model.cameras, options.screen);
@@ -514,7 +613,12 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
                 result.fit_options, options.checks);
   RefineConfigured(used, reduced, options.checks, progress, &result);
 
-  if (options.model.faces == FaceMode::kSeparate) {
+  if (options.model.faces == FaceMode::kSeparate &&
+      options.model.kinematics == Kinematics::kNone) {
+    result.notes.push_back(
+        "faces: separate ignored: a camera-only calibration (kinematics none) has no two-face "
+        "check");
+  } else if (options.model.faces == FaceMode::kSeparate) {
     progress->Step("fitting one model per face");
     result.faces = FitFacesSeparately(used, result, options.checks);
   }

@@ -305,7 +305,8 @@ std::vector<std::string> MarkUndeterminedTools(const Observations& obs, const Fi
   }
   std::vector<std::string> notes;
   model->edm_determined = edm;
-  if (!edm) {
+  // A camera-only model has no EDM at all (nothing to note).
+  if (!edm && model->kinematics != Kinematics::kNone) {
     notes.push_back(
         "EDM tool: not determined by the data (no EDM rows outside the critical regions); "
         "model.yaml holds its start value without uncertainty and predict refuses EDM rows");

@@ -149,9 +149,14 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   for (int g = 0; g < 3; ++g) d.sigma[g] = fit.sigma[g];
   d.coverage = MeasureCoverage(obs, model, fit.options);
 
+  // A camera-only model (SPEC 7.1) has no axes and no EDM: only the camera's
+  // own effects are candidates, and there is no phi or theta to find
+  // structure in.
+  const bool camera_only = model.kinematics == Kinematics::kNone;
   std::vector<Effect> candidates, contained;
   for (const EffectInfo& info : EffectCatalogue()) {
     if (model.effects.Has(info.effect)) continue;
+    if (camera_only && IsKinematic(info.effect)) continue;
     if (ContainedInKinematics(model.kinematics, info.effect)) {
       contained.push_back(info.effect);
     } else {
@@ -162,7 +167,8 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   lo.fit = fit.options;
   for (int g = 0; g < 3; ++g) lo.sigma[g] = fit.sigma[g];
   lo.candidates = candidates;
-  if (settings.harmonics)
+  const bool harmonics = settings.harmonics && !camera_only;
+  if (harmonics)
     lo.probes = DefaultProbes(d.coverage.faces, d.coverage.has_edm, settings.max_harmonic);
   const Linearization lin = Linearize(obs, model, lo);
   const Reduced red = Reduce(lin);
@@ -178,7 +184,7 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
     if (kept >= kRedundantFraction) catalogue.push_back(&b);
   }
   Projector nuisance(lin.NumRows());
-  if (settings.harmonics) {
+  if (harmonics) {
     d.harmonics =
         AnalyseHarmonics(lin, red, catalogue, settings.significance, settings.max_unexplained);
     for (const Harmonic& h : d.harmonics.unexplained) {

@@ -42,12 +42,25 @@ struct PosedShot {
 // Separator of a (shot, board) view's name: the shot, then the board's first id.
 constexpr char kViewSeparator = '\x1f';
 
-// SPEC 7: pixels of boards of unknown pose become views of their board alone,
-// X in the board frame; `frame_of_view` maps such a view's name to its frame
-// (1 + index into `boards`, the unknown boards in first-id order seen).
+// One frame of the start (besides frame 0, the reference frame): a board of
+// unknown pose in one placement (SPEC 7.1) and, camera-only, at one zoom
+// (EstimatedBoard's key).
+struct BoardFrame {
+  const TagBoard* board = nullptr;
+  std::string placement;
+  int zoom = -1;
+  bool operator==(const BoardFrame& o) const {
+    return board == o.board && placement == o.placement && zoom == o.zoom;
+  }
+};
+
+// SPEC 7: pixels of boards of unknown pose become views of their board alone
+// in one placement (and, with `per_zoom`, one zoom), X in the board frame;
+// `frame_of_view` maps such a view's name to its frame (1 + index into
+// `frames`, in the order first seen).
 std::vector<PixelObservation> BoardViews(const std::vector<PixelObservation>& pixels,
-                                         const TargetScene& targets,
-                                         std::vector<const TagBoard*>* boards,
+                                         const TargetScene& targets, bool per_zoom,
+                                         std::vector<BoardFrame>* frames,
                                          std::map<std::string, int>* frame_of_view) {
   std::vector<PixelObservation> out;
   out.reserve(pixels.size());
@@ -70,16 +83,15 @@ std::vector<PixelObservation> BoardViews(const std::vector<PixelObservation>& pi
       if (board->pose_known) {
         p.X = board->ref_from_board * in_board;
       } else {
-        int frame = 0;
-        for (size_t i = 0; i < boards->size(); ++i) {
-          if ((*boards)[i] == board) frame = static_cast<int>(i) + 1;
-        }
-        if (frame == 0) {
-          boards->push_back(board);
-          frame = static_cast<int>(boards->size());
+        const BoardFrame key{board, p.placement, per_zoom ? p.zoom : -1};
+        const auto it = std::find(frames->begin(), frames->end(), key);
+        int frame = static_cast<int>(it - frames->begin()) + 1;
+        if (it == frames->end()) {
+          frames->push_back(key);
+          frame = static_cast<int>(frames->size());
         }
         p.X = in_board;
-        p.shot += kViewSeparator + std::to_string(board->first_id);
+        p.shot += kViewSeparator + std::to_string(frame);
         (*frame_of_view)[p.shot] = frame;
       }
       p.X_known = true;
@@ -87,6 +99,16 @@ std::vector<PixelObservation> BoardViews(const std::vector<PixelObservation>& pi
     out.push_back(std::move(p));
   }
   return out;
+}
+
+EstimatedBoard StartedBoard(const BoardFrame& frame, const Rigid3& ref_from_board) {
+  EstimatedBoard eb;
+  eb.board = *frame.board;
+  eb.placement = frame.placement;
+  eb.zoom = frame.zoom;
+  eb.board.ref_from_board = ref_from_board;
+  eb.pose = PoseBlock::FromRigid(ref_from_board);
+  return eb;
 }
 
 CameraTool SizeFor(const InitFromPixelsOptions& o, int zoom,
@@ -194,10 +216,11 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
   const std::string msg = options.Check();
   if (!msg.empty()) throw std::invalid_argument("InitFromPixels: " + msg);
   InitFromPixelsResult result;
-  std::vector<const TagBoard*> boards;
+  const bool camera_only = options.kinematics == Kinematics::kNone;
+  std::vector<BoardFrame> boards;
   std::map<std::string, int> frame_of_view;
   const std::vector<PixelObservation> pixels =
-      BoardViews(observed, options.targets, &boards, &frame_of_view);
+      BoardViews(observed, options.targets, camera_only, &boards, &frame_of_view);
   const int num_frames = 1 + static_cast<int>(boards.size());
   int excluded = 0;
   const std::map<int, std::vector<PixelObservation>> zooms = ByZoom(pixels, options, &excluded);
@@ -213,6 +236,7 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
   InstrumentModel& m = result.model;
   m.kinematics = Kinematics::kSpherical;
   m.cams.resize(num_zooms);
+  std::map<int, CameraTool> cam_of_zoom;
   result.views.resize(num_zooms);
   for (auto& v : result.views) v.zoom = -1;
   std::vector<PosedShot> shots;
@@ -223,6 +247,7 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
     cam.intrinsics = v.intrinsics;
     cam.distortion = v.distortion;
     m.cams[zoom] = cam;
+    cam_of_zoom[zoom] = cam;
     for (const ShotPose& s : v.shots) {
       const auto f = frame_of_view.find(s.shot);
       shots.push_back(
@@ -235,6 +260,32 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
       result.notes.push_back("zoom " + std::to_string(z) +
                              " has no pixels: its camera is a copy of the nearest zoom's start");
     }
+  }
+  if (camera_only) {
+    // SPEC 7.1: no chain. Each board frame's pose in its zoom's camera frame
+    // is the chordal mean of cam_from_board over its views (the camera did
+    // not move within a placement); OpenCV's pose of a view is board_from_cam.
+    m = IdealModel(Kinematics::kNone, num_zooms, CameraTool());
+    for (int z = 0; z < num_zooms; ++z) {
+      if (result.views[z].zoom >= 0) m.cams[z] = CameraTool(cam_of_zoom[z]);
+    }
+    std::vector<Eigen::Matrix3d> rot(num_frames, Eigen::Matrix3d::Zero());
+    std::vector<Eigen::Vector3d> pos(num_frames, Eigen::Vector3d::Zero());
+    std::vector<int> count(num_frames, 0);
+    for (const PosedShot& s : shots) {
+      const Rigid3 cam_from_board = s.ref_from_cam.Inverse();
+      rot[s.frame] += cam_from_board.rotation;
+      pos[s.frame] += cam_from_board.translation;
+      ++count[s.frame];
+    }
+    for (int f = 1; f < num_frames; ++f) {
+      if (count[f] == 0) continue;  // every view of it excluded by OpenCV: no start
+      m.boards.push_back(
+          StartedBoard(boards[f - 1], Rigid3{ProjectToRotation(rot[f]), pos[f] / count[f]}));
+    }
+    result.notes.push_back("camera-only start: " + std::to_string(m.boards.size()) +
+                           " board pose(s) from OpenCV's views (kinematics none)");
+    return result;
   }
 
   // 2a. Camera tool rotations, per zoom: Park-Martin hand-eye on shot pairs.
@@ -314,11 +365,7 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
   for (int f = 1; f < num_frames; ++f) {
     const Rigid3 frame_from_flange_base{frame_rotation[f], x.segment<3>(3 * f)};
     frame_from_ref[f] = frame_from_flange_base * base.Inverse();
-    EstimatedBoard eb;
-    eb.board = *boards[f - 1];
-    eb.board.ref_from_board = frame_from_ref[f].Inverse();
-    eb.pose = PoseBlock::FromRigid(eb.board.ref_from_board);
-    m.boards.push_back(eb);
+    m.boards.push_back(StartedBoard(boards[f - 1], frame_from_ref[f].Inverse()));
   }
   m.edm = PoseBlock();
   for (int z = 0; z < num_zooms; ++z) {

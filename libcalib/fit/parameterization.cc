@@ -164,7 +164,19 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
     : translation_bound_m_(options.translation_bound_m) {
   InstrumentModel& m = *model;
   const bool dh = m.kinematics == Kinematics::kDh;
-  if (facts.known_positions) {
+  const bool camera_only = m.kinematics == Kinematics::kNone;
+  if (camera_only) {
+    // SPEC 7.1: no chain. Base, links and tools stay at the identity, so that
+    // each zoom's camera frame is the reference of its shots; only the
+    // cameras' intrinsics and distortion and the boards' poses are free.
+    Add(Rotation(m.base.q.data(), "base", BlockKind::kConstant));
+    Add(Decision(m.base.t.data(), BlockKind::kConstant, "base.t", 3));
+    Add(Rotation(m.edm.q.data(), "edm", BlockKind::kConstant));
+    Add(Decision(m.edm.t.data(), BlockKind::kConstant, "edm.t", 3));
+    fixed_gauges_.push_back(
+        "kinematics none (camera-only): no chain is estimated; each zoom's camera frame is the "
+        "reference frame of its shots, and each board pose per placement is cam_from_board");
+  } else if (facts.known_positions) {
     Add(Rotation(m.base.q.data(), "base", BlockKind::kQuaternion));
     Add(Translation(m.base.t.data(), "base", {}));
   } else {
@@ -176,7 +188,9 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
         "base pose held at the instrument's ideal base frame: no observation has a known "
         "position (SPEC 7), so the reference frame is defined by the instrument");
   }
-  if (dh) {
+  if (camera_only) {
+    // (held above)
+  } else if (dh) {
     Add(Euclidean(m.links[0].p.data(), "link1", BlockKind::kSubset, 4, {kDhD, kDhGamma}, "link1.",
                   kDhParamNames, ""));
     Add(Euclidean(m.links[1].p.data(), "link2", BlockKind::kConstant, 4, {}, "", kDhParamNames,
@@ -233,8 +247,13 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
       for (FreeColumn& c : d.columns) c.zoom = z;
       return d;
     };
-    Add(per_zoom(Rotation(cam.flange_from_cam.q.data(), zs, BlockKind::kQuaternion)));
-    Add(per_zoom(Translation(cam.flange_from_cam.t.data(), zs, {})));
+    if (camera_only) {
+      Add(Rotation(cam.flange_from_cam.q.data(), zs, BlockKind::kConstant));
+      Add(Decision(cam.flange_from_cam.t.data(), BlockKind::kConstant, zs + ".t", 3));
+    } else {
+      Add(per_zoom(Rotation(cam.flange_from_cam.q.data(), zs, BlockKind::kQuaternion)));
+      Add(per_zoom(Translation(cam.flange_from_cam.t.data(), zs, {})));
+    }
     Add(per_zoom(Euclidean(cam.intrinsics.data(), zs + ".intrinsics",
                            options.fit_intrinsics ? BlockKind::kFree : BlockKind::kConstant,
                            kNumIntrinsics, {}, zs + ".", kIntrinsicsParamNames, "")));
@@ -264,7 +283,7 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
   // SPEC 7: boards of unknown pose and points of unknown position. No Eq. 98
   // window: their start (PnP, ideal EDM) is not an extraction's.
   for (EstimatedBoard& b : m.boards) {
-    const std::string name = "board[" + std::to_string(b.board.first_id) + "]";
+    const std::string name = b.Key();
     Add(Rotation(b.pose.q.data(), name, BlockKind::kQuaternion));
     Add(Euclidean(b.pose.t.data(), name + ".t", BlockKind::kFree, 3, {}, name + ".t[", kAxes, "]"));
   }
@@ -415,7 +434,7 @@ ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGro
           throw std::invalid_argument(where + "corner must be 0..3, got " +
                                       std::to_string(px.corner));
         }
-        if (EstimatedBoard* b = model->BoardOf(px.target)) {
+        if (EstimatedBoard* b = model->BoardOf(px.target, px.placement, px.zoom)) {
           auto it = slots.find(b);
           if (it == slots.end()) {
             it = slots.emplace(b, static_cast<int>(f->layout.boards.size())).first;

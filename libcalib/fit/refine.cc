@@ -299,6 +299,22 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks,
     n += problem->ParameterBlockTangentSize(p);
   }
   model->sigmas.covariance.resize(0, 0);
+  // The sandwich's middle term sum_c g_c g_c^T has rank <= G (the number of
+  // clusters): with no more clusters than free parameters it cannot measure
+  // the scatter in every direction, and the widening would follow the noise
+  // of a few clusters (a camera-only session: 13 photos, each with its own
+  // board pose). The independent-error covariance is then the honest one.
+  if (refs && clusters) {
+    std::set<int> distinct;
+    for (const std::vector<int>& of_ref : *clusters) distinct.insert(of_ref.begin(), of_ref.end());
+    if (static_cast<int>(distinct.size()) <= n) {
+      summary->message += " covariance: independent errors (" + std::to_string(distinct.size()) +
+                          " clusters cannot measure the scatter of " + std::to_string(n) +
+                          " free parameters; fit.covariance_clusters not applied);";
+      refs = nullptr;
+      clusters = nullptr;
+    }
+  }
   Eigen::MatrixXd c;
   int dropped = 0;
   if (!TangentCovariance(problem, free_blocks, n, num_threads, refs, clusters, &c, &dropped,

@@ -4,6 +4,7 @@
 #include <map>
 #include <opencv2/calib3d.hpp>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 
 #include "libcalib/model/gauge.h"
@@ -65,15 +66,18 @@ std::vector<std::string> StartUnknowns(const Observations& obs, const UsedRows& 
   // stay consistent with its base (libcalib/model/gauge.h).
   if (!facts.known_positions) ToIdealBaseFrame(&m);
 
-  // Boards: the corners of each unknown board per shot.
+  // Boards: the corners of each unknown board pose (board, placement and,
+  // camera-only, zoom: EstimatedBoard) per shot.
   struct ShotCorners {
     int zoom = 0;
     double phi = 0, theta = 0;
     std::vector<Eigen::Vector3d> in_board;
     std::vector<Eigen::Vector2d> uv;
   };
-  std::map<int, std::map<std::tuple<std::string, int, double, double>, ShotCorners>> per_board;
-  std::map<int, int> first_line;
+  using PoseKey = std::tuple<int, std::string, int>;  // first_id, placement, zoom or -1
+  const bool per_zoom = m.kinematics == Kinematics::kNone;
+  std::map<PoseKey, std::map<std::tuple<std::string, int, double, double>, ShotCorners>> per_pose;
+  std::map<PoseKey, int> first_line;
   for (int i : rows.pixels) {
     const PixelObservation& p = obs.pixels[i];
     if (p.X_known) continue;
@@ -90,21 +94,27 @@ std::vector<std::string> StartUnknowns(const Observations& obs, const UsedRows& 
     if (p.corner < 0 || p.corner > 3) {
       throw std::invalid_argument(where + "corner must be 0..3, got " + std::to_string(p.corner));
     }
-    if (m.BoardOf(p.target)) continue;  // already estimated: keep it
-    ShotCorners& s = per_board[b->first_id][std::make_tuple(p.shot, p.zoom, p.phi, p.theta)];
+    if (m.BoardOf(p.target, p.placement, p.zoom)) continue;  // already estimated: keep it
+    const PoseKey key{b->first_id, p.placement, per_zoom ? p.zoom : -1};
+    ShotCorners& s = per_pose[key][std::make_tuple(p.shot, p.zoom, p.phi, p.theta)];
     s.zoom = p.zoom;
     s.phi = p.phi;
     s.theta = p.theta;
     s.in_board.push_back(b->CornersInBoard(p.target - b->first_id)[p.corner]);
     s.uv.push_back(p.uv);
-    if (!first_line.count(b->first_id)) first_line[b->first_id] = p.line;
+    if (!first_line.count(key)) first_line[key] = p.line;
   }
-  for (const auto& [first_id, shots] : per_board) {
+  for (const auto& [key, shots] : per_pose) {
+    const auto& [first_id, placement, zoom] = key;
     const TagBoard* b = UnknownBoardOf(obs.targets, first_id);
+    EstimatedBoard eb;
+    eb.board = *b;
+    eb.placement = placement;
+    eb.zoom = zoom;
     Eigen::Matrix3d sum_r = Eigen::Matrix3d::Zero();
     Eigen::Vector3d sum_t = Eigen::Vector3d::Zero();
     int n = 0;
-    for (const auto& [key, s] : shots) {
+    for (const auto& [shot, s] : shots) {
       if (s.zoom < 0 || s.zoom >= m.NumZooms()) continue;
       Rigid3 cam_from_board;
       if (!BoardPoseFromCorners(s.in_board, s.uv, m.cams[s.zoom], &cam_from_board)) continue;
@@ -114,18 +124,16 @@ std::vector<std::string> StartUnknowns(const Observations& obs, const UsedRows& 
       ++n;
     }
     if (n == 0) {
-      throw std::invalid_argument(obs.pixels_source + ":" + std::to_string(first_line[first_id]) +
-                                  ": the board with first_id " + std::to_string(first_id) +
+      throw std::invalid_argument(obs.pixels_source + ":" + std::to_string(first_line[key]) +
+                                  ": " + eb.Name() +
                                   " has no pose: no shot shows 4 of its corners with a usable "
                                   "camera pose (its pose cannot be started)");
     }
-    EstimatedBoard eb;
-    eb.board = *b;
     eb.board.ref_from_board = Rigid3{NearestRotation(sum_r), sum_t / n};
     eb.pose = PoseBlock::FromRigid(eb.board.ref_from_board);
     m.boards.push_back(eb);
-    notes.push_back("board " + std::to_string(first_id) + ": pose started from " +
-                    std::to_string(n) + " shot(s) (PnP and the start model's chain)");
+    notes.push_back(eb.Name() + ": pose started from " + std::to_string(n) +
+                    " shot(s) (PnP and the start model's chain)");
   }
 
   // Points: the mean of the start model's predictions of their records.
@@ -166,7 +174,7 @@ Observations WithEstimates(const Observations& obs, const InstrumentModel& model
   }
   for (PixelObservation& p : out.pixels) {
     if (p.X_known || p.corner < 0 || p.corner > 3) continue;
-    const EstimatedBoard* b = model.BoardOf(p.target);
+    const EstimatedBoard* b = model.BoardOf(p.target, p.placement, p.zoom);
     if (!b) continue;
     p.X = b->pose.ToRigid() * b->board.CornersInBoard(p.target - b->board.first_id)[p.corner];
     p.X_known = true;

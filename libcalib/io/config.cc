@@ -25,8 +25,12 @@ constexpr double kRadPerArcsec = M_PI / (180.0 * 3600.0);
 template <typename E>
 using Names = std::vector<std::pair<std::string, E>>;
 
+// A simulated instrument has a chain; a calibration may also be camera-only
+// (SPEC 7.1: model.kinematics none).
 const Names<Kinematics> kKinematicsNames = {{"dh", Kinematics::kDh},
                                             {"spherical", Kinematics::kSpherical}};
+const Names<Kinematics> kModelKinematicsNames = {
+    {"dh", Kinematics::kDh}, {"spherical", Kinematics::kSpherical}, {"none", Kinematics::kNone}};
 const Names<FaceMode> kFaceModeNames = {{"joint", FaceMode::kJoint},
                                         {"separate", FaceMode::kSeparate}};
 const Names<IntrinsicsMode> kIntrinsicsNames = {{"auto", IntrinsicsMode::kAuto},
@@ -269,7 +273,7 @@ DistortionChoice ReadDistortionChoice(const YamlNode& n, const EffectInfo& group
 }
 
 void ReadModel(const YamlNode& m, ModelSettings* out) {
-  m.ReadEnum("kinematics", kKinematicsNames, &out->kinematics);
+  m.ReadEnum("kinematics", kModelKinematicsNames, &out->kinematics);
   if (const std::optional<YamlNode> effects = m.Find("effects")) {
     for (const YamlNode& item : effects->Items()) {
       const std::optional<Effect> e = EffectFromName(item.AsString());
@@ -282,6 +286,11 @@ void ReadModel(const YamlNode& m, ModelSettings* out) {
             "an effect that the dh kinematics does not already hold (collimation, "
             "tilting_axis, vertical_index and edm_offset are part of its DH links and tools; "
             "use kinematics: spherical to fit them as effects)");
+      }
+      if (out->kinematics == Kinematics::kNone && IsKinematic(*e)) {
+        item.Fail(
+            "a camera effect (radial_distortion, tangential_distortion, ...): kinematics none is "
+            "a camera-only calibration without axes or EDM");
       }
       out->effects.Add(*e);
     }
@@ -531,6 +540,23 @@ void ReadSimulate(const YamlNode& m, const ModelSettings& model, SimulationOptio
   if (const std::optional<YamlNode> n = m.Find("targets")) {
     for (const YamlNode& item : n->Items()) out->targets.boards.push_back(ReadBoard(item));
   }
+  // SPEC 7.1: boards moved between sets of shots, one scene per placement.
+  if (const std::optional<YamlNode> n = m.Find("placements")) {
+    if (out->targets.boards.size() > 0) {
+      n->Fail("either simulate.targets or simulate.placements (each placement lists its boards)");
+    }
+    for (const YamlNode& item : n->Items()) {
+      const YamlNode name = item.Require("name");
+      TargetScene scene;
+      for (const YamlNode& board : item.Require("targets").Items()) {
+        scene.boards.push_back(ReadBoard(board));
+      }
+      if (scene.boards.empty()) item.Require("targets").Fail("at least one board");
+      if (!out->placements.emplace(name.AsString(), scene).second) {
+        name.Fail("a placement name not used before");
+      }
+    }
+  }
   if (const std::optional<YamlNode> n = m.Find("shots")) ReadShots(*n, &out->shots);
   const int plan_zooms = PlanNumZooms(out->plan);
   const std::optional<YamlNode> truth = m.Find("truth");
@@ -680,19 +706,34 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
   e << YAML::Key << "zooms" << YAML::Value;
   EmitInts(e, p.zooms);
   e << YAML::EndMap;
-  e << YAML::Key << "targets" << YAML::Value << YAML::BeginSeq;
-  for (const TagBoard& b : sim.targets.boards) {
-    e << YAML::Flow << YAML::BeginMap;
-    e << YAML::Key << "family" << YAML::Value << b.family;
-    e << YAML::Key << "first_id" << YAML::Value << b.first_id;
-    e << YAML::Key << "rows" << YAML::Value << b.rows;
-    e << YAML::Key << "cols" << YAML::Value << b.cols;
-    e << YAML::Key << "tag_size" << YAML::Value << Num(b.tag_size);
-    e << YAML::Key << "spacing" << YAML::Value << Num(b.spacing);
-    EmitPose(e, PoseBlock::FromRigid(b.ref_from_board));
-    e << YAML::EndMap;
+  auto emit_boards = [&e](const TargetScene& scene) {
+    e << YAML::BeginSeq;
+    for (const TagBoard& b : scene.boards) {
+      e << YAML::Flow << YAML::BeginMap;
+      e << YAML::Key << "family" << YAML::Value << b.family;
+      e << YAML::Key << "first_id" << YAML::Value << b.first_id;
+      e << YAML::Key << "rows" << YAML::Value << b.rows;
+      e << YAML::Key << "cols" << YAML::Value << b.cols;
+      e << YAML::Key << "tag_size" << YAML::Value << Num(b.tag_size);
+      e << YAML::Key << "spacing" << YAML::Value << Num(b.spacing);
+      EmitPose(e, PoseBlock::FromRigid(b.ref_from_board));
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq;
+  };
+  if (sim.placements.empty()) {
+    e << YAML::Key << "targets" << YAML::Value;
+    emit_boards(sim.targets);
+  } else {
+    e << YAML::Key << "placements" << YAML::Value << YAML::BeginSeq;
+    for (const auto& [name, scene] : sim.placements) {
+      e << YAML::BeginMap << YAML::Key << "name" << YAML::Value << name;
+      e << YAML::Key << "targets" << YAML::Value;
+      emit_boards(scene);
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq;
   }
-  e << YAML::EndSeq;
   e << YAML::Key << "shots" << YAML::Value << YAML::Flow << YAML::BeginMap;
   e << YAML::Key << "shots_per_board" << YAML::Value << sim.shots.shots_per_board;
   e << YAML::Key << "fill" << YAML::Value << Num(sim.shots.fill);

@@ -1,6 +1,7 @@
 #include "libcalib/io/csv.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <set>
@@ -208,6 +209,23 @@ long long CsvTable::Integer(int row, const std::string& column) const {
   const std::optional<long long> value = ParseInteger(text);
   if (!value) Fail(row, column, "an integer");
   return *value;
+}
+
+bool CsvTable::OptionalReading(int row, AngleUnit unit, double* phi, double* theta) const {
+  const bool no_phi = Empty(row, "phi"), no_theta = Empty(row, "theta");
+  if (no_phi && no_theta) {
+    *phi = 0;
+    *theta = M_PI / 2;
+    return false;
+  }
+  if (no_phi != no_theta) {
+    Fail(row, no_phi ? "phi" : "theta",
+         std::string("a reading beside ") + (no_phi ? "theta" : "phi") +
+             " (both phi and theta, or neither for a camera-only calibration)");
+  }
+  *phi = Angle(row, "phi", unit);
+  *theta = Angle(row, "theta", unit);
+  return true;
 }
 
 void CsvTable::Fail(int row, const std::string& column, const std::string& expected) const {

@@ -57,6 +57,12 @@ class CsvTable {
   double Angle(int row, const std::string& column, AngleUnit unit) const {
     return ReadingToRadians(Number(row, column), unit);
   }
+  // The reading phi, theta of a row whose readings may be left empty (a
+  // camera-only session, SPEC 7.1): false when both cells are empty (then
+  // *phi = 0, *theta = pi/2, the horizontal pointing of face 1, which the
+  // kinematics never read: the row says it has no reading), true with both
+  // read as Angle() otherwise; InputError when only one of them is empty.
+  bool OptionalReading(int row, AngleUnit unit, double* phi, double* theta) const;
   // An integral value (see above); InputError otherwise.
   long long Integer(int row, const std::string& column) const;
   // Notes about the file for the run log (ignored columns).

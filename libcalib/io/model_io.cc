@@ -110,8 +110,11 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
   e << YAML::Key << "width" << YAML::Value << cam.width;
   e << YAML::Key << "height" << YAML::Value << cam.height;
   if (!cam.determined) e << YAML::Key << "determined" << YAML::Value << false;
-  e << YAML::Key << "flange_from_cam" << YAML::Value;
-  EmitPose(e, cam.flange_from_cam, s.valid ? &s.cam_tools[zoom] : nullptr, cam.determined);
+  // A camera-only model (SPEC 7.1) has no camera tool: none was estimated.
+  if (model.kinematics != Kinematics::kNone) {
+    e << YAML::Key << "flange_from_cam" << YAML::Value;
+    EmitPose(e, cam.flange_from_cam, s.valid ? &s.cam_tools[zoom] : nullptr, cam.determined);
+  }
   e << YAML::Key << "intrinsics" << YAML::Value;
   EmitNamed(e, kIntrinsicsParamNames, cam.intrinsics.data(), kNumIntrinsics);
   e << YAML::Key << "distortion" << YAML::Value;
@@ -279,10 +282,15 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
   e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(model.kinematics);
   e << YAML::Key << "edm_cyclic_unit_length" << YAML::Value << Num(model.edm_cyclic_unit_length);
   e << YAML::Key << "uncertainties" << YAML::Value << s.valid;
-  e << YAML::Key << "base" << YAML::Value;
-  EmitPose(e, model.base, s.valid ? &s.base : nullptr);
-  e << YAML::Key << "edm" << YAML::Value;
-  EmitPose(e, model.edm, s.valid ? &s.edm : nullptr, model.edm_determined);
+  // A camera-only model (kinematics none, SPEC 7.1) estimated no chain: no
+  // base, EDM or camera tool is written as if it had been.
+  const bool chain = model.kinematics != Kinematics::kNone;
+  if (chain) {
+    e << YAML::Key << "base" << YAML::Value;
+    EmitPose(e, model.base, s.valid ? &s.base : nullptr);
+    e << YAML::Key << "edm" << YAML::Value;
+    EmitPose(e, model.edm, s.valid ? &s.edm : nullptr, model.edm_determined);
+  }
   if (model.kinematics == Kinematics::kDh) {
     e << YAML::Key << "links" << YAML::Value << YAML::BeginSeq;
     for (int i = 0; i < 2; ++i) {
@@ -333,7 +341,14 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
         e << YAML::Key << "tag_size" << YAML::Value << Num(layout.tag_size);
         e << YAML::Key << "spacing" << YAML::Value << Num(layout.spacing);
       }
-      e << YAML::Key << "ref_from_board" << YAML::Value;
+      // SPEC 7.1: the placement the pose is of, and camera-only its zoom,
+      // whose camera frame is then the reference (cam_from_board).
+      if (!b.placement.empty()) {
+        e << YAML::Key << "placement" << YAML::Value;
+        EmitYamlText(e, b.placement);
+      }
+      if (b.zoom >= 0) e << YAML::Key << "zoom" << YAML::Value << b.zoom;
+      e << YAML::Key << (chain ? "ref_from_board" : "cam_from_board") << YAML::Value;
       EmitPose(e, b.pose, s.valid ? &b.sigma : nullptr);
       e << YAML::EndMap;
     }
@@ -378,15 +393,22 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
   InstrumentModel model;
   model.kinematics =
       root.Require("kinematics")
-          .AsEnum<Kinematics>({{"dh", Kinematics::kDh}, {"spherical", Kinematics::kSpherical}});
+          .AsEnum<Kinematics>({{"dh", Kinematics::kDh},
+                               {"spherical", Kinematics::kSpherical},
+                               {"none", Kinematics::kNone}});
+  const bool chain = model.kinematics != Kinematics::kNone;
   const YamlNode unit = root.Require("edm_cyclic_unit_length");
   model.edm_cyclic_unit_length = unit.AsDouble();
   if (!(model.edm_cyclic_unit_length > 0)) unit.Fail("a unit length > 0 [m]");
   const bool with_sigma = root.Require("uncertainties").AsBool();
   ModelSigmas& s = model.sigmas;
   s.valid = with_sigma;
-  model.base = ReadPose(root.Require("base"), with_sigma, &s.base);
-  model.edm = ReadPose(root.Require("edm"), with_sigma, &s.edm, &model.edm_determined);
+  if (chain) {
+    model.base = ReadPose(root.Require("base"), with_sigma, &s.base);
+    model.edm = ReadPose(root.Require("edm"), with_sigma, &s.edm, &model.edm_determined);
+  } else {
+    model.edm_determined = false;  // camera-only: no EDM, base and tools the identity
+  }
   if (model.kinematics == Kinematics::kDh) {
     const YamlNode links = root.Require("links");
     const std::vector<YamlNode> items = links.Items();
@@ -416,9 +438,11 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
     }
     PoseSigma tool_sigma;
     cam.determined = ReadDetermined(item);
-    bool tool_determined = true;
-    cam.flange_from_cam =
-        ReadPose(item.Require("flange_from_cam"), with_sigma, &tool_sigma, &tool_determined);
+    bool tool_determined = cam.determined;
+    if (chain) {
+      cam.flange_from_cam =
+          ReadPose(item.Require("flange_from_cam"), with_sigma, &tool_sigma, &tool_determined);
+    }
     if (tool_determined != cam.determined) {
       item.Require("flange_from_cam")
           .Fail(std::string("determined: ") + (cam.determined ? "true" : "false") +
@@ -468,7 +492,18 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
     for (const YamlNode& item : boards->Items()) {
       EstimatedBoard b;
       b.board = ReadBoardLayout(item);  // targets.yaml's rules (targets_io.h)
-      b.pose = ReadPose(item.Require("ref_from_board"), with_sigma, &b.sigma);
+      if (const std::optional<YamlNode> placement = item.Find("placement")) {
+        b.placement = placement->AsString();
+      }
+      if (const std::optional<YamlNode> zoom = item.Find("zoom")) {
+        b.zoom = zoom->AsInt();
+        if (b.zoom < 0 || b.zoom >= model.NumZooms()) {
+          zoom->Fail("a zoom level of the model's cameras (0.." +
+                     std::to_string(model.NumZooms() - 1) + ")");
+        }
+      }
+      b.pose = ReadPose(item.Require(chain ? "ref_from_board" : "cam_from_board"), with_sigma,
+                        &b.sigma);
       b.board.ref_from_board = b.pose.ToRigid();
       b.board.pose_known = false;  // estimated, not surveyed
       model.boards.push_back(b);

@@ -126,7 +126,7 @@ PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
   const CsvTable t = CsvTable::Read(
       path,
       {{"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"},
-       {"width", "height"}});
+       {"width", "height", "placement", "focus_distance"}});
   PixelsFile out;
   out.notes = t.notes();
   out.pixels.reserve(t.NumRows());
@@ -143,10 +143,16 @@ PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
     p.line = t.Line(row);
     p.face = ReadFace(t, row);
     p.zoom = ReadZoom(t, row);
-    p.phi = t.Angle(row, "phi", unit);
-    p.theta = t.Angle(row, "theta", unit);
+    p.has_reading = t.OptionalReading(row, unit, &p.phi, &p.theta);
     p.shot = t.Text(row, "shot");
     if (p.shot.empty()) t.Fail(row, "shot", "a shot id (one per image)");
+    p.placement = t.Text(row, "placement");
+    if (!t.Empty(row, "focus_distance")) {
+      p.focus_distance = t.Number(row, "focus_distance");
+      if (!(p.focus_distance > 0)) {
+        t.Fail(row, "focus_distance", "the focus distance in metres (> 0), or empty");
+      }
+    }
     p.target = ReadNonNegativeInt(t, row, "target", std::numeric_limits<int>::max(),
                                   "a target id (integer >= 0)");
     p.corner = ReadNonNegativeInt(t, row, "corner", 3, "a corner index 0, 1, 2 or 3");
@@ -182,14 +188,45 @@ PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
 }
 
 void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels,
-                 AngleUnit unit) {
-  CsvWriter w(
-      path, {"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"});
+                 AngleUnit unit, const std::map<int, ImageSize>& image_sizes) {
+  // Optional columns only when they carry something, so that files without
+  // placements or focus distances keep SPEC 3's columns.
+  bool placements = false, focus = false;
   for (const PixelObservation& p : pixels) {
-    w.Row({std::to_string(p.face), std::to_string(p.zoom), FormatReading(p.phi, unit),
-           FormatReading(p.theta, unit), p.shot, std::to_string(p.target), std::to_string(p.corner),
-           p.X_known ? FormatDouble(p.X.x()) : "", p.X_known ? FormatDouble(p.X.y()) : "",
-           p.X_known ? FormatDouble(p.X.z()) : "", FormatDouble(p.uv.x()), FormatDouble(p.uv.y())});
+    placements = placements || !p.placement.empty();
+    focus = focus || p.focus_distance > 0;
+  }
+  std::vector<std::string> header = {"face", "zoom",   "phi", "theta", "shot", "target",
+                                     "corner", "X",    "Y",   "Z",     "u",    "v"};
+  if (placements) header.push_back("placement");
+  if (focus) header.push_back("focus_distance");
+  if (!image_sizes.empty()) {
+    header.push_back("width");
+    header.push_back("height");
+  }
+  CsvWriter w(path, header);
+  for (const PixelObservation& p : pixels) {
+    std::vector<std::string> row = {
+        std::to_string(p.face),
+        std::to_string(p.zoom),
+        p.has_reading ? FormatReading(p.phi, unit) : "",
+        p.has_reading ? FormatReading(p.theta, unit) : "",
+        p.shot,
+        std::to_string(p.target),
+        std::to_string(p.corner),
+        p.X_known ? FormatDouble(p.X.x()) : "",
+        p.X_known ? FormatDouble(p.X.y()) : "",
+        p.X_known ? FormatDouble(p.X.z()) : "",
+        FormatDouble(p.uv.x()),
+        FormatDouble(p.uv.y())};
+    if (placements) row.push_back(p.placement);
+    if (focus) row.push_back(p.focus_distance > 0 ? FormatDouble(p.focus_distance) : "");
+    if (!image_sizes.empty()) {
+      const auto it = image_sizes.find(p.zoom);
+      row.push_back(it == image_sizes.end() ? "" : std::to_string(it->second.width));
+      row.push_back(it == image_sizes.end() ? "" : std::to_string(it->second.height));
+    }
+    w.Row(row);
   }
   w.Close();
 }

@@ -39,13 +39,22 @@ void WriteRecords(const std::string& path, const std::vector<Record>& records,
 // that `rtscalib detect` writes: the size of the image a row was seen in,
 // read from the photo (SPEC 7: sizes are never guessed from the points).
 // Both or neither; a row may leave both empty; one size per zoom level.
+// Optional `placement` (SPEC 7.1, text) and `focus_distance` (SPEC 4.1,
+// metres > 0, may be empty) columns; phi and theta may both be empty (a
+// camera-only session, SPEC 7.1: has_reading false).
 struct PixelsFile {
   std::vector<PixelObservation> pixels;
   std::map<int, ImageSize> image_sizes;  // per zoom, from `width`, `height`
   std::vector<std::string> notes;
 };
 PixelsFile ReadPixels(const std::string& path, AngleUnit unit = AngleUnit::kRad);
+// The one pixels.csv writer (the detection's, the demo's, predict's): SPEC 3's
+// columns, then `placement` and `focus_distance` when some row has one, and
+// `width`, `height` of each row's zoom when `image_sizes` has it (empty
+// cells for zooms it lacks). phi, theta in `unit`; empty for rows without a
+// reading.
 void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels,
-                 AngleUnit unit = AngleUnit::kRad);
+                 AngleUnit unit = AngleUnit::kRad,
+                 const std::map<int, ImageSize>& image_sizes = {});
 
 }  // namespace rtscalib

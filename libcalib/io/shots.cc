@@ -11,12 +11,13 @@
 namespace rtscalib {
 
 ShotsFile ReadShots(const std::string& path, AngleUnit unit) {
-  const CsvTable t = CsvTable::Read(path, {{"face", "zoom", "phi", "theta", "image"}, {"shot"}});
+  const CsvTable t = CsvTable::Read(path, {{"face", "zoom", "phi", "theta", "image"}, {"shot", "placement", "focus_distance"}});
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   ShotsFile out;
   out.path = path;
   out.angle_unit = unit;
   out.notes = t.notes();
+  out.has_placements = t.Has("placement");
   std::map<std::string, int> line_of_shot;
   for (int row = 0; row < t.NumRows(); ++row) {
     PhotoShot s;
@@ -29,8 +30,14 @@ ShotsFile ReadShots(const std::string& path, AngleUnit unit) {
       t.Fail(row, "zoom", "a zoom level (integer >= 0)");
     }
     s.zoom = static_cast<int>(*zoom);
-    s.phi = t.Angle(row, "phi", unit);
-    s.theta = t.Angle(row, "theta", unit);
+    s.has_reading = t.OptionalReading(row, unit, &s.phi, &s.theta);
+    s.placement = t.Text(row, "placement");
+    if (!t.Empty(row, "focus_distance")) {
+      s.focus_distance = t.Number(row, "focus_distance");
+      if (!(s.focus_distance > 0)) {
+        t.Fail(row, "focus_distance", "the focus distance in metres (> 0), or empty");
+      }
+    }
     s.image = t.Text(row, "image");
     if (s.image.empty()) t.Fail(row, "image", "an image file (relative to the CSV's folder)");
     const std::filesystem::path image(s.image);

@@ -7,7 +7,17 @@
 
 namespace rtscalib {
 
-const char* KinematicsName(Kinematics k) { return k == Kinematics::kDh ? "dh" : "spherical"; }
+const char* KinematicsName(Kinematics k) {
+  switch (k) {
+    case Kinematics::kDh:
+      return "dh";
+    case Kinematics::kSpherical:
+      return "spherical";
+    case Kinematics::kNone:
+      return "none";
+  }
+  return "?";
+}
 
 Rigid3 PoseBlock::ToRigid() const {
   Eigen::Quaterniond quat(q[3], q[0], q[1], q[2]);
@@ -117,14 +127,30 @@ bool PredictPixel(const InstrumentModel& model, int zoom, double phi, double the
                       pixel->data());
 }
 
-const EstimatedBoard* InstrumentModel::BoardOf(int id) const {
+std::string EstimatedBoard::Name() const {
+  std::string out = "board " + std::to_string(board.first_id);
+  if (!placement.empty()) out += " at placement " + placement;
+  if (zoom >= 0) out += (placement.empty() ? " at zoom " : ", zoom ") + std::to_string(zoom);
+  return out;
+}
+
+std::string EstimatedBoard::Key() const {
+  std::string out = "board[" + std::to_string(board.first_id);
+  if (!placement.empty()) out += "@" + placement;
+  if (zoom >= 0) out += "/z" + std::to_string(zoom);
+  return out + "]";
+}
+
+const EstimatedBoard* InstrumentModel::BoardOf(int id, const std::string& placement,
+                                               int zoom) const {
   for (const EstimatedBoard& b : boards) {
-    if (b.board.HasId(id)) return &b;
+    if (b.Holds(id, placement, zoom)) return &b;
   }
   return nullptr;
 }
-EstimatedBoard* InstrumentModel::BoardOf(int id) {
-  return const_cast<EstimatedBoard*>(static_cast<const InstrumentModel*>(this)->BoardOf(id));
+EstimatedBoard* InstrumentModel::BoardOf(int id, const std::string& placement, int zoom) {
+  return const_cast<EstimatedBoard*>(
+      static_cast<const InstrumentModel*>(this)->BoardOf(id, placement, zoom));
 }
 const EstimatedPoint* InstrumentModel::Point(const std::string& name) const {
   for (const EstimatedPoint& p : points) {

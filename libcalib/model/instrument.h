@@ -15,6 +15,11 @@
 //   dh         Klug Sec. 3:   ref_from_flange = Base * Z1 X1 * Z2 X2
 //   spherical  Klug Sec. 4.1 + SPEC 4: ref_from_flange = Base * Rz(-phi*) Ry(i) Rx(-theta*) Ry(c)
 // and both end in ref_from_tool = ref_from_flange * flange_from_tool (Eq. 9).
+// A third, `none` (SPEC 7.1), is the camera-only calibration: no chain at
+// all. Base, links and tools stay at the identity and are never estimated,
+// so that ref_from_cam = identity: the reference frame of a zoom's shots is
+// that zoom's camera frame, and each board pose is cam_from_board. Only the
+// intrinsics, the distortion and the boards are estimated.
 #pragma once
 
 #include <Eigen/Core>
@@ -29,7 +34,7 @@
 
 namespace rtscalib {
 
-enum class Kinematics { kDh, kSpherical };
+enum class Kinematics { kDh, kSpherical, kNone };
 const char* KinematicsName(Kinematics k);
 
 // A pose parameter block pair: rotation as a unit quaternion (Eigen storage
@@ -105,10 +110,28 @@ struct ModelSigmas {
 // geometry (`board`, whose ref_from_board is kept equal to `pose` after a
 // fit) and its ref_from_board pose block. Corner (target, corner) is
 // ref_from_board * board.CornersInBoard(target - first_id)[corner].
+// One board has one such pose per `placement` (SPEC 7.1: the board was moved
+// between sets of shots; empty = the one placement of a session without
+// placements). In a camera-only calibration (Kinematics::kNone) the pose is
+// also per `zoom`: each zoom's camera frame is the reference of its own shots
+// and no camera tool relates the zooms; otherwise `zoom` is -1 (every zoom).
 struct EstimatedBoard {
   TagBoard board;
+  std::string placement;
+  int zoom = -1;
   PoseBlock pose;
   PoseSigma sigma;  // filled by the fit (zero when not estimated)
+
+  // Does this pose hold target `id` seen in `placement` at `zoom`?
+  bool Holds(int id, const std::string& at_placement, int at_zoom) const {
+    return board.HasId(id) && placement == at_placement && (zoom < 0 || zoom == at_zoom);
+  }
+  // "board 0", "board 0 at placement p3", "board 0 at placement p3, zoom 1"
+  // (reports, messages).
+  std::string Name() const;
+  // The parameter name stem "board[0]", "board[0@p3]", "board[0@p3/z1]"
+  // (fit columns, covariance.yaml).
+  std::string Key() const;
 };
 // A fixed point of unknown position named by records.csv's `point` column.
 struct EstimatedPoint {
@@ -141,9 +164,10 @@ struct InstrumentModel {
   const std::array<double, 2>& EffectValue(Effect e) const {
     return effect_values[static_cast<int>(e)];
   }
-  // The estimated board holding tag `id`, or nullptr.
-  const EstimatedBoard* BoardOf(int id) const;
-  EstimatedBoard* BoardOf(int id);
+  // The estimated board pose holding tag `id` in `placement` at `zoom`
+  // (EstimatedBoard::Holds), or nullptr.
+  const EstimatedBoard* BoardOf(int id, const std::string& placement, int zoom) const;
+  EstimatedBoard* BoardOf(int id, const std::string& placement, int zoom);
   const EstimatedPoint* Point(const std::string& name) const;
   EstimatedPoint* Point(const std::string& name);
 };

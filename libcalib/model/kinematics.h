@@ -9,6 +9,8 @@
 //   2-9)
 //              Z_i = Tz(d_i) Rz(q_i + gamma_i), X_i = Tx(a_i) Rx(alpha_i)              (Eq. 3, 4)
 //   spherical: ref_from_flange = T(t_B) W(phi) R_B * Rz(-phi*) Ry(i) Rx(-theta*) Ry(c)  (Eq. 84-91)
+//   none:      ref_from_flange = T(t_B) R_B, held at the identity: a camera-only
+//              calibration (SPEC 7.1) has no chain; readings are not used
 //   W(phi) = Rx(w cos(phi - phi_w)) Ry(w sin(phi - phi_w))
 // In `dh`, collimation, tilting_axis, vertical_index and edm_offset are part of
 // the links and tools; the fit never enables them there (reported redundant).
@@ -107,9 +109,10 @@ template <typename T>
 RigidT<T> RefFromFlange(const ModelView<T>& m, const T& phi, const T& theta) {
   using std::cos;
   using std::sin;
+  RigidT<T> base = PoseFromBlocks(m.base_q, m.base_t);
+  if (m.kinematics == Kinematics::kNone) return base;
   T phi_s, theta_s;
   TrueAngles(m, phi, theta, &phi_s, &theta_s);
-  RigidT<T> base = PoseFromBlocks(m.base_q, m.base_t);
   if (const T* w = m.E(Effect::kAxisWobble)) {
     const T wx = w[0] * cos(phi) + w[1] * sin(phi);  // w cos(phi - phi_w)
     const T wy = w[0] * sin(phi) - w[1] * cos(phi);  // w sin(phi - phi_w)

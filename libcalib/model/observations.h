@@ -9,6 +9,13 @@
 // corner `corner` of tag `target` of a board in `Observations::targets` whose
 // pose is unknown (TagBoard::pose_known == false). Both are estimated with
 // everything else.
+//
+// Placements (SPEC 7.1): a board without a pose stays put for all shots of
+// one `placement` (shots.csv's column of that name, any text; empty = the
+// one placement of a session without the column) and has one pose per
+// placement. A camera-only calibration (model.kinematics: none) needs no
+// readings: `has_reading == false` marks a shot whose phi and theta were
+// left empty (phi, theta are then 0 and must not be used).
 #pragma once
 
 #include <Eigen/Core>
@@ -42,7 +49,10 @@ struct PixelObservation {
   int face = 1;
   int zoom = 0;
   double phi = 0, theta = 0;
+  bool has_reading = true;  // false: phi, theta were empty (camera-only data, SPEC 7.1)
   std::string shot;
+  std::string placement;  // SPEC 7.1: where the boards without a pose stood (empty: one placement)
+  double focus_distance = 0;  // [m] the shot's focus distance (SPEC 4.1); 0 = not given
   int target = 0, corner = 0;
   Eigen::Vector3d X = Eigen::Vector3d::Zero();  // known point, reference frame [m]
   // False: X is unknown, the point is corner (target, corner) of a board of

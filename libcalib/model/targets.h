@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -100,5 +101,10 @@ struct TargetScene {
     return out;
   }
 };
+
+// SPEC 7.1: the scene of each placement of a session whose boards were moved
+// between sets of shots (the same boards, other poses), by placement name;
+// "" is the one placement of a session without placements.
+using PlacedScenes = std::map<std::string, TargetScene>;
 
 }  // namespace rtscalib

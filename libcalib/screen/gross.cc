@@ -123,13 +123,17 @@ void ScreenSphere(const std::vector<SphereRow>& rows, const std::string& what,
   }
 }
 
+// Rows without a reading (camera-only pixels, SPEC 7.1) have no face to contradict.
+bool HasReading(const Record&) { return true; }
+bool HasReading(const PixelObservation& p) { return p.has_reading; }
+
 template <typename Row>
 void ScreenFaces(const std::vector<Row>& rows, bool pixel, std::vector<ExcludedRow>* out) {
   for (int face : {1, 2}) {
     std::vector<int> bad;
     size_t of_face = 0;
     for (size_t i = 0; i < rows.size(); ++i) {
-      if (rows[i].face != face) continue;
+      if (rows[i].face != face || !HasReading(rows[i])) continue;
       ++of_face;
       if (FaceContradictsTheta(face, rows[i].theta)) bad.push_back(static_cast<int>(i));
     }

@@ -48,6 +48,7 @@ struct RowView {
   double phi = 0, theta = 0;
   bool has_pixel = false;  // cam rows and pixel observations
   double u = 0, v = 0;
+  bool has_reading = true;  // false: phi, theta left empty (camera-only, SPEC 7.1)
 };
 
 std::vector<RowView> RowsOf(const std::vector<Record>& records) {
@@ -63,7 +64,8 @@ std::vector<RowView> RowsOf(const std::vector<PixelObservation>& pixels) {
   std::vector<RowView> out;
   out.reserve(pixels.size());
   for (const PixelObservation& p : pixels) {
-    out.push_back({p.line, p.face, p.zoom, p.phi, p.theta, true, p.uv.x(), p.uv.y()});
+    out.push_back(
+        {p.line, p.face, p.zoom, p.phi, p.theta, true, p.uv.x(), p.uv.y(), p.has_reading});
   }
   return out;
 }
@@ -120,6 +122,7 @@ std::string UnitCause(const std::vector<RowView>& rows, AngleUnit unit) {
   double max_abs = 0;
   std::vector<double> theta1;
   for (const RowView& r : rows) {
+    if (!r.has_reading) continue;
     max_abs = std::max({max_abs, std::fabs(r.phi), std::fabs(r.theta)});
     if (r.face == 1) theta1.push_back(r.theta);
   }
@@ -151,6 +154,7 @@ void CheckAngles(const std::string& file, const std::vector<RowView>& rows, Angl
   size_t face1_rows = 0, face2_rows = 0;
   std::vector<int> phi_wrapped;
   for (const RowView& r : rows) {
+    if (!r.has_reading) continue;  // nothing to check (camera-only rows)
     const bool phi_ok = InAngleRange(r.phi), theta_ok = InAngleRange(r.theta);
     if (!phi_ok) phi_range.Add(r.line, AsWritten(r.phi, unit));
     if (!theta_ok) theta_range.Add(r.line, AsWritten(r.theta, unit));

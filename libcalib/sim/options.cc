@@ -1,6 +1,7 @@
 #include "libcalib/sim/options.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 
 namespace rtscalib {
@@ -80,7 +81,30 @@ std::string SimulationOptions::Check() const {
       }
     }
   }
+  if (msg.empty() && !placements.empty()) {
+    if (!targets.boards.empty()) {
+      return "targets and placements: give the boards in one of them (placements holds the "
+             "boards of each placement)";
+    }
+    for (const auto& [name, scene] : placements) {
+      bool valid = !name.empty() && name[0] != '.';
+      for (char c : name) {
+        valid = valid && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ||
+                          c == '.');
+      }
+      if (!valid) {
+        return "placements: name '" + name +
+               "': expected letters, digits, '_', '-', '.' (no leading '.')";
+      }
+      if (scene.boards.empty()) return "placements: " + name + " has no boards";
+    }
+  }
   return msg;
+}
+
+PlacedScenes SimulationOptions::Scenes() const {
+  if (!placements.empty()) return placements;
+  return PlacedScenes{{"", targets}};
 }
 
 int PlanNumZooms(const AcquisitionPlan& plan) {

@@ -69,8 +69,15 @@ struct SimulationOptions {
   NoiseOptions noise;
   AcquisitionPlan plan;
   TargetScene targets;  // empty = no pixel observations
+  // SPEC 7.1: boards moved between sets of shots (a surveyor's one board):
+  // the scene of each placement by name (letters, digits, '_', '-', '.').
+  // Non-empty replaces `targets` (which must then be empty); the shots are
+  // planned over every placement and carry its name.
+  PlacedScenes placements;
   ShotPlan shots;
   std::string Check() const;
+  // The scenes the shots see: `placements`, or `targets` as the one placement "".
+  PlacedScenes Scenes() const;
 };
 
 // Number of zoom levels a plan uses: the largest zoom + 1.

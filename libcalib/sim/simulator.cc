@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -211,34 +212,49 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   const Eigen::Vector3d origin = RefFromFlange(truth, 0.0, M_PI / 2).translation;
-  const std::vector<TargetCorner> corners = o.targets.AllCorners();
+  // SPEC 7.1: every placement's boards (the one placement "" without them);
+  // the views of one zoom are chosen over all placements.
+  const PlacedScenes scenes = o.Scenes();
+  std::map<std::string, std::vector<TargetCorner>> corners_of;
+  for (const auto& [name, scene] : scenes) corners_of[name] = scene.AllCorners();
+  struct PlacedView {
+    std::string placement;
+    BoardView view;
+  };
   int shot_index = 0;
   for (int zoom : o.plan.zooms) {
     const CameraTool& cam = truth.cams.at(zoom);
-    std::vector<BoardView> views;
-    for (size_t b = 0; b < o.targets.boards.size(); ++b) {
-      const BoardView v = ViewOfBoard(o.targets.boards[b], static_cast<int>(b), origin, cam);
-      if (v.Usable()) views.push_back(v);
+    std::vector<PlacedView> views;
+    for (const auto& [name, scene] : scenes) {
+      for (size_t b = 0; b < scene.boards.size(); ++b) {
+        const BoardView v = ViewOfBoard(scene.boards[b], static_cast<int>(b), origin, cam);
+        if (v.Usable()) views.push_back({name, v});
+      }
     }
     if (views.empty()) {
       // None fits well: the board closest to filling the view with whole tags.
       double best = -1e300;
-      for (size_t b = 0; b < o.targets.boards.size(); ++b) {
-        const BoardView v = ViewOfBoard(o.targets.boards[b], static_cast<int>(b), origin, cam);
-        const double score = -std::abs(std::log(std::max(v.TagsAcross(), 1e-9) / 4.0)) -
-                             std::abs(std::log(std::max(v.Fill(), 1e-9)));
-        if (score > best) {
-          best = score;
-          views.assign(1, v);
+      for (const auto& [name, scene] : scenes) {
+        for (size_t b = 0; b < scene.boards.size(); ++b) {
+          const BoardView v = ViewOfBoard(scene.boards[b], static_cast<int>(b), origin, cam);
+          const double score = -std::abs(std::log(std::max(v.TagsAcross(), 1e-9) / 4.0)) -
+                               std::abs(std::log(std::max(v.Fill(), 1e-9)));
+          if (score > best) {
+            best = score;
+            views.assign(1, PlacedView{name, v});
+          }
         }
       }
     }
     const int n = o.shots.shots_per_board;
     const int cells = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
     for (int face : o.plan.faces) {
-      for (const BoardView& view : views) {
+      for (const PlacedView& placed : views) {
+        const BoardView& view = placed.view;
+        const TargetScene& scene = scenes.at(placed.placement);
+        const std::vector<TargetCorner>& corners = corners_of.at(placed.placement);
         double phi0, theta0;
-        AimAt(origin, o.targets.boards[view.board].CentreInRef(), &phi0, &theta0);
+        AimAt(origin, scene.boards[view.board].CentreInRef(), &phi0, &theta0);
         // Half range of the aim offsets (angles off the board centre).
         auto half_range = [&](double board, double fov) {
           return board >= fov ? board - o.shots.fill * fov
@@ -264,7 +280,8 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
           double phi = phi0 + ju * range_u / std::max(std::sin(theta0), 0.2);
           double theta = theta0 + jv * range_v;
           if (face == 2) OtherFace(phi, theta, &phi, &theta);
-          const std::string shot = "z" + std::to_string(zoom) + "f" + std::to_string(face) + "s" +
+          const std::string shot = (placed.placement.empty() ? "" : placed.placement + "-") + "z" +
+                                   std::to_string(zoom) + "f" + std::to_string(face) + "s" +
                                    std::to_string(shot_index++);
           std::vector<PixelObservation> rows;
           std::vector<Eigen::Vector2d> exact;
@@ -288,6 +305,7 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
             p.phi = phi;
             p.theta = theta;
             p.shot = shot;
+            p.placement = placed.placement;
             p.target = c.target;
             p.corner = c.corner;
             p.X = c.X;
@@ -368,7 +386,7 @@ SimulatedData Simulate(const SimulationOptions& o) {
   data.obs.records = std::move(records);
   data.obs.records_source = "simulated records";
   data.obs.pixels_source = "simulated pixels";
-  if (!o.targets.boards.empty()) {
+  if (!o.targets.boards.empty() || !o.placements.empty()) {
     SimulatePixels(o, rng, &data);
     // The simulated photos have the simulated cameras' sizes (SPEC 7: sizes
     // come from the images).

@@ -53,7 +53,7 @@ class PhotoSession : public ::testing::Test {
       // Surveyed boards here (targets.yaml with poses); the test of unknown
       // boards below leaves them out.
       demo.render.board_poses_known = true;
-      const RenderStageResult r = RenderSession(demo.render, sim.truth, sim.targets,
+      const RenderStageResult r = RenderSession(demo.render, sim.truth, sim.Scenes(),
                                                 data.obs.pixels, photos_.string(), &progress);
       if (!r.ran) {
         error_ = "render stage did not run: " + r.note;

@@ -10,7 +10,9 @@
 #include <fstream>
 
 #include "app/commands.h"
+#include "libcalib/io/errors.h"
 #include "libcalib/io/model_io.h"
+#include "libcalib/model/kinematics.h"
 #include "libcalib/io/records.h"
 #include "libcalib/sim/simulator.h"
 
@@ -108,6 +110,72 @@ TEST(PredictPixels, PixelsOnlyRunThenPredictEveryZoomAndFace) {
       EXPECT_GT(rows[z][f], 0) << "zoom " << z << " face " << f + 1 << " has no rows";
     }
   }
+}
+
+// SPEC 7.1: rows with empty X, Y, Z are predicted from the pose of their
+// board in their row's placement; a placement the model has no pose for is
+// refused by line (or left out with --skip-bad).
+TEST(PredictPixels, PlacementsPredictFromTheirOwnBoardPose) {
+  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "predict_placements";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  CameraTool cam;
+  cam.width = 640;
+  cam.height = 480;
+  cam.intrinsics = {800, 800, 320, 240};
+  InstrumentModel m = IdealModel(Kinematics::kSpherical, 1, cam);
+  for (const auto& [name, y] : std::vector<std::pair<std::string, double>>{{"a", 5.0}, {"b", 9.0}}) {
+    EstimatedBoard b;
+    b.board.first_id = 0;
+    b.board.rows = 3;
+    b.board.cols = 4;
+    b.board.pose_known = false;
+    b.placement = name;
+    // Facing the instrument at phi = 0 (+y), upright (board x = ref x, y = -z).
+    b.pose = PoseBlock::FromRigid(Rigid3{Rx(-M_PI / 2), Eigen::Vector3d(-0.2, y, 0.15)});
+    b.board.ref_from_board = b.pose.ToRigid();
+    m.boards.push_back(b);
+  }
+  WriteModelYaml((dir / "model.yaml").string(), m, {});
+  std::vector<PixelObservation> rows;
+  for (const std::string placement : {"a", "b", "c"}) {
+    PixelObservation p;
+    p.phi = 0.01;
+    p.theta = M_PI / 2 + 0.02;
+    p.shot = "s" + placement;
+    p.placement = placement;
+    p.target = 5;
+    p.corner = 2;
+    p.X_known = false;
+    rows.push_back(p);
+  }
+  WritePixels((dir / "in.csv").string(), rows);
+  app::PredictArgs predict;
+  predict.model = (dir / "model.yaml").string();
+  predict.pixels = (dir / "in.csv").string();
+  predict.out = (dir / "out.csv").string();
+  try {
+    app::RunPredict(predict);
+    FAIL() << "placement c (no pose in the model) predicted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line, 4);  // header, a, b, c
+    EXPECT_NE(std::string(e.what()).find("placement 'c'"), std::string::npos) << e.what();
+  }
+  predict.skip_bad = true;
+  ASSERT_EQ(app::RunPredict(predict), 0);
+  const PixelsFile out = ReadPixels(predict.out);
+  ASSERT_EQ(out.pixels.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    const EstimatedBoard& b = m.boards[k];
+    EXPECT_EQ(out.pixels[k].placement, b.placement);
+    Eigen::Vector2d expected;
+    ASSERT_TRUE(PredictPixel(m, 0, 0.01, M_PI / 2 + 0.02,
+                             b.pose.ToRigid() * b.board.CornersInBoard(5)[2], &expected));
+    // Written with 17 digits: the same double.
+    EXPECT_LT((out.pixels[k].uv - expected).norm(), 1e-9) << b.placement;
+  }
+  // The two placements are 4 m apart along the line of sight: different pixels.
+  EXPECT_GT((out.pixels[0].uv - out.pixels[1].uv).norm(), 1.0);
 }
 
 }  // namespace

@@ -99,7 +99,10 @@ void AddKinematicsErrors(const InstrumentModel& m, const InstrumentModel& truth,
   ASSERT_EQ(m.kinematics, Kinematics::kDh);
   InstrumentModel t = truth;
   for (const TagBoard& b : true_boards.boards) {
-    t.boards.push_back({b, PoseBlock::FromRigid(b.ref_from_board), {}});
+    EstimatedBoard eb;
+    eb.board = b;
+    eb.pose = PoseBlock::FromRigid(b.ref_from_board);
+    t.boards.push_back(eb);
   }
   SetSecondLink(m.links[1], &t);
   ToIdealBaseFrame(&t);
@@ -119,7 +122,7 @@ void AddKinematicsErrors(const InstrumentModel& m, const InstrumentModel& truth,
   }
   ASSERT_EQ(m.boards.size(), t.boards.size());
   for (const EstimatedBoard& tb : t.boards) {
-    const EstimatedBoard* mb = m.BoardOf(tb.board.first_id);
+    const EstimatedBoard* mb = m.BoardOf(tb.board.first_id, tb.placement, tb.zoom);
     ASSERT_NE(mb, nullptr) << "board " << tb.board.first_id << " not estimated";
     for (Sums* to : {&s->boards, &s->all}) AddPose(mb->pose, tb.pose, mb->sigma, to);
   }

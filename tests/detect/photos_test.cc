@@ -119,7 +119,8 @@ TEST(DetectPhotosTest, BoardWithoutPoseGivesItsCornersWithEmptyXyz) {
     ASSERT_EQ(result.photos.size(), 3u);
     EXPECT_TRUE(result.warnings.empty());
     const std::string out = dir.Path("pixels.csv");
-    WriteDetectedPixels(out, shots, s.targets, result);
+    WritePixels(out, PixelObservationsOf(shots, s.targets, result), shots.angle_unit,
+                ImageSizesOf(shots, result));
     WriteDetectionSummary(out + ".summary.csv", shots, result);
 
     // The exact corners of every tag fully inside the image.
@@ -227,7 +228,7 @@ TEST(DetectPhotosTest, PhotoWithoutTagsIsAWarningNamingLineAndImage) {
   const PhotoDetectionResult r = DetectPhotos(ReadShots(dir.Path("shots.csv")), s.targets, options);
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_THAT(r.warnings[0], HasSubstr(dir.Path("shots.csv") + ":3: image blank.png"));
-  EXPECT_THAT(r.warnings[0], HasSubstr("no tag of the boards found"));
+  EXPECT_THAT(r.warnings[0], HasSubstr("no target of the boards found"));
   EXPECT_EQ(r.photos[0].width, 320);
   EXPECT_EQ(r.photos[0].channels, 3);
 }

@@ -3,7 +3,7 @@
 // printed board, the detected inner corners against their exact images, the
 // target numbering (first_id + k, k = r (cols - 1) + c from the board's top
 // left) and the chessboard's orientation rule per face; then a photo folder
-// through DetectPhotos and WriteDetectedPixels (one corner per target).
+// through DetectPhotos, PixelObservationsOf and WritePixels (one corner per target).
 #include "detect/point_boards.h"
 
 #include <gtest/gtest.h>
@@ -17,6 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "detect/photos.h"
+#include "libcalib/io/records.h"
 #include "libcalib/io/csv.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/targets_io.h"
@@ -162,6 +163,65 @@ TEST(PointBoards, ChessboardOrientationFollowsTheFace) {
   EXPECT_TRUE(d.corners.empty());
 }
 
+// A chessboard whose pose is estimated (SPEC 7.1: one pose per placement)
+// may hang or be held in any orientation: every orientation is used, and
+// its numbering is the printed one or the one turned by 180 degrees (the
+// pose absorbs which), never a mirrored one; upright in face 1 it is the
+// printed one, so that every photo of a placement numbers the grid alike.
+TEST(PointBoards, EstimatedChessboardIsUsedInAnyOrientation) {
+  TagBoard b = Chessboard();
+  b.pose_known = false;
+  const int nc = b.cols - 1, nr = b.rows - 1;
+  for (const auto& [angle, face] : std::vector<std::pair<double, int>>{
+           {0.08, 1}, {M_PI / 2 + 0.1, 1}, {M_PI + 0.05, 1}, {-M_PI / 2 + 0.1, 2}, {0.3, 2}}) {
+    const Photo p = Synthesize(b, 1, 3000.0, angle);
+    const PointBoardDetection d = DetectPointBoard(p.image, b, face);
+    EXPECT_FALSE(d.misoriented);
+    ASSERT_EQ(static_cast<int>(d.corners.size()), b.NumTags()) << "angle " << angle;
+    // RMS against the exact corners under the printed numbering and under
+    // the one turned by 180 degrees (k -> n - 1 - k).
+    double printed = 0, turned = 0;
+    for (const auto& [k, uv] : d.corners) {
+      const Eigen::Vector3d x = b.CornersInBoard(k)[0];
+      const Eigen::Vector3d y = b.CornersInBoard(nc * nr - 1 - k)[0];
+      printed += (uv - testing::Project(p.image_from_board, x.head<2>())).squaredNorm();
+      turned += (uv - testing::Project(p.image_from_board, y.head<2>())).squaredNorm();
+    }
+    printed = std::sqrt(printed / d.corners.size());
+    turned = std::sqrt(turned / d.corners.size());
+    std::cout << "estimated chessboard, angle " << angle << ", face " << face << ": RMS "
+              << std::min(printed, turned) << " px (" << (printed < turned ? "printed" : "turned")
+              << " numbering)\n";
+    // The limits of the test above; a mirrored numbering matches neither.
+    EXPECT_LT(std::min(printed, turned), 0.1) << "angle " << angle;
+    if (angle == 0.08) {
+      EXPECT_LT(printed, 0.1);
+    }
+  }
+}
+
+// Two printed copies of one chessboard in a photo: neither can be told from
+// the other, so neither is used, and the detection says why.
+TEST(PointBoards, ChessboardFoundTwiceIsNotUsed) {
+  TagBoard b = Chessboard();
+  b.pose_known = false;
+  const PrintedTag t = PrintBoard(b, 1);
+  const Eigen::Matrix3d left = MakeHomography(b.Width(), {330.2, 480.6}, 1300.0, 0.05);
+  const Eigen::Matrix3d right = MakeHomography(b.Width(), {950.7, 470.3}, 1300.0, -0.04);
+  cv::Mat coverage = cv::min(testing::RenderCoverage({t}, left, 1280, 960),
+                             testing::RenderCoverage({t}, right, 1280, 960));
+  const cv::Mat two = testing::ToPixels(coverage, CV_8UC1, cv::Scalar(30), cv::Scalar(220));
+  const PointBoardDetection d = DetectPointBoard(two, b, 1);
+  EXPECT_TRUE(d.duplicated);
+  EXPECT_TRUE(d.corners.empty());
+  // One copy alone is found.
+  const cv::Mat one = testing::ToPixels(testing::RenderCoverage({t}, left, 1280, 960), CV_8UC1,
+                                        cv::Scalar(30), cv::Scalar(220));
+  const PointBoardDetection single = DetectPointBoard(one, b, 1);
+  EXPECT_FALSE(single.duplicated);
+  EXPECT_EQ(static_cast<int>(single.corners.size()), b.NumTags());
+}
+
 TEST(PointBoards, PhotoFolderGivesOneCornerPerTarget) {
   const std::filesystem::path dir =
       std::filesystem::path(::testing::TempDir()) / ("rtscalib_point_boards_" + std::to_string(::getpid()));
@@ -187,7 +247,8 @@ TEST(PointBoards, PhotoFolderGivesOneCornerPerTarget) {
   EXPECT_EQ(r.photos[0].tags.size(), 24u);
   EXPECT_EQ(r.photos[1].tags.size(), 40u);
   EXPECT_TRUE(r.warnings.empty());
-  WriteDetectedPixels((dir / "pixels.csv").string(), shots, targets, r);
+  WritePixels((dir / "pixels.csv").string(), PixelObservationsOf(shots, targets, r),
+              shots.angle_unit, ImageSizesOf(shots, r));
   const CsvTable t = CsvTable::Read((dir / "pixels.csv").string(),
                                     {{"shot", "target", "corner", "u", "v"}, {}});
   EXPECT_EQ(t.NumRows(), 64);

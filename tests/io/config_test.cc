@@ -243,7 +243,7 @@ TEST(Config, WrongTypesNameKeyLineExpectedAndGot) {
   const InputError kin =
       ConfigError(dir, std::string(kSimulateOnly) + "model: {kinematics: denavit}\n");
   EXPECT_EQ(kin.key, "model.kinematics");
-  EXPECT_EQ(kin.expected, "one of dh, spherical");
+  EXPECT_EQ(kin.expected, "one of dh, spherical, none");
 
   const InputError list =
       ConfigError(dir, std::string(kSimulateOnly) + "model: {effects: edm_scale}\n");

@@ -402,6 +402,55 @@ TEST(ModelIoBoards, BoardsAndPointsRoundTrip) {
   EXPECT_EQ(r.points[0].sigma, p.sigma);
 }
 
+// SPEC 7.1: one pose per placement, and a camera-only model (kinematics
+// none): its cameras and per-zoom board poses (cam_from_board) are written
+// and read back; no base, EDM or camera tool is written as if estimated.
+TEST(ModelIoBoards, PlacementsAndCameraOnlyModelRoundTrip) {
+  testing_io::TempDir dir;
+  InstrumentModel m = IdealModel(Kinematics::kNone, 2, CameraTool());
+  m.effects.Add(Effect::kRadialDistortion);
+  m.cams[1].distortion[kK1] = -0.25;
+  for (const auto& [placement, zoom] :
+       std::vector<std::pair<std::string, int>>{{"p1", 0}, {"p1", 1}, {"left 02", 0}}) {
+    EstimatedBoard b;
+    b.board.kind = BoardKind::kChessboard;
+    b.board.family = "chessboard";
+    b.board.rows = 7;
+    b.board.cols = 10;
+    b.board.square_size = 0.025;
+    b.placement = placement;
+    b.zoom = zoom;
+    b.pose = PoseBlock::FromRigid(Rigid3::FromEuler({0.1 * zoom, -0.2, 1.3}, {0.1, -0.2, 0.5}));
+    m.boards.push_back(b);
+  }
+  WriteModelYaml(dir.Path("model.yaml"), m, {});
+  const std::string text = dir.Read("model.yaml");
+  EXPECT_EQ(text.find("flange_from_cam"), std::string::npos);
+  EXPECT_EQ(text.find("base:"), std::string::npos);
+  EXPECT_EQ(text.find("edm:"), std::string::npos);
+  EXPECT_EQ(text.find("ref_from_board"), std::string::npos);
+  EXPECT_NE(text.find("cam_from_board"), std::string::npos);
+  const InstrumentModel r = ReadModelYaml(dir.Path("model.yaml"), nullptr);
+  EXPECT_EQ(r.kinematics, Kinematics::kNone);
+  ASSERT_EQ(r.NumZooms(), 2);
+  EXPECT_EQ(r.cams[1].distortion[kK1], -0.25);
+  EXPECT_FALSE(r.edm_determined);
+  ASSERT_EQ(r.boards.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(r.boards[i].placement, m.boards[i].placement);
+    EXPECT_EQ(r.boards[i].zoom, m.boards[i].zoom);
+    EXPECT_EQ(r.boards[i].pose.q, m.boards[i].pose.q);
+  }
+  EXPECT_EQ(r.BoardOf(5, "p1", 1), &r.boards[1]);
+  EXPECT_EQ(r.BoardOf(5, "p2", 1), nullptr);
+  // A board of a zoom the model has no camera for names the key.
+  InstrumentModel bad = m;
+  bad.boards[1].zoom = 4;
+  WriteModelYaml(dir.Path("bad.yaml"), bad, {});
+  const InputError e = CatchInputError([&] { ReadModelYaml(dir.Path("bad.yaml"), nullptr); });
+  EXPECT_THAT(e.what(), HasSubstr("zoom"));
+}
+
 }  // namespace
 }  // namespace rtscalib
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "libcalib/io/csv.h"
 #include "libcalib/io/number_text.h"
 #include "tests/io/io_test_util.h"
 
@@ -536,6 +537,49 @@ TEST(PixelsAngleUnit, DegreesGiveTheRadianObservations) {
   ExpectSameReading(rad.pixels[0].phi, deg.pixels[0].phi, "phi");
   ExpectSameReading(rad.pixels[0].theta, deg.pixels[0].theta, "theta");
   EXPECT_EQ(rad.pixels[0].uv, deg.pixels[0].uv);
+}
+
+// SPEC 7.1 / 4.1: pixels.csv's optional placement and focus_distance
+// columns, empty readings (camera-only), and the one writer's image sizes:
+// written and read back unchanged.
+TEST(PixelsBoards, PlacementsFocusAndEmptyReadingsRoundTrip) {
+  TempDir dir;
+  const std::string path = dir.Write(
+      "pixels.csv",
+      "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v,placement,focus_distance,width,height\n"
+      "1,0,,,s1,48,2,,,,100.5,200.25,p1,7.5,640,480\n"
+      "2,0,3.2,4.7,s2,48,3,,,,10,20,p2,,640,480\n");
+  const PixelsFile file = ReadPixels(path);
+  ASSERT_EQ(file.pixels.size(), 2u);
+  EXPECT_FALSE(file.pixels[0].has_reading);
+  EXPECT_EQ(file.pixels[0].placement, "p1");
+  EXPECT_EQ(file.pixels[0].focus_distance, 7.5);
+  EXPECT_TRUE(file.pixels[1].has_reading);
+  EXPECT_EQ(file.pixels[1].placement, "p2");
+  EXPECT_EQ(file.pixels[1].focus_distance, 0.0);
+  WritePixels(dir.Path("out.csv"), file.pixels, AngleUnit::kRad, file.image_sizes);
+  const PixelsFile back = ReadPixels(dir.Path("out.csv"));
+  ASSERT_EQ(back.pixels.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(back.pixels[i].has_reading, file.pixels[i].has_reading);
+    EXPECT_EQ(back.pixels[i].phi, file.pixels[i].phi);
+    EXPECT_EQ(back.pixels[i].placement, file.pixels[i].placement);
+    EXPECT_EQ(back.pixels[i].focus_distance, file.pixels[i].focus_distance);
+    EXPECT_EQ(back.pixels[i].uv, file.pixels[i].uv);
+  }
+  EXPECT_EQ(back.image_sizes.at(0).width, 640);
+  EXPECT_EQ(back.image_sizes.at(0).height, 480);
+  // Files without placements keep SPEC 3's columns.
+  std::vector<PixelObservation> plain = file.pixels;
+  for (PixelObservation& p : plain) {
+    p.placement.clear();
+    p.focus_distance = 0;
+  }
+  WritePixels(dir.Path("plain.csv"), plain);
+  const CsvTable t = CsvTable::Read(dir.Path("plain.csv"), {{"shot"}, {}});
+  EXPECT_FALSE(t.Has("placement"));
+  EXPECT_FALSE(t.Has("focus_distance"));
+  EXPECT_FALSE(t.Has("width"));
 }
 
 }  // namespace

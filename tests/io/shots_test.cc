@@ -184,5 +184,43 @@ TEST(ShotsAngleUnit, DegreesAndGonGiveTheRadianReadings) {
   }
 }
 
+// SPEC 7.1: the optional `placement` column, readings left empty for a
+// camera-only session, and SPEC 4.1's optional focus distance.
+TEST(Shots, PlacementsEmptyReadingsAndFocusDistance) {
+  TempDir dir;
+  dir.Write("a.png", "x");
+  dir.Write("b.png", "x");
+  const std::string path = dir.Write("shots.csv",
+                                     "face,zoom,phi,theta,image,placement,focus_distance\n"
+                                     "1,0,,,a.png,wall-1,12.5\n"
+                                     "2,1,3.3,4.8,b.png,,\n");
+  const ShotsFile file = ReadShots(path);
+  EXPECT_TRUE(file.has_placements);
+  ASSERT_EQ(file.shots.size(), 2u);
+  EXPECT_FALSE(file.shots[0].has_reading);
+  EXPECT_EQ(file.shots[0].placement, "wall-1");
+  EXPECT_EQ(file.shots[0].focus_distance, 12.5);
+  EXPECT_TRUE(file.shots[1].has_reading);
+  EXPECT_EQ(file.shots[1].phi, 3.3);
+  EXPECT_EQ(file.shots[1].placement, "");
+  EXPECT_EQ(file.shots[1].focus_distance, 0.0);
+  // Without the column: one placement.
+  EXPECT_FALSE(ReadShots(dir.Write("one.csv", std::string(kHeader) + "1,0,0.1,1.5,a.png\n"))
+                   .has_placements);
+}
+
+TEST(Shots, OneReadingWithoutTheOtherIsAnError) {
+  ExpectCellError("1,0,,1.5,photos/a.png\n", "phi", "",
+                  "a reading beside theta (both phi and theta, or neither for a camera-only "
+                  "calibration)");
+  TempDir dir;
+  dir.Write("a.png", "x");
+  const InputError e = CatchInputError([&] {
+    ReadShots(dir.Write("f.csv", "face,zoom,phi,theta,image,focus_distance\n1,0,0,1.5,a.png,-2\n"));
+  });
+  EXPECT_EQ(e.line, 2);
+  EXPECT_EQ(e.column, "focus_distance");
+}
+
 }  // namespace
 }  // namespace rtscalib
