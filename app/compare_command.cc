@@ -13,7 +13,7 @@
 
 #include "app/commands.h"
 #include "app/figures.h"
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/api/compare.h"
 #include "libcalib/io/errors.h"
 

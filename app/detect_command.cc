@@ -4,7 +4,7 @@
 #include <iostream>
 
 #include "app/commands.h"
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 #include "detect/photos.h"
 #include "detect/tag_family.h"
 #include "libcalib/io/records.h"

@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "app/commands.h"
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/export/opencv_export.h"
 #include "libcalib/export/surveyor_export.h"
 #include "libcalib/export/urdf_export.h"

@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "app/commands.h"
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/calibrate/validate.h"
 #include "libcalib/extract/options.h"
 #include "libcalib/io/errors.h"
@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
   } catch (const rtscalib::InputError& e) {
     std::cerr << "rtscalib: error: " << e.what() << "\n";
     return kExitInput;
-  } catch (const rtscalib::app::WriteError& e) {
+  } catch (const rtscalib::WriteError& e) {
     std::cerr << "rtscalib: error: " << e.what() << "\n";
     return kExitInput;
   } catch (const rtscalib::ExtractionError& e) {

@@ -17,7 +17,7 @@
 #include <regex>
 #include <sstream>
 
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/io/errors.h"
 
 namespace fs = std::filesystem;
@@ -30,6 +30,10 @@ constexpr const char* kLatest = "latest";
 constexpr const char* kFigures = "figures";
 constexpr const char* kManifest = ".rtscalib-published";
 constexpr const char* kStatus = "status";
+// Written beside `status` when the entry is made, while there is room: a
+// run that fails on a full disk renames it onto `status` (a rename needs no
+// free space), so that its entry never stays `running`.
+constexpr const char* kStatusFailed = "status.failed";
 constexpr const char* kLock = ".lock";
 
 // An exclusive flock on history/.lock for as long as it lives. The kernel
@@ -288,9 +292,14 @@ void CheckTop(const fs::path& root) {
   if (history.type() != fs::file_type::not_found && history.type() != fs::file_type::directory) {
     foreign(root / kHistory, "nothing or a folder", "a file");
   }
+  // The manifest: rtscalib's symlink through `latest`, or the plain file an
+  // earlier version wrote there.
   const fs::file_status st = fs::symlink_status(root / kManifest, ec);
-  if (st.type() != fs::file_type::not_found && st.type() != fs::file_type::regular) {
-    foreign(root / kManifest, "rtscalib's manifest file", "a folder, symlink or special file");
+  const bool our_link = st.type() == fs::file_type::symlink &&
+                        fs::read_symlink(root / kManifest, ec).string() == TopTarget(kManifest);
+  if (st.type() != fs::file_type::not_found && st.type() != fs::file_type::regular && !our_link) {
+    foreign(root / kManifest, "rtscalib's manifest (a symlink to " + TopTarget(kManifest) + ")",
+            "a folder, another symlink or a special file");
   }
   if (errors.size() == 1) throw errors.front();
   if (!errors.empty()) throw InputError::Combine(errors);
@@ -354,6 +363,9 @@ OutputFolder::OutputFolder(const std::string& root)
     throw WriteError(staging.string(), ErrnoText(errno) + " (creating the run's folder)");
   }
   WriteFileAtomic((staging / kStatus).string(), StatusText("running"));
+  WriteFileAtomic((staging / kStatusFailed).string(),
+                  StatusText("failed: the run stopped and could not write why (the disk may be "
+                             "full); its last messages on the terminal say more"));
   fs::path dir = history / name.str();
   // Numbers are unique under the lock. An rtscalib version without the lock
   // may still have made this name meanwhile: rename() would fail on it (it
@@ -383,6 +395,7 @@ void OutputFolder::MarkComplete() {
   }
   SyncFolder(run_.dir);
   WriteFileAtomic(RunFile(kStatus), StatusText("complete"));
+  ::unlink(RunFile(kStatusFailed).c_str());
   complete_ = true;
   run_.state = RunState::kComplete;
 }
@@ -391,8 +404,16 @@ void OutputFolder::MarkFailed(const std::string& reason) noexcept {
   if (complete_) return;
   try {
     WriteFileAtomic(RunFile(kStatus), StatusText("failed: " + OneLine(reason)));
+    ::unlink(RunFile(kStatusFailed).c_str());
   } catch (...) {
-    // Nothing more to do: the entry stays `running` and is listed as killed.
+    // No room for the reason: the status written while there was room. A
+    // failing rename leaves the entry `running`, listed as killed.
+    if (::rename(RunFile(kStatusFailed).c_str(), RunFile(kStatus).c_str()) == 0) {
+      try {
+        SyncFolder(run_.dir);
+      } catch (...) {
+      }
+    }
   }
 }
 
@@ -461,20 +482,12 @@ std::vector<OutputFolder::PublishStep> OutputFolder::PlanPublish(
                        if (found.owner != Owner::kOurs) PlaceSymlink(root / rel, FigureTarget(f));
                      }});
   }
-  // The commit point: one rename switches every name above to this run.
-  const std::string entry = std::string(kHistory) + "/" + run_.name;
-  steps.push_back({"switch latest", [root, entry, during] {
-                     std::string got;
-                     if (!IsOurLatest(root / kLatest, &got)) {
-                       throw ForeignError(
-                           root / kLatest,
-                           "no file of this name or rtscalib's symlink into history/", got, during);
-                     }
-                     PlaceSymlink(root / kLatest, entry);
-                     SyncFolder(root.string());
-                   }});
+  // The manifest goes into the entry and is shown at the top through
+  // `latest` like every other name, so that the one rename below switches it
+  // with them: a kill at any point never leaves it naming another run than
+  // the one the top shows.
   const std::string run_name = run_.name;
-  steps.push_back({"write " + std::string(kManifest), [root, run_name, figures, kept] {
+  steps.push_back({"write " + std::string(kManifest), [run, run_name, figures, kept] {
                      nlohmann::json m;
                      m["run"] = run_name;
                      m["latest"] = std::string(kHistory) + "/" + run_name;
@@ -490,7 +503,30 @@ std::vector<OutputFolder::PublishStep> OutputFolder::PlanPublish(
                      m["note"] =
                          "every listed name is a symlink resolving through `latest`; files not "
                          "listed are not rtscalib's";
-                     WriteFileAtomic((root / kManifest).string(), m.dump(2) + "\n");
+                     WriteFileAtomic((run / kManifest).string(), m.dump(2) + "\n");
+                   }});
+  steps.push_back({"link " + std::string(kManifest), [root] {
+                     // An earlier version's plain manifest is rtscalib's own
+                     // (CheckTop): it becomes the symlink.
+                     std::error_code ec;
+                     const fs::path at = root / kManifest;
+                     if (fs::symlink_status(at, ec).type() == fs::file_type::symlink &&
+                         fs::read_symlink(at, ec).string() == TopTarget(kManifest)) {
+                       return;
+                     }
+                     PlaceSymlink(at, TopTarget(kManifest));
+                   }});
+  // The commit point: one rename switches every name above to this run.
+  const std::string entry = std::string(kHistory) + "/" + run_.name;
+  steps.push_back({"switch latest", [root, entry, during] {
+                     std::string got;
+                     if (!IsOurLatest(root / kLatest, &got)) {
+                       throw ForeignError(
+                           root / kLatest,
+                           "no file of this name or rtscalib's symlink into history/", got, during);
+                     }
+                     PlaceSymlink(root / kLatest, entry);
+                     SyncFolder(root.string());
                    }});
   // Figures of the run shown before that this run lacks now dangle; they are
   // rtscalib's own symlinks, so they go. So do plain copies an earlier

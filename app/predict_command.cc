@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/api/rtscalib.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/model_io.h"

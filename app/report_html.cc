@@ -8,7 +8,7 @@
 #include <string_view>
 
 #include "app/reports.h"
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 
 namespace rtscalib::app {
 namespace {

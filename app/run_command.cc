@@ -9,7 +9,7 @@
 #include "app/progress.h"
 #include "app/report_html.h"
 #include "app/reports.h"
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/fit/parameter_layout.h"
 #include "libcalib/io/config.h"
 #include "libcalib/io/covariance_io.h"

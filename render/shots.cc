@@ -17,6 +17,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -26,6 +27,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "detect/photos.h"
+#include "libcalib/io/safe_write.h"
 #include "detect/point_boards.h"
 
 namespace rtscalib::render {
@@ -94,7 +96,13 @@ void RenderIndices(const PlacedScenes& scenes, const std::vector<Shot>& shots,
     if (!renderer) renderer = std::make_unique<SceneRenderer>(scenes.at(s.placement), options.render);
     const cv::Mat img = renderer->Render(s.ref_from_cam, s.cam, static_cast<std::uint64_t>(i));
     const std::string path = (fs::path(options.out_dir) / ImageName(s)).string();
-    if (!cv::imwrite(path, img, params)) throw std::runtime_error("could not write " + path);
+    // Encoded in memory and written through the checked writer: a full disk
+    // is a WriteError naming the image, never a photo cut short.
+    std::vector<unsigned char> png;
+    if (!cv::imencode(".png", img, png, params)) {
+      throw std::runtime_error("RenderShots: OpenCV could not encode " + path);
+    }
+    WriteFileAtomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
     done(i);
   }
 }
@@ -155,6 +163,12 @@ void RenderInWorkers(const PlacedScenes& scenes, const std::vector<Shot>& shots,
         for (size_t j = k; j < indices.size(); j += jobs) mine.push_back(indices[j]);
         RenderIndices(scenes, shots, mine, options,
                       [&](int i) { WriteAll(fds[1], "ok " + std::to_string(i) + "\n"); });
+      } catch (const WriteError& e) {
+        // Passed on as what it is: the parent throws it again, naming the file.
+        std::string reason = e.reason;
+        std::replace(reason.begin(), reason.end(), '\n', ' ');
+        WriteAll(fds[1], "write_error " + e.path + "\t" + reason + "\n");
+        code = 1;
       } catch (const std::exception& e) {
         std::string msg = e.what();
         std::replace(msg.begin(), msg.end(), '\n', ' ');
@@ -172,6 +186,7 @@ void RenderInWorkers(const PlacedScenes& scenes, const std::vector<Shot>& shots,
 
   int done = 0, open = jobs;
   std::string error;
+  std::optional<WriteError> write_error;
   while (open > 0) {
     std::vector<pollfd> pfds;
     std::vector<int> who;
@@ -203,6 +218,11 @@ void RenderInWorkers(const PlacedScenes& scenes, const std::vector<Shot>& shots,
         w.buffer.erase(0, nl + 1);
         if (line.rfind("ok ", 0) == 0) {
           progress->Update(++done);
+        } else if (line.rfind("write_error ", 0) == 0) {
+          const size_t tab = line.find('\t');
+          if (!write_error && tab != std::string::npos) {
+            write_error.emplace(line.substr(12, tab - 12), line.substr(tab + 1));
+          }
         } else if (error.empty()) {
           error = line.rfind("error ", 0) == 0 ? line.substr(6) : line;
         }
@@ -215,6 +235,7 @@ void RenderInWorkers(const PlacedScenes& scenes, const std::vector<Shot>& shots,
     ::waitpid(w.pid, &status, 0);
     crashed = crashed || !WIFEXITED(status) || WEXITSTATUS(status) != 0;
   }
+  if (write_error) throw *write_error;
   if (!error.empty()) throw std::runtime_error("RenderShots: " + error);
   if (crashed || done != static_cast<int>(indices.size())) {
     throw std::runtime_error("RenderShots: a worker process died after " + std::to_string(done) +
@@ -323,8 +344,7 @@ RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot
   // The tables need no rendering: written first, from the exact model.
   RenderShotsResult result;
   {
-    std::ofstream st(fs::path(options.out_dir) / ShotsTableName(options.shard, options.num_shards));
-    std::ofstream ex(fs::path(options.out_dir) / ExactTableName(options.shard, options.num_shards));
+    std::ostringstream st, ex;
     st << (placements ? kShotsPlacementHeader : kShotsHeader) << "\n";
     ex << kExactHeader << "\n";
     for (int i : indices) {
@@ -349,8 +369,13 @@ RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot
         }
       }
     }
-    if (!st || !ex)
-      throw std::runtime_error("RenderShots: could not write the tables in " + options.out_dir);
+    // Through the checked writer: a full disk is a WriteError naming the table.
+    WriteFileAtomic(
+        (fs::path(options.out_dir) / ShotsTableName(options.shard, options.num_shards)).string(),
+        st.str());
+    WriteFileAtomic(
+        (fs::path(options.out_dir) / ExactTableName(options.shard, options.num_shards)).string(),
+        ex.str());
   }
   if (indices.empty()) return result;
 
@@ -458,14 +483,15 @@ void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& 
       exact_rows[it->second].push_back(line);
     }
   }
-  std::ofstream st(fs::path(out_dir) / "shots.csv"), ex(fs::path(out_dir) / "exact.csv");
+  std::ostringstream st, ex;
   st << (header.empty() ? kShotsHeader : header.c_str()) << "\n";
   ex << kExactHeader << "\n";
   for (const auto& [index, row] : shot_rows) st << row << "\n";
   for (const auto& [index, rows] : exact_rows) {
     for (const std::string& row : rows) ex << row << "\n";
   }
-  if (!st || !ex) throw std::runtime_error("MergeShards: could not write the tables in " + out_dir);
+  WriteFileAtomic((fs::path(out_dir) / "shots.csv").string(), st.str());
+  WriteFileAtomic((fs::path(out_dir) / "exact.csv").string(), ex.str());
 }
 
 DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>& shots,

@@ -239,6 +239,7 @@ InitFromPixelsOptions PixelStartOptions(const CalibrationOptions& options,
     io.cameras[zoom].height = size.height;
   }
   io.targets = obs.targets;
+  io.source = obs.pixels_source;
   io.min_zenith_rad = options.fit.min_zenith_rad;
   io.max_zenith_rad = options.fit.max_zenith_rad;
   return io;
@@ -252,8 +253,16 @@ void ExtractAndSimplify(const Observations& obs, const CalibrationOptions& optio
   ExtractOptions eo;
   eo.min_zenith_rad = options.fit.min_zenith_rad;
   eo.max_zenith_rad = options.fit.max_zenith_rad;
+  // The extraction's messages name lines; the file is the records'.
+  auto extract = [&](const std::vector<CameraTool>& cameras) {
+    try {
+      return ExtractDhModel(obs.records, cameras, eo);
+    } catch (const ExtractionError& e) {
+      throw ExtractionError(obs.records_source + ": " + e.what());
+    }
+  };
   try {
-    result->extraction = ExtractDhModel(obs.records, options.model.cameras, eo);
+    result->extraction = extract(options.model.cameras);
   } catch (const ExtractionError& first) {
     // Without Klug's pixel triplets (Eq. 67) and configured intrinsics the
     // camera tools cannot be extracted as the paper does; intrinsics from
@@ -274,7 +283,7 @@ void ExtractAndSimplify(const Observations& obs, const CalibrationOptions& optio
     if (!estimated) throw;
     result->notes.push_back(std::string("extraction: first attempt failed (") + first.what() +
                             "); retried with intrinsics from the view rays");
-    result->extraction = ExtractDhModel(obs.records, cameras, eo);
+    result->extraction = extract(cameras);
   }
   for (const std::string& n : result->extraction->notes)
     result->notes.push_back("extraction: " + n);

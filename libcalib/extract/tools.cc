@@ -99,6 +99,11 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
     if (records[i].tool == Tool::kCam && records[i].zoom == zoom) rows.push_back(i);
   }
   if (rows.empty()) return std::nullopt;
+  // Where the zoom's rows are, for every message below.
+  const int first_line = records[rows[0]].line;
+  const std::string where =
+      "zoom " + std::to_string(zoom) + " (" + std::to_string(rows.size()) + " camera rows" +
+      (first_line > 0 ? ", the first on line " + std::to_string(first_line) : std::string()) + ")";
 
   // Pixel triplets {c, c + [1, 0], c + [0, 1]} at one pose and ray length.
   struct Triplet {
@@ -134,8 +139,7 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
   const bool all_rows = triplets.empty() && given && options.exact_camera_rays;
   if (triplets.empty() && !all_rows) {
     std::ostringstream s;
-    s << "cannot extract the camera tool of zoom " << zoom << ": " << rows.size()
-      << " usable camera rows, but no pose has rows at the principal point (" << Num(c.x()) << ", "
+    s << "cannot extract the camera tool of " << where << ": no pose has rows at the principal point (" << Num(c.x()) << ", "
       << Num(c.y()) << ")" << (principal_point.detected ? " (detected)" : "")
       << " and at +1 px in u and in v with the same ray length (Klug Sec. 3.1.10, Eq. 67). "
          "Record F_CAM at these three pixels at each pose, or give the camera's intrinsics "
@@ -178,8 +182,8 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
     const double pixel[2] = {r.u, r.v};
     double ray[3];
     if (!PixelToRay(out.camera.intrinsics.data(), out.camera.distortion.data(), pixel, ray)) {
-      throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
-                            ": pixel (" + Num(r.u) + ", " + Num(r.v) + ") of line " +
+      throw ExtractionError("cannot extract the camera tool of " + where + ": pixel (" +
+                            Num(r.u) + ", " + Num(r.v) + ") of line " +
                             std::to_string(r.line) +
                             " cannot be undistorted with the given distortion");
     }
@@ -205,16 +209,15 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
     }
   }
   if (a.size() < 3) {
-    throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
-                          ": only " + std::to_string(a.size()) +
+    throw ExtractionError("cannot extract the camera tool of " + where + ": only " +
+                          std::to_string(a.size()) +
                           " usable camera rows (need 3 at different pixels or ray lengths)");
   }
   std::vector<int> dropped;
   const KabschResult k = RobustKabsch(a, b, kKabschFloorM, &dropped);
   if (k.rank < 2) {
-    throw ExtractionError("cannot extract the camera tool of zoom " + std::to_string(zoom) +
-                          ": its " + std::to_string(rows.size()) +
-                          " usable camera rows lie on one line in the camera frame (one "
+    throw ExtractionError("cannot extract the camera tool of " + where +
+                          ": its usable camera rows lie on one line in the camera frame (one "
                           "pixel direction only); record the principal point and +1 px in u "
                           "and in v (Klug Eq. 67)");
   }

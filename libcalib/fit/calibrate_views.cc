@@ -36,6 +36,13 @@ std::string LineOf(const PixelObservation& p) {
   return p.line > 0 ? " (line " + std::to_string(p.line) + ")" : "";
 }
 
+// " (pixels from line 12)": where a zoom's rows start, for its messages.
+std::string FirstLine(const std::vector<PixelObservation>& pixels) {
+  return pixels.empty() || pixels.front().line <= 0
+             ? ""
+             : " (pixels from line " + std::to_string(pixels.front().line) + ")";
+}
+
 std::vector<Shot> GroupShots(const std::vector<PixelObservation>& pixels, int* zoom) {
   std::vector<Shot> shots;
   std::map<std::string, size_t> index;
@@ -647,9 +654,9 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   auto require_shots = [&](const char* stage) {
     if (static_cast<int>(shots.size()) < options.min_shots) {
       std::ostringstream msg;
-      msg << "CalibrateViews (zoom " << out.zoom << "): " << shots.size() << " usable shot(s) "
-          << stage << ", at least min_shots = " << options.min_shots << " needed ("
-          << all_shots.size() << " shot(s) in the input, " << out.excluded.size() << " excluded)";
+      msg << "zoom " << out.zoom << FirstLine(pixels) << ": " << shots.size() << " usable shot(s) " << stage
+          << ", at least min_shots = " << options.min_shots << " needed (" << all_shots.size()
+          << " shot(s) in the input, " << out.excluded.size() << " excluded)";
       for (const ExcludedShot& e : out.excluded) msg << "; '" << e.shot << "': " << e.reason;
       throw std::invalid_argument(msg.str());
     }
@@ -688,7 +695,7 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   const int unknowns = num_camera + 6 * static_cast<int>(shots.size());
   if (2 * num_points <= unknowns) {
     std::ostringstream msg;
-    msg << "CalibrateViews (zoom " << out.zoom << "): " << num_points << " points give "
+    msg << "zoom " << out.zoom << FirstLine(pixels) << ": " << num_points << " points give "
         << 2 * num_points << " equations for " << unknowns << " unknowns (" << num_camera
         << " camera parameters with distortion " << options.distortion.Names()
         << ", 6 per shot for " << shots.size() << " shots); more points are needed";

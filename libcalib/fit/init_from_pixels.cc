@@ -59,6 +59,7 @@ struct BoardFrame {
 // `frame_of_view` maps such a view's name to its frame (1 + index into
 // `frames`, in the order first seen).
 std::vector<PixelObservation> BoardViews(const std::vector<PixelObservation>& pixels,
+                                         const std::string& source,
                                          const TargetScene& targets, bool per_zoom,
                                          std::vector<BoardFrame>* frames,
                                          std::map<std::string, int>* frame_of_view) {
@@ -71,12 +72,12 @@ std::vector<PixelObservation> BoardViews(const std::vector<PixelObservation>& pi
         if (b.HasId(p.target)) board = &b;
       }
       if (!board) {
-        throw std::invalid_argument("pixels:" + std::to_string(p.line) +
+        throw std::invalid_argument(source + ":" + std::to_string(p.line) +
                                     ": X, Y, Z are empty but target " + std::to_string(p.target) +
                                     " is not a tag of a board in the targets (SPEC 7)");
       }
       if (p.corner < 0 || p.corner > 3) {
-        throw std::invalid_argument("pixels:" + std::to_string(p.line) +
+        throw std::invalid_argument(source + ":" + std::to_string(p.line) +
                                     ": corner must be 0..3, got " + std::to_string(p.corner));
       }
       const Eigen::Vector3d in_board = board->CornersInBoard(p.target - board->first_id)[p.corner];
@@ -146,6 +147,18 @@ CalibrateViewsOptions ViewsOptions(const InitFromPixelsOptions& o) {
   CalibrateViewsOptions v;
   v.distortion = o.distortion;
   return v;
+}
+
+// CalibrateViews on one zoom's pixels; its messages name the pixels' file.
+ViewsCalibration CalibrateZoom(const std::vector<PixelObservation>& pixels, const CameraTool& cam,
+                               const InitFromPixelsOptions& o) {
+  try {
+    return CalibrateViews(pixels, cam.width, cam.height, ViewsOptions(o));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(o.source + ": " + e.what());
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(o.source + ": " + e.what());
+  }
 }
 
 std::string Describe(const ViewsCalibration& v) {
@@ -220,7 +233,7 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
   std::vector<BoardFrame> boards;
   std::map<std::string, int> frame_of_view;
   const std::vector<PixelObservation> pixels =
-      BoardViews(observed, options.targets, camera_only, &boards, &frame_of_view);
+      BoardViews(observed, options.source, options.targets, camera_only, &boards, &frame_of_view);
   const int num_frames = 1 + static_cast<int>(boards.size());
   int excluded = 0;
   const std::map<int, std::vector<PixelObservation>> zooms = ByZoom(pixels, options, &excluded);
@@ -242,7 +255,7 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
   std::vector<PosedShot> shots;
   for (const auto& [zoom, obs] : zooms) {
     CameraTool cam = SizeFor(options, zoom, obs, &result.notes);
-    ViewsCalibration v = CalibrateViews(obs, cam.width, cam.height, ViewsOptions(options));
+    ViewsCalibration v = CalibrateZoom(obs, cam, options);
     result.notes.push_back(Describe(v));
     cam.intrinsics = v.intrinsics;
     cam.distortion = v.distortion;
@@ -425,14 +438,13 @@ std::vector<std::string> InitCameraFromPixels(const std::vector<PixelObservation
       // camera tool; with records the chain is the extraction's, which has no
       // camera for this zoom.
       throw std::invalid_argument(
-          "pixels:" + std::to_string(p.line) + ": zoom " + std::to_string(zoom) +
+          options.source + ":" + std::to_string(p.line) + ": zoom " + std::to_string(zoom) +
           " has no camera rows in records.csv and its pixels show a board without a pose: add "
           "camera rows of this zoom, a surveyed board, or leave records.csv out (SPEC 7)");
     }
   }
   CameraTool cam = SizeFor(options, zoom, it->second, &notes);
-  const ViewsCalibration v =
-      CalibrateViews(it->second, cam.width, cam.height, ViewsOptions(options));
+  const ViewsCalibration v = CalibrateZoom(it->second, cam, options);
   notes.push_back(Describe(v));
   cam.intrinsics = v.intrinsics;
   cam.distortion = v.distortion;

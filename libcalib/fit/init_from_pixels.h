@@ -54,6 +54,8 @@ struct InitFromPixelsOptions {
   std::vector<CameraTool> cameras;
   // The boards the pixels with X_known == false are corners of (SPEC 7).
   TargetScene targets;
+  // The pixels' file (Observations::pixels_source), for messages that name a line.
+  std::string source = "pixels";
   // Observations outside this zenith window are not used (critical regions, SPEC 1).
   double min_zenith_rad = 10.0 * M_PI / 180.0;
   double max_zenith_rad = 135.0 * M_PI / 180.0;

@@ -758,7 +758,9 @@ CalibrationOptions CalibrationOptionsOf(const RunConfig& config) {
 }
 
 RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& sections) {
-  const YamlDocument doc = YamlDocument::Load(path);
+  // A run's settings take a few kB; 4 MiB leaves room for long simulated
+  // target lists and bounds what a runaway file costs to parse (~200 MB).
+  const YamlDocument doc = YamlDocument::Load(path, std::uintmax_t{4} << 20, "a config");
   const YamlNode root = doc.Root();
   RunConfig config;
   const fs::path absolute = fs::absolute(path).lexically_normal();
@@ -810,6 +812,11 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
   }
   std::string output = "out";
   root.Read("output", &output);
+  // An empty name would resolve to the config's own folder, whose files
+  // (the config itself, the user's data) the run's outputs would join.
+  if (const std::optional<YamlNode> n = root.Find("output"); n && output.empty()) {
+    n->Fail("a folder name (relative to the config's folder), not empty");
+  }
   config.output_dir = Resolve(config.config_dir, output);
 
   doc.CheckAllKeysUsed();

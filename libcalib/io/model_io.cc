@@ -154,22 +154,29 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
 
 // --- reading ----------------------------------------------------------------
 
-void ReadNumbersInto(const YamlNode& n, double* out, int size, bool allow_nan = false) {
+// What a number of model.yaml may be: a finite value, or a standard
+// deviation (>= 0, or .nan where nothing was estimated: a negative sigma
+// would make every uncertainty that uses it wrong without a sign of it).
+enum class Number { kValue, kSigma };
+
+double ReadNumber(const YamlNode& n, Number kind) {
+  if (kind == Number::kValue) return n.AsDouble();
+  const double x = n.AsDoubleOrNan();
+  if (x < 0) n.Fail("a standard deviation >= 0 (or .nan where it was not estimated)");
+  return x;
+}
+
+void ReadNumbersInto(const YamlNode& n, double* out, int size, Number kind = Number::kValue) {
   const std::vector<YamlNode> items = n.Items();
   if (static_cast<int>(items.size()) != size) {
     n.Fail("a list of " + std::to_string(size) + " numbers");
   }
-  for (int i = 0; i < size; ++i) {
-    out[i] = allow_nan ? items[i].AsDoubleOrNan() : items[i].AsDouble();
-  }
+  for (int i = 0; i < size; ++i) out[i] = ReadNumber(items[i], kind);
 }
 
 void ReadNamedInto(const YamlNode& m, const char* const* names, double* out, int size,
-                   bool allow_nan = false) {
-  for (int i = 0; i < size; ++i) {
-    const YamlNode n = m.Require(names[i]);
-    out[i] = allow_nan ? n.AsDoubleOrNan() : n.AsDouble();
-  }
+                   Number kind = Number::kValue) {
+  for (int i = 0; i < size; ++i) out[i] = ReadNumber(m.Require(names[i]), kind);
 }
 
 // Whether a `determined` key (absent in files before it existed: true) says
@@ -214,9 +221,9 @@ PoseBlock ReadPose(const YamlNode& m, bool with_sigma, PoseSigma* sigma,
   }
   if (with_sigma) {
     const YamlNode s = m.Require("sigma");
-    ReadNumbersInto(s.Require("rotation"), sigma->rotation.data(), 3, true);
-    ReadNumbersInto(s.Require("euler"), sigma->euler.data(), 3, true);
-    ReadNumbersInto(s.Require("t"), sigma->t.data(), 3, true);
+    ReadNumbersInto(s.Require("rotation"), sigma->rotation.data(), 3, Number::kSigma);
+    ReadNumbersInto(s.Require("euler"), sigma->euler.data(), 3, Number::kSigma);
+    ReadNumbersInto(s.Require("t"), sigma->t.data(), 3, Number::kSigma);
   }
   return pose;
 }
@@ -236,14 +243,25 @@ void ReadEffect(const YamlNode& m, bool with_sigma, InstrumentModel* model) {
   std::array<double, 2>& si = model->EffectValue(*effect);
   ReadNumbersInto(m.Require("si"), si.data(), info.num_params);
   std::array<double, 4>& cov = model->sigmas.effect_cov[static_cast<int>(*effect)];
-  if (with_sigma) ReadNumbersInto(m.Require("covariance"), cov.data(), 4, true);
+  if (with_sigma) {
+    // A 2 x 2 covariance (row major): variances >= 0, symmetric, |rho| <= 1.
+    const YamlNode c = m.Require("covariance");
+    const std::vector<YamlNode> items = c.Items();
+    if (items.size() != 4) c.Fail("a list of 4 numbers (a 2 x 2 covariance, row major)");
+    for (int i = 0; i < 4; ++i) cov[i] = items[i].AsDoubleOrNan();
+    const bool nan = std::isnan(cov[0]) || std::isnan(cov[3]);
+    if (!nan && (cov[0] < 0 || cov[3] < 0 || cov[1] != cov[2] ||
+                 cov[1] * cov[1] > cov[0] * cov[3] * (1 + 1e-9))) {
+      c.Fail("a covariance: variances >= 0, symmetric, |correlation| <= 1");
+    }
+  }
   // The report values are derived; they must still say what si says.
   const YamlNode report = m.Require("report");
   std::array<double, 2> values{0, 0};
   for (int i = 0; i < info.num_params; ++i) {
     const YamlNode p = report.Require(info.param_names[i]);
     values[i] = p.Require("value").AsDouble();
-    if (with_sigma) p.Require("sigma").AsDoubleOrNan();
+    if (with_sigma) ReadNumber(p.Require("sigma"), Number::kSigma);
     const YamlNode unit = p.Require("unit");
     if (unit.AsString() != info.report_units[i]) unit.Fail(info.report_units[i]);
   }
@@ -416,7 +434,8 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
     for (int i = 0; i < 2; ++i) {
       ReadNamedInto(items[i], kDhParamNames, model.links[i].p.data(), 4);
       if (with_sigma) {
-        ReadNamedInto(items[i].Require("sigma"), kDhParamNames, s.links[i].data(), 4, true);
+        ReadNamedInto(items[i].Require("sigma"), kDhParamNames, s.links[i].data(), 4,
+                      Number::kSigma);
       }
     }
   }
@@ -467,13 +486,13 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
       s.distortion.emplace_back();
       if (cam.determined) {
         ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicsParamNames,
-                      s.intrinsics.back().data(), kNumIntrinsics, true);
+                      s.intrinsics.back().data(), kNumIntrinsics, Number::kSigma);
         // `held`: not estimated; 0 in memory, so that it adds no uncertainty.
         const YamlNode sigma = item.Require("distortion_sigma");
         for (int i = 0; i < kNumDistortion; ++i) {
           const YamlNode n = sigma.Require(kDistortionCoefficientNames[i]);
           s.distortion.back()[i] =
-              n.IsScalar() && n.AsString() == kHeldSigma ? 0.0 : n.AsDoubleOrNan();
+              n.IsScalar() && n.AsString() == kHeldSigma ? 0.0 : ReadNumber(n, Number::kSigma);
         }
       } else {
         s.intrinsics.back().fill(std::numeric_limits<double>::quiet_NaN());
@@ -514,7 +533,7 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
       EstimatedPoint p;
       p.name = item.Require("name").AsString();
       ReadNumbersInto(item.Require("x"), p.x.data(), 3);
-      if (with_sigma) ReadNumbersInto(item.Require("sigma"), p.sigma.data(), 3, true);
+      if (with_sigma) ReadNumbersInto(item.Require("sigma"), p.sigma.data(), 3, Number::kSigma);
       model.points.push_back(p);
     }
   }

@@ -10,6 +10,7 @@
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/number_text.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/io/yaml_reader.h"
 
 namespace rtscalib {
@@ -206,7 +207,9 @@ TargetScene ReadScene(const YamlDocument& doc, const std::map<std::string, int>*
 }  // namespace
 
 TargetScene ReadTargets(const std::string& path, const std::map<std::string, int>* family_codes) {
-  return ReadScene(YamlDocument::Load(path), family_codes);
+  // Boards take a few lines each: 4 MiB bounds what a runaway file costs.
+  return ReadScene(YamlDocument::Load(path, std::uintmax_t{4} << 20, "a targets file"),
+                   family_codes);
 }
 
 TargetScene ParseTargets(const std::string& text, const std::string& name,
@@ -251,10 +254,7 @@ void WriteTargets(const std::string& path, const TargetScene& scene, bool with_p
     }
     o << "}\n";
   }
-  std::ofstream f(path);
-  f << o.str();
-  f.close();
-  if (!f) throw std::runtime_error("could not write " + path);
+  WriteFileAtomic(path, o.str());
 }
 
 }  // namespace rtscalib

@@ -61,7 +61,8 @@ TargetScene ParseTargets(const std::string& text, const std::string& name,
 // significant digits so that they read back exactly); boards with
 // pose_known get their pose, the others none. `with_poses == false` leaves
 // every pose out (a photo session whose boards are all to be estimated).
-// Throws std::runtime_error if the file cannot be written.
+// Written whole or not at all (safe_write.h); throws WriteError naming the
+// file when it cannot be written.
 void WriteTargets(const std::string& path, const TargetScene& scene, bool with_poses = true,
                   const std::string& comment = "");
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -328,11 +329,19 @@ std::string YamlNode::Dump() const {
 // ---------------------------------------------------------------------------
 // YamlDocument
 
-YamlDocument YamlDocument::Load(const std::string& path) {
+YamlDocument YamlDocument::Load(const std::string& path, std::uintmax_t max_bytes,
+                                const std::string& what) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw InputError::File(path, 0, "cannot open file", "a readable YAML file",
                            std::strerror(errno));
+  }
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (!ec && bytes > max_bytes) {
+    throw InputError::File(path, 0, "file size",
+                           what + " of at most " + std::to_string(max_bytes >> 20) + " MiB",
+                           std::to_string(bytes >> 20) + " MiB");
   }
   std::stringstream text;
   text << in.rdbuf();

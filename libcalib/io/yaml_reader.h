@@ -21,6 +21,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -133,8 +134,14 @@ struct YamlNode::Entry {
 class YamlDocument {
  public:
   // Throws InputError when the file cannot be read or is not valid YAML, or
-  // when its top level is not a mapping.
-  static YamlDocument Load(const std::string& path);
+  // when its top level is not a mapping. A file larger than `max_bytes` is
+  // refused before it is parsed: yaml-cpp holds a parsed document at ~50
+  // times its size, so a runaway list under a mistyped key would cost
+  // gigabytes before the key could be named. `what` names the kind of file
+  // in that message ("a config").
+  static YamlDocument Load(const std::string& path,
+                           std::uintmax_t max_bytes = std::numeric_limits<std::uintmax_t>::max(),
+                           const std::string& what = "a YAML file");
   // `name` names the text in messages.
   static YamlDocument Parse(const std::string& text, const std::string& name);
 

@@ -21,7 +21,7 @@
 #include <sstream>
 
 #include "app/reports.h"
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/io/errors.h"
 
 namespace rtscalib::app {
@@ -427,6 +427,12 @@ TEST_F(OutputFolderTest, AKillAtAnyStepLeavesOneWholeRunAtTheTopAndIsListedAsKil
     }
     const std::string top = TopRun(root);
     shown.insert(top == a ? "A" : "B");
+    // The manifest at the top names the run the top shows, whatever step
+    // the kill came at (it switches with `latest`).
+    if (fs::exists(root / ".rtscalib-published")) {
+      const nlohmann::json manifest = nlohmann::json::parse(Read(root / ".rtscalib-published"));
+      EXPECT_EQ(manifest["run"], top) << "killed at step " << kill_at;
+    }
 
     OutputFolder next(root.string());
     ASSERT_EQ(next.earlier().size(), 2u);
@@ -464,6 +470,26 @@ TEST_F(OutputFolderTest, AFailedRunIsListedAsFailedWithItsReason) {
   const nlohmann::json history = HistoryJson(next);
   EXPECT_EQ(history[0]["status"], "failed");
   EXPECT_NE(HistoryText(history).find("failed"), std::string::npos);
+}
+
+// A run that fails when nothing can be written any more (a full disk; here
+// a file size limit of 0): its entry still says failed, through the status
+// written while there was room, never `running`.
+TEST_F(OutputFolderTest, ARunFailingOnAFullDiskIsListedAsFailed) {
+  {
+    OutputFolder out(root_.string());
+    const FileSizeLimit none(0);
+    out.MarkFailed("cannot write 'model.yaml': File too large");
+  }
+  const OutputFolder next(root_.string());
+  ASSERT_EQ(next.earlier().size(), 1u);
+  EXPECT_EQ(next.earlier()[0].state, RunState::kFailed);
+  EXPECT_NE(next.earlier()[0].reason.find("could not write why"), std::string::npos)
+      << next.earlier()[0].reason;
+  // A run that completes leaves no spare status behind.
+  OutputFolder ok(root_.string());
+  ok.MarkComplete();
+  EXPECT_FALSE(Exists(fs::path(ok.run_dir()) / "status.failed"));
 }
 
 TEST_F(OutputFolderTest, AnotherLiveProcessesEntryIsListedAsRunning) {

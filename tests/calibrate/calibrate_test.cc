@@ -230,6 +230,67 @@ TEST(Calibrate, DataMistakesAreRejectedBeforeAnyStep) {
   EXPECT_THAT(progress.steps, ::testing::IsEmpty());
 }
 
+// The start's failures name the file and where its rows are: the
+// extraction's (a zoom whose camera rows lie on one pixel line, so that no
+// camera tool can be extracted, with intrinsics or without) and the pixels'
+// (a zoom shown in one shot only).
+TEST(Calibrate, StartFailuresNameTheFileAndTheLines) {
+  SimulationOptions sim;
+  sim.truth = PaperTruth(1);
+  SimulatedData data = Simulate(sim);
+  std::vector<Record> records;
+  for (const Record& r : data.obs.records) {
+    if (r.tool == Tool::kCam && r.v != sim.truth.cams[0].intrinsics[3]) continue;
+    records.push_back(r);
+  }
+  for (size_t i = 0; i < records.size(); ++i) records[i].line = static_cast<int>(i) + 2;
+  data.obs.records = records;
+  data.obs.records_source = "records.csv";
+  int first_cam = 0;
+  for (const Record& r : records) {
+    if (r.tool == Tool::kCam) {
+      first_cam = r.line;
+      break;
+    }
+  }
+  try {
+    Calibrate(data.obs, ApiOptions(sim.truth));
+    FAIL() << "no ExtractionError";
+  } catch (const ExtractionError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("records.csv: cannot extract the camera tool of zoom 0"));
+    EXPECT_THAT(e.what(), HasSubstr("the first on line " + std::to_string(first_cam)));
+  }
+
+  SimulationOptions shots;
+  shots.truth = PaperTruth(1);
+  shots.plan.sweeps = false;
+  shots.targets = ZoomScene(shots.truth, 4, 5, 3.0);
+  SimulatedData pixels = Simulate(shots);
+  const std::string one = pixels.obs.pixels.front().shot;
+  std::vector<PixelObservation> kept;
+  for (const PixelObservation& p : pixels.obs.pixels) {
+    if (p.shot == one) kept.push_back(p);
+  }
+  for (PixelObservation& p : kept) {
+    p.line = 7;  // one photo: one line of shots.csv
+    p.X_known = false;
+  }
+  pixels.obs.pixels = kept;
+  pixels.obs.pixels_source = "pixels.csv";
+  pixels.obs.targets = shots.targets;
+  for (TagBoard& b : pixels.obs.targets.boards) b.pose_known = false;
+  // Camera-only, so that the pixels' own start (OpenCV per zoom) is what fails.
+  CalibrationOptions camera_only;
+  camera_only.model.kinematics = Kinematics::kNone;
+  camera_only.model.effects.Add(Effect::kRadialDistortion);
+  try {
+    Calibrate(pixels.obs, camera_only);
+    FAIL() << "no error for a zoom of one shot";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("pixels.csv: zoom 0 (pixels from line 7): 1 usable shot(s)"));
+  }
+}
+
 // Warnings of the screening start the notes.
 TEST(Calibrate, ScreeningWarningsAreNotes) {
   SimulationOptions sim;

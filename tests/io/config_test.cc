@@ -426,6 +426,24 @@ TEST(Config, SizeBoundsNameTheKey) {
             "fit.threads");
 }
 
+// A runaway file (a 10-million-element list under a mistyped key) is
+// refused by its size before yaml-cpp builds it (it would cost ~50 times
+// the file's size); an empty output folder would be the config's own.
+TEST(Config, HugeFileAndEmptyOutputAreRefusedByName) {
+  TempDir dir;
+  std::string big = std::string(kSimulateOnly) + "simulat: [";
+  big.reserve(5u << 20);
+  while (big.size() < (5u << 20)) big += "1234567, ";
+  big += "0]\n";
+  const InputError size = ConfigError(dir, big);
+  EXPECT_EQ(size.file, dir.Path("run.yaml"));
+  EXPECT_EQ(size.subject, "file size");
+  EXPECT_EQ(size.expected, "a config of at most 4 MiB");
+  const InputError output = ConfigError(dir, std::string(kSimulateOnly) + "output: \"\"\n");
+  EXPECT_EQ(output.key, "output");
+  EXPECT_EQ(output.line, 2);
+}
+
 TEST(Config, ScreenSection) {
   TempDir dir;
   const RunConfig c = LoadConfig(dir.Write(

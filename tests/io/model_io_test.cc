@@ -346,6 +346,17 @@ TEST(ModelIo, StructuralErrors) {
   // Sigmas present although the file says there are none.
   EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n["uncertainties"] = false; }).key,
             "base.sigma");
+  // A negative standard deviation would make every uncertainty that uses it
+  // wrong without a sign of it.
+  const InputError sigma = EditedModelError(
+      dir, [](YAML::Node& n) { n["cameras"][0]["intrinsics_sigma"]["fx"] = -5; });
+  EXPECT_EQ(sigma.key, "cameras[0].intrinsics_sigma.fx");
+  EXPECT_THAT(sigma.expected, HasSubstr("standard deviation >= 0"));
+  EXPECT_EQ(EditedModelError(dir, [](YAML::Node& n) { n["base"]["sigma"]["t"][1] = -1e-3; }).key,
+            "base.sigma.t[1]");
+  EXPECT_EQ(
+      EditedModelError(dir, [](YAML::Node& n) { n["effects"][0]["covariance"][1] = 1.0; }).key,
+      "effects[0].covariance");
 }
 
 }  // namespace

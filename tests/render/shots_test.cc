@@ -2,7 +2,10 @@
 #include "render/shots.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <filesystem>
 #include <fstream>
@@ -10,6 +13,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "libcalib/io/safe_write.h"
 #include "tests/render/render_fixture.h"
 
 namespace rtscalib::render {
@@ -196,6 +200,87 @@ TEST(ShotsTest, ShardsMergeIntoTheUnshardedOutput) {
     const cv::Mat y = cv::imread(all / (s.id + ".png"), cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(x.empty()) << s.id;
     EXPECT_EQ(cv::norm(x, y, cv::NORM_INF), 0.0) << s.id;  // rendering is deterministic
+  }
+}
+
+// Shots of two placements (SPEC 7.1): each sees its own scene, and
+// shots.csv gets a `placement` column; the exact tables follow the scene.
+TEST(ShotsTest, PlacementsSeeTheirOwnScene) {
+  EnsureDisplay();
+  const TargetScene near = SceneOf(FrontBoard(3, 4, 2.0));
+  const TargetScene far = SceneOf(FrontBoard(3, 4, 3.0));
+  std::vector<Shot> shots = MakeShots(near, 2);
+  shots[1].placement = "far";
+  shots[0].placement = "near";
+  TempDir dir("placements");
+  RenderShotsOptions options;
+  options.out_dir = dir.str();
+  RenderShots(PlacedScenes{{"near", near}, {"far", far}}, shots, options);
+  const std::vector<std::string> table = Lines(dir / "shots.csv");
+  ASSERT_EQ(table.size(), 3u);
+  EXPECT_EQ(table[0], "index,shot,face,zoom,phi,theta,image,placement");
+  EXPECT_EQ(table[1].substr(table[1].size() - 5), ",near");
+  EXPECT_EQ(table[2].substr(table[2].size() - 4), ",far");
+  // The far shot's exact corners are the far board's (1 m further away).
+  bool far_rows = false;
+  for (const std::string& line : Lines(dir / "exact.csv")) {
+    if (line.find(",s1,") == std::string::npos) continue;
+    far_rows = true;
+    std::stringstream cells(line);
+    std::string cell;
+    std::vector<std::string> v;
+    while (std::getline(cells, cell, ',')) v.push_back(cell);
+    const Eigen::Vector3d x(std::stod(v[7]), std::stod(v[8]), std::stod(v[9]));
+    bool on_far = false;
+    for (const TargetCorner& c : far.AllCorners()) on_far = on_far || (c.X - x).norm() < 1e-9;
+    EXPECT_TRUE(on_far) << line;
+  }
+  EXPECT_TRUE(far_rows);
+  shots[1].placement = "elsewhere";
+  EXPECT_THROW(RenderShots(PlacedScenes{{"near", near}}, shots, options), std::invalid_argument);
+}
+
+// A full disk (a file size limit makes writes fail the same way, even as
+// root): a WriteError naming the file that could not be written, from this
+// process and from the worker processes alike; never a half-written photo.
+TEST(ShotsTest, AFullDiskIsAWriteErrorNamingTheFile) {
+  EnsureDisplay();
+  const TargetScene scene = SceneOf(FrontBoard(3, 4, 2.0));
+  const std::vector<Shot> shots = MakeShots(scene, 3);
+  // How large the tables and the photos are, to put the limit between them.
+  std::uintmax_t tables = 0, smallest_photo = ~std::uintmax_t{0};
+  {
+    TempDir dir("sizes");
+    RenderShotsOptions options;
+    options.out_dir = dir.str();
+    RenderShots(scene, shots, options);
+    tables = std::max(fs::file_size(dir / "shots.csv"), fs::file_size(dir / "exact.csv"));
+    for (const Shot& s : shots) {
+      smallest_photo = std::min(smallest_photo, fs::file_size(dir / (s.id + ".png")));
+    }
+  }
+  ASSERT_LT(tables, smallest_photo) << "the test needs photos larger than the tables";
+  for (const int jobs : {1, 2}) {
+    TempDir dir("full" + std::to_string(jobs));
+    RenderShotsOptions options;
+    options.out_dir = dir.str();
+    options.jobs = jobs;
+    rlimit old{};
+    getrlimit(RLIMIT_FSIZE, &old);
+    const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit lim = old;
+    lim.rlim_cur = (tables + smallest_photo) / 2;  // the tables fit, no photo does
+    setrlimit(RLIMIT_FSIZE, &lim);
+    try {
+      RenderShots(scene, shots, options);
+      ADD_FAILURE() << "no WriteError with jobs " << jobs;
+    } catch (const WriteError& e) {
+      EXPECT_NE(e.path.find(dir.str()), std::string::npos) << e.what();
+      EXPECT_NE(e.path.find(".png"), std::string::npos) << e.what();
+    }
+    setrlimit(RLIMIT_FSIZE, &old);
+    std::signal(SIGXFSZ, old_handler);
+    for (const Shot& s : shots) EXPECT_FALSE(fs::exists(dir / (s.id + ".png"))) << s.id;
   }
 }
 

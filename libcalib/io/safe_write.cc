@@ -1,4 +1,4 @@
-#include "app/safe_write.h"
+#include "libcalib/io/safe_write.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -7,7 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace rtscalib::app {
+namespace rtscalib {
 namespace {
 
 std::string TmpPath(const std::string& path) { return path + ".tmp"; }
@@ -119,4 +119,4 @@ void SyncFolder(const std::string& folder) {
   if (const int err = fd.Close()) throw WriteError(folder, ErrnoText(err) + " (close)");
 }
 
-}  // namespace rtscalib::app
+}  // namespace rtscalib

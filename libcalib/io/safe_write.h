@@ -1,4 +1,4 @@
-// The one way app/ writes a file: the bytes go to `<path>.tmp`, every step is
+// The one way rtscalib writes a file (app/, render/ and io's own writers): the bytes go to `<path>.tmp`, every step is
 // checked (write, fsync, close), and only a complete file is renamed onto
 // `path`. A reader therefore sees either the old file or the whole new one,
 // never a file cut short by a full disk or a kill; a failure throws WriteError
@@ -11,7 +11,7 @@
 #include <string>
 #include <string_view>
 
-namespace rtscalib::app {
+namespace rtscalib {
 
 // A file could not be written: `path` is the file the caller asked for,
 // `reason` the OS's text (strerror) or the writer's own message.
@@ -46,4 +46,4 @@ void SyncFolder(const std::string& folder);
 // "<what>: <strerror(err)>" for messages.
 std::string ErrnoText(int err);
 
-}  // namespace rtscalib::app
+}  // namespace rtscalib
