@@ -140,8 +140,11 @@ TEST(OpenCvSamplePhotos, CameraOnlyCalibrationAgreesWithCalibrateCamera) {
     // The same problem solved twice: half of OpenCV's sigma (the issue's
     // bound); OpenCV's float image points alone limit it to ~1e-5 px.
     EXPECT_LT(std::abs(value - same.k[i]), 0.5 * same.sigma[i]) << names[i];
-    // Both sigmas are (J^T J)^-1 scaled by the residuals' variance; they
-    // differ in the degrees of freedom and in what else is free.
+    // Both sigmas are (J^T J)^-1 scaled by the residuals' variance, but
+    // OpenCV 4.6 (Debian's; calibration.cpp) divides the sum of squared
+    // residual norms by (points - parameters) where there are 2 x points
+    // coordinates: its variance is ~2x too large, its sigmas ~1.4x
+    // (measured 1.47x here; fixed in OpenCV 4.7 by pull request 22992).
     EXPECT_GT(sigma, 0.5 * same.sigma[i]) << names[i];
     EXPECT_LT(sigma, 2.0 * same.sigma[i]) << names[i];
   }
