@@ -52,7 +52,7 @@ void ExpectExactCorners(const cv::Mat& photo, const std::string& family, int id,
   const TagDetection& d = found[0];
   EXPECT_EQ(d.id, id) << what;
   EXPECT_EQ(d.family, family) << what;
-  EXPECT_TRUE(d.refined) << what;
+  EXPECT_EQ(d.refinement, CornerRefinement::kEdges) << what;
   for (int k = 0; k < 4; ++k) {
     g_max_error_px = std::max(g_max_error_px, (d.corners[k] - exact[k]).norm());
     EXPECT_LT((d.corners[k] - exact[k]).norm(), kCornerTolPx)

@@ -42,7 +42,7 @@ void Accumulate(const std::vector<TagDetection>& detections, const TargetScene& 
   const Rigid3 cam_from_ref = ref_from_cam.Inverse();
   for (const TagDetection& d : detections) {
     ASSERT_EQ(corners.count(d.id), 1u) << "unknown id " << d.id;
-    EXPECT_TRUE(d.refined) << "tag " << d.id;
+    EXPECT_EQ(d.refinement, detect::CornerRefinement::kEdges) << "tag " << d.id;
     for (int k = 0; k < 4; ++k) {
       const Eigen::Vector3d p = cam_from_ref * corners[d.id][k];
       double px[2];
