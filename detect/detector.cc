@@ -157,7 +157,9 @@ bool Intersect(const EdgeCurve& a, const EdgeCurve& b, Eigen::Vector2d* corner) 
 // Code bit size [px] along the shortest edge of a quad of `width_at_border` bits.
 double BitPixels(const std::array<Eigen::Vector2d, 4>& corners, int width_at_border) {
   double min_len = 1e300;
-  for (int k = 0; k < 4; ++k) min_len = std::min(min_len, (corners[(k + 1) % 4] - corners[k]).norm());
+  for (int k = 0; k < 4; ++k) {
+    min_len = std::min(min_len, (corners[(k + 1) % 4] - corners[k]).norm());
+  }
   return min_len / width_at_border;
 }
 
@@ -305,8 +307,9 @@ struct TagDetector::Impl {
       return;
     }
     if (BitPixels(d->apriltag_corners, f.width_at_border) < options.min_pattern_bit_pixels) return;
-    const PatternFitResult fit = FitTagPattern(img, f.Code(d->id), f.border_offset,
-                                               f.width_at_border, d->apriltag_corners, options.pattern);
+    const PatternFitResult fit =
+        FitTagPattern(img, f.Code(d->id), f.border_offset, f.width_at_border, d->apriltag_corners,
+                      options.pattern);
     if (!fit.converged) return;
     for (int k = 0; k < 4; ++k) {
       if ((fit.corners[k] - d->apriltag_corners[k]).norm() > options.max_refine_shift) return;

@@ -179,7 +179,9 @@ TEST(DetectorTest, NoiseSigmaIsEstimatedDespiteEdges) {
   // with 1 grey level of noise: the edges do not move the median.
   std::vector<PrintedTag> tags;
   for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 5; ++c) tags.push_back(PrintTag("tag36h11", 5 * r + c, 10.0 * c, 10.0 * r, 8));
+    for (int c = 0; c < 5; ++c) {
+      tags.push_back(PrintTag("tag36h11", 5 * r + c, 10.0 * c, 10.0 * r, 8));
+    }
   }
   const Eigen::Matrix3d h = MakeHomography(48, Eigen::Vector2d(320.3, 240.6), 9.0, 0.2);
   const cv::Mat coverage = RenderCoverage(tags, h, 640, 480);

@@ -259,8 +259,9 @@ TEST(DetectorTest, SmallTagsAtEveryZoom) {
     EXPECT_EQ(stats.mismatched, 0) << "zoom " << z;
     ASSERT_EQ(stats.expected, 4 * 48) << "zoom " << z << ": every tag wholly in the image";
     const double recall = static_cast<double>(stats.found) / stats.expected;
-    std::printf("zoom %zu (fx %.0f): %d of %d tags wholly in the image found and refined (%.1f %%)\n",
-                z, zooms[z].fx, stats.found, stats.expected, 100 * recall);
+    std::printf(
+        "zoom %zu (fx %.0f): %d of %d tags wholly in the image found and refined (%.1f %%)\n", z,
+        zooms[z].fx, stats.found, stats.expected, 100 * recall);
     EXPECT_GE(recall, 0.95) << "zoom " << z;
   }
   for (const SizeClass& c : classes) {
