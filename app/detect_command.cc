@@ -50,7 +50,7 @@ int RunDetect(const DetectArgs& args) {
 
   int tags = 0, corners = 0, unrefined = 0, not_on_boards = 0, duplicates = 0, empty = 0;
   double shift_sq = 0, shift_max = 0;
-  int refined_corners = 0;
+  int refined_corners = 0, pattern_refined = 0;
   std::printf("%-24s %11s %9s %8s %10s\n", "shot", "size", "tags", "corners", "shift_rms");
   for (size_t i = 0; i < shots.shots.size(); ++i) {
     const detect::PhotoDetection& p = result.photos[i];
@@ -68,12 +68,14 @@ int RunDetect(const DetectArgs& args) {
     shift_sq += p.shift_rms_px * p.shift_rms_px * p.refined_corners;
     shift_max = std::max(shift_max, p.shift_max_px);
     refined_corners += p.refined_corners;
+    pattern_refined += p.pattern_refined;
   }
   const int n = static_cast<int>(shots.shots.size());
   std::printf(
-      "detect: %d photos, %d tags, %d corners (%d refined); dropped: %d unrefined, %d not on a "
-      "board, %d duplicated; %d photos without tags\n",
-      n, tags, corners, refined_corners, unrefined, not_on_boards, duplicates, empty);
+      "detect: %d photos, %d tags, %d corners (%d refined; %d tags by the pattern fit of small "
+      "tags); dropped: %d unrefined, %d not on a board, %d duplicated; %d photos without tags\n",
+      n, tags, corners, refined_corners, pattern_refined, unrefined, not_on_boards, duplicates,
+      empty);
   std::printf("detect: refined vs libapriltag corners: RMS %.3f px, max %.3f px\n",
               refined_corners > 0 ? std::sqrt(shift_sq / refined_corners) : 0.0, shift_max);
   std::printf("detect: %.2f s, %.1f images/s with %d job(s)\n", result.seconds,

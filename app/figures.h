@@ -30,6 +30,7 @@ struct Figure {
   std::string title;
   std::string caption;
   cv::Mat image;  // BGR, 8 bit
+  std::vector<unsigned char> png;  // the image encoded once, when written (EncodePng)
 };
 
 // `history` = report.json's "history" array (earlier runs, oldest first).

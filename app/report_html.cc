@@ -74,8 +74,9 @@ figcaption { font-size: 13px; color: #555; max-width: 1000px; }
 )";
 
 std::string Img(const Figure& f) {
-  return "<figure><img alt=\"" + Esc(f.title) + "\" src=\"data:image/png;base64," +
-         Base64(EncodePng(f.image)) + "\"><figcaption>" + Esc(f.caption) +
+  const std::vector<unsigned char> png = f.png.empty() ? EncodePng(f.image) : f.png;
+  return "<figure><img alt=\"" + Esc(f.title) + "\" src=\"data:image/png;base64," + Base64(png) +
+         "\"><figcaption>" + Esc(f.caption) +
          "</figcaption></figure>\n";
 }
 
@@ -411,15 +412,16 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
 void WriteReportHtml(const RunConfig& config, const PipelineResult& r, const json& report,
                      const OutputFolder& out) {
   const json history = report.value("history", json::array());
-  const std::vector<Figure> figs = MakeFigures(r, history);
+  std::vector<Figure> figs = MakeFigures(r, history);
   const std::filesystem::path dir = std::filesystem::path(out.run_dir()) / "figures";
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw WriteError(dir.string(), ec.message() + " (creating the folder)");
-  for (const Figure& f : figs) {
-    const std::vector<unsigned char> png = EncodePng(f.image);
+  // Encoded once: the same bytes go to figures/ and into report.html.
+  for (Figure& f : figs) {
+    f.png = EncodePng(f.image);
     WriteFileAtomic((dir / f.name).string(),
-                    std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+                    std::string_view(reinterpret_cast<const char*>(f.png.data()), f.png.size()));
   }
   out.Write("report.html", ReportHtml(config, r, report, figs));
 }

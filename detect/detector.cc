@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <stdexcept>
+#include <vector>
 
 #include "detect/tag_family.h"
 
@@ -153,7 +154,44 @@ bool Intersect(const EdgeCurve& a, const EdgeCurve& b, Eigen::Vector2d* corner) 
   return corner->allFinite();
 }
 
+// Code bit size [px] along the shortest edge of a quad of `width_at_border` bits.
+double BitPixels(const std::array<Eigen::Vector2d, 4>& corners, int width_at_border) {
+  double min_len = 1e300;
+  for (int k = 0; k < 4; ++k) {
+    min_len = std::min(min_len, (corners[(k + 1) % 4] - corners[k]).norm());
+  }
+  return min_len / width_at_border;
+}
+
 }  // namespace
+
+double EstimateNoiseSigma(const cv::Mat& gray) {
+  if (gray.type() != CV_8UC1) throw std::invalid_argument("EstimateNoiseSigma: expected CV_8UC1");
+  // |L| <= 16 * 255; a histogram gives the median in one pass.
+  std::vector<int> histogram(16 * 255 + 1, 0);
+  int n = 0;
+  for (int y = 1; y + 1 < gray.rows; y += 2) {
+    const uint8_t* a = gray.ptr<uint8_t>(y - 1);
+    const uint8_t* b = gray.ptr<uint8_t>(y);
+    const uint8_t* c = gray.ptr<uint8_t>(y + 1);
+    for (int x = 1; x + 1 < gray.cols; x += 2) {
+      const int l = a[x - 1] - 2 * a[x] + a[x + 1] - 2 * b[x - 1] + 4 * b[x] - 2 * b[x + 1] +
+                    c[x - 1] - 2 * c[x] + c[x + 1];
+      ++histogram[std::abs(l)];
+      ++n;
+    }
+  }
+  if (n == 0) return 0.0;
+  // The median, interpolated within its bin (|L| = k stands for [k - 1/2,
+  // k + 1/2)): integer grey levels would otherwise quantise the estimate in
+  // steps of 1/4 sigma.
+  const double half = 0.5 * n;
+  double below = 0;
+  int k = 0;
+  while (below + histogram[k] < half) below += histogram[k++];
+  const double median = std::max(0.0, k - 0.5 + (half - below) / histogram[k]);
+  return median / (6.0 * 0.6745);
+}
 
 std::string DetectorOptions::Check() const {
   if (families.empty()) return "families: expected at least one tag family";
@@ -171,15 +209,17 @@ std::string DetectorOptions::Check() const {
   }
   if (!(min_bit_pixels >= 1.5)) return "min_bit_pixels: expected >= 1.5";
   if (!(max_refine_shift > 0)) return "max_refine_shift: expected > 0";
+  if (!(min_pattern_bit_pixels >= 1.0)) return "min_pattern_bit_pixels: expected >= 1";
+  if (const std::string msg = pattern.Check(); !msg.empty()) return "pattern." + msg;
+  if (!(segmentation_noise_multiple >= 0)) return "segmentation_noise_multiple: expected >= 0";
+  if (!(max_segmentation_contrast >= 5)) return "max_segmentation_contrast: expected >= 5";
   return "";
 }
 
 bool RefineTagCorners(const cv::Mat& gray, int width_at_border, const DetectorOptions& options,
                       std::array<Eigen::Vector2d, 4>* corners) {
   std::array<Eigen::Vector2d, 4> c = *corners;
-  double min_len = 1e9;
-  for (int k = 0; k < 4; ++k) min_len = std::min(min_len, (c[(k + 1) % 4] - c[k]).norm());
-  const double bit = min_len / width_at_border;
+  const double bit = BitPixels(c, width_at_border);
   if (bit < options.min_bit_pixels) return false;
   // The strips must stay on the two bits either side of the edge (the next
   // bit edges are one bit away), less rounding to whole pixels, a pixel's own
@@ -228,11 +268,55 @@ bool RefineTagCorners(const cv::Mat& gray, int width_at_border, const DetectorOp
   return true;
 }
 
+const char* CornerRefinementName(CornerRefinement refinement) {
+  switch (refinement) {
+    case CornerRefinement::kNone:
+      return "none";
+    case CornerRefinement::kEdges:
+      return "edges";
+    case CornerRefinement::kPattern:
+      return "pattern";
+    case CornerRefinement::kSaddle:
+      return "saddle";
+  }
+  return "?";
+}
+
 struct TagDetector::Impl {
+  struct Family {
+    TagFamilyPtr family;
+    int width_at_border = 0, border_offset = 0;
+    std::map<int, cv::Mat> codes;  // code images by id, made on first use
+
+    const cv::Mat& Code(int id) {
+      auto it = codes.find(id);
+      if (it == codes.end()) it = codes.emplace(id, TagCodeImage(family.get(), id)).first;
+      return it->second;
+    }
+  };
   DetectorOptions options;
-  std::vector<TagFamilyPtr> families;
-  std::map<std::string, int> width_at_border;
+  std::map<std::string, Family> families;
   apriltag_detector_t* detector = nullptr;
+
+  // Refines d's corners in place: edges when the bits are big enough and the
+  // edges hold, else the whole pattern; sets d->refinement.
+  void Refine(const cv::Mat& img, TagDetection* d) {
+    Family& f = families.at(d->family);
+    if (RefineTagCorners(img, f.width_at_border, options, &d->corners)) {
+      d->refinement = CornerRefinement::kEdges;
+      return;
+    }
+    if (BitPixels(d->apriltag_corners, f.width_at_border) < options.min_pattern_bit_pixels) return;
+    const PatternFitResult fit =
+        FitTagPattern(img, f.Code(d->id), f.border_offset, f.width_at_border, d->apriltag_corners,
+                      options.pattern);
+    if (!fit.converged) return;
+    for (int k = 0; k < 4; ++k) {
+      if ((fit.corners[k] - d->apriltag_corners[k]).norm() > options.max_refine_shift) return;
+    }
+    d->corners = fit.corners;
+    d->refinement = CornerRefinement::kPattern;
+  }
 
   ~Impl() {
     if (detector != nullptr) apriltag_detector_destroy(detector);
@@ -252,10 +336,13 @@ TagDetector::TagDetector(const DetectorOptions& options) : impl_(std::make_uniqu
   td->refine_edges = true;
   td->decode_sharpening = options.decode_sharpening;
   for (const std::string& name : options.families) {
-    impl_->families.push_back(CreateTagFamily(name));
-    apriltag_detector_add_family_bits(td, impl_->families.back().get(),
-                                      std::max(2, options.max_hamming));
-    impl_->width_at_border[name] = impl_->families.back()->width_at_border;
+    Impl::Family& f = impl_->families[name];
+    if (f.family) continue;  // listed twice
+    f.family = CreateTagFamily(name);
+    const TagFamilyInfo info = GetTagFamilyInfo(name);
+    f.width_at_border = info.width_at_border;
+    f.border_offset = info.border_offset();
+    apriltag_detector_add_family_bits(td, f.family.get(), std::max(2, options.max_hamming));
   }
 }
 
@@ -268,6 +355,10 @@ std::vector<TagDetection> TagDetector::Detect(const cv::Mat& gray) {
     throw std::invalid_argument("TagDetector::Detect: expected a CV_8UC1 image");
   cv::Mat img = gray.isContinuous() ? gray : gray.clone();
   image_u8_t im{img.cols, img.rows, static_cast<int32_t>(img.step[0]), img.data};
+  const double contrast =
+      std::clamp(impl_->options.segmentation_noise_multiple * EstimateNoiseSigma(img), 5.0,
+                 impl_->options.max_segmentation_contrast);
+  impl_->detector->qtp.min_white_black_diff = static_cast<int>(std::lround(contrast));
   zarray_t* found = apriltag_detector_detect(impl_->detector, &im);
   std::vector<TagDetection> out;
   out.reserve(zarray_size(found));
@@ -284,10 +375,7 @@ std::vector<TagDetection> TagDetector::Detect(const cv::Mat& gray) {
     for (int k = 0; k < 4; ++k)
       d.apriltag_corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
     d.corners = d.apriltag_corners;
-    if (impl_->options.refine_corners) {
-      d.refined =
-          RefineTagCorners(img, impl_->width_at_border[d.family], impl_->options, &d.corners);
-    }
+    if (impl_->options.refine_corners) impl_->Refine(img, &d);
     out.push_back(d);
   }
   apriltag_detections_destroy(found);

@@ -1,7 +1,11 @@
 // AprilTag detection with sub-pixel corner refinement.
 //
 // libapriltag (quad_decimate 1, refine_edges on) finds and decodes the tags;
-// its corners then seed our own refinement of the four quad edges:
+// its corners then seed one of two refinements. Tags with code bits of at
+// least `min_bit_pixels` (2.5 px) get our refinement of the four quad edges
+// (below); tags too small for it, or whose edges fail, get the fit of their
+// whole decoded pattern (tag_pattern_fit.h), down to bits of
+// `min_pattern_bit_pixels`. The edge refinement:
 //   * along each edge, away from the corners, the intensity profile across the
 //     edge is sampled (bilinear) and the edge point is where it crosses the
 //     mean of the two plateau levels on either side. For any blur that is
@@ -23,6 +27,11 @@
 // (tests/render/detector_test.cc). Pixel convention: OpenCV's, (0, 0) is the
 // centre of the top-left pixel (libapriltag's own corners are shifted by half a
 // pixel; only our refined corners are returned when refinement succeeds).
+//
+// Measured (tests/render/detector_test.cc, SmallTagsAtEveryZoom, and
+// docs/rendering.md): edges 0.01-0.02 px RMS from 2.5 px per bit up;
+// the pattern fit 0.02-0.03 px RMS at 1.5-2.5 px per bit on our renders, where
+// libapriltag's own corners are 0.14-0.19 px off.
 #pragma once
 
 #include <Eigen/Core>
@@ -33,6 +42,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "detect/tag_pattern_fit.h"
+
 namespace rtscalib::detect {
 
 struct DetectorOptions {
@@ -41,15 +52,43 @@ struct DetectorOptions {
   float quad_sigma = 0.0f;  // Gaussian blur before segmentation [px]
   double decode_sharpening = 0.25;
   int max_hamming = 1;         // detections with more corrected bits are dropped
-  bool refine_corners = true;  // our edge refinement (else libapriltag's corners)
-  // Refinement needs a code bit of at least this many pixels (the profiles
-  // must fit inside one bit on either side of the edge).
+  bool refine_corners = true;  // our refinements (else libapriltag's corners)
+  // The edge refinement needs a code bit of at least this many pixels (the
+  // profiles must fit inside one bit on either side of the edge).
   double min_bit_pixels = 2.5;
+  // Tags the edge refinement cannot refine get the pattern fit down to code
+  // bits of this many pixels; below, libapriltag's corners stay (unrefined).
+  double min_pattern_bit_pixels = 1.5;
+  PatternFitOptions pattern;
   // A refined corner further than this from libapriltag's is a failure [px].
   double max_refine_shift = 2.0;
+  // libapriltag's segmentation ignores every region whose local contrast
+  // (max - min over its 12 x 12 px neighbourhood) is below a threshold; at its
+  // default of 5 grey levels, sensor noise alone passes it in flat areas (144
+  // samples of Gaussian noise span more than 5 sigma 2 times in 3) and fills
+  // the image with noise blobs that cost 5x the time of the tags. The
+  // threshold is this multiple of the image's own noise sigma
+  // (EstimateNoiseSigma), at least 5 (libapriltag's default) and at most
+  // `max_segmentation_contrast`. Ten sigma: the span of 144 Gaussian samples
+  // exceeds 9 sigma with probability < 1e-5, and a tag whose ink and paper
+  // differ by less than 10 sigma has no sub-pixel corners to give.
+  double segmentation_noise_multiple = 10.0;
+  // Texture inflates the noise estimate (EstimateNoiseSigma); any tag with
+  // more contrast than this [grey levels] stays detectable however textured
+  // the scene.
+  double max_segmentation_contrast = 40.0;
 
   std::string Check() const;  // empty when valid
 };
+
+// Where a detection's corners come from.
+enum class CornerRefinement {
+  kNone,     // libapriltag's corners (refinement off, too small, or failed)
+  kEdges,    // the refinement of the quad edges (RefineTagCorners)
+  kPattern,  // the fit of the whole decoded pattern (FitTagPattern)
+  kSaddle,   // a ChArUco or chessboard inner corner (OpenCV's cornerSubPix, point_boards.h)
+};
+const char* CornerRefinementName(CornerRefinement refinement);
 
 struct TagDetection {
   std::string family;
@@ -58,7 +97,9 @@ struct TagDetection {
   double decision_margin = 0;
   std::array<Eigen::Vector2d, 4> corners;           // TargetCorner order, OpenCV pixels
   std::array<Eigen::Vector2d, 4> apriltag_corners;  // libapriltag's, same order, +0.5 shift undone
-  bool refined = false;                             // corners are the sub-pixel refined ones
+  CornerRefinement refinement = CornerRefinement::kNone;
+
+  bool refined() const { return refinement != CornerRefinement::kNone; }
 };
 
 class TagDetector {
@@ -79,6 +120,14 @@ class TagDetector {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// The sigma of the image's noise [grey levels], robust to edges: the median
+// of |L| over the image, with L the 3 x 3 kernel [1 -2 1; -2 4 -2; 1 -2 1]
+// (zero on any plane of intensity, 6 sigma on white noise: the square root of
+// the sum of its squared weights), sampled on every second row and column.
+// For Gaussian noise the median of |L| is 0.6745 of its sigma. The few pixels
+// on edges do not move a median; a textured scene does (it counts as noise).
+double EstimateNoiseSigma(const cv::Mat& gray);
 
 // The refinement on its own: refines `corners` (TargetCorner order, OpenCV
 // pixels, roughly right to ~1 px) of a tag whose quad is `width_at_border`

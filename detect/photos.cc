@@ -59,12 +59,13 @@ void KeepBoardTags(const std::vector<TagDetection>& detections, const TargetScen
       }
       continue;
     }
-    if (!d->refined) {
+    if (!d->refined()) {
       ++photo->unrefined;
       if (!keep_unrefined) continue;
     }
-    photo->tags.push_back({board, d->id, d->corners, d->refined});
-    if (d->refined) {
+    photo->tags.push_back({board, d->id, d->corners, d->refinement});
+    if (d->refinement == CornerRefinement::kPattern) ++photo->pattern_refined;
+    if (d->refined()) {
       for (int k = 0; k < 4; ++k) {
         const double shift = (d->corners[k] - d->apriltag_corners[k]).norm();
         sum_sq += shift * shift;
@@ -90,7 +91,8 @@ void KeepPointBoards(const cv::Mat& gray, const TargetScene& targets, int face,
     if (found.misoriented) ++photo->misoriented_boards;
     if (found.duplicated) ++photo->duplicate_boards;
     for (const auto& [k, uv] : found.corners) {
-      photo->tags.push_back({static_cast<int>(b), board.first_id + k, {uv, uv, uv, uv}, true});
+      photo->tags.push_back({static_cast<int>(b), board.first_id + k, {uv, uv, uv, uv},
+                             CornerRefinement::kSaddle});
       added = true;
     }
   }
@@ -329,7 +331,8 @@ void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
                            const PhotoDetectionResult& result) {
   CsvWriter w(path, {"line", "shot", "image", "face", "zoom", "width", "height", "channels",
                      "bit_depth", "tags_found", "tags_of_boards", "corners", "refined_corners",
-                     "unrefined", "not_on_boards", "duplicates", "shift_rms_px", "shift_max_px"});
+                     "unrefined", "not_on_boards", "duplicates", "shift_rms_px", "shift_max_px",
+                     "pattern_refined"});
   for (size_t i = 0; i < shots.shots.size(); ++i) {
     const PhotoShot& s = shots.shots[i];
     const PhotoDetection& p = result.photos[i];
@@ -341,7 +344,8 @@ void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
            std::to_string(p.bit_depth), std::to_string(p.tags.size()),
            std::to_string(p.tags_of_boards), std::to_string(p.corners),
            std::to_string(p.refined_corners), std::to_string(p.unrefined),
-           std::to_string(p.not_on_boards), std::to_string(p.duplicates), rms, max});
+           std::to_string(p.not_on_boards), std::to_string(p.duplicates), rms, max,
+           std::to_string(p.pattern_refined)});
   }
   w.Close();
 }

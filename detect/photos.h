@@ -6,9 +6,11 @@
 // id belong to one of the boards: what is kept never depends on a model or on
 // where a tag "should" be, so partial boards, occlusions and any pose are
 // fine. Per photo, also:
-//   * a detection whose sub-pixel refinement failed (too small, blurred,
-//     cut by the image edge) is dropped and counted, unless keep_unrefined
-//     (libapriltag's own corners are ~0.1-0.2 px off);
+//   * a detection that neither of the detector's refinements could refine
+//     (edges, or the whole-pattern fit of small tags; detector.h: bits under
+//     1.5 px, heavy blur, a quad cut by the image edge) is dropped and
+//     counted, unless keep_unrefined (libapriltag's own corners are ~0.1-0.2
+//     px off);
 //   * a tag detected twice in one photo (two printed copies) is dropped
 //     entirely and counted: neither copy can be told from the other;
 //   * the detector's own check: the shift between our refined corners and
@@ -58,7 +60,7 @@ struct DetectedTag {
   // (ChArUco, chessboard: TagBoard::CornersPerTarget() == 1) is uv[0], the
   // others repeat it.
   std::array<Eigen::Vector2d, 4> uv;
-  bool refined = true;
+  CornerRefinement refinement = CornerRefinement::kEdges;
 };
 
 struct PhotoDetection {
@@ -68,6 +70,7 @@ struct PhotoDetection {
   std::vector<DetectedTag> tags;    // kept, by id
   int corners = 0;                  // of the kept targets: 4 per tag, 1 per inner corner
   int unrefined = 0;      // board tags whose refinement failed (dropped unless keep_unrefined)
+  int pattern_refined = 0;  // kept tags whose corners come from the pattern fit (detector.h)
   int not_on_boards = 0;  // detections of families/ids of no board (dropped)
   int duplicates = 0;     // detections of a tag seen twice in this photo (dropped)
   std::vector<int> duplicate_ids;  // those tags' ids
@@ -116,7 +119,7 @@ std::map<int, ImageSize> ImageSizesOf(const ShotsFile& shots, const PhotoDetecti
 
 // One row per photo: line, shot, image, face, zoom, width, height, channels,
 // bit_depth, tags_found, tags_of_boards, corners, refined_corners, unrefined,
-// not_on_boards, duplicates, shift_rms_px, shift_max_px.
+// not_on_boards, duplicates, shift_rms_px, shift_max_px, pattern_refined.
 void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
                            const PhotoDetectionResult& result);
 

@@ -554,7 +554,7 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
             d.id = b.first_id + k;
             d.corners = {uv, uv, uv, uv};
             d.apriltag_corners = d.corners;
-            d.refined = true;
+            d.refinement = detect::CornerRefinement::kSaddle;
             dets.push_back(d);
           }
         }

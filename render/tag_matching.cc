@@ -271,7 +271,7 @@ std::vector<MatchedTag> MatchDetections(const std::vector<detect::TagDetection>&
       continue;
     }
     seen[it->second] = true;
-    if (options.require_refined && !det.refined) {
+    if (options.require_refined && !det.refined()) {
       ++stats->unrefined;
       continue;
     }

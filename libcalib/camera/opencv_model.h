@@ -130,9 +130,9 @@ double MaxTrustedDistortedRadius(const double* dist);
 //   - lies inside the trusted region: r < MaxTrustedRadius(dist), and
 //   - has a positive Jacobian determinant of the full distortion map (so the
 //     tangential and thin-prism terms have not folded the image either).
-// Works with ceres::Jet: the iteration runs in double, then one full Newton
-// step in T at the converged point gives exactly the implicit-function
-// derivatives -J^-1 d(distortion)/d(params).
+// Works with ceres::Jet: the iteration runs in double, then one Newton step
+// in T at the converged point (J in double, f in T) gives exactly the
+// implicit-function derivatives -J^-1 d(distortion)/d(params).
 template <typename T>
 bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T* yn,
                     int max_iterations = 20);
@@ -227,16 +227,24 @@ bool UndistortPixel(const T* intrinsics, const T* dist, const T* pixel, T* xn, T
                                  &x0, &y0, max_iterations)) {
     return false;
   }
-  // One full Newton step in T from the converged point: the value moves by
+  // One Newton step in T from the converged point: the value moves by
   // rounding only, and for a ceres::Jet the derivative part becomes
   // -J^-1 d f / d(params), exactly the implicit-function derivative (the
   // iteration itself runs in double, which is what makes Jets cheap here).
+  // Only f = distort(x, y) - (xd, yd) needs T: J's own derivatives would
+  // enter multiplied by f, which vanishes at the solution (1e-12), so J is
+  // taken in double.
   const T x(x0), y(y0);
-  T f[2], J[4];
-  internal::DistortionResidual(dist, x, y, xd, yd, f, J);
-  const T jdet = J[0] * J[3] - J[1] * J[2];
-  *xn = x - (f[0] * J[3] - J[1] * f[1]) / jdet;
-  *yn = y - (J[0] * f[1] - f[0] * J[2]) / jdet;
+  T fx, fy;
+  DistortNormalized(dist, x, y, &fx, &fy);
+  fx -= xd;
+  fy -= yd;
+  double f_value[2], J[4];
+  internal::DistortionResidual(dist_values, x0, y0, internal::ScalarPart(xd),
+                               internal::ScalarPart(yd), f_value, J);
+  const double jdet = J[0] * J[3] - J[1] * J[2];
+  *xn = x - (fx * J[3] - J[1] * fy) / jdet;
+  *yn = y - (J[0] * fy - fx * J[2]) / jdet;
   return true;
 }
 

@@ -73,49 +73,6 @@ struct BlockLayout {
 // Layout for EDM observations (zoom = -1) or camera observations at `zoom`.
 BlockLayout LayoutFor(InstrumentModel* model, int zoom);
 
-// Records of one pointing and one tool (the EDM, or the camera at one zoom).
-struct RecordGroupResidual {
-  struct Row {
-    double u = 0, v = 0, d = 0;
-    Eigen::Vector3d x;
-    double inv_sigma = 1;
-    int point = -1;  // >= 0: x is layout.points[point]'s block (x above unused)
-  };
-  BlockLayout layout;
-  bool edm = true;
-  double phi = 0, theta = 0;
-  std::vector<Row> rows;
-
-  template <typename T>
-  bool operator()(T const* const* p, T* r) const {
-    const ModelView<T> view = layout.View(p);
-    const RigidT<T> ref_from_tool =
-        RefFromFlange(view, T(phi), T(theta)) * PoseFromBlocks(p[layout.tool_q], p[layout.tool_t]);
-    for (size_t k = 0; k < rows.size(); ++k) {
-      const Row& row = rows[k];
-      Vec3<T> local;
-      if (edm) {
-        local = Vec3<T>(T(0), T(0), TrueDistance(view, T(row.d)));  // Klug Eq. 76
-      } else {
-        const T pixel[2] = {T(row.u), T(row.v)};
-        T ray[3];
-        if (!PixelToRay(p[layout.intrinsics], p[layout.distortion], pixel, ray)) {
-          return false;
-        }
-        local = Vec3<T>(ray[0], ray[1], ray[2]) * T(row.d);  // SPEC 2: ray LENGTH d
-      }
-      const Vec3<T> calc = ref_from_tool * local;
-      if (row.point >= 0) {
-        const T* x = p[layout.points[row.point]];
-        for (int i = 0; i < 3; ++i) r[3 * k + i] = (calc[i] - x[i]) * T(row.inv_sigma);
-      } else {
-        for (int i = 0; i < 3; ++i) r[3 * k + i] = (calc[i] - T(row.x[i])) * T(row.inv_sigma);
-      }
-    }
-    return true;
-  }
-};
-
 namespace internal {
 
 // Is T a ceres::Jet (the autodiff pass) or a plain double?
@@ -165,13 +122,129 @@ int SeedSlot(const ceres::Jet<double, N>& j) {
   return slot;
 }
 
+// The intrinsics and distortion of the caller's wide jets (width N) as
+// variables first .. first + 17 of a narrow local jet type J, and back: a
+// value computed in J carries its derivatives with respect to them, and
+// Chain() turns those into the caller's derivatives,
+//   d out = sum_i (d value / d param_i) d param_i.
+// Parameters are seeded unit vectors (one slot each) or zero, so the sum is
+// a scatter, except for a parameter seeded otherwise (slot -2).
+template <typename J, int N>
+struct LocalCamera {
+  J intrinsics[kNumIntrinsics], dist[kNumDistortion];
+  const ceres::Jet<double, N>* wide_intrinsics;
+  const ceres::Jet<double, N>* wide_dist;
+  int first;
+  int slot[kNumIntrinsics + kNumDistortion];
+
+  LocalCamera(const ceres::Jet<double, N>* intrinsics_in, const ceres::Jet<double, N>* dist_in,
+              int first_variable)
+      : wide_intrinsics(intrinsics_in), wide_dist(dist_in), first(first_variable) {
+    for (int i = 0; i < kNumIntrinsics; ++i) {
+      intrinsics[i] = J(intrinsics_in[i].a, first + i);
+      slot[i] = SeedSlot<N>(intrinsics_in[i]);
+    }
+    for (int i = 0; i < kNumDistortion; ++i) {
+      dist[i] = J(dist_in[i].a, first + kNumIntrinsics + i);
+      slot[kNumIntrinsics + i] = SeedSlot<N>(dist_in[i]);
+    }
+  }
+
+  // Adds the part of `local`'s derivative that runs through the intrinsics
+  // and distortion to `out`.
+  void Chain(const J& local, ceres::Jet<double, N>* out) const {
+    for (int i = 0; i < kNumIntrinsics + kNumDistortion; ++i) {
+      const double d = local.v[first + i];
+      if (slot[i] >= 0) {
+        out->v[slot[i]] += d;
+      } else if (slot[i] == -2) {
+        out->v += d * (i < kNumIntrinsics ? wide_intrinsics[i].v : wide_dist[i - kNumIntrinsics].v);
+      }
+    }
+  }
+};
+
+// The back-projection's own variables: intrinsics (4) and distortion (14).
+// A camera record's ray is computed in these 18-wide jets (undistortion
+// included) and chained onto the caller's wide jets (RecordGroupResidual).
+constexpr int kRayVars = kNumIntrinsics + kNumDistortion;
+using RayJet = ceres::Jet<double, kRayVars>;
+
 }  // namespace internal
+
+// Records of one pointing and one tool (the EDM, or the camera at one zoom).
+struct RecordGroupResidual {
+  struct Row {
+    double u = 0, v = 0, d = 0;
+    Eigen::Vector3d x;
+    double inv_sigma = 1;
+    int point = -1;  // >= 0: x is layout.points[point]'s block (x above unused)
+  };
+  BlockLayout layout;
+  bool edm = true;
+  double phi = 0, theta = 0;
+  std::vector<Row> rows;
+
+  // The camera-frame unit ray of a camera row's pixel. With jets, the
+  // undistortion (an iteration and an implicit-function step,
+  // opencv_model.h) runs in the 18-wide local jets of the intrinsics and
+  // distortion, and only the ray is chained onto the caller's wide jets: the
+  // same values, at less than half the cost of undistorting in the wide
+  // jets.
+  template <typename T>
+  bool Ray(T const* const* p, const Row& row, T* ray) const {
+    const T* intrinsics = p[layout.intrinsics];
+    const T* dist = p[layout.distortion];
+    if constexpr (!internal::IsJet<T>::value) {
+      const T pixel[2] = {row.u, row.v};
+      return PixelToRay(intrinsics, dist, pixel, ray);
+    } else {
+      using internal::RayJet;
+      const internal::LocalCamera<RayJet, internal::IsJet<T>::kSize> cam(intrinsics, dist, 0);
+      const RayJet pixel[2] = {RayJet(row.u), RayJet(row.v)};
+      RayJet local[3];
+      if (!PixelToRay(cam.intrinsics, cam.dist, pixel, local)) return false;
+      for (int c = 0; c < 3; ++c) {
+        ray[c] = T(local[c].a);
+        cam.Chain(local[c], &ray[c]);
+      }
+      return true;
+    }
+  }
+
+  template <typename T>
+  bool operator()(T const* const* p, T* r) const {
+    const ModelView<T> view = layout.View(p);
+    const RigidT<T> ref_from_tool =
+        RefFromFlange(view, T(phi), T(theta)) * PoseFromBlocks(p[layout.tool_q], p[layout.tool_t]);
+    for (size_t k = 0; k < rows.size(); ++k) {
+      const Row& row = rows[k];
+      Vec3<T> local;
+      if (edm) {
+        local = Vec3<T>(T(0), T(0), TrueDistance(view, T(row.d)));  // Klug Eq. 76
+      } else {
+        T ray[3];
+        if (!Ray(p, row, ray)) return false;
+        local = Vec3<T>(ray[0], ray[1], ray[2]) * T(row.d);  // SPEC 2: ray LENGTH d
+      }
+      const Vec3<T> calc = ref_from_tool * local;
+      if (row.point >= 0) {
+        const T* x = p[layout.points[row.point]];
+        for (int i = 0; i < 3; ++i) r[3 * k + i] = (calc[i] - x[i]) * T(row.inv_sigma);
+      } else {
+        for (int i = 0; i < 3; ++i) r[3 * k + i] = (calc[i] - T(row.x[i])) * T(row.inv_sigma);
+      }
+    }
+    return true;
+  }
+};
 
 // Image observations of one shot (one pointing, one zoom).
 //
 // Speed (docs/refinement.md): the chain ref_from_cam is evaluated once per
-// shot in the caller's jets (width ~40). Per point, only x_cam = cam_from_ref
-// * X is formed in those wide jets; the projection (distortion, tilt,
+// shot in the caller's jets (width ~40), and so is cam_from_board for each
+// board the shot sees. Per point, only x_cam = cam_from_frame * X (X a plain
+// constant) is formed in those wide jets; the projection (distortion, tilt,
 // intrinsics) runs in 21-wide local jets over (x_cam, intrinsics,
 // distortion), and its 2 x 21 Jacobian is chained onto the wide jets:
 //   d pixel = J_pixel_wrt_xcam d x_cam + J_pixel_wrt_intrinsics d intrinsics
@@ -190,28 +263,46 @@ struct ShotResidual {
   double inv_sigma = 1;
   std::vector<Point> points;
 
-  // The reference-frame position of point k (`boards` = the boards' poses).
+  // cam_from_frame * x for a constant point x: products of the caller's
+  // jets with plain numbers only.
   template <typename T>
-  Vec3<T> PointInRef(const std::vector<RigidT<T>>& boards, size_t k) const {
-    if (points[k].board < 0) return points[k].X.cast<T>();
-    return boards[points[k].board] * Vec3<T>(points[k].X.cast<T>());
+  static Vec3<T> Apply(const RigidT<T>& cam_from_frame, const Eigen::Vector3d& x) {
+    Vec3<T> out;
+    for (int i = 0; i < 3; ++i) {
+      out[i] = cam_from_frame.R(i, 0) * x[0] + cam_from_frame.R(i, 1) * x[1] +
+               cam_from_frame.R(i, 2) * x[2] + cam_from_frame.t[i];
+    }
+    return out;
   }
 
   template <typename T>
   bool operator()(T const* const* p, T* r) const {
-    std::vector<RigidT<T>> boards;
-    for (const auto& b : layout.boards) boards.push_back(PoseFromBlocks(p[b.first], p[b.second]));
     const ModelView<T> view = layout.View(p);
     const RigidT<T> ref_from_cam =
         RefFromFlange(view, T(phi), T(theta)) * PoseFromBlocks(p[layout.tool_q], p[layout.tool_t]);
     const Mat3<T> cam_from_ref_R = ref_from_cam.R.transpose();
+    // cam_from_frame of every frame the points are given in, once per shot:
+    // each board's (slot b: cam_from_ref * ref_from_board) and, last, the
+    // reference frame's. A point then costs one 3 x 3 product with its
+    // constant coordinates, not two rotations in the caller's wide jets.
+    std::vector<RigidT<T>> cam_from_frame;
+    cam_from_frame.reserve(layout.boards.size() + 1);
+    for (const auto& b : layout.boards) {
+      const RigidT<T> ref_from_board = PoseFromBlocks(p[b.first], p[b.second]);
+      cam_from_frame.push_back({cam_from_ref_R * ref_from_board.R,
+                                cam_from_ref_R * (ref_from_board.t - ref_from_cam.t)});
+    }
+    cam_from_frame.push_back({cam_from_ref_R, -(cam_from_ref_R * ref_from_cam.t)});
+    const auto frame_of = [&](size_t k) -> const RigidT<T>& {
+      return cam_from_frame[points[k].board < 0 ? layout.boards.size() : points[k].board];
+    };
     const T* intrinsics = p[layout.intrinsics];
     const T* dist = p[layout.distortion];
     if constexpr (!internal::IsJet<T>::value) {
       T m[9];
       TiltMatrix(dist[kTauX], dist[kTauY], m);
       for (size_t k = 0; k < points.size(); ++k) {
-        const Vec3<T> x_cam = cam_from_ref_R * (PointInRef(boards, k) - ref_from_cam.t);
+        const Vec3<T> x_cam = Apply(frame_of(k), points[k].X);
         T pixel[2];
         if (!internal::ProjectWithTilt(intrinsics, dist, m, x_cam.data(), pixel)) {
           return false;  // behind the camera: the solver must reject the step
@@ -222,40 +313,23 @@ struct ShotResidual {
       return true;
     } else {
       using internal::LocalJet;
-      constexpr int kN = internal::IsJet<T>::kSize;
-      // Local jets of intrinsics and distortion, and where their wide
-      // derivatives live.
-      LocalJet li[kNumIntrinsics], ld[kNumDistortion];
-      int slot[kNumIntrinsics + kNumDistortion];
-      for (int i = 0; i < kNumIntrinsics; ++i) {
-        li[i] = LocalJet(intrinsics[i].a, 3 + i);
-        slot[i] = internal::SeedSlot<kN>(intrinsics[i]);
-      }
-      for (int i = 0; i < kNumDistortion; ++i) {
-        ld[i] = LocalJet(dist[i].a, 3 + kNumIntrinsics + i);
-        slot[kNumIntrinsics + i] = internal::SeedSlot<kN>(dist[i]);
-      }
+      // Local jets of intrinsics and distortion (variables 3..20, after the
+      // camera point).
+      const internal::LocalCamera<LocalJet, internal::IsJet<T>::kSize> cam(intrinsics, dist, 3);
       LocalJet m[9];
-      TiltMatrix(ld[kTauX], ld[kTauY], m);
+      TiltMatrix(cam.dist[kTauX], cam.dist[kTauY], m);
       for (size_t k = 0; k < points.size(); ++k) {
-        const Vec3<T> x_cam = cam_from_ref_R * (PointInRef(boards, k) - ref_from_cam.t);
+        const Vec3<T> x_cam = Apply(frame_of(k), points[k].X);
         const LocalJet lx[3] = {LocalJet(x_cam[0].a, 0), LocalJet(x_cam[1].a, 1),
                                 LocalJet(x_cam[2].a, 2)};
         LocalJet pixel[2];
-        if (!internal::ProjectWithTilt(li, ld, m, lx, pixel)) return false;
+        if (!internal::ProjectWithTilt(cam.intrinsics, cam.dist, m, lx, pixel)) return false;
         for (int c = 0; c < 2; ++c) {
           T out;
           out.a = pixel[c].a;
           out.v =
               pixel[c].v[0] * x_cam[0].v + pixel[c].v[1] * x_cam[1].v + pixel[c].v[2] * x_cam[2].v;
-          for (int i = 0; i < kNumIntrinsics + kNumDistortion; ++i) {
-            const double d = pixel[c].v[3 + i];
-            if (slot[i] >= 0) {
-              out.v[slot[i]] += d;
-            } else if (slot[i] == -2) {
-              out.v += d * (i < kNumIntrinsics ? intrinsics[i].v : dist[i - kNumIntrinsics].v);
-            }
-          }
+          cam.Chain(pixel[c], &out);
           r[2 * k + c] = (out - T(points[k].uv[c])) * T(inv_sigma);
         }
       }

@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <opencv2/imgproc.hpp>
+
 #include "detect/photo_image.h"
 #include "tests/detect/synthetic_photo.h"
 
@@ -52,7 +54,7 @@ void ExpectExactCorners(const cv::Mat& photo, const std::string& family, int id,
   const TagDetection& d = found[0];
   EXPECT_EQ(d.id, id) << what;
   EXPECT_EQ(d.family, family) << what;
-  EXPECT_TRUE(d.refined) << what;
+  EXPECT_EQ(d.refinement, CornerRefinement::kEdges) << what;
   for (int k = 0; k < 4; ++k) {
     g_max_error_px = std::max(g_max_error_px, (d.corners[k] - exact[k]).norm());
     EXPECT_LT((d.corners[k] - exact[k]).norm(), kCornerTolPx)
@@ -118,6 +120,78 @@ TEST(DetectorConventionTest, OtherFamilies) {
                        exact, family);
   }
   std::printf("other families: max corner error %.4f px\n", g_max_error_px);
+}
+
+// Below the edge refinement's 2.5 px per bit, the detector refines a tag by
+// fitting its whole pattern (tag_pattern_fit.h); from 2.5 px per bit on, by
+// its edges.
+TEST(DetectorTest, SmallTagsGetThePatternFit) {
+  const int id = 12;
+  for (const double bit : {1.8, 2.2, 3.0}) {
+    const PrintedTag tag = PrintTag("tag36h11", id, 0, 0, 8);
+    const Eigen::Matrix3d h = MakeHomography(8, Eigen::Vector2d(50.4, 49.7), bit, 0.7, 0.004, 0);
+    cv::Mat coverage = RenderCoverage({tag}, h, 100, 100);
+    cv::GaussianBlur(coverage, coverage, cv::Size(0, 0), 0.5);
+    std::array<Eigen::Vector2d, 4> exact;
+    const std::array<Eigen::Vector2d, 4> quad = QuadCorners(tag);
+    for (int k = 0; k < 4; ++k) exact[k] = Project(h, quad[k]);
+    TagDetector detector;
+    const std::vector<TagDetection> found =
+        detector.Detect(ToPixels(coverage, CV_8UC1, cv::Scalar(25), cv::Scalar(230)));
+    ASSERT_EQ(found.size(), 1u) << bit;
+    EXPECT_EQ(found[0].id, id);
+    EXPECT_EQ(found[0].refinement,
+              bit < DetectorOptions().min_bit_pixels ? CornerRefinement::kPattern
+                                                     : CornerRefinement::kEdges)
+        << bit << " px per bit";
+    for (int k = 0; k < 4; ++k) {
+      // tag_pattern_fit_test.cc: 0.01-0.02 px on such photos; libapriltag's
+      // own corners are 0.1-0.2 px off here.
+      EXPECT_LT((found[0].corners[k] - exact[k]).norm(), 0.05) << bit << " corner " << k;
+    }
+  }
+  // Refinement off: libapriltag's corners, marked as such.
+  DetectorOptions off;
+  off.refine_corners = false;
+  TagDetector detector(off);
+  const PrintedTag tag = PrintTag("tag36h11", id, 0, 0, 8);
+  const cv::Mat coverage =
+      RenderCoverage({tag}, MakeHomography(8, Eigen::Vector2d(50, 50), 2.0, 0.3), 100, 100);
+  const std::vector<TagDetection> found =
+      detector.Detect(ToPixels(coverage, CV_8UC1, cv::Scalar(25), cv::Scalar(230)));
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].refinement, CornerRefinement::kNone);
+  EXPECT_EQ(found[0].corners, found[0].apriltag_corners);
+}
+
+TEST(DetectorTest, NoiseSigmaIsEstimatedDespiteEdges) {
+  cv::setRNGSeed(3);
+  // Flat grey with Gaussian noise of 2 grey levels.
+  cv::Mat flat(480, 640, CV_64FC1, cv::Scalar(120));
+  cv::Mat noise(flat.size(), CV_64FC1);
+  cv::randn(noise, 0, 2.0);
+  cv::Mat img;
+  cv::Mat(flat + noise).convertTo(img, CV_8UC1);
+  // The rounding to integers adds 1/12 grey level^2 of variance.
+  const double expected = std::sqrt(4.0 + 1.0 / 12);
+  EXPECT_NEAR(EstimateNoiseSigma(img), expected, 0.1 * expected);
+  // A photo of tags (edges everywhere, a quarter of the pixels near one)
+  // with 1 grey level of noise: the edges do not move the median.
+  std::vector<PrintedTag> tags;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 5; ++c) {
+      tags.push_back(PrintTag("tag36h11", 5 * r + c, 10.0 * c, 10.0 * r, 8));
+    }
+  }
+  const Eigen::Matrix3d h = MakeHomography(48, Eigen::Vector2d(320.3, 240.6), 9.0, 0.2);
+  const cv::Mat coverage = RenderCoverage(tags, h, 640, 480);
+  cv::randn(noise, 0, 1.0);
+  cv::Mat(coverage * 200 + 30 + noise).convertTo(img, CV_8UC1);
+  const double one = std::sqrt(1.0 + 1.0 / 12);
+  EXPECT_NEAR(EstimateNoiseSigma(img), one, 0.15 * one);
+  // Without noise: only the rounding of the edge pixels.
+  cv::Mat(coverage * 200 + 30).convertTo(img, CV_8UC1);
+  EXPECT_LT(EstimateNoiseSigma(img), 0.2);
 }
 
 TEST(DetectorTest, TinyTagsAreNotRefined) {

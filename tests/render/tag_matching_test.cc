@@ -195,7 +195,7 @@ TEST(MatchDetectionsTest, CountsUnknownDuplicateAndMismatchedDetections) {
   TagDetection good;
   good.family = "tag36h11";
   good.id = 0;
-  good.refined = true;
+  good.refinement = detect::CornerRefinement::kEdges;
   good.corners = expected[0].uv;
   TagDetection unknown = good;
   unknown.id = 300;
@@ -204,7 +204,7 @@ TEST(MatchDetectionsTest, CountsUnknownDuplicateAndMismatchedDetections) {
   TagDetection unrefined = good;
   unrefined.id = 2;
   unrefined.corners = expected[2].uv;
-  unrefined.refined = false;
+  unrefined.refinement = detect::CornerRefinement::kNone;
   ShotStats stats;
   const std::vector<MatchedTag> kept = MatchDetections(
       {good, good, unknown, wrong_place, unrefined}, expected, MatchOptions(), &stats);

@@ -1,0 +1,142 @@
+// The demo's photo session as a user runs it (README, "Speed"): once, in a
+// temporary copy of the repository's layout, `rtscalib --config
+// configs/zoom3.yaml` renders its 92 photos (3 zooms at fx 1500, 3000 and 6000
+// px, 4 boards of 48 tag36h11, 1280 x 960, supersample 2, sensor noise of 1
+// grey level) into out/zoom3/latest/photos/; then
+//   BM_PhotoSessionDetect/jobs:N/noise_threshold:T  detects that folder
+//                                 (detect::DetectPhotos, as data.shots does)
+//                                 with N threads; T = 0: libapriltag's own
+//                                 segmentation threshold of 5 grey levels
+//                                 instead of 10 noise sigmas (detector.h);
+//   BM_PhotoSessionRun            the whole `rtscalib --config
+//                                 configs/photos.yaml` in process (the
+//                                 shipped config: detection with 2 jobs,
+//                                 calibration, diagnosis, reports).
+//
+//   build/bench/photo_session_benchmark --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+#include "app/commands.h"
+#include "detect/photos.h"
+#include "libcalib/io/shots.h"
+#include "libcalib/io/targets_io.h"
+
+namespace rtscalib::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+// stdout to /dev/null for the lifetime of the object: the run prints its
+// report there, and the benchmark's own table should stay readable.
+class QuietStdout {
+ public:
+  QuietStdout() : saved_(::dup(STDOUT_FILENO)) {
+    std::fflush(stdout);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, STDOUT_FILENO);
+    ::close(null);
+  }
+  ~QuietStdout() {
+    std::fflush(stdout);
+    ::dup2(saved_, STDOUT_FILENO);
+    ::close(saved_);
+  }
+
+ private:
+  int saved_;
+};
+
+// <tmp>/configs/{zoom3,photos}.yaml copied from the source tree, and the
+// demo's output in <tmp>/out/zoom3 (the configs' relative paths hold).
+class DemoFolder {
+ public:
+  DemoFolder() {
+    char dir[] = "/tmp/rtscalib-photo-session-XXXXXX";
+    if (::mkdtemp(dir) == nullptr) throw std::runtime_error("mkdtemp failed");
+    root_ = dir;
+    fs::create_directories(root_ / "configs");
+    for (const char* name : {"zoom3.yaml", "photos.yaml"}) {
+      fs::copy_file(fs::path(RTSCALIB_SOURCE_DIR) / "configs" / name, root_ / "configs" / name);
+    }
+    RunArgs demo;
+    demo.config = (root_ / "configs" / "zoom3.yaml").string();
+    demo.quiet = true;
+    const QuietStdout quiet;
+    if (RunCalibration(demo) != 0) throw std::runtime_error("the zoom3 demo failed");
+  }
+  ~DemoFolder() { fs::remove_all(root_); }
+
+  fs::path root() const { return root_; }
+  fs::path photos() const { return root_ / "out" / "zoom3" / "latest" / "photos"; }
+
+ private:
+  fs::path root_;
+};
+
+const DemoFolder& Demo() {
+  static const DemoFolder demo;
+  return demo;
+}
+
+void BM_PhotoSessionDetect(benchmark::State& state) {
+  const DemoFolder& demo = Demo();
+  const std::map<std::string, int> families = detect::DetectableCodeCounts();
+  const TargetScene targets = ReadTargets((demo.photos() / "targets.yaml").string(), &families);
+  const ShotsFile shots = ReadShots((demo.photos() / "shots.csv").string());
+  detect::PhotoDetectionOptions options;
+  options.jobs = static_cast<int>(state.range(0));
+  if (state.range(1) == 0) options.detector.segmentation_noise_multiple = 0;
+  options.progress = false;
+  size_t tags = 0;
+  for (auto _ : state) {
+    const detect::PhotoDetectionResult r = detect::DetectPhotos(shots, targets, options);
+    tags = 0;
+    for (const detect::PhotoDetection& p : r.photos) tags += p.tags.size();
+  }
+  state.counters["photos"] = static_cast<double>(shots.shots.size());
+  state.counters["tags"] = static_cast<double>(tags);
+  state.counters["images/s"] = benchmark::Counter(
+      static_cast<double>(state.iterations() * shots.shots.size()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_PhotoSessionDetect)
+    ->ArgNames({"jobs", "noise_threshold"})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Args({2, 0})
+    ->Args({2, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
+void BM_PhotoSessionRun(benchmark::State& state) {
+  const DemoFolder& demo = Demo();
+  RunArgs run;
+  run.config = (demo.root() / "configs" / "photos.yaml").string();
+  run.quiet = true;
+  const QuietStdout quiet;
+  for (auto _ : state) {
+    if (RunCalibration(run) != 0) {
+      state.SkipWithError("rtscalib --config configs/photos.yaml failed");
+      return;
+    }
+  }
+}
+BENCHMARK(BM_PhotoSessionRun)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
+}  // namespace
+}  // namespace rtscalib::app
+
+BENCHMARK_MAIN();
