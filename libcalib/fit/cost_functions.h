@@ -4,8 +4,9 @@
 // on a `BlockLayout`: the list of parameter blocks one group of observations
 // touches, each a pointer into the InstrumentModel's own memory, in this order:
 //   base_q(4) base_t(3) [link0(4) link1(4) if dh] tool_q(4) tool_t(3)
-//   [intrinsics(4) distortion(14) for camera tools] [one block per enabled
-//   kinematic effect, in catalogue order] [board_q(4) board_t(3) per board of
+//   [intrinsics(4) distortion(14) for camera tools] [focus(3) for camera tools
+//   when the model has the focus effect] [one block per enabled kinematic
+//   effect, in catalogue order] [board_q(4) board_t(3) per board of
 //   unknown pose the group sees] [point(3) per point of unknown position]
 // Observations that share a pointing share one residual block, so that the
 // chain ref_from_tool(phi, theta) is differentiated once per pointing, not
@@ -16,6 +17,12 @@
 // SPEC 7: a record of a named point uses that point's block as x; a pixel of
 // a board of unknown pose uses X = ref_from_board * corner_in_board, with
 // ref_from_board from that board's blocks.
+// SPEC 4.1 (focus block present): a camera record projects with the
+// intrinsics focused at D = its ray length d, a shot with those focused at
+// the photo's D (libcalib/model/focus.h): its focus_distance when given, else
+// the distance from the camera centre to the centroid of the photo's points
+// as the blocks place them (a function of the chain and the boards' poses,
+// differentiated like everything else).
 #pragma once
 
 #include <ceres/dynamic_autodiff_cost_function.h>
@@ -37,6 +44,7 @@ struct BlockLayout {
   std::vector<int> sizes;
   int base_q = -1, base_t = -1, link0 = -1, link1 = -1, tool_q = -1, tool_t = -1;
   int intrinsics = -1, distortion = -1;
+  int focus = -1;  // the zoom's focus block (SPEC 4.1), when the model has the effect
   int effect[kNumKinematicEffects];
   double edm_cyclic_unit_length = 1.5;
   // Layout indices of the (q, t) blocks of boards of unknown pose and of the
@@ -98,8 +106,14 @@ struct RecordGroupResidual {
         local = Vec3<T>(T(0), T(0), TrueDistance(view, T(row.d)));  // Klug Eq. 76
       } else {
         const T pixel[2] = {T(row.u), T(row.v)};
+        // SPEC 4.1: the camera of a cam record is focused at its ray length.
+        T k[4];
+        if (!FocusedIntrinsics(p[layout.intrinsics], layout.focus >= 0 ? p[layout.focus] : nullptr,
+                               T(row.d), k)) {
+          return false;
+        }
         T ray[3];
-        if (!PixelToRay(p[layout.intrinsics], p[layout.distortion], pixel, ray)) {
+        if (!PixelToRay(k, p[layout.distortion], pixel, ray)) {
           return false;
         }
         local = Vec3<T>(ray[0], ray[1], ray[2]) * T(row.d);  // SPEC 2: ray LENGTH d
@@ -185,16 +199,55 @@ struct ShotResidual {
     Eigen::Vector2d uv;
     int board = -1;  // >= 0: X is a corner of layout.boards[board]
   };
+  // The photo's points summed for its centroid (SPEC 4.1): known points
+  // (board -1, reference frame) or the corners of one board of unknown pose
+  // (its board frame), `count` of them. They are every point of the photo,
+  // also those of other residual blocks when each observation is a block.
+  struct FocusTerm {
+    int board = -1;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int count = 0;
+  };
   BlockLayout layout;
   double phi = 0, theta = 0;
   double inv_sigma = 1;
   std::vector<Point> points;
+  double focus_distance = 0;  // [m] the photo's D when given (focus_distance column); 0: centroid
+  std::vector<FocusTerm> focus_terms;
+  int focus_count = 0;
 
   // The reference-frame position of point k (`boards` = the boards' poses).
   template <typename T>
   Vec3<T> PointInRef(const std::vector<RigidT<T>>& boards, size_t k) const {
     if (points[k].board < 0) return points[k].X.cast<T>();
     return boards[points[k].board] * Vec3<T>(points[k].X.cast<T>());
+  }
+
+  // The intrinsics of this photo: focused at its D when the layout has a
+  // focus block (SPEC 4.1), the block's own otherwise.
+  template <typename T>
+  bool PhotoIntrinsics(T const* const* p, const std::vector<RigidT<T>>& boards,
+                       const RigidT<T>& ref_from_cam, T* k) const {
+    const T* intrinsics = p[layout.intrinsics];
+    if (layout.focus < 0) {
+      for (int i = 0; i < kNumIntrinsics; ++i) k[i] = intrinsics[i];
+      return true;
+    }
+    T distance(focus_distance);
+    if (!(focus_distance > 0)) {
+      if (focus_count <= 0) return false;
+      Vec3<T> sum(T(0), T(0), T(0));
+      for (const FocusTerm& f : focus_terms) {
+        if (f.board < 0) {
+          sum += f.sum.cast<T>();
+        } else {
+          sum += boards[f.board].R * Vec3<T>(f.sum.cast<T>()) + boards[f.board].t * T(f.count);
+        }
+      }
+      const Vec3<T> from_camera = sum / T(focus_count) - ref_from_cam.t;
+      distance = from_camera.norm();
+    }
+    return FocusedIntrinsics(intrinsics, p[layout.focus], distance, k);
   }
 
   template <typename T>
@@ -205,7 +258,8 @@ struct ShotResidual {
     const RigidT<T> ref_from_cam =
         RefFromFlange(view, T(phi), T(theta)) * PoseFromBlocks(p[layout.tool_q], p[layout.tool_t]);
     const Mat3<T> cam_from_ref_R = ref_from_cam.R.transpose();
-    const T* intrinsics = p[layout.intrinsics];
+    T intrinsics[kNumIntrinsics];
+    if (!PhotoIntrinsics(p, boards, ref_from_cam, intrinsics)) return false;
     const T* dist = p[layout.distortion];
     if constexpr (!internal::IsJet<T>::value) {
       T m[9];
@@ -224,7 +278,8 @@ struct ShotResidual {
       using internal::LocalJet;
       constexpr int kN = internal::IsJet<T>::kSize;
       // Local jets of intrinsics and distortion, and where their wide
-      // derivatives live.
+      // derivatives live (focused intrinsics are no unit seeds: their full
+      // product is taken).
       LocalJet li[kNumIntrinsics], ld[kNumDistortion];
       int slot[kNumIntrinsics + kNumDistortion];
       for (int i = 0; i < kNumIntrinsics; ++i) {
