@@ -113,6 +113,7 @@ json FindingJson(const StructureFinding& f) {
           {"wald", f.wald},
           {"unexplained", f.unexplained},
           {"explained_by", f.explained_by.empty() ? json() : json(f.explained_by)},
+          {"same_as", f.same_as.empty() ? json() : json(f.same_as)},
           {"points_to", f.points_to},
           {"description", f.description}};
 }
@@ -316,9 +317,12 @@ std::string DiagnosisText(const CalibrationResult& r) {
     }
   }
   if (!d.structure.explained.empty()) {
-    o << "\nStructure that a catalogue effect explains (significant alone)\n";
+    o << "\nStructure significant alone that a catalogue effect or other structure holds\n";
     for (const StructureFinding& f : d.structure.explained) {
-      o << "  " << f.description << " (explained by " << f.explained_by << ")\n";
+      o << "  " << f.description << " ("
+        << (f.explained_by.empty() ? "the same structure as " + f.same_as
+                                   : "explained by " + f.explained_by)
+        << ")\n";
     }
   }
   if (d.outliers.tested > 0) {

@@ -78,42 +78,47 @@ std::string SigmaText(double value, const std::string& unit) {
 }
 
 // The first sentence when some kind of observation fits worse than its
-// a-priori sigma allows: which, by how much.
+// a-priori sigma allows: which kinds, at which zoom, by how much (the
+// largest factor over the faces; the faces named when not all exceed).
 std::string FitQualitySentence(const Diagnosis& d) {
-  std::string cells;
-  int listed = 0, more = 0;
-  std::vector<const FitQualityCell*> exceeding;
+  struct Kind {
+    const FitQualityCell* worst = nullptr;
+    std::vector<int> faces, exceeding;
+  };
+  std::vector<std::pair<std::pair<int, int>, Kind>> kinds;  // (group, zoom), in cell order
   for (const FitQualityCell& c : d.fit_quality.cells) {
-    if (c.exceeds) exceeding.push_back(&c);
+    const std::pair<int, int> key{static_cast<int>(c.group), c.zoom};
+    auto it = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == key; });
+    if (it == kinds.end()) it = kinds.insert(kinds.end(), {key, Kind()});
+    Kind& k = it->second;
+    k.faces.push_back(c.face);
+    if (!c.exceeds) continue;
+    k.exceeding.push_back(c.face);
+    if (!k.worst || c.factor > k.worst->factor) k.worst = &c;
   }
-  std::stable_sort(exceeding.begin(), exceeding.end(),
-                   [](const FitQualityCell* a, const FitQualityCell* b) {
-                     return a->factor > b->factor;
-                   });
-  for (const FitQualityCell* c : exceeding) {
-    if (listed == 4) {
-      ++more;
-      continue;
+  std::string cells;
+  for (const auto& [key, k] : kinds) {
+    if (!k.worst) continue;
+    const FitQualityCell& c = *k.worst;
+    std::string name = c.name.substr(0, c.name.find(", face"));
+    if (k.exceeding.size() < k.faces.size()) {
+      name += " in face " + std::to_string(k.exceeding.front());
     }
-    cells += std::string(listed ? "; " : "") + c->name + " " + Fmt("%.2g", c->factor) + "x (" +
-             SigmaText(c->rms, c->unit) + " rms per coordinate against " +
-             SigmaText(c->apriori, c->unit) + ", chi-square " + Fmt("%.4g", c->chi2) + " for " +
-             Fmt("%.0f", c->dof) + " degrees of freedom)";
-    ++listed;
+    cells += std::string(cells.empty() ? "" : "; ") + name + " " + Fmt("%.2g", c.factor) + "x (" +
+             SigmaText(c.rms, c.unit) + " rms per coordinate against " +
+             SigmaText(c.apriori, c.unit) + ")";
   }
-  if (more > 0) cells += "; and " + std::to_string(more) + " more";
   return "The model (" + d.model_description +
          ") is incomplete or its a-priori sigmas are too small: observations fit worse than "
          "their a-priori sigma (fit.sigmas) allows: " +
          cells + ".";
 }
 
-// Whether anything says that the model lacks an effect (for the likely
-// cause of a fit gone wild).
-bool MissingEffectEvidence(const Diagnosis& d) {
-  if (d.fit_quality.Exceeds() || d.Next() != nullptr) return true;
-  return !d.harmonics.unexplained.empty() || !d.structure.unexplained.empty();
-}
+// Whether the residuals say that the model lacks an effect (the likely
+// cause of a fit gone wild): some kind of observation fits worse than its
+// a-priori sigma allows. Residuals at the noise level mean the parameters
+// that went wild are merely undetermined.
+bool MissingEffectEvidence(const Diagnosis& d) { return d.fit_quality.Exceeds(); }
 
 std::vector<std::string> Verdict(const Diagnosis& d) {
   std::vector<std::string> v;

@@ -10,6 +10,18 @@ Eigen::MatrixXd Columns(const Eigen::MatrixXd& m, const ColumnBlock& b) {
   return m.middleCols(b.first, b.size);
 }
 
+// `projected` (a probe's columns after some projection) with the columns
+// that kept less than kAbsorbed of their norm before the fit's projection
+// (Reduced::column_norm of the block) set to zero.
+Eigen::MatrixXd Prune(Eigen::MatrixXd projected, const Reduced& red, const ColumnBlock& b) {
+  for (int j = 0; j < b.size; ++j) {
+    if (!(projected.col(j).norm() >= kAbsorbed * red.column_norm[b.first + j])) {
+      projected.col(j).setZero();
+    }
+  }
+  return projected;
+}
+
 }  // namespace
 
 ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
@@ -31,7 +43,8 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
 
   // 1. Against the fitted model alone.
   for (ProbeResult& r : out.probes) {
-    r.raw = TestColumns(red.r, Columns(red.extra, *r.block), red.cluster, g, dof_base);
+    r.raw = TestColumns(red.r, Prune(Columns(red.extra, *r.block), red, *r.block), red.cluster, g,
+                        dof_base);
     r.raw_significant = r.raw.rank > 0 && r.raw.p_value < out.level;
   }
 
@@ -51,7 +64,8 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
   const Eigen::VectorXd y = cat.Apply(red.r);
   std::vector<Eigen::MatrixXd> t_cat(out.probes.size());
   for (size_t j = 0; j < out.probes.size(); ++j) {
-    t_cat[j] = cat.Apply(Columns(red.extra, *out.probes[j].block));
+    const ColumnBlock& b = *out.probes[j].block;
+    t_cat[j] = Prune(cat.Apply(Columns(red.extra, b)), red, b);
   }
   std::vector<int> selected;
   Projector sel(n);
@@ -63,7 +77,8 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
       if (std::find(selected.begin(), selected.end(), static_cast<int>(j)) != selected.end())
         continue;
       const ColumnTest t =
-          TestColumns(ys, sel.Apply(t_cat[j]), red.cluster, g, dof_base + cat.rank() + sel.rank());
+          TestColumns(ys, Prune(sel.Apply(t_cat[j]), red, *out.probes[j].block), red.cluster, g,
+                      dof_base + cat.rank() + sel.rank());
       if (t.rank == 0) continue;
       if (t.p_value < best_p || (t.p_value == best_p && t.wald > best_wald)) {
         best = static_cast<int>(j);
@@ -83,15 +98,38 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     }
     ProbeResult& r = out.probes[s];
     r.selected = true;
-    r.joint = TestColumns(others.Apply(y), others.Apply(t_cat[s]), red.cluster, g,
-                          dof_base + cat.rank() + others.rank());
+    r.joint = TestColumns(others.Apply(y), Prune(others.Apply(t_cat[s]), red, *r.block),
+                          red.cluster, g, dof_base + cat.rank() + others.rank());
   }
   out.selected = selected;
+
+  // 3a. Significant on top of the catalogue but not selected: the selected
+  // probe that removes most of it holds the same structure.
+  for (size_t j = 0; j < out.probes.size(); ++j) {
+    ProbeResult& r = out.probes[j];
+    if (!r.raw_significant || r.selected) continue;
+    const ColumnTest on_catalogue = TestColumns(y, t_cat[j], red.cluster, g, dof_base + cat.rank());
+    if (!(on_catalogue.rank > 0 && on_catalogue.p_value < out.level)) continue;
+    double best = std::numeric_limits<double>::infinity();
+    for (int s : selected) {
+      Projector ps(n);
+      ps.Add(t_cat[s]);
+      const ColumnTest t = TestColumns(ps.Apply(y), Prune(ps.Apply(t_cat[j]), red, *r.block),
+                                       red.cluster, g, dof_base + cat.rank() + ps.rank());
+      if (t.wald < best) {
+        best = t.wald;
+        r.same_as = out.probes[s].block->name;
+      }
+    }
+    if (r.same_as.empty()) r.same_as = "the structure selected above";
+  }
 
   // 3. What the catalogue explains: per catalogue effect, its projector and
   // the residual without it, built once.
   bool any = false;
-  for (const ProbeResult& r : out.probes) any = any || (r.raw_significant && !r.selected);
+  for (const ProbeResult& r : out.probes) {
+    any = any || (r.raw_significant && !r.selected && r.same_as.empty());
+  }
   if (!any) return out;
   std::vector<Projector> without;
   std::vector<Eigen::VectorXd> y_without;
@@ -101,11 +139,12 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     y_without.push_back(without.back().Apply(red.r));
   }
   for (ProbeResult& r : out.probes) {
-    if (!r.raw_significant || r.selected) continue;
+    if (!r.raw_significant || r.selected || !r.same_as.empty()) continue;
     double best = std::numeric_limits<double>::infinity();
     for (size_t c = 0; c < catalogue.size(); ++c) {
-      const ColumnTest t = TestColumns(y_without[c], without[c].Apply(Columns(red.extra, *r.block)),
-                                       red.cluster, g, dof_base + without[c].rank());
+      const ColumnTest t = TestColumns(
+          y_without[c], Prune(without[c].Apply(Columns(red.extra, *r.block)), red, *r.block),
+          red.cluster, g, dof_base + without[c].rank());
       if (t.wald < best) {
         best = t.wald;
         r.explained_by = catalogue[c]->name;

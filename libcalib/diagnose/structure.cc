@@ -320,13 +320,13 @@ std::string ReadingWords(Reading r) {
 std::string FormWords(const ColumnBlock& b, const SessionVariable& v) {
   switch (b.basis.form) {
     case TrendForm::kLinear:
-      return "in proportion to " + v.name;
+      return "changes in proportion to " + v.name;
     case TrendForm::kInverse:
-      return "as 1/" + v.name;
+      return "changes as 1/" + v.name;
     case TrendForm::kQuadratic:
-      return IsOrder(v) ? "a slow drift with " + v.name : "smoothly with " + v.name;
+      return IsOrder(v) ? "drifts slowly with the " + v.name : "changes smoothly with " + v.name;
     case TrendForm::kCategories:
-      return "per " + v.name;
+      return "changes per " + v.name;
   }
   return "";
 }
@@ -445,7 +445,8 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
     }
     size_text = parts;
   } else {
-    // Image fields: the largest displacement over a grid of the image.
+    // Image fields: the largest displacement at the data (the field is a
+    // polynomial: beyond the points it is extrapolation, not structure).
     f.quantity = "image displacement field of zoom " + std::to_string(p.zoom) + " (" +
                  (p.field == ImageField::kPosition ? "over the image position" : "along the radius") +
                  ")";
@@ -453,41 +454,32 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
                                               : "odd powers of the radius";
     f.variable = p.field == ImageField::kPosition ? "image position" : "image radius";
     f.unit = "px";
-    constexpr int kGrid = 9;
-    for (int i = 0; i < kGrid; ++i) {
-      for (int j = 0; j < kGrid; ++j) {
-        const double x = -1.0 + 2.0 * i / (kGrid - 1), y = -1.0 + 2.0 * j / (kGrid - 1);
-        double du = 0, dv = 0;
-        if (p.field == ImageField::kPosition) {
-          constexpr int kPowers[7][2] = {{2, 0}, {1, 1}, {0, 2}, {3, 0}, {2, 1}, {1, 2}, {0, 3}};
-          for (int m = 0; m < 7; ++m) {
-            const double mono = std::pow(x, kPowers[m][0]) * std::pow(y, kPowers[m][1]);
-            du -= t.beta[m] * mono;
-            dv -= t.beta[7 + m] * mono;
-          }
-        } else {
-          const CameraTool& cam = model.cams.at(p.zoom);
-          const double hw = 0.5 * cam.width, hh = 0.5 * cam.height;
-          const double rho = std::hypot(x * hw, y * hh) / std::hypot(hw, hh);
-          if (rho > 0) {
-            const double ax = x * hw / std::hypot(x * hw, y * hh), ay = y * hh / std::hypot(x * hw, y * hh);
-            constexpr int kPowers[6] = {3, 5, 7, 9, 3, 5};
-            for (int m = 0; m < 6; ++m) {
-              const double value = -t.beta[m] * std::pow(rho, kPowers[m]);
-              du += m < 4 ? value * ax : -value * ay;
-              dv += m < 4 ? value * ay : value * ax;
-            }
-          }
-        }
-        f.size = std::max(f.size, std::hypot(du, dv));
-      }
+    const double sigma = lin.sigma[static_cast<int>(ObsGroup::kPixel)];
+    std::map<int, Eigen::Vector2d> at;  // per image observation: the fitted displacement
+    for (int i = 0; i < lin.NumRows(); ++i) {
+      const ResidualRow& row = lin.rows[i];
+      if (row.group != ObsGroup::kPixel) continue;
+      double value = 0;
+      for (int j = 0; j < b.size; ++j) value -= lin.extra(i, b.first + j) * t.beta[j];
+      if (value == 0) continue;
+      auto it = at.emplace(row.index, Eigen::Vector2d::Zero()).first;
+      it->second[row.component] = value * sigma;
     }
+    for (const auto& [index, d] : at) f.size = std::max(f.size, d.norm());
     size_text = "up to " + Fmt("%.3g", f.size) + " px";
   }
-  f.description = f.quantity + " " + (v ? "changes " + f.form : "has structure " + f.form) +
-                  ": " + size_text + (v ? " " + Range(b, *v) : "");
+  f.description = f.quantity + " " + (v ? f.form : "has structure of " + f.form) + ": " +
+                  size_text + (v ? " " + Range(b, *v) : "");
   f.points_to = Hint(b, v, model);
   return f;
+}
+
+// Below these a statistically significant trend is round-off of exact data,
+// not structure: no instrument resolves 1e-3 arcsec, 1e-3 mm or 1e-3 ppm,
+// and 1e-6 px is ranking.h's pixel floor.
+bool AboveFloor(const StructureFinding& f) {
+  if (f.unit == "px") return f.size > 1e-6;
+  return f.size > 1e-3;  // arcsec, mm, ppm
 }
 
 }  // namespace
@@ -500,13 +492,14 @@ StructureAnalysis AnalyseStructure(const Linearization& lin, const ProbeAnalysis
     if (r.block->probe.kind == ProbeKind::kHarmonic) continue;
     StructureFinding f = MakeFinding(*r.block, r.joint, lin, model);
     f.unexplained = true;
-    out.unexplained.push_back(f);
+    if (AboveFloor(f)) out.unexplained.push_back(f);
   }
   for (const ProbeResult& r : probes.probes) {
     if (r.block->probe.kind == ProbeKind::kHarmonic || !r.raw_significant || r.selected) continue;
     StructureFinding f = MakeFinding(*r.block, r.raw, lin, model);
     f.explained_by = r.explained_by;
-    out.explained.push_back(f);
+    f.same_as = r.same_as;
+    if (AboveFloor(f)) out.explained.push_back(f);
   }
   // Most significant first (by the test's statistic per degree of freedom
   // would favour small probes; the p-value saturates at 0, so the Wald).

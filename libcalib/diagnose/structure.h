@@ -64,13 +64,16 @@ struct StructureFinding {
   double wald = 0, p_value = 1;
   bool unexplained = false;   // significant on top of the whole catalogue
   std::string explained_by;   // the catalogue effect that removes it (explained ones)
+  std::string same_as;        // the unexplained probe that holds the same structure
   std::string points_to;      // the catalogue effect or physical cause it suggests
   std::string description;    // the sentence
 };
 
 struct StructureAnalysis {
   std::vector<StructureFinding> unexplained;  // most significant first
-  std::vector<StructureFinding> explained;    // significant alone, removed by a catalogue effect
+  // Significant alone, but removed by a catalogue effect (explained_by) or
+  // held by an unexplained finding (same_as).
+  std::vector<StructureFinding> explained;
 };
 
 // The reading-trend, image-motion and image-field probes of `probes`.

@@ -463,7 +463,10 @@ InstrumentModel PerturbedStart(const InstrumentModel& truth, std::uint64_t seed,
     m.edm.t[0] += scale * n(rng);
     m.edm.t[1] += scale * n(rng);
   }
-  for (CameraTool& c : m.cams) move_pose(&c.flange_from_cam);
+  for (CameraTool& c : m.cams) {
+    move_pose(&c.flange_from_cam);
+    c.focus.fill(0.0);  // an effect's values, zeroed like the others
+  }
   for (auto& e : m.effect_values) e = {0.0, 0.0};
   m.sigmas = {};
   return m;
