@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <initializer_list>
@@ -14,7 +15,6 @@
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/cost_functions.h"
 #include "libcalib/fit/parameterization.h"
-#include "libcalib/geometry/rotation.h"
 #include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
 
@@ -324,7 +324,8 @@ InstrumentModel MovedImage(const InstrumentModel& model, int zoom, int motion, d
       // The image turned by +w about the principal point is the camera
       // turned by -w about its z axis.
       Rigid3 tool = cam.flange_from_cam.ToRigid();
-      tool.rotation = tool.rotation * Rz(-step);
+      tool.rotation =
+          tool.rotation * Eigen::AngleAxisd(-step, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       cam.flange_from_cam = PoseBlock::FromRigid(tool);
       break;
     }

@@ -204,6 +204,7 @@ CsvTable CsvTable::Parse(std::istream& in, const std::string& name, const Column
                            " kept as covariate" + (table.covariates_.size() > 1 ? "s" : "") +
                            " (numbers; the diagnosis tests the residuals against them)");
   }
+  std::sort(ignored.begin(), ignored.end());
   if (!ignored.empty()) {
     table.notes_.push_back(name + ":" + std::to_string(header_line) + ": ignored column" +
                            (ignored.size() > 1 ? "s " : " ") + Join(ignored) +
