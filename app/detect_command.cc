@@ -41,7 +41,7 @@ int RunDetect(const DetectArgs& args) {
       args.out,
       [&](const std::string& tmp) {
         WritePixels(tmp, detect::PixelObservationsOf(shots, targets, result), shots.angle_unit,
-                    detect::ImageSizesOf(shots, result));
+                    detect::ImageSizesOf(shots, result), shots.covariates);
       },
       existing);
   WriteFileAtomicWith(

@@ -66,6 +66,17 @@ json RankedJson(const RankedEffect& r) {
     }
     j["value"] = d;
   }
+  if (!r.focus.empty()) {
+    json d = json::array();
+    for (const FocusValue& v : r.focus) {
+      d.push_back({{"zoom", v.zoom},
+                   {"parameter", v.name},
+                   {"value", v.value * kFocusReportScale[v.index]},
+                   {"sigma", v.sigma * kFocusReportScale[v.index]},
+                   {"unit", kFocusReportUnits[v.index]}});
+    }
+    j["value"] = d;
+  }
   if (r.has_equivalent) j["equivalent"] = ValueJson(r.effect, r.equivalent);
   if (!r.correlated_with.empty())
     j["correlated_with"] = {{"parameter", r.correlated_with}, {"rho", r.rho}};
@@ -86,6 +97,48 @@ json HarmonicJson(const Harmonic& h) {
           {"p_value", h.p_value},
           {"explained_by", h.explained_by.empty() ? json() : json(h.explained_by)},
           {"description", h.description}};
+}
+
+json FindingJson(const StructureFinding& f) {
+  const char* kinds[] = {"harmonic", "reading_trend", "image_motion", "image_field"};
+  return {{"variable", f.variable},
+          {"kind", kinds[static_cast<int>(f.probe.kind)]},
+          {"quantity", f.quantity},
+          {"form", f.form},
+          {"size", f.size},
+          {"unit", f.unit},
+          {"range", {f.lo, f.hi}},
+          {"zoom", f.probe.zoom >= 0 ? json(f.probe.zoom) : json()},
+          {"p_value", f.p_value},
+          {"wald", f.wald},
+          {"unexplained", f.unexplained},
+          {"explained_by", f.explained_by.empty() ? json() : json(f.explained_by)},
+          {"same_as", f.same_as.empty() ? json() : json(f.same_as)},
+          {"points_to", f.points_to},
+          {"description", f.description}};
+}
+
+json FitQualityJson(const FitQuality& q) {
+  json cells = json::array();
+  for (const FitQualityCell& c : q.cells) {
+    cells.push_back({{"kind", GroupName(c.group)},
+                     {"name", c.name},
+                     {"zoom", c.zoom >= 0 ? json(c.zoom) : json()},
+                     {"face", c.face},
+                     {"observations", c.observations},
+                     {"rms", c.rms},
+                     {"apriori_sigma", c.apriori},
+                     {"unit", c.unit},
+                     {"factor", c.factor},
+                     {"chi_square", c.chi2},
+                     {"dof", c.dof},
+                     {"p_value", c.p_value},
+                     {"exceeds", c.exceeds}});
+  }
+  return {{"exceeds", q.Exceeds()},
+          {"min_factor", kMinFactor},
+          {"test_level", q.level},
+          {"cells", cells}};
 }
 
 json LadderJson(const std::vector<LadderStep>& ladder) {
@@ -145,9 +198,28 @@ json DiagnosisJson(const CalibrationResult& r) {
     }
     distortion.push_back(e);
   }
+  json structure_unexplained = json::array(), structure_explained = json::array();
+  for (const StructureFinding& f : d.structure.unexplained) {
+    structure_unexplained.push_back(FindingJson(f));
+  }
+  for (const StructureFinding& f : d.structure.explained) {
+    structure_explained.push_back(FindingJson(f));
+  }
+  json wild = json::array();
+  for (const WildParameter& w : d.wild) {
+    wild.push_back({{"parameter", w.name},
+                    {"zoom", w.zoom >= 0 ? json(w.zoom) : json()},
+                    {"value", w.value},
+                    {"why", w.why},
+                    {"undetermined", w.undetermined}});
+  }
   const RankedEffect* next = d.Next();
   json j = {{"model", d.model_description},
             {"verdict", d.verdict},
+            {"fit_quality", FitQualityJson(d.fit_quality)},
+            {"wild", wild},
+            {"structure",
+             {{"unexplained", structure_unexplained}, {"explained", structure_explained}}},
             {"next", next ? json(next->name) : json()},
             {"ranking", ranking},
             {"unexplained", unexplained},
@@ -193,6 +265,21 @@ std::string DiagnosisText(const CalibrationResult& r) {
         << "\n";
     }
   }
+  if (!d.fit_quality.cells.empty()) {
+    o << "\nFit against the a-priori sigmas (factor = rms / a-priori sigma per coordinate; "
+         "flagged above "
+      << Fmt("%.2g", kMinFactor) << " when the chi-square test fails)\n";
+    o << "  observations                          n        rms          a-priori     factor  "
+         "flagged\n";
+    for (const FitQualityCell& c : d.fit_quality.cells) {
+      const double scale = c.unit == "m" ? 1e3 : 1.0;
+      const char* unit = c.unit == "m" ? "mm" : "px";
+      o << "  " << std::left << std::setw(34) << c.name << std::right << "  " << std::setw(6)
+        << c.observations << "  " << std::setw(9) << Fmt("%.4g", c.rms * scale) << " " << unit
+        << "  " << std::setw(9) << Fmt("%.4g", c.apriori * scale) << " " << unit << "  "
+        << std::setw(6) << Fmt("%.2f", c.factor) << "  " << (c.exceeds ? "yes" : "no") << "\n";
+    }
+  }
   o << "\nRanking of the effects not in the model (best first; rms over the fitted rows)\n";
   o << "  effect                  rms before -> after          delta BIC   p        signif  "
        "identif\n";
@@ -221,9 +308,22 @@ std::string DiagnosisText(const CalibrationResult& r) {
         << "\n";
     }
   }
-  if (!d.harmonics.unexplained.empty()) {
+  if (!d.harmonics.unexplained.empty() || !d.structure.unexplained.empty()) {
     o << "\nStructure outside the catalogue (unexplained)\n";
     for (const Harmonic& h : d.harmonics.unexplained) o << "  " << h.description << "\n";
+    for (const StructureFinding& f : d.structure.unexplained) {
+      o << "  " << f.description << (f.points_to.empty() ? "" : "; points to " + f.points_to)
+        << "\n";
+    }
+  }
+  if (!d.structure.explained.empty()) {
+    o << "\nStructure significant alone that a catalogue effect or other structure holds\n";
+    for (const StructureFinding& f : d.structure.explained) {
+      o << "  " << f.description << " ("
+        << (f.explained_by.empty() ? "the same structure as " + f.same_as
+                                   : "explained by " + f.explained_by)
+        << ")\n";
+    }
   }
   if (d.outliers.tested > 0) {
     o << "\nOutliers (w-test, critical w = " << Fmt("%.2f", d.outliers.critical_w) << ", "

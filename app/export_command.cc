@@ -78,6 +78,11 @@ int RunExport(const ExportArgs& args) {
       out << "zoom " << z << ": " << files[z].string() << " (" << cam.width << "x" << cam.height
           << " px from model.yaml, " << OpenCvDistortionCount(model, z)
           << " distortion coefficients)\n";
+      if (model.effects.Has(Effect::kFocus)) {
+        out << "  focus (SPEC 4.1): camera_matrix is focused at infinity; the file holds "
+               "focus_kf, focus_au, focus_av for fx (1 + kf/D), cx + au/D, cy + av/D at focus "
+               "distance D\n";
+      }
       // An extraction without given intrinsics sets the size from the
       // principal point (2 c + 1); flag it so that nobody mistakes it for the sensor's.
       if (cam.width == std::lround(2.0 * cam.intrinsics[2] + 1.0) &&

@@ -38,6 +38,7 @@ PhotoSessionSummary LoadPhotoSession(const std::string& shots_path, const std::s
   out.warnings = det.warnings;
 
   if (obs->pixels.empty()) obs->pixels_source = shots_path;
+  obs->pixel_covariates = shots.covariates;
   const std::vector<PixelObservation> pixels = detect::PixelObservationsOf(shots, targets, det);
   obs->pixels.insert(obs->pixels.end(), pixels.begin(), pixels.end());
   for (const auto& [zoom, size] : detect::ImageSizesOf(shots, det)) obs->image_sizes[zoom] = size;

@@ -35,6 +35,7 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
     if (!config.records_path.empty()) {
       RecordsFile f = ReadRecords(config.records_path, config.angle_unit);
       obs.records = std::move(f.records);
+      obs.record_covariates = std::move(f.covariates);
       obs.records_source = config.records_path;
       for (const std::string& n : f.notes) progress->Note(n);
       result->notes.insert(result->notes.end(), f.notes.begin(), f.notes.end());
@@ -42,6 +43,7 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
     if (!config.pixels_path.empty()) {
       PixelsFile f = ReadPixels(config.pixels_path, config.angle_unit);
       obs.pixels = std::move(f.pixels);
+      obs.pixel_covariates = std::move(f.covariates);
       obs.image_sizes = std::move(f.image_sizes);
       obs.pixels_source = config.pixels_path;
       for (const std::string& n : f.notes) progress->Note(n);

@@ -112,7 +112,8 @@ int RunPredict(const PredictArgs& args) {
       }
     }
     WriteFileAtomicWith(
-        args.out, [&](const std::string& tmp) { WriteRecords(tmp, out, unit); }, existing);
+        args.out, [&](const std::string& tmp) { WriteRecords(tmp, out, unit, in.covariates); },
+        existing);
     bad.Report(in.records.size());
     std::cerr << "predict: " << out.size() << " records -> " << args.out << "\n";
     return 0;
@@ -121,20 +122,27 @@ int RunPredict(const PredictArgs& args) {
   BadRows bad(args.pixels, args.skip_bad, true);
   std::vector<PixelObservation> out;
   out.reserve(in.pixels.size());
-  for (PixelObservation& p : in.pixels) {
+  // SPEC 4.1: each photo's D, its focus_distance or the centroid of its
+  // points as the model places them (zeros without the focus effect).
+  const std::vector<double> focus = PredictionFocusDistances(instrument.Model(), in.pixels);
+  for (size_t i = 0; i < in.pixels.size(); ++i) {
+    PixelObservation& p = in.pixels[i];
     try {
       // SPEC 7: empty X, Y, Z = a corner of a board the model estimated, as
       // it stood in the row's placement (SPEC 7.1).
-      p.uv = p.X_known ? instrument.Pixel(p.zoom, p.phi, p.theta, p.X)
+      p.uv = p.X_known ? instrument.Pixel(p.zoom, p.phi, p.theta, p.X, focus[i])
                        : instrument.BoardCornerPixel(p.zoom, p.phi, p.theta, p.target, p.corner,
-                                                     p.placement);
+                                                     p.placement, focus[i]);
       out.push_back(p);
     } catch (const PredictionError& e) {
       bad.Add(p.line, e);
     }
   }
   WriteFileAtomicWith(
-      args.out, [&](const std::string& tmp) { WritePixels(tmp, out, unit, in.image_sizes); },
+      args.out,
+      [&](const std::string& tmp) {
+        WritePixels(tmp, out, unit, in.image_sizes, in.covariates);
+      },
       existing);
   bad.Report(in.pixels.size());
   std::cerr << "predict: " << out.size() << " pixel rows -> " << args.out << "\n";

@@ -9,6 +9,7 @@
 
 #include "libcalib/io/csv.h"
 #include "libcalib/io/targets_io.h"
+#include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
 
 #ifdef RTSCALIB_WITH_RENDER
@@ -35,9 +36,15 @@ RenderStageResult RenderSession(const render::RenderSettings& settings,
   return out;
 #else
   // One shot per distinct shot id of the simulated pixel observations.
+  // SPEC 4.1: with the focus effect each photo is drawn with the intrinsics
+  // focused at its D (the simulator's, or the centroid of its points), and
+  // D is written to shots.csv as the instrument would report it.
+  const bool focus = truth.effects.Has(Effect::kFocus);
+  const std::vector<double> distance = PhotoFocusDistances(truth, exact);
   std::vector<render::Shot> shots;
   std::set<std::string> seen;
-  for (const PixelObservation& p : exact) {
+  for (size_t i = 0; i < exact.size(); ++i) {
+    const PixelObservation& p = exact[i];
     if (!seen.insert(p.shot).second) continue;
     render::Shot s;
     s.face = p.face;
@@ -48,6 +55,11 @@ RenderStageResult RenderSession(const render::RenderSettings& settings,
     s.placement = p.placement;
     s.ref_from_cam = RefFromCam(truth, p.zoom, p.phi, p.theta);
     s.cam = truth.cams.at(p.zoom);
+    if (focus && distance[i] > 0) {
+      s.focus_distance = distance[i];
+      FocusedIntrinsics(truth.cams[p.zoom].intrinsics.data(), truth.cams[p.zoom].focus.data(),
+                        s.focus_distance, s.cam.intrinsics.data());
+    }
     shots.push_back(s);
   }
   if (shots.empty()) {

@@ -114,6 +114,12 @@ std::string ValueCell(const RankedEffect& r) {
     }
     return out;
   }
+  for (size_t i = 0; i < r.focus.size(); ++i) {
+    const FocusValue& f = r.focus[i];
+    out += (i ? "<br>" : "") + std::string("zoom ") + std::to_string(f.zoom) + " " + f.name +
+           " = " + Fmt("%.3g", f.value * kFocusReportScale[f.index]) + " &plusmn; " +
+           Fmt("%.2g", f.sigma * kFocusReportScale[f.index]) + " " + kFocusReportUnits[f.index];
+  }
   for (size_t i = 0; i < r.distortion.size() && i < 8; ++i) {
     const DistortionValue& d = r.distortion[i];
     out += (i ? "<br>" : "") + std::string("zoom ") + std::to_string(d.zoom) + " " + d.coefficient +
@@ -244,7 +250,9 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   if (r.calibration.diagnosis) {
     const Diagnosis& d = *r.calibration.diagnosis;
     const RankedEffect* next = d.Next();
-    o << "<section class=\"verdict" << (next || !d.harmonics.unexplained.empty() ? "" : " ok")
+    const bool ok = !next && d.harmonics.unexplained.empty() && d.structure.unexplained.empty() &&
+                    !d.fit_quality.Exceeds() && d.wild.empty();
+    o << "<section class=\"verdict" << (ok ? " ok" : "")
       << "\" id=\"verdict\"><h2 style=\"border:none;margin-top:4px\">Verdict</h2>\n";
     for (size_t i = 0; i < d.verdict.size(); ++i) {
       o << "<p" << (i == 1 ? " class=lead" : "") << ">" << Esc(d.verdict[i]) << "</p>\n";
@@ -319,8 +327,21 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     const Diagnosis& d = *r.calibration.diagnosis;
     o << "<h2 id=\"ranking\">Which effect is missing</h2>\n" << RankingTable(d);
     o << "<h2 id=\"structure\">Structure outside the catalogue</h2>\n";
+    if (!d.structure.unexplained.empty() || !d.structure.explained.empty()) {
+      o << "<p>Against the session's other variables (target distance, photo and record order, "
+           "covariate columns, placements and boards, image position and radius):</p>\n"
+        << "<table><tr><th>structure</th><th>p</th><th>explained by</th><th>points to</th></tr>\n";
+      for (const auto* list : {&d.structure.unexplained, &d.structure.explained}) {
+        for (const StructureFinding& f : *list) {
+          o << "<tr><td>" << Esc(f.description) << "</td><td>" << Fmt("%.1e", f.p_value)
+            << "</td><td>" << Esc(f.explained_by.empty() ? "-" : f.explained_by) << "</td><td>"
+            << Esc(f.unexplained ? f.points_to : "-") << "</td></tr>\n";
+        }
+      }
+      o << "</table>\n";
+    }
     if (d.harmonics.unexplained.empty()) {
-      o << "<p>None: no harmonic of the phi, theta or distance readings (1 to 4 per turn, or of "
+      o << "<p>No harmonic of the phi, theta or distance readings (1 to 4 per turn, or of "
            "the EDM unit "
            "length) is significant once every catalogue effect is allowed for.</p>\n";
     } else {

@@ -565,6 +565,23 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   if (!r.calibration.model.effects.Empty()) {
     o << "Effects (report units)\n";
     for (Effect e : r.calibration.model.effects.List()) {
+      if (e == Effect::kFocus) {
+        // SPEC 4.1, per zoom in report units.
+        const InstrumentModel& m = r.calibration.model;
+        for (int z = 0; z < m.NumZooms(); ++z) {
+          o << "  focus zoom " << z << ":";
+          for (int i = 0; i < kNumFocus; ++i) {
+            const double sigma = z < static_cast<int>(m.sigmas.focus.size())
+                                     ? m.sigmas.focus[z][i] * kFocusReportScale[i]
+                                     : 0.0;
+            o << "  " << kFocusParamNames[i] << " = "
+              << Fmt("%.4g", m.cams[z].focus[i] * kFocusReportScale[i]) << " +- "
+              << Fmt("%.2g", sigma) << " " << kFocusReportUnits[i];
+          }
+          o << "\n";
+        }
+        continue;
+      }
       if (!IsKinematic(e)) {
         o << "  " << Info(e).name << " (per zoom, see model.yaml)\n";
         continue;

@@ -31,10 +31,16 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   progress.Step("writing the model and the reports");
   if (result.simulated) {
     WriteFileAtomicWith(out.RunFile("records.csv"),
-                        [&](const std::string& tmp) { WriteRecords(tmp, result.obs.records); });
+                        [&](const std::string& tmp) {
+                          WriteRecords(tmp, result.obs.records, AngleUnit::kRad,
+                                       result.obs.record_covariates);
+                        });
     if (!result.obs.pixels.empty()) {
       WriteFileAtomicWith(out.RunFile("pixels.csv"),
-                          [&](const std::string& tmp) { WritePixels(tmp, result.obs.pixels); });
+                          [&](const std::string& tmp) {
+                            WritePixels(tmp, result.obs.pixels, AngleUnit::kRad, {},
+                                        result.obs.pixel_covariates);
+                          });
     }
     if (result.truth) {
       WriteFileAtomicWith(out.RunFile("truth.yaml"), [&](const std::string& tmp) {

@@ -297,6 +297,7 @@ void AppendPixelObservations(const PhotoShot& shot, const TargetScene& targets,
       o.shot = shot.shot;
       o.placement = shot.placement;
       o.focus_distance = shot.focus_distance;
+      o.covariates = shot.covariates;
       o.target = tag.id;
       o.corner = k;
       o.X_known = board.pose_known;

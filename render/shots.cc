@@ -35,7 +35,8 @@ namespace fs = std::filesystem;
 namespace {
 
 const char kShotsHeader[] = "index,shot,face,zoom,phi,theta,image";
-const char kShotsPlacementHeader[] = "index,shot,face,zoom,phi,theta,image,placement";
+// Optional columns after kShotsHeader's, in this order.
+const char* const kShotsOptional[] = {"placement", "focus_distance"};
 const char kExactHeader[] = "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v,status";
 
 std::string Num(double v) {
@@ -326,13 +327,14 @@ RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot
   }
   if (const std::string m = CheckShots(shots); !m.empty())
     throw std::invalid_argument("shots: " + m);
-  bool placements = false;
+  bool placements = false, focus = false;
   for (const Shot& s : shots) {
     if (!scenes.count(s.placement)) {
       throw std::invalid_argument("shots: shot " + s.id + " has placement '" + s.placement +
                                   "', which has no scene");
     }
     placements = placements || !s.placement.empty();
+    focus = focus || s.focus_distance > 0;
   }
   fs::create_directories(options.out_dir);
 
@@ -345,13 +347,15 @@ RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot
   RenderShotsResult result;
   {
     std::ostringstream st, ex;
-    st << (placements ? kShotsPlacementHeader : kShotsHeader) << "\n";
+    st << kShotsHeader << (placements ? ",placement" : "") << (focus ? ",focus_distance" : "")
+       << "\n";
     ex << kExactHeader << "\n";
     for (int i : indices) {
       const Shot& s = shots[i];
       st << i << "," << s.id << "," << s.face << "," << s.zoom << "," << Num(s.phi) << ","
          << Num(s.theta) << "," << ImageName(s);
       if (placements) st << "," << s.placement;
+      if (focus) st << "," << (s.focus_distance > 0 ? Num(s.focus_distance) : "");
       st << "\n";
       const TargetScene& scene = scenes.at(s.placement);
       for (const ExpectedTag& t : ExpectTags(scene, s.ref_from_cam, s.cam, options.visibility)) {
@@ -445,17 +449,28 @@ void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& 
     std::ifstream in(t.shots);
     std::string line;
     std::getline(in, line);
-    if ((line != kShotsHeader && line != kShotsPlacementHeader) ||
-        (!header.empty() && line != header)) {
+    // kShotsHeader, then optional columns in their order.
+    bool known = line.rfind(kShotsHeader, 0) == 0;
+    if (known) {
+      const std::vector<std::string> columns = SplitCsvLine(line);
+      size_t next = 0;
+      for (size_t c = 7; c < columns.size() && known; ++c) {
+        while (next < std::size(kShotsOptional) && columns[c] != kShotsOptional[next]) ++next;
+        known = next < std::size(kShotsOptional);
+        ++next;
+      }
+    }
+    if (!known || (!header.empty() && line != header)) {
       throw std::runtime_error("MergeShards: unexpected header in " + t.shots);
     }
     header = line;
-    const size_t columns = line == kShotsHeader ? 7 : 8;
+    const size_t columns = SplitCsvLine(line).size();
     while (std::getline(in, line)) {
       if (line.empty()) continue;
-      const std::vector<std::string> cells = SplitCsvLine(line);
-      if (cells.size() != columns &&
-          !(columns == 8 && cells.size() == 7 && !line.empty() && line.back() == ',')) {
+      std::vector<std::string> cells = SplitCsvLine(line);
+      // getline drops a last empty cell: "...,p3," has one cell fewer.
+      if (cells.size() + 1 == columns && line.back() == ',') cells.emplace_back();
+      if (cells.size() != columns) {
         throw std::runtime_error("MergeShards: bad row in " + t.shots + ": " + line);
       }
       const int index = std::stoi(cells[0]);
@@ -576,6 +591,7 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
         photo.phi = s.phi;
         photo.theta = s.theta;
         photo.shot = s.id;
+        photo.focus_distance = s.focus_distance;
         detect::AppendPixelObservations(photo, scene, kept, &per_shot[i]);
         const int d = ++done;
         std::lock_guard<std::mutex> lock(mutex);

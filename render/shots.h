@@ -4,8 +4,10 @@
 // RenderShots writes into `out_dir`:
 //   <shot id>.png   8-bit grey image of each shot
 //   shots.csv       index, shot, face, zoom, phi, theta, image [, placement]
-//                   (placement when the shots have placements, SPEC 7.1: each
-//                   shot sees the scene of its placement)
+//                   [, focus_distance] (placement when the shots have
+//                   placements, SPEC 7.1: each shot sees the scene of its
+//                   placement; focus_distance when a shot has one, SPEC 4.1:
+//                   the distance its camera was focused at)
 //   exact.csv       pixels.csv columns (SPEC 3: face, zoom, phi, theta, shot,
 //                   target, corner, X, Y, Z, u, v) plus `status`: the exact
 //                   projection (ProjectToPixel) of every corner that
@@ -46,7 +48,8 @@ struct Shot {
   std::string id;             // unique; the image is <id>.png ([A-Za-z0-9_.-], no leading '.')
   std::string placement;      // SPEC 7.1: which scene it sees ("" = the one placement)
   Rigid3 ref_from_cam;        // the camera's true pose for this shot
-  CameraTool cam;             // intrinsics, distortion, size (pose block unused)
+  CameraTool cam;             // intrinsics (as focused for this shot), distortion, size
+  double focus_distance = 0;  // [m] SPEC 4.1: written to shots.csv when > 0
 };
 
 struct RenderShotsOptions {

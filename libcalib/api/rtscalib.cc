@@ -79,16 +79,22 @@ Eigen::VectorXd DiagonalVariances(const InstrumentModel& m,
     put(c + ".t", s.cam_tools[z].t.data());
     put(c + ".intrinsics", s.intrinsics[z].data());
     put(c + ".distortion", s.distortion[z].data());
+    if (z < static_cast<int>(s.focus.size())) put(c + ".focus", s.focus[z].data());
   }
   return var;
 }
 
+// The ray through (u, v) with the camera focused at `focus_distance` (SPEC
+// 4.1; <= 0: at infinity, the intrinsics as stored).
 bool RawRay(const InstrumentModel& m, int zoom, double phi, double theta, double u, double v,
-            Eigen::Matrix<double, 6, 1>* out) {
+            double focus_distance, Eigen::Matrix<double, 6, 1>* out) {
   const CameraTool& cam = m.cams[zoom];
   const double pixel[2] = {u, v};
+  double k[kNumIntrinsics];
+  const double* focus = focus_distance > 0 ? FocusOf(m, zoom) : nullptr;
+  if (!FocusedIntrinsics(cam.intrinsics.data(), focus, focus_distance, k)) return false;
   double ray[3];
-  if (!PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pixel, ray)) return false;
+  if (!PixelToRay(k, cam.distortion.data(), pixel, ray)) return false;
   const Rigid3 ref_from_cam = RefFromCam(m, zoom, phi, theta);
   out->head<3>() = ref_from_cam.translation;
   out->tail<3>() = ref_from_cam.rotation * Eigen::Vector3d(ray[0], ray[1], ray[2]);
@@ -238,12 +244,13 @@ Eigen::Vector3d CalibratedInstrument::EdmPoint(double phi, double theta, double 
   return x;
 }
 
-Ray CalibratedInstrument::CameraRay(int zoom, double phi, double theta, double u, double v) const {
-  CheckFinite({phi, theta, u, v}, "readings phi, theta and pixel u, v");
+Ray CalibratedInstrument::CameraRay(int zoom, double phi, double theta, double u, double v,
+                                    double focus_distance) const {
+  CheckFinite({phi, theta, u, v, focus_distance}, "readings phi, theta, pixel u, v and focus distance");
   CheckCameraDetermined(zoom);
   CheckInImage(model_.cams[zoom], zoom, u, v, "a pixel");
   Eigen::Matrix<double, 6, 1> r;
-  if (!RawRay(model_, zoom, phi, theta, u, v, &r)) {
+  if (!RawRay(model_, zoom, phi, theta, u, v, focus_distance, &r)) {
     throw PredictionError(PredictionFailure::kUntrustedPixel,
                           "a pixel zoom " + std::to_string(zoom) +
                               "'s distortion can undistort (inside its trusted region)",
@@ -256,7 +263,7 @@ Ray CalibratedInstrument::CameraRay(int zoom, double phi, double theta, double u
 Eigen::Vector3d CalibratedInstrument::CameraPoint(int zoom, double phi, double theta, double u,
                                                   double v, double d) const {
   CheckFinite({d}, "ray length d");
-  CameraRay(zoom, phi, theta, u, v);  // the checks; F_CAM itself is the model's
+  CameraRay(zoom, phi, theta, u, v, d);  // the checks; F_CAM itself is the model's
   const Eigen::Vector3d x = PredictCam(model_, zoom, phi, theta, u, v, d);
   CheckFiniteResult(x, "camera point");
   return x;
@@ -284,13 +291,16 @@ Eigen::Vector3d CalibratedInstrument::BoardCorner(int target, int corner,
 
 Eigen::Vector2d CalibratedInstrument::BoardCornerPixel(int zoom, double phi, double theta,
                                                        int target, int corner,
-                                                       const std::string& placement) const {
-  return Pixel(zoom, phi, theta, BoardCorner(target, corner, placement, zoom));
+                                                       const std::string& placement,
+                                                       double focus_distance) const {
+  return Pixel(zoom, phi, theta, BoardCorner(target, corner, placement, zoom), focus_distance);
 }
 
 Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
-                                            const Eigen::Vector3d& x_ref) const {
-  CheckFinite({phi, theta, x_ref[0], x_ref[1], x_ref[2]}, "readings phi, theta and point X, Y, Z");
+                                            const Eigen::Vector3d& x_ref,
+                                            double focus_distance) const {
+  CheckFinite({phi, theta, x_ref[0], x_ref[1], x_ref[2], focus_distance},
+              "readings phi, theta, point X, Y, Z and focus distance");
   CheckCameraDetermined(zoom);
   const CameraTool& cam = model_.cams[zoom];
   const Eigen::Vector3d x_cam = RefFromCam(model_, zoom, phi, theta).Inverse() * x_ref;
@@ -311,7 +321,7 @@ Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
                           Point(x_ref) + " at " + Num(r));
   }
   Eigen::Vector2d uv;
-  if (!PredictPixel(model_, zoom, phi, theta, x_ref, &uv)) {
+  if (!PredictPixel(model_, zoom, phi, theta, x_ref, &uv, focus_distance)) {
     throw PredictionError(PredictionFailure::kBehindCamera,
                           "a point in front of zoom " + std::to_string(zoom) + "'s camera",
                           Point(x_ref));
@@ -405,24 +415,28 @@ Uncertain<3> CalibratedInstrument::EdmPointWithUncertainty(double phi, double th
 }
 
 Uncertain<6> CalibratedInstrument::CameraRayWithUncertainty(int zoom, double phi, double theta,
-                                                            double u, double v) const {
+                                                            double u, double v,
+                                                            double focus_distance) const {
   RequireCovariance(has_covariance_);
-  const Ray r = CameraRay(zoom, phi, theta, u, v);
+  const Ray r = CameraRay(zoom, phi, theta, u, v, focus_distance);
   Eigen::Matrix<double, 6, 1> value;
   value << r.origin, r.direction;
   return Propagate<6>(model_, covariance_, zoom, value,
                       [&](const InstrumentModel& m, Eigen::Matrix<double, 6, 1>* out) {
-                        return RawRay(m, zoom, phi, theta, u, v, out) && out->allFinite();
+                        return RawRay(m, zoom, phi, theta, u, v, focus_distance, out) &&
+                               out->allFinite();
                       });
 }
 
 Uncertain<2> CalibratedInstrument::PixelWithUncertainty(int zoom, double phi, double theta,
-                                                        const Eigen::Vector3d& x_ref) const {
+                                                        const Eigen::Vector3d& x_ref,
+                                                        double focus_distance) const {
   RequireCovariance(has_covariance_);
-  const Eigen::Vector2d uv = Pixel(zoom, phi, theta, x_ref);
+  const Eigen::Vector2d uv = Pixel(zoom, phi, theta, x_ref, focus_distance);
   return Propagate<2>(model_, covariance_, zoom, uv,
                       [&](const InstrumentModel& m, Eigen::Vector2d* out) {
-                        return PredictPixel(m, zoom, phi, theta, x_ref, out) && out->allFinite();
+                        return PredictPixel(m, zoom, phi, theta, x_ref, out, focus_distance) &&
+                               out->allFinite();
                       });
 }
 

@@ -18,6 +18,14 @@
 //                                   F_CAM (Klug Eq. 12, SPEC 2) = PredictCam
 //   CameraPoint(z, phi, theta, u, v, d) = PredictCam (F_CAM itself)
 //   Pixel(z, phi, theta, X)       = project(cam_from_ref X) (Klug Eq. 62) = PredictPixel
+// With the `focus` effect (SPEC 4.1) the camera's intrinsics depend on the
+// focus distance D [m]: CameraPoint uses D = d (F_CAM); Pixel and
+// CameraRay take D as an optional last argument. Pixel's default (0) is the
+// point's own distance from the camera; a photo's pixels are those at the
+// photo's D (its focus_distance, or the distance to the centroid of the
+// points it shows: `rtscalib predict --pixels` does that). CameraRay's
+// default (0) is the camera focused at infinity; CameraRay(.., D).At(D) is
+// CameraPoint(.., D). Without the effect D plays no role.
 // A prediction that the model cannot make throws PredictionError saying why
 // (no such zoom, pixel outside the image by more than kImageMargin, pixel or
 // point outside the distortion's trusted region, point behind the camera,
@@ -123,15 +131,20 @@ class CalibratedInstrument {
 
   // The point the EDM measures at distance d [m] for readings phi, theta [rad].
   Eigen::Vector3d EdmPoint(double phi, double theta, double d) const;
-  // The line of sight of pixel (u, v) of zoom level `zoom`.
-  Ray CameraRay(int zoom, double phi, double theta, double u, double v) const;
+  // The line of sight of pixel (u, v) of zoom level `zoom`, the camera
+  // focused at `focus_distance` [m] (<= 0: at infinity; header).
+  Ray CameraRay(int zoom, double phi, double theta, double u, double v,
+                double focus_distance = 0) const;
   // The point at ray length d [m] through pixel (u, v): F_CAM, what
   // `rtscalib predict --records` writes for a cam row (= CameraRay(..).At(d)
   // up to rounding).
   Eigen::Vector3d CameraPoint(int zoom, double phi, double theta, double u, double v,
                               double d) const;
-  // The pixel at which zoom level `zoom` sees the reference-frame point x_ref.
-  Eigen::Vector2d Pixel(int zoom, double phi, double theta, const Eigen::Vector3d& x_ref) const;
+  // The pixel at which zoom level `zoom` sees the reference-frame point x_ref,
+  // the camera focused at `focus_distance` [m] (<= 0: at the point's own
+  // distance; header).
+  Eigen::Vector2d Pixel(int zoom, double phi, double theta, const Eigen::Vector3d& x_ref,
+                        double focus_distance = 0) const;
   // SPEC 7: corner `corner` (0..3) of tag `target` of a board the model
   // estimated (ref_from_board * TagBoard::CornersInBoard), in the reference
   // frame, as the board stood in `placement` (SPEC 7.1; "" for a session
@@ -144,16 +157,18 @@ class CalibratedInstrument {
   // The pixel at which zoom level `zoom` sees that corner
   // (= Pixel(zoom, phi, theta, BoardCorner(target, corner, placement, zoom))).
   Eigen::Vector2d BoardCornerPixel(int zoom, double phi, double theta, int target, int corner,
-                                   const std::string& placement = "") const;
+                                   const std::string& placement = "",
+                                   double focus_distance = 0) const;
 
   // The same with first-order covariances (header). The ray's value is
   // [origin; direction] (6 values: metres, then unitless). Throw
   // std::logic_error when the model has no uncertainties.
   Uncertain<3> EdmPointWithUncertainty(double phi, double theta, double d) const;
-  Uncertain<6> CameraRayWithUncertainty(int zoom, double phi, double theta, double u,
-                                        double v) const;
+  Uncertain<6> CameraRayWithUncertainty(int zoom, double phi, double theta, double u, double v,
+                                        double focus_distance = 0) const;
   Uncertain<2> PixelWithUncertainty(int zoom, double phi, double theta,
-                                    const Eigen::Vector3d& x_ref) const;
+                                    const Eigen::Vector3d& x_ref,
+                                    double focus_distance = 0) const;
 
   // The parameter vector the covariance refers to.
   const std::vector<ParameterBlock>& ParameterBlocks() const { return blocks_; }

@@ -134,6 +134,7 @@ std::vector<std::string> NonFiniteParameters(const InstrumentModel& m) {
     pose(m.cams[z].flange_from_cam, zoom + " camera tool");
     if (!all_finite(m.cams[z].intrinsics)) out.push_back(zoom + " intrinsics");
     if (!all_finite(m.cams[z].distortion)) out.push_back(zoom + " distortion");
+    if (!all_finite(m.cams[z].focus)) out.push_back(zoom + " focus");
   }
   for (Effect e : m.effects.List()) {
     if (IsKinematic(e) && !all_finite(m.EffectValue(e))) out.push_back(Info(e).name);

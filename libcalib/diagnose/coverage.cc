@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/model/focus.h"
 
 namespace rtscalib {
 namespace {
@@ -37,6 +38,13 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
     phis.push_back(std::fmod(std::fmod(p1, 2 * M_PI) + 2 * M_PI, 2 * M_PI));
     zeniths.push_back(ZenithOf(theta) * 180 / M_PI);
   };
+  // The nearest and farthest camera target per zoom (SPEC 4.1's D).
+  auto target = [&](int zoom, double d) {
+    if (!(d > 0)) return;
+    auto [it, fresh] = c.target_distance.emplace(zoom, std::make_pair(d, d));
+    it->second.first = std::min(it->second.first, d);
+    it->second.second = std::max(it->second.second, d);
+  };
   for (const Record& r : obs.records) {
     if (InCriticalRegion(r.theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
     ++c.records;
@@ -47,14 +55,18 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
     } else {
       c.has_cam = true;
       corner(r.zoom, r.u, r.v);
+      target(r.zoom, r.d);
     }
   }
-  for (const PixelObservation& p : obs.pixels) {
+  const std::vector<double> focus = PhotoFocusDistances(model, obs.pixels, &obs.targets);
+  for (size_t i = 0; i < obs.pixels.size(); ++i) {
+    const PixelObservation& p = obs.pixels[i];
     if (InCriticalRegion(p.theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
     ++c.pixels;
     c.has_cam = true;
     pointing(p.face, p.phi, p.theta);
     corner(p.zoom, p.uv.x(), p.uv.y());
+    target(p.zoom, focus[i]);
   }
   if (!zeniths.empty()) {
     c.min_zenith_deg = *std::min_element(zeniths.begin(), zeniths.end());
@@ -146,6 +158,20 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
       }
     }
   };
+  auto need_near_and_far = [&] {
+    if (!c.has_cam) {
+      out.push_back("camera observations (photos or cam rows) of targets near and far");
+      return;
+    }
+    for (const auto& [zoom, range] : c.target_distance) {
+      if (range.second < rules.focus_distance_ratio * range.first) {
+        out.push_back("targets near and far at zoom " + std::to_string(zoom) +
+                      " (the farthest at least " + Num(rules.focus_distance_ratio) +
+                      " times the nearest; the data span " + Num(range.first) + " to " +
+                      Num(range.second) + " m)");
+      }
+    }
+  };
   // What data each effect needs is a column of the catalogue (effects.h); the
   // advice is given in DataNeed order.
   for (int bit = 0; bit < kNumDataNeeds; ++bit) {
@@ -177,6 +203,9 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
         break;
       case kNeedImageCorners:
         need_image_corners();
+        break;
+      case kNeedNearAndFar:
+        need_near_and_far();
         break;
     }
   }

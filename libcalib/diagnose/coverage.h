@@ -11,9 +11,11 @@
 //   edm_offset                                      -> EDM distances at all
 //   edm_cyclic                                      -> distances sampled finer than U/4 over >= U
 //   distortion groups                               -> points near the image corners
+//   focus                                           -> camera targets near and far (per zoom)
 // `WhatWouldHelp` returns the requirements the data do not meet, in words.
 #pragma once
 
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -33,6 +35,8 @@ struct CoverageRules {
   double distance_ratio = 5.0;     // max / min EDM distance for scale
   double long_distance_m = 10.0;
   double corner_fraction = 0.7;  // of the half-diagonal from the image centre
+  // focus (SPEC 4.1) is 1/D: targets at one distance cannot tell it from fx, cx, cy.
+  double focus_distance_ratio = 2.0;  // farthest / nearest camera target of a zoom
 };
 
 struct Coverage {
@@ -44,6 +48,8 @@ struct Coverage {
   int distinct_edm = 0;
   double finest_edm_step_m = 0;         // smallest gap between distinct EDM distances
   std::vector<double> corner_fraction;  // per zoom: farthest observed pixel / half-diagonal
+  // per zoom: nearest and farthest camera target (photos' D, cam rows' d) [m]
+  std::map<int, std::pair<double, double>> target_distance;
   int records = 0, pixels = 0;          // used (outside the critical regions)
 };
 

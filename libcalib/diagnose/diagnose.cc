@@ -1,6 +1,8 @@
 #include "libcalib/diagnose/diagnose.h"
 
+#include <algorithm>
 #include <chrono>
+#include <map>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -47,6 +49,19 @@ std::string Change(const GroupRms& a, const GroupRms& b) {
 
 std::string ValueText(const RankedEffect& r) {
   const EffectInfo& info = Info(r.effect);
+  if (r.effect == Effect::kFocus) {
+    std::string out;
+    int zoom = -1;
+    for (const FocusValue& f : r.focus) {
+      if (f.zoom != zoom) {
+        out += std::string(out.empty() ? "" : "; ") + "zoom " + std::to_string(f.zoom) + ":";
+        zoom = f.zoom;
+      }
+      out += " " + f.name + " = " + Fmt("%.3g", f.value * kFocusReportScale[f.index]) + " +- " +
+             Fmt("%.2g", f.sigma * kFocusReportScale[f.index]) + " " + kFocusReportUnits[f.index];
+    }
+    return out;
+  }
   if (!IsKinematic(r.effect)) return "";
   std::string out;
   for (int k = 0; k < r.value.num; ++k) {
@@ -57,19 +72,100 @@ std::string ValueText(const RankedEffect& r) {
   return out;
 }
 
+// "0.0123 mm" or "0.334 px" for a per-coordinate sigma.
+std::string SigmaText(double value, const std::string& unit) {
+  return unit == "m" ? Fmt("%.3g", value * 1e3) + " mm" : Fmt("%.3g", value) + " px";
+}
+
+// The first sentence when some kind of observation fits worse than its
+// a-priori sigma allows: which kinds, at which zoom, by how much (the
+// largest factor over the faces; the faces named when not all exceed).
+std::string FitQualitySentence(const Diagnosis& d) {
+  struct Kind {
+    const FitQualityCell* worst = nullptr;
+    std::vector<int> faces, exceeding;
+  };
+  std::vector<std::pair<std::pair<int, int>, Kind>> kinds;  // (group, zoom), in cell order
+  for (const FitQualityCell& c : d.fit_quality.cells) {
+    const std::pair<int, int> key{static_cast<int>(c.group), c.zoom};
+    auto it = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == key; });
+    if (it == kinds.end()) it = kinds.insert(kinds.end(), {key, Kind()});
+    Kind& k = it->second;
+    k.faces.push_back(c.face);
+    if (!c.exceeds) continue;
+    k.exceeding.push_back(c.face);
+    if (!k.worst || c.factor > k.worst->factor) k.worst = &c;
+  }
+  std::string cells;
+  for (const auto& [key, k] : kinds) {
+    if (!k.worst) continue;
+    const FitQualityCell& c = *k.worst;
+    std::string name = c.name.substr(0, c.name.find(", face"));
+    if (k.exceeding.size() < k.faces.size()) {
+      name += " in face " + std::to_string(k.exceeding.front());
+    }
+    cells += std::string(cells.empty() ? "" : "; ") + name + " " + Fmt("%.2g", c.factor) + "x (" +
+             SigmaText(c.rms, c.unit) + " rms per coordinate against " +
+             SigmaText(c.apriori, c.unit) + ")";
+  }
+  return "The model (" + d.model_description +
+         ") is incomplete or its a-priori sigmas are too small: observations fit worse than "
+         "their a-priori sigma (fit.sigmas) allows: " +
+         cells + ".";
+}
+
+// Whether the residuals say that the model lacks an effect (the likely
+// cause of a fit gone wild): some kind of observation fits worse than its
+// a-priori sigma allows. Residuals at the noise level mean the parameters
+// that went wild are merely undetermined.
+bool MissingEffectEvidence(const Diagnosis& d) { return d.fit_quality.Exceeds(); }
+
 std::vector<std::string> Verdict(const Diagnosis& d) {
   std::vector<std::string> v;
+  const bool incomplete = d.fit_quality.Exceeds();
+  if (incomplete) v.push_back(FitQualitySentence(d));
   v.push_back("The model (" + d.model_description + ") fits " + Rms(d.current) + " over " +
               std::to_string(d.current.edm_n + d.current.cam_n) + " records and " +
               std::to_string(d.current.pixels_n) + " image points outside the critical regions.");
+  if (!d.wild.empty()) {
+    std::string list;
+    for (size_t i = 0; i < d.wild.size() && i < 4; ++i) {
+      const WildParameter& w = d.wild[i];
+      list += std::string(i ? "; " : "") + w.name + " = " + w.value + " (" + w.why + ")";
+    }
+    if (d.wild.size() > 4) list += "; and " + std::to_string(d.wild.size() - 4) + " more";
+    bool undetermined = false;
+    for (const WildParameter& w : d.wild) undetermined = undetermined || w.undetermined;
+    std::string cause;
+    if (MissingEffectEvidence(d)) {
+      cause = "the model lacks an effect, which these parameters try to absorb (see the fit "
+              "against the a-priori sigmas, the effects and the structure below): add what is "
+              "missing before reading these values";
+    } else if (undetermined) {
+      cause = "parameters these data do not determine (no point near where they act, e.g. the "
+              "image corners): hold them, or add data that reach there";
+    } else {
+      cause = "values no instrument has: check the start values and the data's conventions "
+              "(angle unit, faces, zoom labels)";
+    }
+    v.push_back("Warning: the fit went wild: " + list + ". Likely cause: " + cause + ".");
+  }
   std::vector<const RankedEffect*> significant;
   for (const RankedEffect& r : d.ranking.entries) {
     if (r.significant) significant.push_back(&r);
   }
   if (significant.empty()) {
-    v.push_back("No catalogue effect is missing: none of the " + std::to_string(d.ranking.tested) +
-                " effects tested is significant at the " +
-                Fmt("%g", 100 * d.ranking.level * d.ranking.tested) + "% level.");
+    if (incomplete) {
+      v.push_back("None of the " + std::to_string(d.ranking.tested) +
+                  " catalogue effects tested is significant at the " +
+                  Fmt("%g", 100 * d.ranking.level * d.ranking.tested) +
+                  "% level: what the model lacks is outside the catalogue (see the structure "
+                  "below), or the a-priori sigmas are too small.");
+    } else {
+      v.push_back("No catalogue effect is missing: none of the " +
+                  std::to_string(d.ranking.tested) + " effects tested is significant at the " +
+                  Fmt("%g", 100 * d.ranking.level * d.ranking.tested) + "% level.");
+    }
   } else {
     const RankedEffect& r = *significant.front();
     std::string s = "Add " + r.name + " next: " + Change(r.before, r.after) + " (delta BIC " +
@@ -98,6 +194,18 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
   }
   for (const Harmonic& h : d.harmonics.unexplained) {
     v.push_back("Structure outside the catalogue: " + h.description + ".");
+  }
+  for (const StructureFinding& f : d.structure.unexplained) {
+    v.push_back("Structure outside the catalogue: " + f.description +
+                (f.points_to.empty() ? "" : "; points to " + f.points_to) + ".");
+  }
+  // Structure a catalogue effect explains, for the few most significant
+  // (what the surveyor would see in the residuals without that effect).
+  for (size_t i = 0; i < d.structure.explained.size() && i < 3; ++i) {
+    const StructureFinding& f = d.structure.explained[i];
+    if (f.explained_by.empty()) continue;
+    v.push_back("Structure against " + f.variable + " (" + f.description + ") is what " +
+                f.explained_by + " explains.");
   }
   if (d.outliers.flagged > 0) {
     v.push_back(std::to_string(d.outliers.flagged) + " of " + std::to_string(d.outliers.tested) +
@@ -157,6 +265,10 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   for (const EffectInfo& info : EffectCatalogue()) {
     if (model.effects.Has(info.effect)) continue;
     if (camera_only && IsKinematic(info.effect)) continue;
+    if (std::find(settings.untested.begin(), settings.untested.end(), info.effect) !=
+        settings.untested.end()) {
+      continue;
+    }
     if (ContainedInKinematics(model.kinematics, info.effect)) {
       contained.push_back(info.effect);
     } else {
@@ -170,11 +282,19 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   const bool harmonics = settings.harmonics && !camera_only;
   if (harmonics)
     lo.probes = DefaultProbes(d.coverage.faces, d.coverage.has_edm, settings.max_harmonic);
+  if (settings.structure) {
+    lo.variables = SessionVariables(obs, model);
+    for (const Probe& p : StructureProbes(lo.variables, obs, model, !camera_only)) {
+      lo.probes.push_back(p);
+    }
+  }
   const Linearization lin = Linearize(obs, model, lo);
   const Reduced red = Reduce(lin);
   d.num_rows = lin.NumRows();
   d.num_parameters = red.base.rank();
   d.excluded_critical = lin.excluded_critical;
+  d.fit_quality =
+      AssessFitQuality(lin, obs, fit.options, d.num_parameters, settings.significance);
 
   std::vector<const ColumnBlock*> catalogue;
   for (const ColumnBlock& b : lin.blocks) {
@@ -184,11 +304,19 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
     if (kept >= kRedundantFraction) catalogue.push_back(&b);
   }
   Projector nuisance(lin.NumRows());
-  if (harmonics) {
-    d.harmonics =
-        AnalyseHarmonics(lin, red, catalogue, settings.significance, settings.max_unexplained);
+  if (!lo.probes.empty()) {
+    const ProbeAnalysis probes =
+        AnalyseProbes(lin, red, catalogue, settings.significance, settings.max_unexplained);
+    d.harmonics = AnalyseHarmonics(lin, probes);
+    d.structure = AnalyseStructure(lin, probes, model);
+    // Structure outside the catalogue is a nuisance for the ranking: an
+    // effect is credited only with what it explains beyond it.
     for (const Harmonic& h : d.harmonics.unexplained) {
       if (const ColumnBlock* b = lin.Find(h.block))
+        nuisance.Add(red.extra.middleCols(b->first, b->size));
+    }
+    for (const StructureFinding& f : d.structure.unexplained) {
+      if (const ColumnBlock* b = lin.Find(f.block))
         nuisance.Add(red.extra.middleCols(b->first, b->size));
     }
   }
@@ -214,6 +342,23 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   d.current = d.ranking.current;
 
   d.distortion_terms = AssessDistortionTerms(lin, model);
+  {
+    // The nearest target of each zoom (photos' D, camera records' d).
+    std::map<int, double> nearest;
+    for (const SessionVariable& v : lin.variables) {
+      if (v.name != "target distance") continue;
+      auto keep = [&](int zoom, double x) {
+        if (!(x > 0)) return;
+        auto [it, fresh] = nearest.emplace(zoom, x);
+        if (!fresh) it->second = std::min(it->second, x);
+      };
+      for (size_t i = 0; i < obs.pixels.size(); ++i) keep(obs.pixels[i].zoom, v.pixel[i]);
+      for (size_t i = 0; i < obs.records.size(); ++i) {
+        if (obs.records[i].tool == Tool::kCam) keep(obs.records[i].zoom, v.record[i]);
+      }
+    }
+    d.wild = FindWildParameters(lin, model, d.distortion_terms, nearest);
+  }
   d.residuals = ObservationResiduals(obs, model, fit.options);
   if (settings.outliers) {
     d.outliers =

@@ -3,11 +3,16 @@
 // outliers. docs/diagnostics.md explains every number.
 //
 //   Linearize (one Jacobian at the fitted model)  ->  Reduce (project out the fit)
-//     -> AnalyseHarmonics (structure outside the catalogue; the nuisance for the ranking)
+//     -> AssessFitQuality (each kind of observation against its a-priori sigma)
+//     -> AnalyseProbes (structure outside the catalogue: harmonics of phi and
+//        theta, trends against the session's variables, image motions and
+//        fields; the nuisance for the ranking) -> AnalyseHarmonics, AnalyseStructure
 //     -> RankEffects (every effect not in the model; best ones confirmed by Refine)
 //     -> TestOutliers (w-test per observation)
 //     -> AssessDistortionTerms (fitted distortion coefficients to drop)
-//     -> verdict (the sentences a report opens with)
+//     -> FindWildParameters (a fit that went wild)
+//     -> verdict (the sentences a report opens with: first whether the model
+//        fits its a-priori sigmas, then wild parameters, then the ranking)
 // Nothing here writes files; app/ turns a Diagnosis into report.json and report.html.
 #pragma once
 
@@ -17,10 +22,13 @@
 #include "libcalib/diagnose/coverage.h"
 #include "libcalib/diagnose/distortion_terms.h"
 #include "libcalib/diagnose/equivalents.h"
+#include "libcalib/diagnose/fit_quality.h"
 #include "libcalib/diagnose/harmonics.h"
 #include "libcalib/diagnose/outliers.h"
 #include "libcalib/diagnose/ranking.h"
 #include "libcalib/diagnose/residuals.h"
+#include "libcalib/diagnose/structure.h"
+#include "libcalib/diagnose/wild_fit.h"
 
 namespace rtscalib {
 
@@ -32,6 +40,13 @@ struct Settings {
   int max_unexplained = 6;
   bool outliers = true;
   int outliers_listed = 12;
+  // Structure beyond phi and theta (structure.h): trends against the
+  // session's variables, image motions and fields.
+  bool structure = true;
+  // Catalogue effects the ranking leaves out (neither ranked nor used to
+  // explain structure): what the diagnosis says of data whose effect the
+  // catalogue lacks (tests).
+  std::vector<Effect> untested;
   std::string Check() const;
 };
 
@@ -48,8 +63,13 @@ struct Diagnosis {
   std::vector<std::string> effects;
   Kinematics kinematics = Kinematics::kDh;
   GroupRms current;
+  // Each kind of observation (per zoom and face) against its a-priori sigma.
+  FitQuality fit_quality;
   Ranking ranking;
   HarmonicAnalysis harmonics;
+  StructureAnalysis structure;
+  // Parameters the data do not hold or no instrument has (a fit gone wild).
+  std::vector<WildParameter> wild;
   OutlierReport outliers;
   // Fitted distortion coefficients, and those to drop with their config line.
   DistortionTerms distortion_terms;

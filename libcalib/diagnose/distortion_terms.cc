@@ -169,7 +169,12 @@ DistortionTerms AssessDistortionTerms(const Linearization& lin, const Instrument
     t.group = *col.effect;
     t.value = model.cams[col.zoom].distortion[col.index];
     t.sigma = std::sqrt(std::max(cov(a, a), 0.0));
-    t.corner_px = t.sigma * CornerDerivative(model.cams[col.zoom], col.index);
+    const CameraTool& cam = model.cams[col.zoom];
+    const double derivative = CornerDerivative(cam, col.index);
+    t.corner_px = t.sigma * derivative;
+    t.corner_value_px = std::fabs(t.value) * derivative;
+    const double size = std::max(cam.width, cam.height);
+    t.wild = t.corner_px > size || t.corner_value_px > size;
     for (size_t b = 0; b < columns.size(); ++b) {
       const FreeColumn& other = lin.base_columns[columns[b]];
       if (b == a || other.zoom != col.zoom) continue;
@@ -190,7 +195,7 @@ DistortionTerms AssessDistortionTerms(const Linearization& lin, const Instrument
     const bool zero = tvalue < rules.max_t;
     const bool corner = t.corner_px > rules.max_corner_sigmas * out.pixel_sigma;
     const bool collinear = std::fabs(t.rho) > rules.max_rho;
-    if (!zero || !(corner || collinear)) continue;
+    if (t.wild || !zero || !(corner || collinear)) continue;
     t.reason = t.name + " = " + Fmt("%.3g", t.value) + " +- " + Fmt("%.2g", t.sigma) +
                " is not distinguishable from 0 (|value| < " + Fmt("%g", rules.max_t) + " sigma)";
     if (corner) {

@@ -11,10 +11,16 @@
 //                corners (the distortion is extrapolated where no point was);
 //   rho        = the largest |C_kl| / (s_k s_l) over the other fitted
 //                coefficients l of the same zoom.
+//   corner_value_px = |v| * the same derivative: how far the coefficient's
+//                value moves the corners.
 // Rule: k is suggested for dropping when it is not distinguishable from the
 // held value 0, |v| < 2 s (so that dropping it costs nothing significant),
 // AND it is badly determined: corner_px > the fit's pixel sigma, or
-// |rho| > 0.99. Per zoom and group at most one coefficient is suggested:
+// |rho| > 0.99. A coefficient whose sigma or value moves the corners by more
+// than the image's size is never suggested for dropping: the fit went wild
+// there (`wild`), which wild_fit.h reports with its likely cause (a missing
+// effect the coefficient tries to absorb, or a coefficient the data cannot
+// determine), not as a coefficient to drop. Per zoom and group at most one coefficient is suggested:
 // the one of the highest power of the radius (k3 before k2 before k1: data
 // without the image corners cannot tell r^4 from r^6, and the series is
 // truncated from the top), then the smallest |v| / s. Drop one at a time and
@@ -44,6 +50,8 @@ struct DistortionTerm {
   Effect group = Effect::kRadialDistortion;
   double value = 0, sigma = 0;
   double corner_px = 0;     // sigma's effect at the farthest image corner [px]
+  double corner_value_px = 0;  // the value's effect there [px]
+  bool wild = false;        // corner_px or corner_value_px beyond the image's size
   double rho = 0;           // largest |correlation| with another fitted coefficient of the zoom
   std::string partner;      // that coefficient's name ("" when there is none)
   bool drop = false;        // the rule above holds and it is the zoom's and group's weakest

@@ -4,16 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 
 namespace rtscalib {
 namespace {
 
 constexpr double kArcsecPerRad = 180.0 * 3600.0 / M_PI;
-
-Eigen::MatrixXd Columns(const Eigen::MatrixXd& m, const ColumnBlock& b) {
-  return m.middleCols(b.first, b.size);
-}
 
 Harmonic MakeHarmonic(const ColumnBlock& block, const ColumnTest& t, double level,
                       double unit_length) {
@@ -71,109 +66,40 @@ std::vector<Probe> DefaultProbes(const std::set<int>& faces, bool has_edm, int m
   std::vector<Probe> out;
   for (int face : faces) {
     for (int k = 1; k <= max_harmonic; ++k) {
-      out.push_back({Reading::kPhi, Reading::kPhi, k, face});
-      out.push_back({Reading::kTheta, Reading::kTheta, k, face});
-      out.push_back({Reading::kTheta, Reading::kPhi, k, face});
-      if (has_edm) out.push_back({Reading::kDistance, Reading::kDistance, k, face});
+      auto add = [&](Reading reading, Reading variable) {
+        Probe p;
+        p.kind = ProbeKind::kHarmonic;
+        p.reading = reading;
+        p.variable = variable;
+        p.harmonic = k;
+        p.face = face;
+        out.push_back(p);
+      };
+      add(Reading::kPhi, Reading::kPhi);
+      add(Reading::kTheta, Reading::kTheta);
+      add(Reading::kTheta, Reading::kPhi);
+      if (has_edm) add(Reading::kDistance, Reading::kDistance);
     }
   }
   return out;
 }
 
-HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
-                                  const std::vector<const ColumnBlock*>& catalogue,
-                                  double significance, int max_terms) {
+HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const ProbeAnalysis& probes) {
   HarmonicAnalysis out;
-  std::vector<const ColumnBlock*> probes;
-  for (const ColumnBlock& b : lin.blocks) {
-    if (b.is_probe) probes.push_back(&b);
-  }
-  out.tests = static_cast<int>(probes.size());
-  if (probes.empty()) return out;
-  out.level = significance / out.tests;
-  const int n = lin.NumRows();
-  const int g = lin.num_clusters;
-  const int dof_base = red.base.rank();
-
-  // 1. Against the fitted model alone.
-  std::vector<int> raw_significant;
-  for (size_t j = 0; j < probes.size(); ++j) {
-    const ColumnTest t =
-        TestColumns(red.r, Columns(red.extra, *probes[j]), red.cluster, g, dof_base);
-    if (t.rank > 0 && t.p_value < out.level) raw_significant.push_back(static_cast<int>(j));
-  }
-
-  // 2. On top of every catalogue effect the data see.
-  Projector cat(n);
-  {
-    int cols = 0;
-    for (const ColumnBlock* b : catalogue) cols += b->size;
-    Eigen::MatrixXd c(n, cols);
-    int k = 0;
-    for (const ColumnBlock* b : catalogue) {
-      c.middleCols(k, b->size) = Columns(red.extra, *b);
-      k += b->size;
-    }
-    cat.Add(c);
-  }
-  const Eigen::VectorXd y = cat.Apply(red.r);
-  std::vector<Eigen::MatrixXd> t_cat(probes.size());
-  for (size_t j = 0; j < probes.size(); ++j) t_cat[j] = cat.Apply(Columns(red.extra, *probes[j]));
-  std::vector<int> selected;
-  Projector sel(n);
-  for (int iter = 0; iter < max_terms; ++iter) {
-    const Eigen::VectorXd ys = sel.Apply(y);
-    int best = -1;
-    double best_p = 1.0, best_wald = 0.0;
-    for (size_t j = 0; j < probes.size(); ++j) {
-      if (std::find(selected.begin(), selected.end(), static_cast<int>(j)) != selected.end())
-        continue;
-      const ColumnTest t =
-          TestColumns(ys, sel.Apply(t_cat[j]), red.cluster, g, dof_base + cat.rank() + sel.rank());
-      if (t.rank == 0) continue;
-      if (t.p_value < best_p || (t.p_value == best_p && t.wald > best_wald)) {
-        best = static_cast<int>(j);
-        best_p = t.p_value;
-        best_wald = t.wald;
-      }
-    }
-    if (best < 0 || best_p >= out.level) break;
-    selected.push_back(best);
-    sel.Add(t_cat[best]);
-  }
-  // Joint amplitudes of the selected probes.
-  for (int s : selected) {
-    Projector others(n);
-    for (int o : selected) {
-      if (o != s) others.Add(t_cat[o]);
-    }
-    const ColumnTest t = TestColumns(others.Apply(y), others.Apply(t_cat[s]), red.cluster, g,
-                                     dof_base + cat.rank() + others.rank());
-    Harmonic h = MakeHarmonic(*probes[s], t, out.level, lin.edm_cyclic_unit_length);
+  out.level = probes.level;
+  out.tests = probes.tests;
+  for (int s : probes.selected) {
+    const ProbeResult& r = probes.probes[s];
+    if (r.block->probe.kind != ProbeKind::kHarmonic) continue;
+    Harmonic h = MakeHarmonic(*r.block, r.joint, out.level, lin.edm_cyclic_unit_length);
     // Below the resolution floor a statistically significant term is
     // round-off of exact data, not structure.
     if (h.significant) out.unexplained.push_back(h);
   }
-
-  // 3. What the catalogue explains.
-  for (int j : raw_significant) {
-    const ColumnTest raw =
-        TestColumns(red.r, Columns(red.extra, *probes[j]), red.cluster, g, dof_base);
-    Harmonic h = MakeHarmonic(*probes[j], raw, out.level, lin.edm_cyclic_unit_length);
-    const bool unexplained = std::find(selected.begin(), selected.end(), j) != selected.end();
-    if (!unexplained) {
-      double best = std::numeric_limits<double>::infinity();
-      for (const ColumnBlock* b : catalogue) {
-        Projector pb(n);
-        pb.Add(Columns(red.extra, *b));
-        const ColumnTest t = TestColumns(pb.Apply(red.r), pb.Apply(Columns(red.extra, *probes[j])),
-                                         red.cluster, g, dof_base + pb.rank());
-        if (t.wald < best) {
-          best = t.wald;
-          h.explained_by = b->name;
-        }
-      }
-    }
+  for (const ProbeResult& r : probes.probes) {
+    if (r.block->probe.kind != ProbeKind::kHarmonic || !r.raw_significant) continue;
+    Harmonic h = MakeHarmonic(*r.block, r.raw, out.level, lin.edm_cyclic_unit_length);
+    h.explained_by = r.explained_by;
     out.before_catalogue.push_back(h);
   }
   return out;

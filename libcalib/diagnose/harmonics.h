@@ -12,17 +12,10 @@
 // the reading's own units (arcsec, mm), with whatever the fitted model can
 // absorb already taken out.
 //
-// Analysis:
-//  1. before the catalogue: each probe tested against the fitted model alone;
-//  2. unexplained: forward selection of probes on top of ALL catalogue effects
-//     that the data can see (each step adds the most significant probe, until
-//     none is significant or `max_terms`): what remains significant is
-//     structure that no catalogue effect can produce, reported with its joint
-//     amplitude and phase and never under an effect's name;
-//  3. a probe significant in (1) but not in (2) is explained by the catalogue;
-//     `explained_by` names the single effect that removes most of it.
-// Tests are the robust Wald tests of statistics.h at level significance /
-// (number of probes) (Bonferroni).
+// The tests are AnalyseProbes' (probes.h: against the fitted model alone,
+// then on top of the whole catalogue, then what explains them); this file
+// reports the harmonic probes among them: joint amplitude and phase, never
+// under an effect's name.
 #pragma once
 
 #include <set>
@@ -30,6 +23,7 @@
 #include <vector>
 
 #include "libcalib/diagnose/linearization.h"
+#include "libcalib/diagnose/probes.h"
 
 namespace rtscalib {
 
@@ -56,10 +50,8 @@ struct HarmonicAnalysis {
 // Probes for the faces present: the four families above, k = 1..max_harmonic.
 std::vector<Probe> DefaultProbes(const std::set<int>& faces, bool has_edm, int max_harmonic = 4);
 
-// `catalogue` = column blocks of the candidate effects the data can see.
-HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const Reduced& red,
-                                  const std::vector<const ColumnBlock*>& catalogue,
-                                  double significance, int max_terms = 6);
+// The harmonic probes of `probes` (AnalyseProbes over `lin`).
+HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const ProbeAnalysis& probes);
 
 // "twice per turn in phi", "harmonic 2 of the EDM unit length (period 0.75 m)".
 std::string HarmonicName(const Probe& p, double unit_length_m);

@@ -2,9 +2,11 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <initializer_list>
+#include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -13,6 +15,7 @@
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/cost_functions.h"
 #include "libcalib/fit/parameterization.h"
+#include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib {
@@ -67,6 +70,13 @@ struct ReadingDerivatives {
 constexpr double kAngleStep = 1e-6;     // rad: round-off ~1e-16 * 50 m / 1e-6 << signal
 constexpr double kDistanceStep = 1e-4;  // m
 
+// The zoom of a row's observation (-1 for EDM rows).
+int ZoomOf(const Observations& obs, const ResidualRow& row) {
+  if (row.group == ObsGroup::kPixel) return obs.pixels[row.index].zoom;
+  if (row.group == ObsGroup::kCam) return obs.records[row.index].zoom;
+  return -1;
+}
+
 ReadingDerivatives RecordDerivatives(const InstrumentModel& m, const Record& r, bool need[3]) {
   ReadingDerivatives out;
   auto predict = [&](double phi, double theta, double d, Eigen::Vector3d* x) {
@@ -95,30 +105,18 @@ ReadingDerivatives RecordDerivatives(const InstrumentModel& m, const Record& r, 
 }
 
 ReadingDerivatives PixelDerivatives(const InstrumentModel& m, const PixelObservation& p,
-                                    bool need[3]) {
+                                    double focus_distance, bool need[3]) {
   ReadingDerivatives out;
   Eigen::Vector2d a, b;
   auto diff = [&](double dphi, double dtheta, Eigen::Vector3d* out3) {
-    if (PredictPixel(m, p.zoom, p.phi + dphi, p.theta + dtheta, p.X, &a) &&
-        PredictPixel(m, p.zoom, p.phi - dphi, p.theta - dtheta, p.X, &b)) {
+    if (PredictPixel(m, p.zoom, p.phi + dphi, p.theta + dtheta, p.X, &a, focus_distance) &&
+        PredictPixel(m, p.zoom, p.phi - dphi, p.theta - dtheta, p.X, &b, focus_distance)) {
       out3->head<2>() = (a - b) / (2 * kAngleStep);
     }
   };
   if (need[0]) diff(kAngleStep, 0, &out.dphi);
   if (need[1]) diff(0, kAngleStep, &out.dtheta);
   return out;
-}
-
-double ProbeVariable(const Probe& probe, double phi, double theta, double d, double unit_length) {
-  switch (probe.variable) {
-    case Reading::kPhi:
-      return phi;
-    case Reading::kTheta:
-      return theta;
-    case Reading::kDistance:
-      return 2.0 * M_PI * d / unit_length;
-  }
-  return 0.0;
 }
 
 // The model with every candidate effect enabled (kinematic ones at zero):
@@ -132,6 +130,9 @@ InstrumentModel WithCandidates(const InstrumentModel& model,
       throw std::invalid_argument(std::string(Info(e).name) + " is already in the model");
     work.effects.Add(e);
     if (IsKinematic(e)) work.EffectValue(e) = {0.0, 0.0};
+    if (e == Effect::kFocus) {
+      for (CameraTool& cam : work.cams) cam.focus.fill(0.0);
+    }
   }
   return work;
 }
@@ -158,7 +159,7 @@ std::map<std::pair<const double*, int>, int> CandidateColumns(const Parameteriza
         if (c.effect != e || (c.zoom >= 0 && !zoom_used[c.zoom])) continue;
         extra_col[{d.block, static_cast<int>(k)}] = b.first + b.size;
         b.param_names.push_back(c.name);
-        if (IsDistortion(e)) b.distortion.push_back({c.zoom, c.index});
+        if (IsCameraEffect(e)) b.distortion.push_back({c.zoom, c.index});
         ++b.size;
       }
     }
@@ -282,42 +283,299 @@ void EvaluateColumns(ceres::Problem* problem, const std::vector<ceres::ResidualB
   }
 }
 
-// Probes: d r / d reading times the harmonic, per face, in the columns of
-// `extra` from `first_col` on (central differences of the model's
-// predictions, cached per observation).
+double HarmonicVariable(const Probe& probe, double phi, double theta, double d,
+                        double unit_length) {
+  switch (probe.variable) {
+    case Reading::kPhi:
+      return phi;
+    case Reading::kTheta:
+      return theta;
+    case Reading::kDistance:
+      return 2.0 * M_PI * d / unit_length;
+  }
+  return 0.0;
+}
+
+// Steps of the image motions' central differences on camera records: a
+// relative scale, a shift [px], a rotation [rad]; F_CAM is linear in them to
+// ~1e-12 over such steps, and round-off (1e-16 x 50 m / 1e-6) stays far
+// below any signal.
+constexpr double kMotionStep[kNumImageMotions] = {1e-6, 1e-3, 1e-3, 1e-6};
+
+// The model with zoom z's image moved by `step` of motion k (image-motion
+// probes of camera records): scale (fx, fy), shift (cx or cy), or a turn of
+// the camera about its optical axis.
+InstrumentModel MovedImage(const InstrumentModel& model, int zoom, int motion, double step) {
+  InstrumentModel m = model;
+  m.sigmas = ModelSigmas();
+  CameraTool& cam = m.cams[zoom];
+  switch (motion) {
+    case 0:
+      cam.intrinsics[0] *= 1.0 + step;
+      cam.intrinsics[1] *= 1.0 + step;
+      break;
+    case 1:
+      cam.intrinsics[2] += step;
+      break;
+    case 2:
+      cam.intrinsics[3] += step;
+      break;
+    default: {
+      // The image turned by +w about the principal point is the camera
+      // turned by -w about its z axis.
+      Rigid3 tool = cam.flange_from_cam.ToRigid();
+      tool.rotation =
+          tool.rotation * Eigen::AngleAxisd(-step, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      cam.flange_from_cam = PoseBlock::FromRigid(tool);
+      break;
+    }
+  }
+  return m;
+}
+
+int TrendSize(const Probe& p, const std::vector<SessionVariable>& variables) {
+  switch (p.form) {
+    case TrendForm::kLinear:
+    case TrendForm::kInverse:
+      return 1;
+    case TrendForm::kQuadratic:
+      return 2;
+    case TrendForm::kCategories:
+      return static_cast<int>(variables.at(p.session_variable).categories.size());
+  }
+  return 1;
+}
+
+// Columns of a probe in `extra`.
+int ProbeSize(const Probe& p, const std::vector<SessionVariable>& variables) {
+  switch (p.kind) {
+    case ProbeKind::kHarmonic:
+      return 2;
+    case ProbeKind::kReadingTrend:
+      return TrendSize(p, variables);
+    case ProbeKind::kImageMotion:
+      return kNumImageMotions * TrendSize(p, variables);
+    case ProbeKind::kImageField:
+      return p.field == ImageField::kPosition ? 14 : 6;
+  }
+  return 0;
+}
+
+const char* const kMotionNames[kNumImageMotions] = {"scale", "shift u", "shift v", "rotation"};
+
+std::string FormName(TrendForm f) {
+  switch (f) {
+    case TrendForm::kLinear:
+      return "linear";
+    case TrendForm::kInverse:
+      return "1/x";
+    case TrendForm::kQuadratic:
+      return "P1, P2";
+    case TrendForm::kCategories:
+      return "per category";
+  }
+  return "";
+}
+
+// The block name of a probe (reports refer to probes by it).
+std::string ProbeName(const Probe& p, const std::vector<SessionVariable>& variables) {
+  switch (p.kind) {
+    case ProbeKind::kHarmonic:
+      return std::string(ReadingName(p.reading)) + " error, harmonic " +
+             std::to_string(p.harmonic) + " of " + ReadingName(p.variable) + ", face " +
+             std::to_string(p.face);
+    case ProbeKind::kReadingTrend:
+      return std::string(ReadingName(p.reading)) + (p.per_metre ? " scale" : " error") +
+             " against " + variables.at(p.session_variable).name + " (" + FormName(p.form) + ")";
+    case ProbeKind::kImageMotion:
+      return "image motion of zoom " + std::to_string(p.zoom) + " against " +
+             variables.at(p.session_variable).name + " (" + FormName(p.form) + ")";
+    case ProbeKind::kImageField:
+      return "image field of zoom " + std::to_string(p.zoom) + " (" +
+             (p.field == ImageField::kPosition ? "position" : "radius") + ")";
+  }
+  return "";
+}
+
+// The monomials x^a y^b, 2 <= a + b <= 3, of the position field.
+constexpr int kFieldPowers[7][2] = {{2, 0}, {1, 1}, {0, 2}, {3, 0}, {2, 1}, {1, 2}, {0, 3}};
+// Powers of the radius along (4) and across (2) the radial direction.
+constexpr int kRadialPowers[6] = {3, 5, 7, 9, 3, 5};
+
+// Displacement [px] of image field column `k` at pixel `uv` of `cam`.
+Eigen::Vector2d FieldColumn(const Probe& p, int k, const CameraTool& cam,
+                            const Eigen::Vector2d& uv) {
+  const double hw = 0.5 * cam.width, hh = 0.5 * cam.height;
+  const double x = (uv.x() - hw) / hw, y = (uv.y() - hh) / hh;
+  if (p.field == ImageField::kPosition) {
+    const int m = k % 7;
+    const double value = std::pow(x, kFieldPowers[m][0]) * std::pow(y, kFieldPowers[m][1]);
+    return k < 7 ? Eigen::Vector2d(value, 0) : Eigen::Vector2d(0, value);
+  }
+  // Radius in pixels over the half-diagonal (1 at the corners).
+  const Eigen::Vector2d d(uv.x() - hw, uv.y() - hh);
+  const double rho = d.norm() / std::hypot(hw, hh);
+  if (!(rho > 0)) return Eigen::Vector2d::Zero();
+  const Eigen::Vector2d along = d / d.norm();
+  const Eigen::Vector2d across(-along.y(), along.x());
+  const double value = std::pow(rho, kRadialPowers[k]);
+  return k < 4 ? Eigen::Vector2d(value * along) : Eigen::Vector2d(value * across);
+}
+
+// The value of a probe's variable at row `row`, NaN where the probe does
+// not apply (harmonics: their own variable).
+double ProbeValue(const Probe& p, const ResidualRow& row,
+                  const std::vector<SessionVariable>& variables) {
+  const bool pixel = row.group == ObsGroup::kPixel;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (p.kind == ProbeKind::kReadingTrend && p.reading == Reading::kDistance &&
+      row.group != ObsGroup::kEdm) {
+    return nan;
+  }
+  if (p.kind == ProbeKind::kImageField) return pixel ? 0.0 : nan;
+  const SessionVariable& v = variables.at(p.session_variable);
+  return pixel ? v.pixel.at(row.index) : v.record.at(row.index);
+}
+
+// Image-motion derivatives of one observation (whitened): columns scale,
+// shift u, shift v, rotation; rows the observation's components.
+using MotionDerivatives = Eigen::Matrix<double, 3, kNumImageMotions>;
+
+// Probe columns in `extra` from `first_col` on: d r / d reading times the
+// harmonic or trend functions, image motions times the trend functions,
+// image fields (central differences of the model's predictions, cached per
+// observation).
 void AddProbeColumns(const Observations& obs, const InstrumentModel& model,
                      const std::vector<Probe>& probes, int first_col, Linearization* lin) {
+  const std::vector<SessionVariable>& variables = lin->variables;
   bool need[3] = {false, false, false};
-  for (const Probe& p : probes) need[static_cast<int>(p.reading)] = true;
-  std::map<std::pair<int, int>, ReadingDerivatives> cache;  // (group kind != pixel, index)
-  int col = first_col;
+  bool motions = false;
   for (const Probe& p : probes) {
+    if (p.kind == ProbeKind::kHarmonic || p.kind == ProbeKind::kReadingTrend) {
+      need[static_cast<int>(p.reading)] = true;
+    }
+    motions = motions || p.kind == ProbeKind::kImageMotion;
+  }
+  std::vector<int> first(probes.size());
+  std::vector<ColumnBlock*> blocks;
+  int col = first_col;
+  for (size_t k = 0; k < probes.size(); ++k) {
+    const Probe& p = probes[k];
     ColumnBlock b;
     b.is_probe = true;
     b.probe = p;
     b.first = col;
-    b.size = 2;
-    b.name = std::string(ReadingName(p.reading)) + " error, harmonic " +
-             std::to_string(p.harmonic) + " of " + ReadingName(p.variable) + ", face " +
-             std::to_string(p.face);
-    b.param_names = {b.name + " [cos]", b.name + " [sin]"};
+    b.size = ProbeSize(p, variables);
+    b.name = ProbeName(p, variables);
+    for (int j = 0; j < b.size; ++j) {
+      if (p.kind == ProbeKind::kHarmonic) {
+        b.param_names.push_back(b.name + (j == 0 ? " [cos]" : " [sin]"));
+      } else if (p.kind == ProbeKind::kImageMotion) {
+        const int per = b.size / kNumImageMotions;
+        b.param_names.push_back(b.name + " [" + kMotionNames[j / per] + " " +
+                                std::to_string(j % per) + "]");
+      } else {
+        b.param_names.push_back(b.name + " [" + std::to_string(j) + "]");
+      }
+    }
+    first[k] = col;
+    col += b.size;
     lin->blocks.push_back(b);
-    col += 2;
   }
+
+  // Trend functions over the rows each probe applies to.
+  std::vector<TrendBasis> basis(probes.size());
+  for (size_t k = 0; k < probes.size(); ++k) {
+    const Probe& p = probes[k];
+    if (p.kind != ProbeKind::kReadingTrend && p.kind != ProbeKind::kImageMotion) continue;
+    TrendBasis& b = basis[k];
+    b.form = p.form;
+    b.size = TrendSize(p, variables);
+    double sum = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    int n = 0;
+    for (int i = 0; i < lin->NumRows(); ++i) {
+      const ResidualRow& row = lin->rows[i];
+      if (p.kind == ProbeKind::kImageMotion &&
+          (row.group == ObsGroup::kEdm || ZoomOf(obs, row) != p.zoom)) {
+        continue;
+      }
+      const double x = ProbeValue(p, row, variables);
+      if (!std::isfinite(x)) continue;
+      sum += p.form == TrendForm::kInverse ? 1.0 / x : x;
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+      ++n;
+    }
+    b.mean = n > 0 ? sum / n : 0.0;
+    b.lo = n > 0 ? lo : 0.0;
+    b.hi = n > 0 ? hi : 1.0;
+    lin->blocks[lin->blocks.size() - probes.size() + k].basis = b;
+  }
+
+  // Per observation: reading derivatives and image motions (whitened).
+  std::map<std::pair<int, int>, ReadingDerivatives> cache;  // (group kind != pixel, index)
+  std::map<std::pair<int, int>, MotionDerivatives> motion_cache;
+  std::map<int, std::array<InstrumentModel, 2 * kNumImageMotions>> moved;  // per zoom
+  const std::vector<double> focus = PredictionFocusDistances(model, obs.pixels, &obs.targets);
+  double f[kMaxTrendFunctions];
   for (int i = 0; i < lin->NumRows(); ++i) {
     const ResidualRow& row = lin->rows[i];
     const bool pixel = row.group == ObsGroup::kPixel;
-    auto it = cache.find({pixel ? 1 : 0, row.index});
+    const double s = 1.0 / lin->sigma[static_cast<int>(row.group)];
+    const std::pair<int, int> key{pixel ? 1 : 0, row.index};
+    auto it = cache.find(key);
     if (it == cache.end()) {
-      ReadingDerivatives d = pixel ? PixelDerivatives(model, obs.pixels[row.index], need)
-                                   : RecordDerivatives(model, obs.records[row.index], need);
-      const double s = 1.0 / lin->sigma[static_cast<int>(row.group)];
+      ReadingDerivatives d =
+          pixel ? PixelDerivatives(model, obs.pixels[row.index], focus[row.index], need)
+                : RecordDerivatives(model, obs.records[row.index], need);
       d.dphi *= s;
       d.dtheta *= s;
       d.dd *= s;
-      it = cache.insert({{pixel ? 1 : 0, row.index}, d}).first;
+      it = cache.insert({key, d}).first;
     }
     const ReadingDerivatives& d = it->second;
+    const MotionDerivatives* motion = nullptr;
+    if (motions && row.group != ObsGroup::kEdm) {
+      auto mt = motion_cache.find(key);
+      if (mt == motion_cache.end()) {
+        MotionDerivatives m = MotionDerivatives::Zero();
+        const int zoom = ZoomOf(obs, row);
+        if (pixel) {
+          const CameraTool& cam = model.cams[zoom];
+          const Eigen::Vector2d c(cam.intrinsics[2], cam.intrinsics[3]);
+          const Eigen::Vector2d x = obs.pixels[row.index].uv - c;
+          m.block<2, 1>(0, 0) = x;
+          m.block<2, 1>(0, 1) = Eigen::Vector2d(1, 0);
+          m.block<2, 1>(0, 2) = Eigen::Vector2d(0, 1);
+          m.block<2, 1>(0, 3) = Eigen::Vector2d(-x.y(), x.x());
+        } else {
+          auto mv = moved.find(zoom);
+          if (mv == moved.end()) {
+            std::array<InstrumentModel, 2 * kNumImageMotions> models;
+            for (int k = 0; k < kNumImageMotions; ++k) {
+              models[2 * k] = MovedImage(model, zoom, k, kMotionStep[k]);
+              models[2 * k + 1] = MovedImage(model, zoom, k, -kMotionStep[k]);
+            }
+            mv = moved.emplace(zoom, std::move(models)).first;
+          }
+          const Record& r = obs.records[row.index];
+          for (int k = 0; k < kNumImageMotions; ++k) {
+            try {
+              const Eigen::Vector3d a =
+                  PredictCam(mv->second[2 * k], zoom, r.phi, r.theta, r.u, r.v, r.d);
+              const Eigen::Vector3d b =
+                  PredictCam(mv->second[2 * k + 1], zoom, r.phi, r.theta, r.u, r.v, r.d);
+              m.col(k) = (a - b) / (2 * kMotionStep[k]);
+            } catch (const std::exception&) {
+              // Not evaluable: no column (the row's group was evaluable, so rare).
+            }
+          }
+        }
+        m *= s;
+        mt = motion_cache.insert({key, m}).first;
+      }
+      motion = &mt->second;
+    }
     double phi, theta, dist;
     if (pixel) {
       phi = obs.pixels[row.index].phi;
@@ -330,21 +588,77 @@ void AddProbeColumns(const Observations& obs, const InstrumentModel& model,
     }
     for (size_t k = 0; k < probes.size(); ++k) {
       const Probe& p = probes[k];
-      if (p.face != row.face) continue;
-      if (p.variable == Reading::kDistance && row.group != ObsGroup::kEdm) continue;
+      const int c = first[k];
       const double deriv = p.reading == Reading::kPhi     ? d.dphi[row.component]
                            : p.reading == Reading::kTheta ? d.dtheta[row.component]
                                                           : d.dd[row.component];
-      const double x =
-          p.harmonic * ProbeVariable(p, phi, theta, dist, model.edm_cyclic_unit_length);
-      const int c = first_col + 2 * static_cast<int>(k);
-      lin->extra(i, c) = deriv * std::cos(x);
-      lin->extra(i, c + 1) = deriv * std::sin(x);
+      switch (p.kind) {
+        case ProbeKind::kHarmonic: {
+          if (p.face != row.face) break;
+          if (p.variable == Reading::kDistance && row.group != ObsGroup::kEdm) break;
+          const double x = p.harmonic * HarmonicVariable(p, phi, theta, dist,
+                                                         model.edm_cyclic_unit_length);
+          lin->extra(i, c) = deriv * std::cos(x);
+          lin->extra(i, c + 1) = deriv * std::sin(x);
+          break;
+        }
+        case ProbeKind::kReadingTrend: {
+          const double x = ProbeValue(p, row, variables);
+          if (!std::isfinite(x)) break;
+          basis[k].Evaluate(x, f);
+          const double scale = p.per_metre ? dist : 1.0;
+          for (int j = 0; j < basis[k].size; ++j) lin->extra(i, c + j) = deriv * scale * f[j];
+          break;
+        }
+        case ProbeKind::kImageMotion: {
+          if (!motion || ZoomOf(obs, row) != p.zoom) break;
+          const double x = ProbeValue(p, row, variables);
+          if (!std::isfinite(x)) break;
+          basis[k].Evaluate(x, f);
+          const int per = basis[k].size;
+          for (int m = 0; m < kNumImageMotions; ++m) {
+            for (int j = 0; j < per; ++j) {
+              lin->extra(i, c + m * per + j) = (*motion)(row.component, m) * f[j];
+            }
+          }
+          break;
+        }
+        case ProbeKind::kImageField: {
+          if (!pixel || ZoomOf(obs, row) != p.zoom) break;
+          const CameraTool& cam = model.cams[p.zoom];
+          const int size = p.field == ImageField::kPosition ? 14 : 6;
+          for (int j = 0; j < size; ++j) {
+            lin->extra(i, c + j) =
+                s * FieldColumn(p, j, cam, obs.pixels[row.index].uv)[row.component];
+          }
+          break;
+        }
+      }
     }
   }
 }
 
 }  // namespace
+
+void TrendBasis::Evaluate(double x, double* f) const {
+  switch (form) {
+    case TrendForm::kLinear:
+      f[0] = x - mean;
+      return;
+    case TrendForm::kInverse:
+      f[0] = 1.0 / x - mean;
+      return;
+    case TrendForm::kQuadratic: {
+      const double t = hi > lo ? 2.0 * (x - lo) / (hi - lo) - 1.0 : 0.0;
+      f[0] = t;
+      f[1] = 0.5 * (3.0 * t * t - 1.0);
+      return;
+    }
+    case TrendForm::kCategories:
+      for (int c = 0; c < size; ++c) f[c] = static_cast<int>(x) == c ? 1.0 : 0.0;
+      return;
+  }
+}
 
 Linearization Linearize(const Observations& obs, const InstrumentModel& model,
                         const LinearizeOptions& options) {
@@ -352,6 +666,7 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   if (!msg.empty()) throw std::invalid_argument(msg);
   Linearization lin;
   for (int g = 0; g < 3; ++g) lin.sigma[g] = options.sigma[g];
+  lin.variables = options.variables;
   lin.edm_cyclic_unit_length = model.edm_cyclic_unit_length;
 
   InstrumentModel work = WithCandidates(model, options.candidates);
@@ -382,9 +697,10 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   }
 
   const std::vector<const BlockDecision*> free_blocks = param.Apply(&problem, false);
+  int num_probe_cols = 0;
+  for (const Probe& p : options.probes) num_probe_cols += ProbeSize(p, options.variables);
   EvaluateColumns(&problem, residual_ids, free_blocks, extra_col,
-                  num_candidate_cols + 2 * static_cast<int>(options.probes.size()),
-                  options.fit.num_threads, &lin);
+                  num_candidate_cols + num_probe_cols, options.fit.num_threads, &lin);
   if (!options.probes.empty())
     AddProbeColumns(obs, model, options.probes, num_candidate_cols, &lin);
   return lin;

@@ -16,13 +16,38 @@
 // effect (its own block, or its coefficients in a zoom's distortion block) go
 // to `extra`, all others to `base`. Nothing is decided here.
 //
-// (c) A probe is a generic error of one reading (phi, theta or d) that is a
-// harmonic of one variable on the rows of one face:
-//   reading* = reading + a cos(k x) + b sin(k x),   x = phi, theta [rad] or 2 pi d / U
-// Its columns are d r / d reading * [cos(k x), sin(k x)] (central differences).
-// Catalogue effects are probes too (hz_eccentricity = phi error, harmonic 1 of
-// phi); testing probes on top of the whole catalogue isolates structure that
-// no catalogue effect can produce.
+// (c) A probe is a generic error outside the catalogue, of one of four kinds
+// (ProbeKind), each a few columns of `extra`:
+//   harmonic       one reading's error as a harmonic of one variable on the
+//                  rows of one face:
+//                    reading* = reading + a cos(k x) + b sin(k x),  x = phi, theta [rad] or 2 pi d / U
+//                  columns d r / d reading * [cos(k x), sin(k x)]
+//   reading trend  one reading's error as a function of a session variable
+//                  (SessionVariable: the order of the rows or photos, a
+//                  covariate column such as temperature), both faces:
+//                    reading* = reading + sum_j b_j f_j(x)
+//                  columns d r / d reading * f_j(x) (for the distance also
+//                  times d: a scale that changes with x)
+//   image motion   the image of one zoom scaled about the principal point,
+//                  shifted in u and v and turned about the principal point,
+//                  by amounts that are functions of a session variable (the
+//                  target distance D as 1/D or D, the photo order, a
+//                  covariate, the board or placement):
+//                    pixel* = pixel + sum_j f_j(x) [s (pixel - c) + (a, b) + w J (pixel - c)]
+//                  columns d r / d (s, a, b, w) * f_j(x): analytic for image
+//                  points, central differences of F_CAM for camera records
+//   image field    a displacement field over the image of one zoom: the
+//                  monomials of degree 2 and 3 in the image position
+//                  (x, y in [-1, 1] over the image), or radial and
+//                  tangential terms in the radius rho (1 at the corners):
+//                  rho^n along (n = 3, 5, 7, 9) and across (n = 3, 5) the radius
+// f_j (TrendForm): x - mean (linear), 1/x - mean (inverse), the Legendre
+// polynomials P1, P2 over the variable's range (quadratic), or one indicator
+// per category. Reading derivatives are central differences of the model's
+// predictions. Catalogue effects are probes too (hz_eccentricity = phi error,
+// harmonic 1 of phi; focus = image scale and shift as 1/D); testing probes
+// on top of the whole catalogue isolates structure that no catalogue effect
+// can produce.
 #pragma once
 
 #include <Eigen/Core>
@@ -43,11 +68,41 @@ const char* GroupName(ObsGroup g);
 enum class Reading { kPhi, kTheta, kDistance };
 const char* ReadingName(Reading r);
 
+enum class ProbeKind { kHarmonic, kReadingTrend, kImageMotion, kImageField };
+// How a trend probe's error depends on its variable (the functions f_j above).
+enum class TrendForm { kLinear, kInverse, kQuadratic, kCategories };
+enum class ImageField { kPosition, kRadius };
+// The four image motions of an image-motion probe, in column order.
+constexpr int kNumImageMotions = 4;  // scale, shift u, shift v, rotation
+// At most this many functions f_j per trend probe (categories of a
+// categorical variable beyond it are not tested, SessionVariables).
+constexpr int kMaxTrendFunctions = 32;
+
 struct Probe {
-  Reading reading = Reading::kPhi;   // which reading is in error
-  Reading variable = Reading::kPhi;  // the error is periodic in this variable
+  ProbeKind kind = ProbeKind::kHarmonic;
+  Reading reading = Reading::kPhi;   // harmonic, reading trend: which reading is in error
+  Reading variable = Reading::kPhi;  // harmonic: the error is periodic in this variable
   int harmonic = 1;                  // k
-  int face = 1;                      // rows of this face only
+  int face = 1;                      // harmonic: rows of this face only
+  // Reading trends and image motions: the session variable (index into
+  // LinearizeOptions::variables) and how the error depends on it.
+  int session_variable = -1;
+  TrendForm form = TrendForm::kLinear;
+  bool per_metre = false;  // distance trends: the error is proportional to d
+  int zoom = -1;           // image motions and fields: the zoom
+  ImageField field = ImageField::kPosition;
+};
+
+// A variable of the session that the residuals are tested against (beyond
+// phi and theta): one value per record and per image observation, NaN where
+// a row has none. Categorical variables hold category indices.
+struct SessionVariable {
+  std::string name;  // "target distance", "photo order", "temperature", "placement"
+  std::string unit;  // "m", "" (orders, covariates of unknown unit)
+  bool categorical = false;
+  std::vector<std::string> categories;
+  std::vector<double> record;  // per obs.records
+  std::vector<double> pixel;   // per obs.pixels
 };
 
 // One row of the stacked residual vector.
@@ -59,20 +114,32 @@ struct ResidualRow {
   int face = 1;
 };
 
+// The functions f_j of a trend probe (TrendForm), with the statistics of its
+// variable over the rows the probe applies to.
+struct TrendBasis {
+  TrendForm form = TrendForm::kLinear;
+  double mean = 0;         // of x (linear) or of 1/x (inverse)
+  double lo = 0, hi = 1;   // range of x
+  int size = 1;            // number of functions
+  // f[0 .. size) at x.
+  void Evaluate(double x, double* f) const;
+};
+
 // A contiguous block of columns of `extra`.
 struct ColumnBlock {
   std::string name;
   int first = 0;
   int size = 0;
   std::vector<std::string> param_names;
-  // Catalogue effects: which effect; distortion groups: which (zoom, index)
-  // each column is.
+  // Catalogue effects: which effect; camera effects (distortion groups,
+  // focus): which (zoom, index in the zoom's block) each column is.
   bool is_effect = false;
   Effect effect = Effect::kCollimation;
-  std::vector<std::pair<int, int>> distortion;  // (zoom, coefficient index)
+  std::vector<std::pair<int, int>> distortion;  // (zoom, coefficient or focus index)
   // Probes.
   bool is_probe = false;
   Probe probe;
+  TrendBasis basis;  // reading trends and image motions
 };
 
 struct LinearizeOptions {
@@ -80,6 +147,7 @@ struct LinearizeOptions {
   double sigma[3] = {1e-5, 1e-5, 0.5};  // whitening per ObsGroup (the fit's a-posteriori sigmas)
   std::vector<Effect> candidates;       // effects not in the model whose columns to add
   std::vector<Probe> probes;
+  std::vector<SessionVariable> variables;  // what trend probes refer to
 };
 
 struct Linearization {
@@ -98,6 +166,7 @@ struct Linearization {
   int excluded_critical = 0;
   int not_evaluable = 0;                // groups the model could not evaluate (skipped)
   double edm_cyclic_unit_length = 1.5;  // U of the distance probes [m]
+  std::vector<SessionVariable> variables;  // LinearizeOptions::variables
 
   const ColumnBlock* Find(const std::string& name) const;
   int NumRows() const { return static_cast<int>(r.size()); }

@@ -257,6 +257,13 @@ RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
     for (int k = 0; k < b.size && k < 2; ++k) r.si[k] = -t.beta[k];
     r.si_cov = Cov2(t.cov);
     r.value = ToReportUnits(b.effect, r.si, r.si_cov);
+  } else if (b.effect == Effect::kFocus) {
+    // Linearised at zero (WithCandidates): the estimate is minus the step.
+    for (int k = 0; k < b.size; ++k) {
+      const auto [zoom, index] = b.distortion[k];
+      r.focus.push_back({zoom, kFocusParamNames[index], index, -t.beta[k],
+                         std::sqrt(std::max(t.cov(k, k), 0.0))});
+    }
   } else {
     for (int k = 0; k < b.size; ++k) {
       const auto [zoom, index] = b.distortion[k];
@@ -367,13 +374,7 @@ void ConfirmByRefinement(const Context& cx, Ranking* out) {
     if (refined >= cx.o.refine_top || !r.significant) break;
     ++refined;
     InstrumentModel m = *in.model;
-    m.effects.Add(r.effect);
-    m.sigmas = {};
-    if (IsKinematic(r.effect)) {
-      m.EffectValue(r.effect) = r.si;
-    } else {
-      for (const DistortionValue& d : r.distortion) m.cams[d.zoom].distortion[d.index] = d.value;
-    }
+    AddAtEstimate(r, &m);
     FitOptions fo = in.fit;
     fo.reestimate_sigmas = false;  // the same weights as the linearisation
     fo.sigma_edm_m = lin.sigma[0];
@@ -399,6 +400,13 @@ void ConfirmByRefinement(const Context& cx, Ranking* out) {
         if (c[0] + c[3] > r.si_cov[0] + r.si_cov[3]) r.si_cov = c;
       }
       r.value = ToReportUnits(r.effect, r.si, r.si_cov);
+    } else if (r.effect == Effect::kFocus) {
+      for (FocusValue& f : r.focus) {
+        f.value = m.cams[f.zoom].focus[f.index];
+        if (m.sigmas.valid && f.zoom < static_cast<int>(m.sigmas.focus.size())) {
+          f.sigma = std::max(f.sigma, m.sigmas.focus[f.zoom][f.index]);
+        }
+      }
     } else {
       for (DistortionValue& d : r.distortion) {
         d.value = m.cams[d.zoom].distortion[d.index];
@@ -411,6 +419,19 @@ void ConfirmByRefinement(const Context& cx, Ranking* out) {
 }
 
 }  // namespace
+
+void AddAtEstimate(const RankedEffect& r, InstrumentModel* m) {
+  m->effects.Add(r.effect);
+  m->sigmas = {};
+  if (IsKinematic(r.effect)) {
+    m->EffectValue(r.effect) = r.si;
+  } else if (r.effect == Effect::kFocus) {
+    for (CameraTool& cam : m->cams) cam.focus.fill(0.0);
+    for (const FocusValue& f : r.focus) m->cams[f.zoom].focus[f.index] = f.value;
+  } else {
+    for (const DistortionValue& d : r.distortion) m->cams[d.zoom].distortion[d.index] = d.value;
+  }
+}
 
 Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
   const Linearization& lin = *in.lin;

@@ -82,6 +82,15 @@ struct DistortionValue {
   double value = 0, sigma = 0;
 };
 
+// One focus parameter of one zoom (SPEC 4.1), in SI (kf [m], au, av [px m];
+// reports scale by kFocusReportScale).
+struct FocusValue {
+  int zoom = 0;
+  std::string name;  // kf, au, av
+  int index = 0;     // FocusIndex
+  double value = 0, sigma = 0;
+};
+
 struct RankedEffect {
   Effect effect = Effect::kCollimation;
   std::string name;
@@ -97,6 +106,7 @@ struct RankedEffect {
   std::array<double, 4> si_cov{};
   EffectReportValue value;  // in report units
   std::vector<DistortionValue> distortion;
+  std::vector<FocusValue> focus;
   bool has_equivalent = false;  // redundant: value read off the model
   EffectReportValue equivalent;
   std::vector<std::string> needs;  // what data would make it identifiable / better determined
@@ -133,6 +143,11 @@ struct RankingInput {
 };
 
 Ranking RankEffects(const RankingInput& in, const RankingOptions& options);
+
+// `model` with effect r.effect added at r's estimate (kinematic value,
+// distortion coefficients or focus terms): the warm start of a refinement
+// that adds it (the confirmation here, the stepwise ladder).
+void AddAtEstimate(const RankedEffect& r, InstrumentModel* model);
 
 // "model.effects: [hz_eccentricity, edm_scale]": the model's effects plus `e`.
 std::string ConfigLine(const InstrumentModel& model, Effect e);

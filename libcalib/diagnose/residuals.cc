@@ -5,6 +5,7 @@
 
 #include "libcalib/camera/opencv_model.h"
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib {
@@ -66,6 +67,7 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
     }
     out.push_back(o);
   }
+  const std::vector<double> focus = PredictionFocusDistances(model, obs.pixels, &obs.targets);
   for (size_t i = 0; i < obs.pixels.size(); ++i) {
     const PixelObservation& p = obs.pixels[i];
     ObservationResidual o;
@@ -80,12 +82,18 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
     o.critical = InCriticalRegion(p.theta, fit.min_zenith_rad, fit.max_zenith_rad);
     Eigen::Vector2d pred;
     if (p.zoom >= 0 && p.zoom < model.NumZooms() &&
-        PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &pred)) {
+        PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &pred, focus[i])) {
       const CameraTool& cam = model.cams[p.zoom];
+      const Rigid3 ref_from_cam = RefFromCam(model, p.zoom, p.phi, p.theta);
+      // The photo's intrinsics (SPEC 4.1: focused at its D, else at the point).
+      double k[kNumIntrinsics];
+      const double distance =
+          focus[i] > 0 ? focus[i] : (p.X - ref_from_cam.translation).norm();
       double ray_obs[3], ray_pred[3];
-      if (PixelToRay(cam.intrinsics.data(), cam.distortion.data(), p.uv.data(), ray_obs) &&
-          PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pred.data(), ray_pred)) {
-        const Eigen::Matrix3d rot = RefFromCam(model, p.zoom, p.phi, p.theta).rotation;
+      if (FocusedIntrinsics(cam.intrinsics.data(), FocusOf(model, p.zoom), distance, k) &&
+          PixelToRay(k, cam.distortion.data(), p.uv.data(), ray_obs) &&
+          PixelToRay(k, cam.distortion.data(), pred.data(), ray_pred)) {
+        const Eigen::Matrix3d rot = ref_from_cam.rotation;
         const Eigen::Vector3d a = rot * Eigen::Vector3d(ray_obs).normalized();
         const Eigen::Vector3d b = rot * Eigen::Vector3d(ray_pred).normalized();
         AngularComponents(b, a - b, &o.hz, &o.zenith);

@@ -31,14 +31,7 @@ StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& m
       break;
     }
     InstrumentModel m = out.model;
-    m.effects.Add(next->effect);
-    m.sigmas = {};
-    if (IsKinematic(next->effect)) {
-      m.EffectValue(next->effect) = next->si;
-    } else {
-      for (const DistortionValue& d : next->distortion)
-        m.cams[d.zoom].distortion[d.index] = d.value;
-    }
+    AddAtEstimate(*next, &m);
     added = next->name;
     out.fit = Refine(obs, fit_options, &m);
     out.model = m;

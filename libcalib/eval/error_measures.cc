@@ -5,6 +5,7 @@
 #include <map>
 #include <tuple>
 
+#include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib {
@@ -55,12 +56,14 @@ std::vector<PixelResidual> PixelResiduals(const InstrumentModel& model,
                                           const std::vector<PixelObservation>& pixels) {
   std::vector<PixelResidual> out;
   out.reserve(pixels.size());
+  const std::vector<double> focus = PredictionFocusDistances(model, pixels);
   for (size_t i = 0; i < pixels.size(); ++i) {
     const PixelObservation& p = pixels[i];
     PixelResidual res;
     res.index = static_cast<int>(i);
     Eigen::Vector2d uv;
-    if (p.zoom < model.NumZooms() && PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &uv)) {
+    if (p.zoom < model.NumZooms() &&
+        PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &uv, focus[i])) {
       res.delta = p.uv - uv;
     } else {
       res.valid = false;

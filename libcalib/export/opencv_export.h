@@ -10,6 +10,11 @@
 // non-zero one. The model's camera is OpenCV's pinhole model exactly (SPEC 2,
 // libcalib/camera/opencv_model.h), so cv::projectPoints with these values
 // reproduces rtscalib's projection of a camera-frame point.
+// With the `focus` effect (SPEC 4.1) the intrinsics depend on the focus
+// distance D: the file states the D its camera_matrix holds (key
+// `focus_distance` [m], 0 = focused at infinity) and the focus terms (keys
+// `focus_kf` [m], `focus_au`, `focus_av` [px m]) with which a reader forms
+// fx (1 + kf/D), fy (1 + kf/D), cx + au/D, cy + av/D for another D.
 #pragma once
 
 #include <string>
@@ -21,10 +26,12 @@ namespace rtscalib {
 // The distortion vector length written for `zoom`: 4, 5, 8, 12 or 14.
 int OpenCvDistortionCount(const InstrumentModel& model, int zoom);
 
-// Writes `zoom`'s intrinsics with cv::FileStorage (YAML). Throws
+// Writes `zoom`'s intrinsics with cv::FileStorage (YAML), with the focus
+// effect those focused at `focus_distance` [m] (<= 0: at infinity). Throws
 // std::out_of_range for a zoom the model lacks, std::runtime_error when the
 // file cannot be written.
-void WriteOpenCvCamera(const std::string& path, const InstrumentModel& model, int zoom);
+void WriteOpenCvCamera(const std::string& path, const InstrumentModel& model, int zoom,
+                       double focus_distance = 0);
 
 // The file name used for a zoom level: camera_zoom<z>.yaml.
 std::string OpenCvCameraFileName(int zoom);

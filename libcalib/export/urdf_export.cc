@@ -110,6 +110,11 @@ UrdfExport ExportUrdf(const InstrumentModel& model, const UrdfOptions& options) 
                              ", per zoom; in the OpenCV export (format opencv)");
       continue;
     }
+    if (e == Effect::kFocus) {
+      out.not_held.push_back(name + ": " + info.definition +
+                             "; the camera's intrinsics, in the OpenCV export (format opencv)");
+      continue;
+    }
     const std::string what = name + " (" + ValueText(model, e) + ")";
     switch (e) {
       case Effect::kVerticalIndex:

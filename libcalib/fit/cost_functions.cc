@@ -23,6 +23,7 @@ BlockLayout LayoutFor(InstrumentModel* model, int zoom) {
   if (zoom >= 0) {
     l.intrinsics = add(model->cams[zoom].intrinsics.data(), kNumIntrinsics);
     l.distortion = add(model->cams[zoom].distortion.data(), kNumDistortion);
+    if (model->effects.Has(Effect::kFocus)) l.focus = add(model->cams[zoom].focus.data(), kNumFocus);
   }
   for (Effect e : model->effects.List()) {
     if (!IsKinematic(e)) continue;

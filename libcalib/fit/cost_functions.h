@@ -4,8 +4,9 @@
 // on a `BlockLayout`: the list of parameter blocks one group of observations
 // touches, each a pointer into the InstrumentModel's own memory, in this order:
 //   base_q(4) base_t(3) [link0(4) link1(4) if dh] tool_q(4) tool_t(3)
-//   [intrinsics(4) distortion(14) for camera tools] [one block per enabled
-//   kinematic effect, in catalogue order] [board_q(4) board_t(3) per board of
+//   [intrinsics(4) distortion(14) for camera tools] [focus(3) for camera tools
+//   when the model has the focus effect] [one block per enabled kinematic
+//   effect, in catalogue order] [board_q(4) board_t(3) per board of
 //   unknown pose the group sees] [point(3) per point of unknown position]
 // Observations that share a pointing share one residual block, so that the
 // chain ref_from_tool(phi, theta) is differentiated once per pointing, not
@@ -16,6 +17,12 @@
 // SPEC 7: a record of a named point uses that point's block as x; a pixel of
 // a board of unknown pose uses X = ref_from_board * corner_in_board, with
 // ref_from_board from that board's blocks.
+// SPEC 4.1 (focus block present): a camera record projects with the
+// intrinsics focused at D = its ray length d, a shot with those focused at
+// the photo's D (libcalib/model/focus.h): its focus_distance when given, else
+// the distance from the camera centre to the centroid of the photo's points
+// as the blocks place them (a function of the chain and the boards' poses,
+// differentiated like everything else).
 #pragma once
 
 #include <ceres/dynamic_autodiff_cost_function.h>
@@ -37,6 +44,7 @@ struct BlockLayout {
   std::vector<int> sizes;
   int base_q = -1, base_t = -1, link0 = -1, link1 = -1, tool_q = -1, tool_t = -1;
   int intrinsics = -1, distortion = -1;
+  int focus = -1;  // the zoom's focus block (SPEC 4.1), when the model has the effect
   int effect[kNumKinematicEffects];
   double edm_cyclic_unit_length = 1.5;
   // Layout indices of the (q, t) blocks of boards of unknown pose and of the
@@ -193,7 +201,12 @@ struct RecordGroupResidual {
   // jets.
   template <typename T>
   bool Ray(T const* const* p, const Row& row, T* ray) const {
-    const T* intrinsics = p[layout.intrinsics];
+    // SPEC 4.1: the camera of a cam record is focused at its ray length.
+    T intrinsics[kNumIntrinsics];
+    if (!FocusedIntrinsics(p[layout.intrinsics], layout.focus >= 0 ? p[layout.focus] : nullptr,
+                           T(row.d), intrinsics)) {
+      return false;
+    }
     const T* dist = p[layout.distortion];
     if constexpr (!internal::IsJet<T>::value) {
       const T pixel[2] = {row.u, row.v};
@@ -258,10 +271,22 @@ struct ShotResidual {
     Eigen::Vector2d uv;
     int board = -1;  // >= 0: X is a corner of layout.boards[board]
   };
+  // The photo's points summed for its centroid (SPEC 4.1): known points
+  // (board -1, reference frame) or the corners of one board of unknown pose
+  // (its board frame), `count` of them. They are every point of the photo,
+  // also those of other residual blocks when each observation is a block.
+  struct FocusTerm {
+    int board = -1;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int count = 0;
+  };
   BlockLayout layout;
   double phi = 0, theta = 0;
   double inv_sigma = 1;
   std::vector<Point> points;
+  double focus_distance = 0;  // [m] the photo's D when given (focus_distance column); 0: centroid
+  std::vector<FocusTerm> focus_terms;
+  int focus_count = 0;
 
   // cam_from_frame * x for a constant point x: products of the caller's
   // jets with plain numbers only.
@@ -273,6 +298,33 @@ struct ShotResidual {
                cam_from_frame.R(i, 2) * x[2] + cam_from_frame.t[i];
     }
     return out;
+  }
+
+  // The intrinsics of this photo: focused at its D when the layout has a
+  // focus block (SPEC 4.1), the block's own otherwise.
+  template <typename T>
+  bool PhotoIntrinsics(T const* const* p, const std::vector<RigidT<T>>& boards,
+                       const RigidT<T>& ref_from_cam, T* k) const {
+    const T* intrinsics = p[layout.intrinsics];
+    if (layout.focus < 0) {
+      for (int i = 0; i < kNumIntrinsics; ++i) k[i] = intrinsics[i];
+      return true;
+    }
+    T distance(focus_distance);
+    if (!(focus_distance > 0)) {
+      if (focus_count <= 0) return false;
+      Vec3<T> sum(T(0), T(0), T(0));
+      for (const FocusTerm& f : focus_terms) {
+        if (f.board < 0) {
+          sum += f.sum.cast<T>();
+        } else {
+          sum += boards[f.board].R * Vec3<T>(f.sum.cast<T>()) + boards[f.board].t * T(f.count);
+        }
+      }
+      const Vec3<T> from_camera = sum / T(focus_count) - ref_from_cam.t;
+      distance = from_camera.norm();
+    }
+    return FocusedIntrinsics(intrinsics, p[layout.focus], distance, k);
   }
 
   template <typename T>
@@ -287,8 +339,10 @@ struct ShotResidual {
     // constant coordinates, not two rotations in the caller's wide jets.
     std::vector<RigidT<T>> cam_from_frame;
     cam_from_frame.reserve(layout.boards.size() + 1);
+    std::vector<RigidT<T>> boards;  // ref_from_board
+    boards.reserve(layout.boards.size());
     for (const auto& b : layout.boards) {
-      const RigidT<T> ref_from_board = PoseFromBlocks(p[b.first], p[b.second]);
+      const RigidT<T>& ref_from_board = boards.emplace_back(PoseFromBlocks(p[b.first], p[b.second]));
       cam_from_frame.push_back({cam_from_ref_R * ref_from_board.R,
                                 cam_from_ref_R * (ref_from_board.t - ref_from_cam.t)});
     }
@@ -296,7 +350,8 @@ struct ShotResidual {
     const auto frame_of = [&](size_t k) -> const RigidT<T>& {
       return cam_from_frame[points[k].board < 0 ? layout.boards.size() : points[k].board];
     };
-    const T* intrinsics = p[layout.intrinsics];
+    T intrinsics[kNumIntrinsics];
+    if (!PhotoIntrinsics(p, boards, ref_from_cam, intrinsics)) return false;
     const T* dist = p[layout.distortion];
     if constexpr (!internal::IsJet<T>::value) {
       T m[9];
@@ -314,7 +369,7 @@ struct ShotResidual {
     } else {
       using internal::LocalJet;
       // Local jets of intrinsics and distortion (variables 3..20, after the
-      // camera point).
+      // camera point); focused intrinsics carry a full product, not a seed.
       const internal::LocalCamera<LocalJet, internal::IsJet<T>::kSize> cam(intrinsics, dist, 3);
       LocalJet m[9];
       TiltMatrix(cam.dist[kTauX], cam.dist[kTauY], m);

@@ -186,7 +186,7 @@ std::string InitFromPixelsOptions::Check() const {
 // DistortionGroups (calibrate_views.h) is CalibrateViews' own closed set of
 // OpenCV groups (it does not know the effect catalogue); this is the one mapping,
 // checked against the catalogue's coefficients in tests/fit/joint_init_test.cc.
-static_assert(kNumEffects - kNumKinematicEffects == 5,
+static_assert(kNumDistortionGroups == 5,
               "a distortion group was added to the effect catalogue: map it here and in "
               "DistortionGroups");
 DistortionGroups DistortionGroupsOf(const EffectSet& effects) {

@@ -57,6 +57,10 @@ std::vector<LayoutBlock> ParameterLayout(const InstrumentModel& m) {
     add(c + ".distortion", kNumDistortion, kNumDistortion, "1 (OpenCV order)",
         LayoutTangent::kEuclidean, z,
         [z](InstrumentModel& x) { return x.cams[z].distortion.data(); });
+    if (m.effects.Has(Effect::kFocus)) {
+      add(c + ".focus", kNumFocus, kNumFocus, "m, px m, px m", LayoutTangent::kEuclidean, z,
+          [z](InstrumentModel& x) { return x.cams[z].focus.data(); });
+    }
   }
   return out;
 }

@@ -8,7 +8,9 @@
 //   base.rotation (3), base.t (3), link1 (4), link2 (4) (dh only),
 //   edm.rotation (2), edm.t (3), each kinematic/EDM effect in EffectSet order
 //   (1 or 2), then per zoom z: cam[z].rotation (3), cam[z].t (3),
-//   cam[z].intrinsics (4: fx fy cx cy), cam[z].distortion (14, OpenCV order).
+//   cam[z].intrinsics (4: fx fy cx cy), cam[z].distortion (14, OpenCV order),
+//   and cam[z].focus (3: kf, au, av; SPEC 4.1) when the model has the focus
+//   effect.
 // Boards and points of unknown position (SPEC 7) are not in p: they are
 // nuisance parameters of the fit, and the covariance is the marginal one
 // over them.

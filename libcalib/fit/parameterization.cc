@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <tuple>
 
@@ -262,6 +263,13 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
                                             zs + ".", kDistortionCoefficientNames, ""));
     for (FreeColumn& c : dist.columns) c.effect = DistortionGroupOf(c.index);
     Add(std::move(dist));
+    // SPEC 4.1: how the zoom's intrinsics change with the focus distance.
+    if (m.effects.Has(Effect::kFocus)) {
+      BlockDecision focus = per_zoom(Euclidean(cam.focus.data(), zs + ".focus", BlockKind::kFree,
+                                               kNumFocus, {}, zs + ".", kFocusParamNames, ""));
+      for (FreeColumn& c : focus.columns) c.effect = Effect::kFocus;
+      Add(std::move(focus));
+    }
   }
   for (Effect e : m.effects.List()) {
     if (!IsKinematic(e)) continue;
@@ -401,13 +409,19 @@ std::vector<ObservationGroup> GroupObservations(const Observations& obs, const U
     }
   }
   std::map<std::tuple<std::string, int, double, double>, int> shot_index;
+  // Every used pixel of each photo (its focus distance, SPEC 4.1, is the
+  // whole photo's, also when each observation is a group of its own).
+  std::map<std::tuple<std::string, int, double, double>, std::shared_ptr<std::vector<int>>> photos;
   for (int i : rows.pixels) {
     const PixelObservation& p = obs.pixels[i];
     const auto key = std::make_tuple(p.shot, p.zoom, p.phi, p.theta);
+    std::shared_ptr<std::vector<int>>& photo = photos[key];
+    if (!photo) photo = std::make_shared<std::vector<int>>();
+    photo->push_back(i);
     auto it = shot_index.find(key);
     if (one_per_observation || it == shot_index.end()) {
       shot_index[key] = static_cast<int>(groups.size());
-      groups.push_back({ObsGroup::kPixel, p.zoom, p.phi, p.theta, p.face, {i}, p.shot});
+      groups.push_back({ObsGroup::kPixel, p.zoom, p.phi, p.theta, p.face, {i}, p.shot, photo});
     } else {
       groups[it->second].indices.push_back(i);
     }
@@ -425,39 +439,59 @@ ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGro
     f->theta = g.theta;
     f->inv_sigma = inv_sigma;
     std::map<const EstimatedBoard*, int> slots;
-    for (int i : g.indices) {
-      const PixelObservation& px = obs.pixels[i];
+    // Point (in the reference frame, or in the frame of layout board
+    // `board`) of one pixel observation.
+    auto place = [&](const PixelObservation& px) {
       ShotResidual::Point pt{px.X, px.uv, -1};
-      if (!px.X_known) {
-        const std::string where = obs.pixels_source + ":" + std::to_string(px.line) + ": ";
-        if (px.corner < 0 || px.corner > 3) {
-          throw std::invalid_argument(where + "corner must be 0..3, got " +
-                                      std::to_string(px.corner));
+      if (px.X_known) return pt;
+      const std::string where = obs.pixels_source + ":" + std::to_string(px.line) + ": ";
+      if (px.corner < 0 || px.corner > 3) {
+        throw std::invalid_argument(where + "corner must be 0..3, got " +
+                                    std::to_string(px.corner));
+      }
+      if (EstimatedBoard* b = model->BoardOf(px.target, px.placement, px.zoom)) {
+        auto it = slots.find(b);
+        if (it == slots.end()) {
+          it = slots.emplace(b, static_cast<int>(f->layout.boards.size())).first;
+          f->layout.boards.push_back(
+              {f->layout.Add(b->pose.q.data(), 4), f->layout.Add(b->pose.t.data(), 3)});
         }
-        if (EstimatedBoard* b = model->BoardOf(px.target, px.placement, px.zoom)) {
-          auto it = slots.find(b);
-          if (it == slots.end()) {
-            it = slots.emplace(b, static_cast<int>(f->layout.boards.size())).first;
-            f->layout.boards.push_back(
-                {f->layout.Add(b->pose.q.data(), 4), f->layout.Add(b->pose.t.data(), 3)});
+        pt.X = b->board.CornersInBoard(px.target - b->board.first_id)[px.corner];
+        pt.board = it->second;
+        return pt;
+      }
+      const TagBoard* known = nullptr;
+      for (const TagBoard& tb : obs.targets.boards) {
+        if (tb.HasId(px.target) && tb.pose_known) known = &tb;
+      }
+      if (!known) {
+        throw std::invalid_argument(
+            where + "X, Y, Z are empty but target " + std::to_string(px.target) +
+            " is not a tag of a board in the targets (SPEC 7: empty X, Y, Z need one)");
+      }
+      pt.X = known->ref_from_board * known->CornersInBoard(px.target - known->first_id)[px.corner];
+      return pt;
+    };
+    for (int i : g.indices) f->points.push_back(place(obs.pixels[i]));
+    if (f->layout.focus >= 0) {
+      // SPEC 4.1: the photo's D, given or from the centroid of all its points.
+      for (int i : g.photo ? *g.photo : g.indices) {
+        if (obs.pixels[i].focus_distance > 0) f->focus_distance = obs.pixels[i].focus_distance;
+      }
+      if (!(f->focus_distance > 0)) {
+        std::map<int, int> term_of;  // layout board (-1: known points) -> focus_terms index
+        for (int i : g.photo ? *g.photo : g.indices) {
+          const ShotResidual::Point pt = place(obs.pixels[i]);
+          auto it = term_of.find(pt.board);
+          if (it == term_of.end()) {
+            it = term_of.emplace(pt.board, static_cast<int>(f->focus_terms.size())).first;
+            f->focus_terms.push_back({pt.board, Eigen::Vector3d::Zero(), 0});
           }
-          pt.X = b->board.CornersInBoard(px.target - b->board.first_id)[px.corner];
-          pt.board = it->second;
-        } else {
-          const TagBoard* known = nullptr;
-          for (const TagBoard& tb : obs.targets.boards) {
-            if (tb.HasId(px.target) && tb.pose_known) known = &tb;
-          }
-          if (!known) {
-            throw std::invalid_argument(
-                where + "X, Y, Z are empty but target " + std::to_string(px.target) +
-                " is not a tag of a board in the targets (SPEC 7: empty X, Y, Z need one)");
-          }
-          pt.X =
-              known->ref_from_board * known->CornersInBoard(px.target - known->first_id)[px.corner];
+          f->focus_terms[it->second].sum += pt.X;
+          ++f->focus_terms[it->second].count;
+          ++f->focus_count;
         }
       }
-      f->points.push_back(pt);
     }
     *blocks = f->layout.blocks;
     return MakeCost(f, 2 * static_cast<int>(g.indices.size()), param.ActiveSize(f->layout));

@@ -17,6 +17,7 @@
 //   cam[z].distortion the coefficients of the enabled distortion groups free, except those
 //                    the user holds (CameraTool::distortion_held, set by HoldDistortion
 //                    from the config's model.<group>.coefficients); the rest held
+//   cam[z].focus     {kf, au, av} free when the model has the focus effect (SPEC 4.1)
 //   <effect>         one free block per enabled kinematic effect (effects.h)
 //   board[id]        a board of unknown pose (SPEC 7): quaternion manifold + free t
 //   point[name]      a point of unknown position (SPEC 7): free 3-vector
@@ -34,6 +35,7 @@
 // entry in `Parameterization`'s constructor (parameterization.cc).
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -167,6 +169,10 @@ struct ObservationGroup {
   int face = 1;              // of the group's first observation
   std::vector<int> indices;  // into obs.records (edm, cam) or obs.pixels
   std::string shot;          // pixels: the shot's name
+  // Pixels: every used observation of the group's photo (= indices unless
+  // each observation is a group): the photo's focus distance (SPEC 4.1) is
+  // the centroid of all its points.
+  std::shared_ptr<const std::vector<int>> photo;
 };
 std::vector<ObservationGroup> GroupObservations(const Observations& obs, const UsedRows& rows,
                                                 bool one_per_observation);

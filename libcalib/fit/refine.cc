@@ -350,6 +350,7 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks,
   s.cam_tools.assign(model->NumZooms(), PoseSigma{});
   s.intrinsics.assign(model->NumZooms(), {});
   s.distortion.assign(model->NumZooms(), {});
+  if (model->effects.Has(Effect::kFocus)) s.focus.assign(model->NumZooms(), {});
   auto block_cov = [&](const double* p, Eigen::MatrixXd* out) -> bool {
     for (size_t b = 0; b < free_blocks.size(); ++b) {
       if (free_blocks[b] != p) continue;
@@ -403,6 +404,7 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks,
     pose_sigma(model->cams[z].flange_from_cam, &s.cam_tools[z]);
     ambient_sigma(model->cams[z].intrinsics.data(), 4, s.intrinsics[z].data());
     ambient_sigma(model->cams[z].distortion.data(), kNumDistortion, s.distortion[z].data());
+    if (!s.focus.empty()) ambient_sigma(model->cams[z].focus.data(), kNumFocus, s.focus[z].data());
   }
   for (EstimatedBoard& b : model->boards) pose_sigma(b.pose, &b.sigma);
   for (EstimatedPoint& p : model->points) ambient_sigma(p.x.data(), 3, p.sigma.data());

@@ -196,6 +196,15 @@ void ReadCameraFields(const YamlNode& m, bool required, CameraTool* cam) {
     cam->distortion.fill(0.0);
     std::copy(d.begin(), d.end(), cam->distortion.begin());
   }
+  // SPEC 4.1, in report units: {kf: mm, au: px m, av: px m}.
+  if (const std::optional<YamlNode> n = m.Find("focus")) {
+    for (int i = 0; i < kNumFocus; ++i) {
+      double x = 0;
+      ReadNumber(*n, kFocusParamNames[i], &x, [](double v) { return std::isfinite(v); },
+                 std::string("a finite number [") + kFocusReportUnits[i] + "]");
+      cam->focus[i] = x / kFocusReportScale[i];
+    }
+  }
 }
 
 // --- sections ---------------------------------------------------------------
@@ -454,6 +463,7 @@ void ReadShots(const YamlNode& m, ShotPlan* out) {
       "a fraction of the image in (0, 1]");
   ReadNumber(m, "pointing_jitter", &out->pointing_jitter, IsNonNegative,
              "a fraction of the field of view >= 0");
+  m.Read("report_focus_distance", &out->report_focus_distance);
 }
 
 // The truth instrument: starts from the ideal model of its kinematics (with
@@ -495,10 +505,10 @@ InstrumentModel ReadTruth(const YamlNode& m, const ModelSettings& model, int pla
       const std::optional<Effect> e = EffectFromName(entry.key.AsString());
       if (!e) entry.key.FailChoice(AllEffectNames());
       const EffectInfo& info = Info(*e);
-      if (IsDistortion(*e)) {
+      if (IsCameraEffect(*e)) {
         entry.key.Fail(
             "a kinematic or EDM effect (distortion coefficients go in "
-            "simulate.truth.cameras[zoom].distortion)");
+            "simulate.truth.cameras[zoom].distortion, focus in simulate.truth.cameras[zoom].focus)");
       }
       if (kinematics == Kinematics::kDh && info.redundant_in_dh) {
         entry.key.Fail(
@@ -526,6 +536,12 @@ InstrumentModel ReadTruth(const YamlNode& m, const ModelSettings& model, int pla
       for (int index : info.distortion_indices) {
         if (cam.distortion[index] != 0) truth.effects.Add(info.effect);
       }
+    }
+  }
+  // Likewise focus (SPEC 4.1): the simulated camera refocuses per photo.
+  for (const CameraTool& cam : truth.cams) {
+    for (double f : cam.focus) {
+      if (f != 0) truth.effects.Add(Effect::kFocus);
     }
   }
   return truth;
@@ -632,6 +648,14 @@ void EmitCameraFields(YAML::Emitter& e, const CameraTool& cam) {
   }
   e << YAML::Key << "distortion" << YAML::Value;
   EmitNumbers(e, cam.distortion.data(), cam.distortion.size());
+  if (cam.focus != std::array<double, kNumFocus>{}) {
+    e << YAML::Key << "focus" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    for (int i = 0; i < kNumFocus; ++i) {
+      e << YAML::Key << kFocusParamNames[i] << YAML::Value
+        << Num(cam.focus[i] * kFocusReportScale[i]);
+    }
+    e << YAML::EndMap;
+  }
 }
 
 void EmitTruth(YAML::Emitter& e, const InstrumentModel& truth) {
@@ -738,6 +762,7 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
   e << YAML::Key << "shots_per_board" << YAML::Value << sim.shots.shots_per_board;
   e << YAML::Key << "fill" << YAML::Value << Num(sim.shots.fill);
   e << YAML::Key << "pointing_jitter" << YAML::Value << Num(sim.shots.pointing_jitter);
+  e << YAML::Key << "report_focus_distance" << YAML::Value << sim.shots.report_focus_distance;
   e << YAML::EndMap;
   e << YAML::EndMap;
 }

@@ -1,9 +1,11 @@
 #include "libcalib/io/csv.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <stdexcept>
 
@@ -175,9 +177,34 @@ CsvTable CsvTable::Parse(std::istream& in, const std::string& name, const Column
     s.insert(columns.optional.begin(), columns.optional.end());
     return s;
   }();
+  // Extra columns in header order; numeric ones may be kept as covariates.
+  std::vector<std::pair<int, std::string>> extra;
   for (const auto& [column_name, index] : table.index_) {
-    if (!known.count(column_name)) ignored.push_back(column_name);
+    if (!known.count(column_name)) extra.emplace_back(index, column_name);
   }
+  std::sort(extra.begin(), extra.end());
+  for (const auto& [index, column_name] : extra) {
+    bool numeric = columns.covariates, any = false;
+    for (size_t r = 0; numeric && r < table.rows_.size(); ++r) {
+      const std::string& cell = table.rows_[r].cells[index];
+      if (cell.empty()) continue;
+      any = true;
+      numeric = ParseFiniteDouble(cell).has_value();
+    }
+    if (numeric && any) {
+      table.covariates_.push_back(column_name);
+    } else {
+      ignored.push_back(column_name);
+    }
+  }
+  if (!table.covariates_.empty()) {
+    table.notes_.push_back(name + ":" + std::to_string(header_line) + ": column" +
+                           (table.covariates_.size() > 1 ? "s " : " ") +
+                           Join(table.covariates_) +
+                           " kept as covariate" + (table.covariates_.size() > 1 ? "s" : "") +
+                           " (numbers; the diagnosis tests the residuals against them)");
+  }
+  std::sort(ignored.begin(), ignored.end());
   if (!ignored.empty()) {
     table.notes_.push_back(name + ":" + std::to_string(header_line) + ": ignored column" +
                            (ignored.size() > 1 ? "s " : " ") + Join(ignored) +
@@ -195,6 +222,12 @@ const std::string& CsvTable::Text(int row, const std::string& column) const {
   const auto it = index_.find(column);
   if (it == index_.end()) return kEmpty;
   return rows_[row].cells[it->second];
+}
+
+double CsvTable::Covariate(int row, int k) const {
+  const std::string& text = Text(row, covariates_.at(k));
+  if (text.empty()) return std::numeric_limits<double>::quiet_NaN();
+  return Number(row, covariates_[k]);
 }
 
 double CsvTable::Number(int row, const std::string& column) const {

@@ -13,7 +13,10 @@
 //   - every data row has exactly as many fields as the header;
 //   - a file needs at least one data row ("no rows" otherwise);
 //   - required columns missing -> InputError naming the column; columns that
-//     are neither required nor optional are ignored and listed in notes();
+//     are neither required nor optional are ignored and listed in notes(),
+//     except, for a reader that keeps covariates (Columns::covariates), the
+//     ones whose every non-empty cell is a finite number: those are kept as
+//     named covariates (temperature, time, ...; covariates(), Covariate());
 //   - CRLF line ends and a UTF-8 byte-order mark are accepted; a UTF-16 or
 //     UTF-32 file (byte-order mark or NUL bytes) is an error.
 // Numbers must be finite decimal numbers (NaN/Inf are errors), integers must
@@ -35,6 +38,7 @@ class CsvTable {
   struct Columns {
     std::vector<std::string> required;
     std::vector<std::string> optional;
+    bool covariates = false;  // keep numeric extra columns as covariates
   };
 
   // Reads `path`; messages name the file by `path`.
@@ -65,8 +69,12 @@ class CsvTable {
   bool OptionalReading(int row, AngleUnit unit, double* phi, double* theta) const;
   // An integral value (see above); InputError otherwise.
   long long Integer(int row, const std::string& column) const;
-  // Notes about the file for the run log (ignored columns).
+  // Notes about the file for the run log (ignored columns, covariates kept).
   const std::vector<std::string>& notes() const { return notes_; }
+  // The extra numeric columns kept as covariates, in header order.
+  const std::vector<std::string>& covariates() const { return covariates_; }
+  // Covariate k of a row: its number, NaN when the cell is empty.
+  double Covariate(int row, int k) const;
   // An InputError pointing at one cell, for checks done by the caller.
   [[noreturn]] void Fail(int row, const std::string& column, const std::string& expected) const;
 
@@ -79,6 +87,7 @@ class CsvTable {
   std::map<std::string, int> index_;
   std::vector<Row> rows_;
   std::vector<std::string> notes_;
+  std::vector<std::string> covariates_;
 };
 
 // Writes a CSV file row by row. Numbers are written with %.17g so that reading

@@ -128,6 +128,13 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
     }
   }
   if (!held.empty()) e << YAML::Key << "distortion_held" << YAML::Value << YAML::Flow << held;
+  // SPEC 4.1: the intrinsics above are focused at infinity; at focus
+  // distance D they are fx (1 + kf/D), fy (1 + kf/D), cx + au/D, cy + av/D.
+  const bool focus = model.effects.Has(Effect::kFocus);
+  if (focus) {
+    e << YAML::Key << "focus" << YAML::Value;
+    EmitNamed(e, kFocusParamNames, cam.focus.data(), kNumFocus);
+  }
   if (s.valid && cam.determined) {
     e << YAML::Key << "intrinsics_sigma" << YAML::Value;
     EmitNamed(e, kIntrinsicsParamNames, s.intrinsics[zoom].data(), kNumIntrinsics);
@@ -143,6 +150,10 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
       }
     }
     e << YAML::EndMap;
+    if (focus && zoom < static_cast<int>(s.focus.size())) {
+      e << YAML::Key << "focus_sigma" << YAML::Value;
+      EmitNamed(e, kFocusParamNames, s.focus[zoom].data(), kNumFocus);
+    }
   }
   if (!cam.valid_region.empty()) {
     e << YAML::Key << "valid_region" << YAML::Value << YAML::BeginSeq;
@@ -480,10 +491,23 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
         cam.distortion_held[it - names.begin()] = true;
       }
     }
+    const bool focus = model.effects.Has(Effect::kFocus);
+    if (focus) {
+      ReadNamedInto(item.Require("focus"), kFocusParamNames, cam.focus.data(), kNumFocus);
+    }
     if (with_sigma) {
       s.cam_tools.push_back(tool_sigma);
       s.intrinsics.emplace_back();
       s.distortion.emplace_back();
+      if (focus) {
+        s.focus.emplace_back();
+        if (cam.determined) {
+          ReadNamedInto(item.Require("focus_sigma"), kFocusParamNames, s.focus.back().data(),
+                        kNumFocus, true);
+        } else {
+          s.focus.back().fill(std::numeric_limits<double>::quiet_NaN());
+        }
+      }
       if (cam.determined) {
         ReadNamedInto(item.Require("intrinsics_sigma"), kIntrinsicsParamNames,
                       s.intrinsics.back().data(), kNumIntrinsics, Number::kSigma);

@@ -1,5 +1,6 @@
 #include "libcalib/io/records.h"
 
+#include <cmath>
 #include <limits>
 #include <map>
 
@@ -37,9 +38,11 @@ Eigen::Vector3d ReadPoint(const CsvTable& t, int row, const char* x, const char*
 RecordsFile ReadRecords(const std::string& path, AngleUnit unit) {
   const CsvTable t = CsvTable::Read(
       path,
-      {{"face", "zoom", "phi", "theta", "tool", "d", "x", "y", "z"}, {"u", "v", "set", "point"}});
+      {{"face", "zoom", "phi", "theta", "tool", "d", "x", "y", "z"}, {"u", "v", "set", "point"},
+       /*covariates=*/true});
   RecordsFile out;
   out.notes = t.notes();
+  out.covariates = t.covariates();
   out.records.reserve(t.NumRows());
   for (int row = 0; row < t.NumRows(); ++row) {
     Record r;
@@ -87,12 +90,23 @@ RecordsFile ReadRecords(const std::string& path, AngleUnit unit) {
       }
     }
     r.set = t.Text(row, "set");
+    for (size_t k = 0; k < out.covariates.size(); ++k) {
+      r.covariates.push_back(t.Covariate(row, static_cast<int>(k)));
+    }
     out.records.push_back(std::move(r));
   }
   return out;
 }
 
-void WriteRecords(const std::string& path, const std::vector<Record>& records, AngleUnit unit) {
+namespace {
+// A covariate cell: its number, empty for NaN or a row without it.
+std::string CovariateCell(const std::vector<double>& values, size_t k) {
+  return k < values.size() && std::isfinite(values[k]) ? FormatDouble(values[k]) : "";
+}
+}  // namespace
+
+void WriteRecords(const std::string& path, const std::vector<Record>& records, AngleUnit unit,
+                  const std::vector<std::string>& covariates) {
   // The `point` column (SPEC 7) only when some row names a point, so that
   // files without such points keep their columns.
   bool points = false;
@@ -100,6 +114,7 @@ void WriteRecords(const std::string& path, const std::vector<Record>& records, A
   std::vector<std::string> header = {"face", "zoom", "phi", "theta", "tool", "u",
                                      "v",    "d",    "x",   "y",     "z",    "set"};
   if (points) header.push_back("point");
+  header.insert(header.end(), covariates.begin(), covariates.end());
   CsvWriter w(path, header);
   for (const Record& r : records) {
     const bool cam = r.tool == Tool::kCam;
@@ -117,6 +132,7 @@ void WriteRecords(const std::string& path, const std::vector<Record>& records, A
                                     unknown ? "" : FormatDouble(r.x.z()),
                                     r.set};
     if (points) row.push_back(r.point);
+    for (size_t k = 0; k < covariates.size(); ++k) row.push_back(CovariateCell(r.covariates, k));
     w.Row(row);
   }
   w.Close();
@@ -126,9 +142,11 @@ PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
   const CsvTable t = CsvTable::Read(
       path,
       {{"face", "zoom", "phi", "theta", "shot", "target", "corner", "X", "Y", "Z", "u", "v"},
-       {"width", "height", "placement", "focus_distance"}});
+       {"width", "height", "placement", "focus_distance"},
+       /*covariates=*/true});
   PixelsFile out;
   out.notes = t.notes();
+  out.covariates = t.covariates();
   out.pixels.reserve(t.NumRows());
   if (t.Has("width") != t.Has("height") && t.NumRows() > 0) {
     const char* given = t.Has("width") ? "width" : "height";
@@ -164,6 +182,9 @@ PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
       p.X = ReadPoint(t, row, "X", "Y", "Z");
     }
     p.uv = {t.Number(row, "u"), t.Number(row, "v")};
+    for (size_t k = 0; k < out.covariates.size(); ++k) {
+      p.covariates.push_back(t.Covariate(row, static_cast<int>(k)));
+    }
     if (sizes && !(t.Empty(row, "width") && t.Empty(row, "height"))) {
       constexpr int kMaxSide = 1 << 20;
       const ImageSize size{
@@ -188,7 +209,8 @@ PixelsFile ReadPixels(const std::string& path, AngleUnit unit) {
 }
 
 void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels,
-                 AngleUnit unit, const std::map<int, ImageSize>& image_sizes) {
+                 AngleUnit unit, const std::map<int, ImageSize>& image_sizes,
+                 const std::vector<std::string>& covariates) {
   // Optional columns only when they carry something, so that files without
   // placements or focus distances keep SPEC 3's columns.
   bool placements = false, focus = false;
@@ -204,6 +226,7 @@ void WritePixels(const std::string& path, const std::vector<PixelObservation>& p
     header.push_back("width");
     header.push_back("height");
   }
+  header.insert(header.end(), covariates.begin(), covariates.end());
   CsvWriter w(path, header);
   for (const PixelObservation& p : pixels) {
     std::vector<std::string> row = {
@@ -226,6 +249,7 @@ void WritePixels(const std::string& path, const std::vector<PixelObservation>& p
       row.push_back(it == image_sizes.end() ? "" : std::to_string(it->second.width));
       row.push_back(it == image_sizes.end() ? "" : std::to_string(it->second.height));
     }
+    for (size_t k = 0; k < covariates.size(); ++k) row.push_back(CovariateCell(p.covariates, k));
     w.Row(row);
   }
   w.Close();

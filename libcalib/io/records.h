@@ -25,15 +25,21 @@
 
 namespace rtscalib {
 
+// Extra numeric columns (temperature, time, ...) are kept as covariates
+// (Record::covariates, in the order of `covariates`); the diagnosis tests
+// the residuals against them. Other extra columns are ignored with a note.
 struct RecordsFile {
   std::vector<Record> records;
+  std::vector<std::string> covariates;
   std::vector<std::string> notes;  // e.g. ignored extra columns
 };
 RecordsFile ReadRecords(const std::string& path, AngleUnit unit = AngleUnit::kRad);
 // Writes all columns including `set`, numbers with %.17g (phi, theta in
-// `unit`, FormatReading); u, v empty on edm rows.
+// `unit`, FormatReading); u, v empty on edm rows; then the `covariates`
+// columns (the records' values, empty for NaN).
 void WriteRecords(const std::string& path, const std::vector<Record>& records,
-                  AngleUnit unit = AngleUnit::kRad);
+                  AngleUnit unit = AngleUnit::kRad,
+                  const std::vector<std::string>& covariates = {});
 
 // pixels.csv (SPEC 3, SPEC 7) with the optional columns `width`, `height`
 // that `rtscalib detect` writes: the size of the image a row was seen in,
@@ -42,19 +48,22 @@ void WriteRecords(const std::string& path, const std::vector<Record>& records,
 // Optional `placement` (SPEC 7.1, text) and `focus_distance` (SPEC 4.1,
 // metres > 0, may be empty) columns; phi and theta may both be empty (a
 // camera-only session, SPEC 7.1: has_reading false).
+// Extra numeric columns are kept as covariates, as in records.csv.
 struct PixelsFile {
   std::vector<PixelObservation> pixels;
   std::map<int, ImageSize> image_sizes;  // per zoom, from `width`, `height`
+  std::vector<std::string> covariates;
   std::vector<std::string> notes;
 };
 PixelsFile ReadPixels(const std::string& path, AngleUnit unit = AngleUnit::kRad);
 // The one pixels.csv writer (the detection's, the demo's, predict's): SPEC 3's
 // columns, then `placement` and `focus_distance` when some row has one, and
 // `width`, `height` of each row's zoom when `image_sizes` has it (empty
-// cells for zooms it lacks). phi, theta in `unit`; empty for rows without a
-// reading.
+// cells for zooms it lacks), then the `covariates` columns. phi, theta in
+// `unit`; empty for rows without a reading.
 void WritePixels(const std::string& path, const std::vector<PixelObservation>& pixels,
                  AngleUnit unit = AngleUnit::kRad,
-                 const std::map<int, ImageSize>& image_sizes = {});
+                 const std::map<int, ImageSize>& image_sizes = {},
+                 const std::vector<std::string>& covariates = {});
 
 }  // namespace rtscalib

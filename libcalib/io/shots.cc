@@ -11,13 +11,16 @@
 namespace rtscalib {
 
 ShotsFile ReadShots(const std::string& path, AngleUnit unit) {
-  const CsvTable t = CsvTable::Read(path, {{"face", "zoom", "phi", "theta", "image"}, {"shot", "placement", "focus_distance"}});
+  const CsvTable t = CsvTable::Read(path, {{"face", "zoom", "phi", "theta", "image"},
+                                           {"shot", "placement", "focus_distance"},
+                                           /*covariates=*/true});
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   ShotsFile out;
   out.path = path;
   out.angle_unit = unit;
   out.notes = t.notes();
   out.has_placements = t.Has("placement");
+  out.covariates = t.covariates();
   std::map<std::string, int> line_of_shot;
   for (int row = 0; row < t.NumRows(); ++row) {
     PhotoShot s;
@@ -37,6 +40,9 @@ ShotsFile ReadShots(const std::string& path, AngleUnit unit) {
       if (!(s.focus_distance > 0)) {
         t.Fail(row, "focus_distance", "the focus distance in metres (> 0), or empty");
       }
+    }
+    for (size_t k = 0; k < out.covariates.size(); ++k) {
+      s.covariates.push_back(t.Covariate(row, static_cast<int>(k)));
     }
     s.image = t.Text(row, "image");
     if (s.image.empty()) t.Fail(row, "image", "an image file (relative to the CSV's folder)");

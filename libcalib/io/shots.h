@@ -39,6 +39,7 @@ struct PhotoShot {
   std::string placement;      // SPEC 7.1 (empty: the one placement)
   double focus_distance = 0;  // [m], SPEC 4.1; 0 = not given
   int line = 0;               // 1-based line in the CSV
+  std::vector<double> covariates;  // ShotsFile::covariates' values (NaN: empty)
 };
 
 struct ShotsFile {
@@ -46,6 +47,9 @@ struct ShotsFile {
   AngleUnit angle_unit = AngleUnit::kRad;  // the unit the file gave phi, theta in
   std::vector<PhotoShot> shots;
   bool has_placements = false;  // the file has a `placement` column (SPEC 7.1)
+  // Extra numeric columns (temperature, time, ...) kept as covariates; each
+  // photo's pixel observations carry them (docs/diagnostics.md).
+  std::vector<std::string> covariates;
   std::vector<std::string> notes;  // e.g. ignored extra columns
 };
 

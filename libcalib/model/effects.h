@@ -27,6 +27,9 @@
 //                    A sin(2 pi d/U + psi) = p0 sin(.) + p1 cos(.)
 //   distortion groups: coefficients of OpenCV's 14, per zoom
 //                    (RTSCALIB_DISTORTION_COEFFICIENTS).
+//   focus            per zoom [kf, au, av]                 m, px m, px m
+//                    (SPEC 4.1, libcalib/model/focus.h: the camera constant and
+//                    the principal point at focus distance D)
 #pragma once
 
 #include <array>
@@ -53,11 +56,13 @@ enum DataNeed : unsigned {
   kNeedLongDistances = 1u << 5,  // EDM distances over a wide ratio
   kNeedFineDistances = 1u << 6,  // EDM distances finer than the cyclic unit
   kNeedImageCorners = 1u << 7,   // camera observations reaching the image corners
+  kNeedNearAndFar = 1u << 8,     // camera targets at several distances, near and far
 };
-constexpr int kNumDataNeeds = 8;
+constexpr int kNumDataNeeds = 9;
 
 // clang-format off
-// THE effect list. One row per effect, kinematic and EDM effects first:
+// THE effect list. One row per effect, kinematic and EDM effects first, then
+// the per-zoom camera effects (the distortion groups, then focus):
 //   X(enumerator, name, kind, num_params, param_names {p0, p1}, report_units {u0, u1},
 //     redundant_in_dh, needs, definition, signature)
 // Report units are "arcsec", "ppm" or "mm" for the (amplitude) parameter and
@@ -103,7 +108,11 @@ constexpr int kNumDataNeeds = 8;
   X(kThinPrism, "thin_prism", kDistortion, 0, "", "", "", "", false, kNeedImageCorners,            \
     "OpenCV s1..s4", "thin prism")                                                                 \
   X(kSensorTilt, "sensor_tilt", kDistortion, 0, "", "", "", "", false, kNeedImageCorners,          \
-    "OpenCV taux tauy", "sensor tilt (Scheimpflug)")
+    "OpenCV taux tauy", "sensor tilt (Scheimpflug)")                                            \
+  X(kFocus, "focus", kFocus, 0, "", "", "", "", false, kNeedNearAndFar,                           \
+    "per zoom: fx* = fx (1 + kf/D), fy* = fy (1 + kf/D), cx* = cx + au/D, cy* = cy + av/D, "      \
+    "D = the photo's focus distance",                                                              \
+    "image scale and principal point that change with the target's distance")
 
 // OpenCV's 14 distortion coefficients, in DistortionIndex order, each
 // with the effect (distortion group) that owns it: X(name, camera index, group).
@@ -130,7 +139,10 @@ enum class Effect : int {
 #undef RTSCALIB_EFFECT_ENUMERATOR
 };
 
-enum class EffectKind { kAngle, kAxis, kEdm, kDistortion };
+// kAngle, kAxis, kEdm: one block of their own (InstrumentModel::effect_values);
+// kDistortion: coefficients of each zoom's distortion block; kFocus: each
+// zoom's focus block (CameraTool::focus, libcalib/model/focus.h).
+enum class EffectKind { kAngle, kAxis, kEdm, kDistortion, kFocus };
 
 // The list as a constexpr table (compile-time checks below; EffectInfo adds
 // the derived distortion coefficients at run time).
@@ -175,23 +187,31 @@ inline constexpr const char* kDistortionCoefficientNames[] = {
 namespace effects_internal {
 constexpr int CountKinematic() {
   int n = 0;
-  for (const EffectRow& r : kEffectRows) n += r.kind != EffectKind::kDistortion;
+  for (const EffectRow& r : kEffectRows)
+    n += r.kind != EffectKind::kDistortion && r.kind != EffectKind::kFocus;
+  return n;
+}
+constexpr int CountKind(EffectKind kind) {
+  int n = 0;
+  for (const EffectRow& r : kEffectRows) n += r.kind == kind;
   return n;
 }
 constexpr bool Same(const char* a, const char* b) {
   while (*a && *a == *b) ++a, ++b;
   return *a == *b;
 }
-// Rows in enum order, kinematic effects first, parameter counts and report
-// units consistent with the kind.
+// Rows in enum order, kinematic effects first, then the distortion groups,
+// then focus; parameter counts and report units consistent with the kind
+// (per-zoom camera effects have no block of their own: num_params 0).
 constexpr bool RowsConsistent() {
-  bool distortion_seen = false;
+  int stage = 0;  // 0 kinematic, 1 distortion, 2 focus
   for (int i = 0; i < static_cast<int>(std::size(kEffectRows)); ++i) {
     const EffectRow& r = kEffectRows[i];
     if (static_cast<int>(r.effect) != i) return false;
-    const bool distortion = r.kind == EffectKind::kDistortion;
-    if (distortion_seen && !distortion) return false;
-    distortion_seen = distortion_seen || distortion;
+    const int s = r.kind == EffectKind::kDistortion ? 1 : r.kind == EffectKind::kFocus ? 2 : 0;
+    if (s < stage) return false;
+    stage = s;
+    const bool distortion = s > 0;
     if (distortion != (r.num_params == 0)) return false;
     if (!distortion && !Same(r.report_units[0], "arcsec") && !Same(r.report_units[0], "ppm") &&
         !Same(r.report_units[0], "mm"))
@@ -220,8 +240,9 @@ constexpr bool CoefficientsConsistent() {
 }  // namespace effects_internal
 
 // Effects with a parameter block of their own (the rest live in the per-zoom
-// distortion block).
+// camera blocks: distortion, focus).
 constexpr int kNumKinematicEffects = effects_internal::CountKinematic();
+constexpr int kNumDistortionGroups = effects_internal::CountKind(EffectKind::kDistortion);
 constexpr int kMaxEffectParams = 2;
 
 static_assert(effects_internal::RowsConsistent(),
@@ -237,7 +258,7 @@ struct EffectInfo {
   Effect effect;
   const char* name;
   EffectKind kind;
-  int num_params;  // kinematic effects: size of its block
+  int num_params;  // kinematic effects: size of its block (0 for camera effects)
   std::array<const char*, 2> param_names;
   std::array<const char*, 2> report_units;  // after polar conversion (see below)
   const char* definition;
@@ -255,7 +276,13 @@ const std::vector<EffectInfo>& EffectCatalogue();
 const EffectInfo& Info(Effect e);
 std::optional<Effect> EffectFromName(std::string_view name);
 inline bool IsKinematic(Effect e) { return static_cast<int>(e) < kNumKinematicEffects; }
-inline bool IsDistortion(Effect e) { return !IsKinematic(e); }
+// A group of OpenCV distortion coefficients (per zoom).
+inline bool IsDistortion(Effect e) {
+  return kEffectRows[static_cast<int>(e)].kind == EffectKind::kDistortion;
+}
+// An effect of each zoom's camera (distortion groups and focus): its
+// parameters live in the cameras (CameraTool), not in effect_values.
+inline bool IsCameraEffect(Effect e) { return !IsKinematic(e); }
 
 // The distortion group (effect) that owns coefficient `index`.
 inline Effect DistortionGroupOf(int index) { return kDistortionCoefficients[index].group; }

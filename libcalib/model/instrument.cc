@@ -111,7 +111,8 @@ Eigen::Vector3d PredictCam(const InstrumentModel& model, int zoom, double phi, d
   const double pixel[2] = {u, v};
   Eigen::Vector3d out;
   if (!CamPoint(ViewOf(model), cam.flange_from_cam.q.data(), cam.flange_from_cam.t.data(),
-                cam.intrinsics.data(), cam.distortion.data(), phi, theta, pixel, d, &out)) {
+                cam.intrinsics.data(), cam.distortion.data(), FocusOf(model, zoom), phi, theta,
+                pixel, d, &out)) {
     throw std::runtime_error("pixel (" + std::to_string(u) + ", " + std::to_string(v) +
                              ") cannot be undistorted with zoom " + std::to_string(zoom) +
                              "'s distortion");
@@ -120,11 +121,16 @@ Eigen::Vector3d PredictCam(const InstrumentModel& model, int zoom, double phi, d
 }
 
 bool PredictPixel(const InstrumentModel& model, int zoom, double phi, double theta,
-                  const Eigen::Vector3d& x_ref, Eigen::Vector2d* pixel) {
+                  const Eigen::Vector3d& x_ref, Eigen::Vector2d* pixel, double focus_distance) {
   const CameraTool& cam = Cam(model, zoom);
   return ProjectPoint(ViewOf(model), cam.flange_from_cam.q.data(), cam.flange_from_cam.t.data(),
-                      cam.intrinsics.data(), cam.distortion.data(), phi, theta, x_ref,
-                      pixel->data());
+                      cam.intrinsics.data(), cam.distortion.data(), FocusOf(model, zoom),
+                      focus_distance, phi, theta, x_ref, pixel->data());
+}
+
+const double* FocusOf(const InstrumentModel& model, int zoom) {
+  if (!model.effects.Has(Effect::kFocus)) return nullptr;
+  return Cam(model, zoom).focus.data();
 }
 
 std::string EstimatedBoard::Name() const {

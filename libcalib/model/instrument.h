@@ -5,7 +5,8 @@
 //   links[2]    DH link parameters {d, gamma_offset, alpha, a} (Klug Eq. 5)   [m, rad]
 //               joint angle gamma_i = control_i* + gamma_offset_i
 //   edm         flange_from_edm pose (EDM ray = +z of this frame)
-//   cams[z]     per zoom: flange_from_cam pose, intrinsics[4], distortion[14]
+//   cams[z]     per zoom: flange_from_cam pose, intrinsics[4], distortion[14],
+//               focus[3] {kf [m], au [px m], av [px m]} (SPEC 4.1, focus.h)
 //   effects[e]  one block per kinematic/EDM effect (effects.h), SI units
 //   boards[b]   ref_from_board pose of a board of unknown pose (SPEC 7):
 //               quaternion + translation [m]; scale fixed by its tag_size
@@ -30,6 +31,7 @@
 #include "libcalib/camera/opencv_model.h"
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/effects.h"
+#include "libcalib/model/focus.h"
 #include "libcalib/model/targets.h"
 
 namespace rtscalib {
@@ -68,6 +70,10 @@ struct CameraTool {
   // libcalib/fit/parameterization.h decides with it); written to model.yaml
   // as `distortion_held`, its sigma as `held`.
   std::array<bool, kNumDistortion> distortion_held{};
+  // SPEC 4.1: how the intrinsics above (focused at infinity) change with the
+  // focus distance D (libcalib/model/focus.h); used only when the model has
+  // the `focus` effect.
+  std::array<double, kNumFocus> focus{};
   int width = 1280;
   int height = 960;
   // False when the data held no rows of this zoom (outside the critical
@@ -99,6 +105,7 @@ struct ModelSigmas {
   std::vector<PoseSigma> cam_tools;
   std::vector<std::array<double, kNumIntrinsics>> intrinsics;
   std::vector<std::array<double, kNumDistortion>> distortion;
+  std::vector<std::array<double, kNumFocus>> focus;  // per zoom, when the model has `focus`
   std::array<std::array<double, 4>, kNumKinematicEffects> effect_cov{};  // 2x2 row major
   // The fit's full joint covariance of p in the tangent coordinates and order
   // of libcalib/fit/parameter_layout.h (held coordinates: zero rows); empty

@@ -19,6 +19,8 @@
 //   F_EDM(phi, theta, d)       = ref_from_flange * flange_from_edm * [0 0 d* 1]
 //   F_CAM(phi, theta, u, v, d) = ref_from_flange * flange_from_cam * (d * ray(u, v))
 //   pixel of X                 = project(cam_from_ref * X)
+// With the `focus` effect (SPEC 4.1, focus.h) the intrinsics are those at the
+// focus distance D: D = d for F_CAM, the photo's D for a pixel.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -27,6 +29,7 @@
 #include "libcalib/camera/opencv_model.h"
 #include "libcalib/geometry/rotation.h"
 #include "libcalib/model/effects.h"
+#include "libcalib/model/focus.h"
 #include "libcalib/model/instrument.h"
 
 namespace rtscalib {
@@ -138,27 +141,35 @@ Vec3<T> EdmPoint(const ModelView<T>& m, const T* edm_q, const T* edm_t, const T&
   return flange * (tool * Vec3<T>(T(0), T(0), TrueDistance(m, d)));
 }
 
-// Klug Eq. 12/96 with SPEC 2: the point at ray length d through pixel (u, v).
+// Klug Eq. 12/96 with SPEC 2: the point at ray length d through pixel (u, v);
+// `focus` null without the focus effect, else the camera is focused at D = d.
 template <typename T>
 bool CamPoint(const ModelView<T>& m, const T* cam_q, const T* cam_t, const T* intrinsics,
-              const T* distortion, const T& phi, const T& theta, const T* pixel, const T& d,
-              Vec3<T>* out) {
+              const T* distortion, const T* focus, const T& phi, const T& theta, const T* pixel,
+              const T& d, Vec3<T>* out) {
+  T k[4];
+  if (!FocusedIntrinsics(intrinsics, focus, d, k)) return false;
   T ray[3];
-  if (!PixelToRay(intrinsics, distortion, pixel, ray)) return false;
+  if (!PixelToRay(k, distortion, pixel, ray)) return false;
   const RigidT<T> flange = RefFromFlange(m, phi, theta);
   const RigidT<T> tool = PoseFromBlocks(cam_q, cam_t);
   *out = flange * (tool * Vec3<T>(d * ray[0], d * ray[1], d * ray[2]));
   return true;
 }
 
-// Klug Eq. 62: the pixel at which a reference-frame point is seen.
+// Klug Eq. 62: the pixel at which a reference-frame point is seen; `focus`
+// null without the focus effect, else the camera is focused at
+// `focus_distance`, or at the point's own distance when that is <= 0.
 template <typename T>
 bool ProjectPoint(const ModelView<T>& m, const T* cam_q, const T* cam_t, const T* intrinsics,
-                  const T* distortion, const T& phi, const T& theta, const Vec3<T>& x_ref,
-                  T* pixel) {
+                  const T* distortion, const T* focus, const T& focus_distance, const T& phi,
+                  const T& theta, const Vec3<T>& x_ref, T* pixel) {
   const RigidT<T> ref_from_cam = RefFromFlange(m, phi, theta) * PoseFromBlocks(cam_q, cam_t);
   const Vec3<T> x_cam = ref_from_cam.InverseApply(x_ref);
-  return ProjectToPixel(intrinsics, distortion, x_cam.data(), pixel);
+  T k[4];
+  const T distance = focus_distance > T(0) ? focus_distance : T(x_cam.norm());
+  if (!FocusedIntrinsics(intrinsics, focus, distance, k)) return false;
+  return ProjectToPixel(k, distortion, x_cam.data(), pixel);
 }
 
 // ---------------------------------------------------------------------------
@@ -168,11 +179,17 @@ Rigid3 RefFromFlange(const InstrumentModel& model, double phi, double theta);
 Rigid3 RefFromEdm(const InstrumentModel& model, double phi, double theta);
 Rigid3 RefFromCam(const InstrumentModel& model, int zoom, double phi, double theta);
 Eigen::Vector3d PredictEdm(const InstrumentModel& model, double phi, double theta, double d);
-// Throws std::runtime_error when the pixel cannot be undistorted.
+// Throws std::runtime_error when the pixel cannot be undistorted. With the
+// focus effect the camera is focused at D = d (SPEC 4.1).
 Eigen::Vector3d PredictCam(const InstrumentModel& model, int zoom, double phi, double theta,
                            double u, double v, double d);
-// Returns false for points behind the camera.
+// Returns false for points behind the camera. With the focus effect the
+// camera is focused at `focus_distance` [m] (a photo's D, PhotoFocusDistances
+// in focus.h), or at the point's own distance when it is <= 0.
 bool PredictPixel(const InstrumentModel& model, int zoom, double phi, double theta,
-                  const Eigen::Vector3d& x_ref, Eigen::Vector2d* pixel);
+                  const Eigen::Vector3d& x_ref, Eigen::Vector2d* pixel,
+                  double focus_distance = 0.0);
+// The focus block of zoom `zoom` when the model has the focus effect, else null.
+const double* FocusOf(const InstrumentModel& model, int zoom);
 
 }  // namespace rtscalib

@@ -43,6 +43,9 @@ struct Record {
   // this is not empty.
   std::string point;
   int line = 0;  // 1-based line in the source file (0 = not from a file)
+  // Values of the file's extra numeric columns (Observations::record_covariates,
+  // e.g. temperature, time), NaN where a cell is empty.
+  std::vector<double> covariates;
 };
 
 struct PixelObservation {
@@ -60,6 +63,9 @@ struct PixelObservation {
   bool X_known = true;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // observed pixel
   int line = 0;
+  // Values of the extra numeric columns of shots.csv / pixels.csv
+  // (Observations::pixel_covariates), NaN where a cell is empty.
+  std::vector<double> covariates;
 };
 
 // A row taken out of a calibration as a gross error (libcalib/screen/gross.h
@@ -94,6 +100,12 @@ struct Observations {
   // Per zoom, the image size of its photos, when the observations come from
   // photos (empty otherwise: sizes then come from model.cameras).
   std::map<int, ImageSize> image_sizes;
+  // Names of the extra numeric columns of records.csv and of shots.csv /
+  // pixels.csv (covariates such as temperature or time, kept in the rows'
+  // `covariates` in this order): the diagnosis tests the residuals against
+  // them (docs/diagnostics.md).
+  std::vector<std::string> record_covariates;
+  std::vector<std::string> pixel_covariates;
   std::string records_source = "records";  // file names for messages
   std::string pixels_source = "pixels";
   // The unit the files gave phi and theta in (data.angle_unit); the values

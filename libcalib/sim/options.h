@@ -61,6 +61,12 @@ struct ShotPlan {
   int shots_per_board = 4;       // per usable board, zoom and face
   double fill = 0.7;             // fraction of the view (half extent) the pattern is sized by
   double pointing_jitter = 0.3;  // jitter of each aim within its pattern cell (fraction of a cell)
+  // SPEC 4.1, a truth with the focus effect: each photo is taken focused at
+  // its D, the distance from the camera to the centroid of the corners it
+  // shows; true: the photo reports D (PixelObservation::focus_distance, as
+  // an instrument reports its focus or EDM distance), false: it does not
+  // (the calibration then computes D from the model).
+  bool report_focus_distance = true;
 };
 
 struct SimulationOptions {

@@ -207,8 +207,13 @@ constexpr double kEdgeReach = 0.96;
 // axis leaves the middle third of the image without points (with margin).
 constexpr double kMiddleThird = 0.36;
 
+// Refocusing rounds of one photo (SimulatePixels): the corners shown settle
+// in two or three; a photo whose edge keeps trading a corner is not taken.
+constexpr int kMaxFocusIterations = 8;
+
 void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedData* data) {
   const InstrumentModel& truth = o.truth;
+  const bool focus = truth.effects.Has(Effect::kFocus);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   const Eigen::Vector3d origin = RefFromFlange(truth, 0.0, M_PI / 2).translation;
@@ -283,22 +288,63 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
           const std::string shot = (placed.placement.empty() ? "" : placed.placement + "-") + "z" +
                                    std::to_string(zoom) + "f" + std::to_string(face) + "s" +
                                    std::to_string(shot_index++);
-          std::vector<PixelObservation> rows;
-          std::vector<Eigen::Vector2d> exact;
           const Rigid3 ref_from_cam = RefFromCam(truth, zoom, phi, theta);
           const double trusted_radius = MaxTrustedRadius(cam.distortion.data());
-          for (const TargetCorner& c : corners) {
-            Eigen::Vector2d uv;
-            if (!PredictPixel(truth, zoom, phi, theta, c.X, &uv)) continue;
-            // A corner beyond the lens's trusted radius folds back into the
-            // image under strong barrel distortion; a real lens never shows it.
-            const Eigen::Vector3d x_cam = ref_from_cam.Inverse() * c.X;
-            if (std::hypot(x_cam.x(), x_cam.y()) > trusted_radius * x_cam.z()) continue;
-            const double margin = 2.0;
-            if (uv.x() < margin || uv.y() < margin || uv.x() > cam.width - 1 - margin ||
-                uv.y() > cam.height - 1 - margin) {
-              continue;
+          // The corners the photo shows, and their exact pixels, with the
+          // camera focused at `distance` (SPEC 4.1; without focus it plays
+          // no role).
+          auto visible = [&](double distance, std::vector<int>* which,
+                             std::vector<Eigen::Vector2d>* uvs) {
+            which->clear();
+            uvs->clear();
+            for (size_t k = 0; k < corners.size(); ++k) {
+              const TargetCorner& c = corners[k];
+              Eigen::Vector2d uv;
+              if (!PredictPixel(truth, zoom, phi, theta, c.X, &uv, distance)) continue;
+              // A corner beyond the lens's trusted radius folds back into the
+              // image under strong barrel distortion; a real lens never shows it.
+              const Eigen::Vector3d x_cam = ref_from_cam.Inverse() * c.X;
+              if (std::hypot(x_cam.x(), x_cam.y()) > trusted_radius * x_cam.z()) continue;
+              const double margin = 2.0;
+              if (uv.x() < margin || uv.y() < margin || uv.x() > cam.width - 1 - margin ||
+                  uv.y() > cam.height - 1 - margin) {
+                continue;
+              }
+              which->push_back(static_cast<int>(k));
+              uvs->push_back(uv);
             }
+          };
+          std::vector<int> shown;
+          std::vector<Eigen::Vector2d> exact;
+          double distance = 0;
+          if (focus) {
+            // The camera focuses on what it shows: D is the distance to the
+            // centroid of the corners in the photo, which themselves depend
+            // on D through the image scale. Start at the aimed board's
+            // centre and repeat until the corners shown no longer change, so
+            // that D is exactly the centroid of the photo's own points (what
+            // a calibration without a reported D computes).
+            distance = (scene.boards[view.board].CentreInRef() - ref_from_cam.translation).norm();
+            std::vector<int> before;
+            bool stable = false;
+            for (int iteration = 0; iteration < kMaxFocusIterations && !stable; ++iteration) {
+              visible(distance, &shown, &exact);
+              if (shown.empty()) break;
+              stable = iteration > 0 && shown == before;
+              if (stable) break;
+              Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+              for (int k : shown) sum += corners[k].X;
+              distance = (sum / static_cast<double>(shown.size()) - ref_from_cam.translation).norm();
+              before = shown;
+            }
+            if (!stable) continue;  // no photo whose focus settles is taken
+          } else {
+            visible(0.0, &shown, &exact);
+          }
+          if (shown.size() < 8) continue;  // a shot that shows almost nothing is not taken
+          std::vector<PixelObservation> rows;
+          for (size_t j = 0; j < shown.size(); ++j) {
+            const TargetCorner& c = corners[shown[j]];
             PixelObservation p;
             p.face = face;
             p.zoom = zoom;
@@ -306,14 +352,13 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
             p.theta = theta;
             p.shot = shot;
             p.placement = placed.placement;
+            p.focus_distance = focus && o.shots.report_focus_distance ? distance : 0.0;
             p.target = c.target;
             p.corner = c.corner;
             p.X = c.X;
-            p.uv = uv + o.noise.pixel_px * Eigen::Vector2d(normal(rng), normal(rng));
+            p.uv = exact[j] + o.noise.pixel_px * Eigen::Vector2d(normal(rng), normal(rng));
             rows.push_back(p);
-            exact.push_back(uv);
           }
-          if (rows.size() < 8) continue;  // a shot that shows almost nothing is not taken
           data->obs.pixels.insert(data->obs.pixels.end(), rows.begin(), rows.end());
           data->exact_pixels.insert(data->exact_pixels.end(), exact.begin(), exact.end());
         }
@@ -418,7 +463,10 @@ InstrumentModel PerturbedStart(const InstrumentModel& truth, std::uint64_t seed,
     m.edm.t[0] += scale * n(rng);
     m.edm.t[1] += scale * n(rng);
   }
-  for (CameraTool& c : m.cams) move_pose(&c.flange_from_cam);
+  for (CameraTool& c : m.cams) {
+    move_pose(&c.flange_from_cam);
+    c.focus.fill(0.0);  // an effect's values, zeroed like the others
+  }
   for (auto& e : m.effect_values) e = {0.0, 0.0};
   m.sigmas = {};
   return m;

@@ -41,7 +41,8 @@ SimulatedData Simulate(const SimulationOptions& options);
 // A starting model for tests and benchmarks of the refinement alone: the
 // truth moved by about `scale` (metres and radians) in every parameter a fit
 // frees - base, EDM (dh: pose; spherical: t_x, t_y), link 1's alpha and a,
-// camera tools - with the effect values zeroed (the enabled set is kept).
+// camera tools - with the effect values (and the cameras' focus terms)
+// zeroed (the enabled set is kept).
 // What a good extraction gives; end-to-end tests start from the extraction.
 InstrumentModel PerturbedStart(const InstrumentModel& truth, std::uint64_t seed,
                                double scale = 1e-3);

@@ -149,10 +149,16 @@ TEST(Diagnose, FlagsTheGrossErrorAndSaysSoInTheVerdict) {
   EXPECT_EQ(d.outliers.worst.front().group, ObsGroup::kEdm);
   EXPECT_EQ(d.outliers.worst.front().index, s.outlier);
   EXPECT_EQ(d.outliers.worst.front().where, Where(s.f.data.obs, ObsGroup::kEdm, s.outlier));
-  // The verdict, most important first: the fit, the next effect, ..., the outliers.
-  ASSERT_GE(d.verdict.size(), 3u);
-  EXPECT_EQ(d.verdict[0].rfind("The model (dh, effects: [])", 0), 0u) << d.verdict[0];
-  EXPECT_EQ(d.verdict[1].rfind("Add edm_scale next", 0), 0u) << d.verdict[1];
+  // The verdict, most important first: the EDM points fit worse than their
+  // a-priori sigma (edm_scale's 0.6 mm at 30 m against 10 um), said first
+  // with the factor; the fit; the next effect; ...; the outliers.
+  ASSERT_GE(d.verdict.size(), 4u);
+  EXPECT_EQ(d.verdict[0].rfind("The model (dh, effects: []) is incomplete", 0), 0u)
+      << d.verdict[0];
+  EXPECT_NE(d.verdict[0].find("EDM points"), std::string::npos) << d.verdict[0];
+  EXPECT_TRUE(d.fit_quality.Exceeds());
+  EXPECT_EQ(d.verdict[1].rfind("The model (dh, effects: []) fits", 0), 0u) << d.verdict[1];
+  EXPECT_EQ(d.verdict[2].rfind("Add edm_scale next", 0), 0u) << d.verdict[2];
   const bool outlier_line = std::any_of(d.verdict.begin(), d.verdict.end(), [&](const auto& v) {
     return v.find("w-test") != std::string::npos &&
            v.find(d.outliers.worst.front().where) != std::string::npos;

@@ -45,7 +45,7 @@ struct Scene {
 // The simulator's shots cover the whole image (its planner aims at every
 // image cell); the points beyond kKeptRadius of the half-diagonal are left
 // out, so that the image corners are empty (checked below).
-Scene CentralShots() {
+Scene CentralShots(double kept_radius = kKeptRadius) {
   Scene s;
   s.truth = testing_scene::DhTruth(1);
   auto& d = s.truth.cams[0].distortion;
@@ -57,7 +57,7 @@ Scene CentralShots() {
   s.obs = Simulate(o).obs;
   s.obs.records.clear();
   const CameraTool& cam = s.truth.cams[0];
-  const double kept = kKeptRadius * std::hypot(cam.width / 2.0, cam.height / 2.0);
+  const double kept = kept_radius * std::hypot(cam.width / 2.0, cam.height / 2.0);
   std::vector<PixelObservation> central;
   for (const PixelObservation& p : s.obs.pixels) {
     if (std::hypot(p.uv.x() - cam.intrinsics[2], p.uv.y() - cam.intrinsics[3]) < kept) {
@@ -170,6 +170,40 @@ TEST(DistortionTerms, FittingK1K2RecoversThemWithinThreeSigmas) {
   const Diagnosis d = Diagnose(s.obs, model, ContextOf(used, summary), Settings());
   EXPECT_EQ(d.distortion_terms.terms.size(), 2u);
   for (const DistortionTerm& t : d.distortion_terms.terms) EXPECT_NE(t.index, kK3);
+}
+
+// Points within 30 % of the half-diagonal (a narrow patch at the centre):
+// there k3 r^6 is nothing, and its sigma alone moves the image corners by
+// more than the image is wide. That is a fit gone wild, reported
+// at the top of the verdict with its likely cause (nothing else is missing:
+// a coefficient these data do not determine), never as a coefficient to drop.
+TEST(DistortionTerms, AnUndeterminedCoefficientIsAWildFitNotAnAdviceToDrop) {
+  const Scene s = CentralShots(0.3);
+  ASSERT_GT(s.obs.pixels.size(), 1000u);
+  FitSummary summary;
+  FitOptions used;
+  const InstrumentModel model = Fit(s, {}, &summary, &used);
+  const Diagnosis d = Diagnose(s.obs, model, ContextOf(used, summary), Settings());
+  const DistortionTerm* k3 = nullptr;
+  for (const DistortionTerm& t : d.distortion_terms.terms) {
+    if (t.zoom == 0 && t.index == kK3) k3 = &t;
+  }
+  ASSERT_NE(k3, nullptr);
+  EXPECT_GT(k3->corner_px, s.truth.cams[0].width);
+  EXPECT_TRUE(k3->wild);
+  EXPECT_FALSE(k3->drop);
+  bool listed = false;
+  for (const WildParameter& w : d.wild) listed = listed || w.name == "k3 of zoom 0";
+  EXPECT_TRUE(listed);
+  std::string verdict;
+  for (const std::string& v : d.verdict) verdict += v + "\n";
+  EXPECT_THAT(verdict, HasSubstr("Warning: the fit went wild: "));
+  EXPECT_THAT(verdict, HasSubstr("k3 of zoom 0 = "));
+  EXPECT_THAT(verdict, HasSubstr("Likely cause: parameters these data do not determine"));
+  EXPECT_THAT(verdict, ::testing::Not(HasSubstr("Drop k3 of zoom 0")));
+  // Before the ranking: right after the fit's sentence.
+  ASSERT_GE(d.verdict.size(), 2u);
+  EXPECT_THAT(d.verdict[1], HasSubstr("Warning: the fit went wild")) << verdict;
 }
 
 TEST(DistortionTerms, ConfigLineKeepsOtherZoomsAndHeldCoefficients) {

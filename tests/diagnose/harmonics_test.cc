@@ -130,6 +130,8 @@ TEST(Harmonics, EccentricityIsExplainedByTheCatalogue) {
 
 // The control: no hidden effect. Nothing may be flagged (ranking or
 // unexplained structure) in at least 19 of 20 seeds.
+// Also the structure beyond phi and theta (structure.h): trends against the
+// record order on the same records.
 TEST(Control, NoHiddenEffectFlagsNothingIn19Of20Seeds) {
   int flagged = 0;
   std::string what;
@@ -143,11 +145,15 @@ TEST(Control, NoHiddenEffectFlagsNothingIn19Of20Seeds) {
     Settings s;
     s.outliers = false;
     const Diagnosis d = DiagnoseFitted(f, s);
-    const bool any = d.Next() != nullptr || !d.harmonics.unexplained.empty();
+    const bool any = d.Next() != nullptr || !d.harmonics.unexplained.empty() ||
+                     !d.structure.unexplained.empty();
     if (any) {
       ++flagged;
       what += "seed " + std::to_string(seed) + ": " +
-              (d.Next() ? d.Next()->name : d.harmonics.unexplained[0].description) + "\n";
+              (d.Next()                           ? d.Next()->name
+               : !d.harmonics.unexplained.empty() ? d.harmonics.unexplained[0].description
+                                                  : d.structure.unexplained[0].description) +
+              "\n";
     }
   }
   EXPECT_LE(flagged, 1) << what;
@@ -176,6 +182,8 @@ TEST(Control, ExactDataFlagNothing) {
   const Diagnosis d = DiagnoseFitted(f, s);
   EXPECT_EQ(d.Next(), nullptr) << d.Next()->name;
   EXPECT_TRUE(d.harmonics.unexplained.empty()) << d.harmonics.unexplained[0].description;
+  EXPECT_TRUE(d.structure.unexplained.empty()) << d.structure.unexplained[0].description;
+  EXPECT_FALSE(d.fit_quality.Exceeds());
 }
 
 }  // namespace

@@ -37,6 +37,7 @@ InstrumentModel ModelWithEverything(Kinematics k) {
   }
   m.cams[0].distortion = {-0.12, 0.05, 8e-4,  -5e-4, -0.01, 0.05, -0.01,
                           0.002, 1e-3, -5e-4, -8e-4, 3e-4,  0.01, -0.015};
+  m.cams[0].focus = {0.03, 8.0, -5.0};  // SPEC 4.1: kf 30 mm, au, av [px m]
   return m;
 }
 
@@ -145,19 +146,26 @@ TEST_P(CostFunctionGradients, EdmRecordGroupOfAnUnknownPoint) {
   ExpectGradientsMatch(cost.get(), layout);
 }
 
-// Points over the whole image of a shot, observed 0.3 px off.
+// Points over the whole image of a shot, observed 0.3 px off; the photo's
+// focus distance (SPEC 4.1) is the centroid of its points, a function of
+// the chain.
 ShotResidual* MakeShot(InstrumentModel* m) {
   auto* f = new ShotResidual;
   f->layout = LayoutFor(m, 0);
   f->phi = 0.4;
   f->theta = 1.4;
   f->inv_sigma = 1.0 / 0.5;
+  ShotResidual::FocusTerm known;
   for (double u : {30.0, 640.0, 1250.0}) {
     for (double v : {20.0, 480.0, 940.0}) {
       const Eigen::Vector3d X = PredictCam(*m, 0, f->phi, f->theta, u, v, 4.0);
       f->points.push_back({X, Eigen::Vector2d(u + 0.3, v - 0.3)});
+      known.sum += X;
+      ++known.count;
     }
   }
+  f->focus_terms.push_back(known);
+  f->focus_count = known.count;
   return f;
 }
 
@@ -192,11 +200,12 @@ struct PlainShotResidual {
     const ModelView<T> view = shot->layout.View(p);
     const RigidT<T> ref_from_cam = RefFromFlange(view, T(shot->phi), T(shot->theta)) *
                                    PoseFromBlocks(p[shot->layout.tool_q], p[shot->layout.tool_t]);
+    T intrinsics[kNumIntrinsics];
+    if (!shot->PhotoIntrinsics(p, std::vector<RigidT<T>>(), ref_from_cam, intrinsics)) return false;
     for (size_t k = 0; k < shot->points.size(); ++k) {
       const Vec3<T> x_cam = ref_from_cam.InverseApply(shot->points[k].X.cast<T>());
       T pixel[2];
-      if (!ProjectToPixel(p[shot->layout.intrinsics], p[shot->layout.distortion], x_cam.data(),
-                          pixel)) {
+      if (!ProjectToPixel(intrinsics, p[shot->layout.distortion], x_cam.data(), pixel)) {
         return false;
       }
       for (int c = 0; c < 2; ++c)
@@ -282,18 +291,42 @@ TEST_P(CostFunctionGradients, ShotOfBoardsOfUnknownPose) {
     EstimatedBoard& board = m.boards[b];
     f->layout.boards.push_back(
         {f->layout.Add(board.pose.q.data(), 4), f->layout.Add(board.pose.t.data(), 3)});
+    // The photo's focus distance: the centroid of all its points, these
+    // boards' corners included (through their pose blocks).
+    ShotResidual::FocusTerm term;
+    term.board = b;
     for (int tag = 0; tag < board.board.NumTags(); tag += 2) {
       for (int k = 0; k < 4; ++k) {
         const Eigen::Vector3d in_board = board.board.CornersInBoard(tag)[k];
         Eigen::Vector2d uv;
-        ASSERT_TRUE(PredictPixel(m, 0, f->phi, f->theta, board.pose.ToRigid() * in_board, &uv));
+        ASSERT_TRUE(
+            PredictPixel(m, 0, f->phi, f->theta, board.pose.ToRigid() * in_board, &uv, 4.0));
         f->points.push_back({in_board, uv + Eigen::Vector2d(0.2, -0.1), b});
+        term.sum += in_board;
+        ++term.count;
       }
     }
+    f->focus_terms.push_back(term);
+    f->focus_count += term.count;
   }
   const BlockLayout layout = f->layout;
   std::unique_ptr<ceres::CostFunction> cost(
       MakeCost(f, 2 * static_cast<int>(f->points.size()), TotalSize(layout)));
+  ExpectGradientsMatch(cost.get(), layout);
+}
+
+// SPEC 4.1 with the photo's focus distance given (the focus_distance
+// column): the focus terms' derivatives at that D, no chain through D.
+TEST_P(CostFunctionGradients, ShotWithGivenFocusDistance) {
+  InstrumentModel m = ModelWithEverything(GetParam());
+  ShotResidual* f = MakeShot(&m);
+  f->focus_distance = 6.5;
+  f->focus_terms.clear();
+  f->focus_count = 0;
+  const BlockLayout layout = f->layout;
+  ASSERT_GE(layout.focus, 0);
+  const int n = 2 * static_cast<int>(f->points.size());
+  std::unique_ptr<ceres::CostFunction> cost(MakeCost(f, n, TotalSize(layout)));
   ExpectGradientsMatch(cost.get(), layout);
 }
 

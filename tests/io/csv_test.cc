@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <sstream>
 
 #include "tests/io/io_test_util.h"
@@ -49,6 +51,26 @@ TEST(Csv, ExtraColumnsAreNoted) {
   ASSERT_EQ(t.notes().size(), 1u);
   EXPECT_THAT(t.notes()[0], HasSubstr("t.csv:1"));
   EXPECT_THAT(t.notes()[0], HasSubstr("yy, zz"));
+}
+
+// A reader that keeps covariates keeps the extra columns whose every
+// non-empty cell is a number (in header order; an empty cell is NaN) and
+// still ignores the others, naming both.
+TEST(Csv, NumericExtraColumnsAreCovariatesWhenAsked) {
+  const CsvTable t =
+      ParseText("a,temp,label,time,blank\n1,20.5,x,,\n2,,y,3,\n", {{"a"}, {}, true});
+  EXPECT_EQ(t.covariates(), (std::vector<std::string>{"temp", "time"}));
+  EXPECT_EQ(t.Covariate(0, 0), 20.5);
+  EXPECT_TRUE(std::isnan(t.Covariate(1, 0)));
+  EXPECT_TRUE(std::isnan(t.Covariate(0, 1)));
+  EXPECT_EQ(t.Covariate(1, 1), 3.0);
+  ASSERT_EQ(t.notes().size(), 2u);
+  EXPECT_THAT(t.notes()[0], HasSubstr("temp, time kept as covariates"));
+  EXPECT_THAT(t.notes()[1], HasSubstr("ignored columns blank, label"));
+  // Without the request every extra column is ignored.
+  const CsvTable plain = ParseText("a,temp\n1,2\n", {{"a"}, {}});
+  EXPECT_TRUE(plain.covariates().empty());
+  EXPECT_THAT(plain.notes().at(0), HasSubstr("ignored column temp"));
 }
 
 // A UTF-16 or UTF-32 file would read as one field of odd bytes per line;

@@ -43,6 +43,7 @@ InstrumentModel RandomModel(Kinematics k, int zooms, bool with_sigmas, unsigned 
     c.distortion[kP1] = 1e-3 * unif(rng);
     c.distortion[kP2] = 1e-3 * unif(rng);
     c.distortion[kK3] = 1e-3 * unif(rng);
+    c.focus = {0.01 * unif(rng), 5.0 * unif(rng), 5.0 * unif(rng)};  // SPEC 4.1 [m, px m]
   }
   if (k == Kinematics::kDh) {
     for (DhLink& link : m.links) {
@@ -84,6 +85,7 @@ InstrumentModel RandomModel(Kinematics k, int zooms, bool with_sigmas, unsigned 
       s.intrinsics.push_back({0.1, 0.2, 0.3, 0.4});
       s.distortion.emplace_back();
       for (double& x : s.distortion.back()) x = std::abs(unif(rng)) * 1e-4;
+      s.focus.push_back({1e-4, 0.05, 0.06});
     }
     // Coefficients the fit did not free have no uncertainty: `held` in the
     // file, 0 in memory (what Refine gives them).
@@ -151,6 +153,7 @@ void ExpectRoundTrip(const InstrumentModel& m) {
     EXPECT_EQ(r.cams[z].flange_from_cam.t, m.cams[z].flange_from_cam.t);
     EXPECT_EQ(r.cams[z].intrinsics, m.cams[z].intrinsics);
     EXPECT_EQ(r.cams[z].distortion, m.cams[z].distortion);
+    if (m.effects.Has(Effect::kFocus)) EXPECT_EQ(r.cams[z].focus, m.cams[z].focus);
   }
   for (Effect e : m.effects.List()) {
     if (IsKinematic(e)) {
@@ -170,6 +173,9 @@ void ExpectRoundTrip(const InstrumentModel& m) {
       ExpectSameSigma(r.sigmas.cam_tools[z], m.sigmas.cam_tools[z], "cam_tools");
       ExpectSameBits(r.sigmas.intrinsics[z], m.sigmas.intrinsics[z], "intrinsics");
       ExpectSameBits(r.sigmas.distortion[z], m.sigmas.distortion[z], "distortion");
+      if (m.effects.Has(Effect::kFocus)) {
+        ExpectSameBits(r.sigmas.focus[z], m.sigmas.focus[z], "focus");
+      }
     }
     for (Effect e : m.effects.List()) {
       if (!IsKinematic(e)) continue;
@@ -191,6 +197,9 @@ void ExpectRoundTrip(const InstrumentModel& m) {
       Eigen::Vector2d pixel_m, pixel_r;
       ASSERT_TRUE(PredictPixel(m, z, p, t, x, &pixel_m));
       ASSERT_TRUE(PredictPixel(r, z, p, t, x, &pixel_r));
+      EXPECT_EQ(pixel_r, pixel_m);
+      ASSERT_TRUE(PredictPixel(m, z, p, t, x, &pixel_m, 3.0));  // a photo focused at 3 m
+      ASSERT_TRUE(PredictPixel(r, z, p, t, x, &pixel_r, 3.0));
       EXPECT_EQ(pixel_r, pixel_m);
     }
   }

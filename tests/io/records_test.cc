@@ -144,16 +144,31 @@ TEST(Records, CamRowsNeedPixels) {
   EXPECT_EQ(e.column, "u");
 }
 
-TEST(Records, ExtraColumnIsIgnoredWithANote) {
+// An extra column of numbers (temperature, time) is kept as a covariate
+// that the diagnosis tests the residuals against; another extra column is
+// ignored with a note. Both are said; the writer gives the covariates back.
+TEST(Records, ExtraNumericColumnIsKeptAsACovariate) {
   TempDir dir;
   const std::string path = dir.Write("records.csv",
-                                     "face,zoom,phi,theta,tool,u,v,d,x,y,z,set,temperature\n"
-                                     "1,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,,21.5\n");
+                                     "face,zoom,phi,theta,tool,u,v,d,x,y,z,set,temperature,who\n"
+                                     "1,0,0.5,1.5,edm,,,2,0.1,0.2,0.3,,21.5,ann\n"
+                                     "1,0,0.6,1.5,edm,,,2,0.1,0.2,0.3,,,bob\n");
   const RecordsFile file = ReadRecords(path);
-  EXPECT_EQ(file.records.size(), 1u);
-  ASSERT_EQ(file.notes.size(), 1u);
+  ASSERT_EQ(file.records.size(), 2u);
+  EXPECT_EQ(file.covariates, std::vector<std::string>{"temperature"});
+  EXPECT_EQ(file.records[0].covariates, std::vector<double>{21.5});
+  ASSERT_EQ(file.records[1].covariates.size(), 1u);
+  EXPECT_TRUE(std::isnan(file.records[1].covariates[0]));
+  ASSERT_EQ(file.notes.size(), 2u);
   EXPECT_THAT(file.notes[0], HasSubstr(path + ":1"));
-  EXPECT_THAT(file.notes[0], HasSubstr("temperature"));
+  EXPECT_THAT(file.notes[0], HasSubstr("temperature kept as covariate"));
+  EXPECT_THAT(file.notes[1], HasSubstr("ignored column who"));
+  const std::string out = dir.Path("out.csv");
+  WriteRecords(out, file.records, AngleUnit::kRad, file.covariates);
+  const RecordsFile back = ReadRecords(out);
+  EXPECT_EQ(back.covariates, file.covariates);
+  EXPECT_EQ(back.records[0].covariates, file.records[0].covariates);
+  EXPECT_TRUE(std::isnan(back.records[1].covariates[0]));
 }
 
 TEST(Records, WrongFieldCountNamesTheLine) {

@@ -12,8 +12,9 @@ namespace {
 // The tables derived from RTSCALIB_EFFECT_LIST hold the values the catalogue
 // had when each was kept by hand (SPEC 4, docs/effects.md).
 TEST(EffectCatalogue, DerivedCountsAndOrder) {
-  EXPECT_EQ(kNumEffects, 16);
+  EXPECT_EQ(kNumEffects, 17);
   EXPECT_EQ(kNumKinematicEffects, 11);
+  EXPECT_EQ(kNumDistortionGroups, 5);
   ASSERT_EQ(static_cast<int>(EffectCatalogue().size()), kNumEffects);
   for (int i = 0; i < kNumEffects; ++i) {
     const Effect e = static_cast<Effect>(i);
@@ -22,6 +23,12 @@ TEST(EffectCatalogue, DerivedCountsAndOrder) {
     EXPECT_EQ(IsKinematic(e), i < kNumKinematicEffects);
   }
   EXPECT_EQ(std::string(Info(Effect::kEdmCyclic).name), "edm_cyclic");
+  // The per-zoom camera effects: the distortion groups, then focus (SPEC 4.1).
+  EXPECT_TRUE(IsCameraEffect(Effect::kFocus));
+  EXPECT_FALSE(IsDistortion(Effect::kFocus));
+  EXPECT_TRUE(IsDistortion(Effect::kSensorTilt));
+  EXPECT_EQ(std::string(Info(Effect::kFocus).name), "focus");
+  EXPECT_TRUE(Info(Effect::kFocus).distortion_indices.empty());
   EXPECT_FALSE(EffectFromName("no_such_effect").has_value());
 }
 

@@ -1,0 +1,57 @@
+// The tests of every probe of structure outside the catalogue (harmonics of
+// phi and theta, trends against the session's other variables, image
+// motions and fields; linearization.h defines them), in three steps:
+//  1. before the catalogue: each probe tested against the fitted model alone;
+//  2. unexplained: forward selection of probes on top of ALL catalogue effects
+//     that the data can see (each step adds the most significant probe, until
+//     none is significant or `max_terms`): what remains significant is
+//     structure that no catalogue effect can produce;
+//  3. a probe significant in (1) but not in (2) on top of the catalogue is
+//     explained by the catalogue; `explained_by` names the single effect that
+//     removes most of it. One still significant on top of the catalogue but
+//     not selected describes structure a selected probe holds (`same_as`).
+// A probe's column that a projection (the fit's parameters, the catalogue,
+// the probes selected) leaves with less than kAbsorbed of its norm is
+// absorbed: it is dropped from the test, as a candidate effect is redundant
+// (ranking.h), so that round-off of an absorbed direction never tests as
+// structure.
+// Tests are the robust Wald tests of statistics.h at level significance /
+// (number of probes) (Bonferroni). One joint selection over every kind of
+// probe, so that two kinds that describe the same structure (a drift of the
+// horizontal index and a harmonic of phi) are not both reported.
+// harmonics.h and structure.h turn the results into words.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "libcalib/diagnose/linearization.h"
+#include "libcalib/diagnose/statistics.h"
+
+namespace rtscalib {
+
+constexpr double kAbsorbed = 1e-3;
+
+struct ProbeResult {
+  const ColumnBlock* block = nullptr;
+  ColumnTest raw;  // (1) against the fitted model alone
+  bool raw_significant = false;
+  bool selected = false;     // (2) significant on top of the whole catalogue
+  ColumnTest joint;          // (2) with the other selected probes (selected only)
+  std::string explained_by;  // (3) raw significant, not significant on top of the catalogue
+  std::string same_as;       // (3) significant on top of the catalogue, but a selected probe holds it
+};
+
+struct ProbeAnalysis {
+  std::vector<ProbeResult> probes;  // every probe block of the linearisation, in its order
+  std::vector<int> selected;        // (2) indices into `probes`, most significant first
+  double level = 0;                 // per-test level
+  int tests = 0;
+};
+
+// `catalogue` = column blocks of the candidate effects the data can see.
+ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
+                            const std::vector<const ColumnBlock*>& catalogue, double significance,
+                            int max_terms = 6);
+
+}  // namespace rtscalib
