@@ -214,10 +214,9 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   d.current = d.ranking.current;
 
   d.distortion_terms = AssessDistortionTerms(lin, model);
-  d.residuals = ObservationResiduals(obs, model, fit.options);
   if (settings.outliers) {
-    d.outliers =
-        TestOutliers(obs, lin, red, d.residuals, settings.significance, settings.outliers_listed);
+    d.outliers = TestOutliers(obs, lin, red, ObservationResiduals(obs, model, fit.options),
+                              settings.significance, settings.outliers_listed);
   }
   d.verdict = Verdict(d);
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
