@@ -312,17 +312,20 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
   };
   std::vector<Cell> cells(nx * ny);
   double ss = 0;
-  int n = 0;
+  int n = 0, records = 0;
   for (const ObservationResidual& o : rows) {
-    if (!Fitted(o) || o.group != ObsGroup::kPixel || o.zoom != zoom) continue;
+    // Fitted image observations: pixels and camera records of this zoom.
+    if (!Fitted(o) || o.group == ObsGroup::kEdm || o.zoom != zoom || !std::isfinite(o.image_delta.x()))
+      continue;
     const int i = std::clamp(static_cast<int>((o.u + 0.5) / cam.width * nx), 0, nx - 1);
     const int j = std::clamp(static_cast<int>((o.v + 0.5) / cam.height * ny), 0, ny - 1);
     Cell& c = cells[j * nx + i];
-    c.du += o.delta.x();
-    c.dv += o.delta.y();
+    c.du += o.image_delta.x();
+    c.dv += o.image_delta.y();
     ++c.n;
-    ss += o.size * o.size;
+    ss += o.image_delta.squaredNorm();
     ++n;
+    records += o.group == ObsGroup::kCam;
   }
   const double rms = n ? std::sqrt(ss / n) : 0;
   std::vector<double> lengths;
@@ -358,7 +361,9 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
   }
   json spec = Chart("Image residuals, zoom " + std::to_string(zoom) +
                         ": mean observed - predicted pixel per cell",
-                    std::to_string(n) + " fitted image points, rms " + Num(rms) + " px; arrow: " +
+                    std::to_string(n - records) + " fitted image points and " +
+                        std::to_string(records) + " camera records, rms " + Num(rms) +
+                        " px; arrow: " +
                         Num(reference_px) + " px residual = " + Num(0.9) +
                         " cell widths; cell colour and number: points per cell");
   int w = 0, h = 0;
@@ -424,8 +429,8 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
   f.section = "image";
   f.title = "Image residuals, zoom " + std::to_string(zoom);
   f.caption =
-      "The fitted image points of this zoom (residual table, final model, boards at their "
-      "estimated poses), binned over the image: each arrow is the mean observed-minus-predicted "
+      "The fitted image observations of this zoom (image points and camera records; residual "
+      "table, final model, boards at their estimated poses), binned over the image: each arrow is the mean observed-minus-predicted "
       "pixel of its cell, drawn at the scale the red reference arrow states; the number is the "
       "cell's points. A pattern of arrows is a model error (distortion, a principal point, a "
       "tool); random arrows shorter than the rms are noise. Empty corner ninths (dashed) mean "
@@ -433,6 +438,7 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
   f.spec = spec;
   f.summary = {{"zoom", zoom},
                {"fitted_rows", n},
+               {"camera_records", records},
                {"rms_px", rms},
                {"arrow_scale_px", reference_px},
                {"cells", {nx, ny}}};
@@ -1221,7 +1227,11 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   }
 
   // The image: binned residuals per zoom, then the worst photos.
-  for (int z : pixel_zooms) figs.push_back(ImageResiduals(z, c.model.cams[z], rows));
+  std::set<int> image_zooms = pixel_zooms;
+  image_zooms.insert(cam_zooms.begin(), cam_zooms.end());
+  for (int z : image_zooms) {
+    if (z < c.model.NumZooms()) figs.push_back(ImageResiduals(z, c.model.cams[z], rows));
+  }
   std::map<std::string, std::vector<ObservationResidual>> by_shot;
   for (const ObservationResidual& o : rows) {
     if (o.group == ObsGroup::kPixel && !o.shot.empty()) by_shot[o.shot].push_back(o);

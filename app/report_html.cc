@@ -89,8 +89,8 @@ std::string Img(const Figure& f) {
 
 // The Vega runtime (app/vega.h) and the script that draws every figure of
 // the page as SVG; each figure says when it is drawn (data-rendered: the
-// number of SVG elements) or why not (data-error), for the checks of
-// scripts/render-report.sh.
+// number of SVG elements, data-marks: the items of its data marks) or why not
+// (data-error), for the checks of scripts/render-report.sh.
 std::string FigureScripts() {
   std::string missing;
   const std::string& runtime = VegaRuntime(&missing);
@@ -111,7 +111,14 @@ std::string FigureScripts() {
       var spec = JSON.parse(document.getElementById('spec-' + f.dataset.figure).textContent);
       new vega.View(vega.parse(spec), {renderer: 'svg', container: plot, hover: true})
         .runAsync()
-        .then(function () { f.setAttribute('data-rendered', plot.querySelectorAll('svg *').length); })
+        .then(function () {
+          f.setAttribute('data-rendered', plot.querySelectorAll('svg *').length);
+          // Items of the data marks (not axes, legends or titles): a figure
+          // with none is blank.
+          f.setAttribute('data-marks', plot.querySelectorAll(
+              ['symbol', 'rect', 'rule', 'line', 'area', 'image'].map(function (m) {
+                return '.role-mark.mark-' + m + ' > *'; }).join(', ')).length);
+        })
         .catch(function (e) { f.setAttribute('data-error', String(e)); console.error('figure ' + f.dataset.figure + ': ' + e); });
     } catch (e) {
       f.setAttribute('data-error', String(e));

@@ -440,7 +440,7 @@ const std::vector<std::string>& ResidualColumns() {
       "d",      "shot",   "placement", "target", "corner", "point", "obs_x", "obs_y",
       "obs_z",  "pred_x", "pred_y", "pred_z",  "res_x",  "res_y",  "res_z",  "size",
       "sigma",  "normalised", "along_m", "hz_rad", "zenith_rad", "target_distance_m",
-      "image_radius_px", "reason"};
+      "image_radius_px", "u", "v", "image_du", "image_dv", "reason"};
   return columns;
 }
 
@@ -481,8 +481,11 @@ std::string ResidualsCsv(const PipelineResult& r) {
       << (x.valid ? num(x.hz, "%.6g") : "");
     o << "," << (x.valid ? num(x.zenith, "%.6g") : "") << ","
       << (x.valid ? num(x.target_distance, "%.8g") : "");
-    o << "," << (x.image_radius >= 0 ? num(x.image_radius, "%.8g") : "") << "," << text(x.reason)
-      << "\n";
+    o << "," << (x.image_radius >= 0 ? num(x.image_radius, "%.8g") : "");
+    const bool image = px || x.group == ObsGroup::kCam;
+    o << "," << (image ? num(x.u, "%.10g") : "") << "," << (image ? num(x.v, "%.10g") : "");
+    o << "," << num(x.image_delta.x(), "%.6g") << "," << num(x.image_delta.y(), "%.6g") << ","
+      << text(x.reason) << "\n";
   }
   return o.str();
 }

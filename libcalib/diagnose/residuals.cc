@@ -68,6 +68,9 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
       if (r.tool == Tool::kCam && r.zoom >= 0 && r.zoom < model.NumZooms()) {
         const CameraTool& cam = model.cams[r.zoom];
         o.image_radius = std::hypot(r.u - cam.intrinsics[2], r.v - cam.intrinsics[3]);
+        Eigen::Vector2d pred;
+        if (PredictPixel(model, r.zoom, r.phi, r.theta, r.x, &pred))
+          o.image_delta = Eigen::Vector2d(r.u, r.v) - pred;
       }
     } catch (const std::exception&) {
       o.valid = false;
@@ -99,6 +102,7 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
         AngularComponents(b, a - b, &o.hz, &o.zenith);
         o.delta = Eigen::Vector3d(p.uv.x() - pred.x(), p.uv.y() - pred.y(), 0.0);
         o.size = o.delta.norm();
+        o.image_delta = p.uv - pred;
         o.observed = Eigen::Vector3d(p.uv.x(), p.uv.y(), 0.0);
         o.predicted = Eigen::Vector3d(pred.x(), pred.y(), 0.0);
         o.target_distance = (p.X - RefFromCam(model, p.zoom, p.phi, p.theta).translation).norm();

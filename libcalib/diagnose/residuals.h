@@ -24,6 +24,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,10 @@ struct ObservationResidual {
   // The observed and the predicted value: records x, y, z [m]; pixels u, v, 0 [px].
   Eigen::Vector3d observed = Eigen::Vector3d::Zero();
   Eigen::Vector3d predicted = Eigen::Vector3d::Zero();
+  // Observed minus predicted pixel [px]: pixels (= delta's u, v), and cam
+  // records (u, v minus their point projected at the reading); NaN for EDM
+  // rows and rows the model cannot project.
+  Eigen::Vector2d image_delta = Eigen::Vector2d::Constant(std::nan(""));
   // Variables the diagnosis tests the residuals against, besides phi, theta, d:
   double target_distance = 0;  // camera (pixels) or tool (records) to the point [m]
   double image_radius = -1;    // pixels and cam records: |uv - principal point| [px]; else -1

@@ -20,6 +20,8 @@
 #include "libcalib/io/targets_io.h"
 #include "libcalib/sim/simulator.h"
 
+#include "tests/app/figure_checks.h"
+
 namespace rtscalib::app {
 namespace {
 
@@ -143,6 +145,18 @@ TEST_F(PhotoSession, CalibrationFromThePhotosMatchesTheTruth) {
   EXPECT_LT(result_->calibration.final_errors.pixels.rms_px, 0.3);
 }
 
+TEST_F(PhotoSession, FiguresDrawTheResidualTable) {
+  const std::vector<Figure> figs = testing_figures::CheckFiguresAgainstResidualFile(*result_);
+  // The worst photos are drawn on the photo itself.
+  int photos = 0;
+  for (const Figure& f : figs) {
+    if (f.section != "photos") continue;
+    ++photos;
+    EXPECT_TRUE(f.summary["photo"].get<bool>()) << f.name << ": the photo file was not found";
+  }
+  EXPECT_GT(photos, 0);
+}
+
 TEST_F(PhotoSession, BoardsWithoutPoseAreEstimatedWithEverythingElse) {
   // The same folder with the boards' poses left out (SPEC 7): the corners are
   // points of boards without pose (X_known = false), estimated with
@@ -167,6 +181,15 @@ TEST_F(PhotoSession, BoardsWithoutPoseAreEstimatedWithEverythingElse) {
   EXPECT_EQ(r.photos.boards_without_pose, 4);
   ASSERT_FALSE(r.obs.pixels.empty());
   for (const PixelObservation& p : r.obs.pixels) EXPECT_FALSE(p.X_known);
+  {
+    // The figures of boards without pose: every corner's residual at the
+    // board's estimated pose, none left unpredicted.
+    SCOPED_TRACE("figures, boards without pose");
+    testing_figures::CheckFiguresAgainstResidualFile(r);
+    for (const ObservationResidual& o : r.calibration.residuals) {
+      if (o.group == ObsGroup::kPixel) EXPECT_TRUE(o.valid) << o.shot << " " << o.target;
+    }
+  }
 
   // Unknown poses cost little: the same tolerances as the surveyed session
   // above, and both errors printed side by side.
