@@ -89,6 +89,14 @@ json Axis(const std::string& orient, const std::string& scale, const std::string
           {"titleFontSize", 11}};
 }
 
+// A mark of `type` drawn from `data` ("" for one item) with its `enter`
+// encoding.
+json Mark(const std::string& type, const std::string& data, json enter) {
+  json m = {{"type", type}, {"encode", {{"enter", std::move(enter)}}}};
+  if (!data.empty()) m["from"] = {{"data", data}};
+  return m;
+}
+
 // A tooltip: Vega's tooltip handler shows "key: value" per entry.
 json Tip(const std::vector<std::pair<std::string, std::string>>& entries) {
   std::string s = "{";
@@ -100,6 +108,28 @@ json Tip(const std::vector<std::pair<std::string, std::string>>& entries) {
 
 json Field(const std::string& scale, const std::string& field) {
   return {{"scale", scale}, {"field", field}};
+}
+
+// A line through (x, y) per series of `data` (grouped by `by`, coloured by
+// the ordinal scale `colour`), with a dot and `tooltip` on each point.
+json SeriesLines(const std::string& data, const std::string& by, const std::string& colour,
+                 const std::string& x, const std::string& y, double width, double dot,
+                 const json& tooltip, json extra_marks = json::array()) {
+  const std::string each = data + "_series";
+  json marks = std::move(extra_marks);
+  for (json& m : marks) m["from"] = {{"data", each}};
+  marks.push_back(Mark("line", each, {{"x", Field("x", x)},
+                       {"y", Field("y", y)},
+                       {"stroke", Field(colour, by)},
+                       {"strokeWidth", {{"value", width}}}}));
+  marks.push_back(Mark("symbol", each, {{"x", Field("x", x)},
+                       {"y", Field("y", y)},
+                       {"fill", Field(colour, by)},
+                       {"size", {{"value", dot}}},
+                       {"tooltip", tooltip}}));
+  return {{"type", "group"},
+          {"from", {{"facet", {{"name", each}, {"data", data}, {"groupby", by}}}}},
+          {"marks", marks}};
 }
 
 // A panel of an image's size: u right, v down (SPEC 2), pixel centres at
@@ -123,59 +153,42 @@ void ImageScales(json* spec, int width, int height, int* w, int* h) {
 // Arrow marks over an image: a rule from (u, v) to (tip_u, tip_v) and a
 // wedge at the tip, both from `data`; `tooltip` on both.
 void Arrows(json* marks, const std::string& data, const std::string& colour, const json& tooltip) {
-  marks->push_back({{"type", "rule"},
-                    {"from", {{"data", data}}},
-                    {"encode",
-                     {{"enter",
-                       {{"x", Field("u", "u")},
+  marks->push_back(Mark("rule", data, {{"x", Field("u", "u")},
                         {"y", Field("v", "v")},
                         {"x2", Field("u", "tip_u")},
                         {"y2", Field("v", "tip_v")},
                         {"stroke", {{"value", colour}}},
                         {"strokeWidth", {{"value", 1.6}}},
-                        {"tooltip", tooltip}}}}}});
-  marks->push_back({{"type", "symbol"},
-                    {"from", {{"data", data}}},
-                    {"encode",
-                     {{"enter",
-                       {{"x", Field("u", "tip_u")},
+                        {"tooltip", tooltip}}));
+  marks->push_back(Mark("symbol", data, {{"x", Field("u", "tip_u")},
                         {"y", Field("v", "tip_v")},
                         {"shape", {{"value", "wedge"}}},
                         {"angle", {{"field", "angle"}}},
                         {"size", {{"value", 40}}},
                         {"fill", {{"value", colour}}},
-                        {"tooltip", tooltip}}}}}});
+                        {"tooltip", tooltip}}));
 }
 
 // The reference arrow of a figure, above the panel's top right corner:
 // `length` display pixels, labelled with the residual it stands for.
 void ScaleBar(json* marks, double length, const std::string& text, int w) {
-  marks->push_back({{"type", "rule"},
-                    {"encode",
-                     {{"enter",
-                       {{"x", {{"value", w - length}}},
+  marks->push_back(Mark("rule", "", {{"x", {{"value", w - length}}},
                         {"x2", {{"value", w}}},
                         {"y", {{"value", -8}}},
                         {"stroke", {{"value", "#c0392b"}}},
-                        {"strokeWidth", {{"value", 2}}}}}}}});
-  marks->push_back({{"type", "symbol"},
-                    {"encode",
-                     {{"enter",
-                       {{"x", {{"value", w}}},
+                        {"strokeWidth", {{"value", 2}}}}));
+  marks->push_back(Mark("symbol", "", {{"x", {{"value", w}}},
                         {"y", {{"value", -8}}},
                         {"shape", {{"value", "wedge"}}},
                         {"angle", {{"value", 90}}},
                         {"size", {{"value", 40}}},
-                        {"fill", {{"value", "#c0392b"}}}}}}}});
-  marks->push_back({{"type", "text"},
-                    {"encode",
-                     {{"enter",
-                       {{"x", {{"value", w - length - 6}}},
+                        {"fill", {{"value", "#c0392b"}}}}));
+  marks->push_back(Mark("text", "", {{"x", {{"value", w - length - 6}}},
                         {"y", {{"value", -8}}},
                         {"align", {{"value", "right"}}},
                         {"baseline", {{"value", "middle"}}},
                         {"fontSize", {{"value", 11}}},
-                        {"text", {{"value", text}}}}}}}});
+                        {"text", {{"value", text}}}}));
 }
 
 // ---------------------------------------------------------------------------
@@ -261,20 +274,12 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& ro
         {"scales", {Linear("x", {0, 360}, {0, w}), Linear("y", domain, {0, h})}},
         {"axes", {ax, ay}},
         {"marks",
-         {{{"type", "rect"},
-           {"from", {{"data", "bands"}}},
-           {"encode",
-            {{"enter",
-              {{"x", {{"value", 0}}},
+         {Mark("rect", "bands", {{"x", {{"value", 0}}},
                {"x2", {{"value", w}}},
                {"y", Field("y", "a")},
                {"y2", Field("y", "b")},
-               {"fill", {{"value", "#dddddd"}}}}}}}},
-          {{"type", "rect"},
-           {"from", {{"data", data}}},
-           {"encode",
-            {{"enter",
-              {{"xc", Field("x", "phi")},
+               {"fill", {{"value", "#dddddd"}}}}),
+          Mark("rect", data, {{"xc", Field("x", "phi")},
                {"yc", Field("y", "theta")},
                {"width", {{"value", cw}}},
                {"height", {{"value", ch}}},
@@ -284,7 +289,7 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& ro
                                 {"phi [deg]", "format(datum.phi, '.2f')"},
                                 {"theta [deg]", "format(datum.theta, '.2f')"},
                                 {"rms [" + src.unit + "]", "format(datum.rms, '.3g')"},
-                                {"observations", "datum.n"}})}}}}}}}}};
+                                {"observations", "datum.n"}})}})}}};
     spec["marks"].push_back(group);
   }
   Figure f;
@@ -383,17 +388,13 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
                         {"points", "datum.n"},
                         {"mean du [px]", "format(datum.du, '.4f')"},
                         {"mean dv [px]", "format(datum.dv, '.4f')"}});
-  marks.push_back({{"type", "rect"},
-                   {"from", {{"data", "cells"}}},
-                   {"encode",
-                    {{"enter",
-                      {{"x", Field("u", "u0")},
+  marks.push_back(Mark("rect", "cells", {{"x", Field("u", "u0")},
                        {"x2", Field("u", "u1")},
                        {"y", Field("v", "v0")},
                        {"y2", Field("v", "v1")},
                        {"fill", Field("count", "n")},
                        {"stroke", {{"value", "#e4e4e4"}}},
-                       {"tooltip", tip}}}}}});
+                       {"tooltip", tip}}));
   // The corner ninths of the image: the distortion needs points there.
   json ninths = json::array();
   for (int k = 1; k < 3; ++k) {
@@ -403,25 +404,17 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
                       {"v0", k * cam.height / 3.0 - 0.5}, {"v1", k * cam.height / 3.0 - 0.5}});
   }
   spec["data"].push_back({{"name", "ninths"}, {"values", ninths}});
-  marks.push_back({{"type", "rule"},
-                   {"from", {{"data", "ninths"}}},
-                   {"encode",
-                    {{"enter",
-                      {{"x", Field("u", "u0")},
+  marks.push_back(Mark("rule", "ninths", {{"x", Field("u", "u0")},
                        {"x2", Field("u", "u1")},
                        {"y", Field("v", "v0")},
                        {"y2", Field("v", "v1")},
                        {"stroke", {{"value", "#999"}}},
-                       {"strokeDash", {{"value", {4, 4}}}}}}}}});
-  marks.push_back({{"type", "text"},
-                   {"from", {{"data", "arrows"}}},
-                   {"encode",
-                    {{"enter",
-                      {{"x", {{"scale", "u"}, {"field", "u0"}, {"offset", 2}}},
+                       {"strokeDash", {{"value", {4, 4}}}}}));
+  marks.push_back(Mark("text", "arrows", {{"x", {{"scale", "u"}, {"field", "u0"}, {"offset", 2}}},
                        {"y", {{"scale", "v"}, {"field", "v1"}, {"offset", -2}}},
                        {"fontSize", {{"value", 8}}},
                        {"fill", {{"value", "#555"}}},
-                       {"text", {{"field", "n"}}}}}}}});
+                       {"text", {{"field", "n"}}}}));
   Arrows(&marks, "arrows", "#c0392b", tip);
   ScaleBar(&marks, 0.9 * cell_w * w / cam.width, Num(reference_px) + " px", w);
   Figure f;
@@ -521,16 +514,13 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
        {"transform", {{{"type", "filter"}, {"expr", "datum.status == 'fitted'"}}}}});
   json& marks = spec["marks"];
   if (!uri.empty()) {
-    marks.push_back({{"type", "image"},
-                     {"encode",
-                      {{"enter",
-                        {{"url", {{"value", uri}}},
+    marks.push_back(Mark("image", "", {{"url", {{"value", uri}}},
                          {"x", {{"value", 0}}},
                          {"y", {{"value", 0}}},
                          {"width", {{"value", w}}},
                          {"height", {{"value", h}}},
                          {"aspect", {{"value", false}}},
-                         {"opacity", {{"value", 0.85}}}}}}}});
+                         {"opacity", {{"value", 0.85}}}}));
   }
   const json tip = Tip({{"shot", "'" + shot + "'"},
                         {"target", "datum.target"},
@@ -540,17 +530,13 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
                         {"|r| / sigma", "format(datum.nr, '.2f')"},
                         {"status", "datum.status"},
                         {"pixels.csv line", "datum.line"}});
-  marks.push_back({{"type", "symbol"},
-                   {"from", {{"data", "corners"}}},
-                   {"encode",
-                    {{"enter",
-                      {{"x", Field("u", "u")},
+  marks.push_back(Mark("symbol", "corners", {{"x", Field("u", "u")},
                        {"y", Field("v", "v")},
                        {"shape", {{"value", "circle"}}},
                        {"size", {{"value", 18}}},
                        {"stroke", {{"signal", "datum.status == 'fitted' ? '#00e5ff' : '#ff00ff'"}}},
                        {"strokeWidth", {{"value", 1.2}}},
-                       {"tooltip", tip}}}}}});
+                       {"tooltip", tip}}));
   Arrows(&marks, "arrows", "#ff3b30", tip);
   ScaleBar(&marks, drawn * w / width, Num(reference_px) + " px", w);
   Figure f;
@@ -702,14 +688,11 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
       const std::string data = var.key + "_" + comp.key;
       summary.push_back({{"variable", var.key}, {"component", comp.key}, {"bins", values.size()}});
       if (values.empty()) {
-        group["marks"] = {{{"type", "text"},
-                           {"encode",
-                            {{"enter",
-                              {{"x", {{"value", 125}}},
+        group["marks"] = {Mark("text", "", {{"x", {{"value", 125}}},
                                {"y", {{"value", 75}}},
                                {"align", {{"value", "center"}}},
                                {"fill", {{"value", "#888"}}},
-                               {"text", {{"value", "no " + comp.key + " residuals against " + var.key}}}}}}}}};
+                               {"text", {{"value", "no " + comp.key + " residuals against " + var.key}}}})};
         group["title"] = {{"text", var.label}, {"fontSize", 10}};
         spec["marks"].push_back(group);
         continue;
@@ -732,44 +715,19 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
                             {"mean", "format(datum.mean, '.3g')"},
                             {"2 sigma", "format(datum.hi - datum.mean, '.2g')"},
                             {"n", "datum.n"}});
+      // The 2-sigma band under each series' line.
+      const json band = json::array({Mark("area", "", {{"x", Field("x", "x")},
+                              {"y", Field("y", "lo")},
+                              {"y2", Field("y", "hi")},
+                              {"fill", Field("group", "group")},
+                              {"fillOpacity", {{"value", 0.18}}}})});
       group["marks"] = {
-          {{"type", "group"},
-           {"from", {{"facet", {{"name", data + "_s"}, {"data", data}, {"groupby", "group"}}}}},
-           {"marks",
-            {{{"type", "area"},
-              {"from", {{"data", data + "_s"}}},
-              {"encode",
-               {{"enter",
-                 {{"x", Field("x", "x")},
-                  {"y", Field("y", "lo")},
-                  {"y2", Field("y", "hi")},
-                  {"fill", Field("group", "group")},
-                  {"fillOpacity", {{"value", 0.18}}}}}}}},
-             {{"type", "line"},
-              {"from", {{"data", data + "_s"}}},
-              {"encode",
-               {{"enter",
-                 {{"x", Field("x", "x")},
-                  {"y", Field("y", "mean")},
-                  {"stroke", Field("group", "group")},
-                  {"strokeWidth", {{"value", 1.5}}}}}}}},
-             {{"type", "symbol"},
-              {"from", {{"data", data + "_s"}}},
-              {"encode",
-               {{"enter",
-                 {{"x", Field("x", "x")},
-                  {"y", Field("y", "mean")},
-                  {"size", {{"value", 14}}},
-                  {"fill", Field("group", "group")},
-                  {"tooltip", tip}}}}}}}}},
-          {{"type", "rule"},
-           {"encode",
-            {{"enter",
-              {{"x", {{"value", 0}}},
+          SeriesLines(data, "group", "group", "x", "mean", 1.5, 14, tip, band),
+          Mark("rule", "", {{"x", {{"value", 0}}},
                {"x2", {{"signal", "width"}}},
                {"y", {{"scale", "y"}, {"value", 0}}},
                {"stroke", {{"value", "#444"}}},
-               {"strokeDash", {{"value", {3, 3}}}}}}}}}};
+               {"strokeDash", {{"value", {3, 3}}}}})};
       spec["marks"].push_back(group);
     }
   }
@@ -871,25 +829,17 @@ Figure Histograms(const std::vector<ObservationResidual>& rows) {
             {"range", "height"}, {"nice", true}, {"zero", true}}}},
          {"axes", {ax, ay}},
          {"marks",
-          {{{"type", "rect"},
-            {"from", {{"data", key + "_bars"}}},
-            {"encode",
-             {{"enter",
-               {{"x", Field("x", "x0")},
+          {Mark("rect", key + "_bars", {{"x", Field("x", "x0")},
                 {"x2", Field("x", "x1")},
                 {"y", Field("y", "n")},
                 {"y2", {{"scale", "y"}, {"value", 0}}},
                 {"fill", {{"value", "#8cb4d8"}}},
                 {"stroke", {{"value", "#5079a0"}}},
-                {"tooltip", tip}}}}}},
-           {{"type", "line"},
-            {"from", {{"data", key + "_curve"}}},
-            {"encode",
-             {{"enter",
-               {{"x", Field("x", "x")},
+                {"tooltip", tip}}),
+           Mark("line", key + "_curve", {{"x", Field("x", "x")},
                 {"y", Field("y", "y")},
                 {"stroke", {{"value", "#d62728"}}},
-                {"strokeWidth", {{"value", 2}}}}}}}}}}});
+                {"strokeWidth", {{"value", 2}}}})}}});
     summary.push_back({{"group", key},
                        {"values", s.values.size()},
                        {"sigma", s.sigma},
@@ -959,27 +909,7 @@ Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name,
            {{"name", "y"}, {"type", "log"}, {"domain", {{"data", d}, {"field", "value"}}},
             {"range", "height"}, {"nice", true}}}},
          {"axes", {ax, ay}},
-         {"marks",
-          {{{"type", "group"},
-            {"from", {{"facet", {{"name", d + "_s"}, {"data", d}, {"groupby", "series"}}}}},
-            {"marks",
-             {{{"type", "line"},
-               {"from", {{"data", d + "_s"}}},
-               {"encode",
-                {{"enter",
-                  {{"x", Field("x", "label")},
-                   {"y", Field("y", "value")},
-                   {"stroke", Field("series", "series")},
-                   {"strokeWidth", {{"value", 2}}}}}}}},
-              {{"type", "symbol"},
-               {"from", {{"data", d + "_s"}}},
-               {"encode",
-                {{"enter",
-                  {{"x", Field("x", "label")},
-                   {"y", Field("y", "value")},
-                   {"fill", Field("series", "series")},
-                   {"size", {{"value", 50}}},
-                   {"tooltip", tip}}}}}}}}}}}});
+         {"marks", {SeriesLines(d, "series", "series", "label", "value", 2, 50, tip)}}});
     summary.push_back({{"unit", unit}, {"points", *data}});
   }
   Figure f;
@@ -1048,31 +978,23 @@ json HeatMapSpec(const std::string& title, const std::string& subtitle, int widt
                         {legend, "datum.value === null ? 'not predictable' : format(datum.value, '.3g')"},
                         {"inside the points' hull", "datum.inside"}});
   spec["marks"].push_back(
-      {{"type", "rect"},
-       {"from", {{"data", "cells"}}},
-       {"encode",
-        {{"enter",
-          {{"x", Field("u", "u0")},
+      Mark("rect", "cells", {{"x", Field("u", "u0")},
            {"x2", Field("u", "u1")},
            {"y", Field("v", "v0")},
            {"y2", Field("v", "v1")},
            {"fill", {{"signal", "datum.value === null ? '#bbbbbb' : scale('colour', datum.value)"}}},
            {"opacity", {{"signal", "datum.inside ? 1 : 0.55"}}},
-           {"tooltip", tip}}}}}});
+           {"tooltip", tip}}));
   spec["data"].push_back(
       {{"name", "outside"},
        {"source", "cells"},
        {"transform", {{{"type", "filter"}, {"expr", "!datum.inside"}}}}});
-  spec["marks"].push_back({{"type", "rule"},
-                           {"from", {{"data", "outside"}}},
-                           {"encode",
-                            {{"enter",
-                              {{"x", Field("u", "u0")},
+  spec["marks"].push_back(Mark("rule", "outside", {{"x", Field("u", "u0")},
                                {"y", Field("v", "v1")},
                                {"x2", Field("u", "u1")},
                                {"y2", Field("v", "v0")},
                                {"stroke", {{"value", "white"}}},
-                               {"strokeOpacity", {{"value", 0.8}}}}}}}});
+                               {"strokeOpacity", {{"value", 0.8}}}}));
   if (hull.size() >= 3) {
     json pts = json::array();
     for (size_t k = 0; k <= hull.size(); ++k) {
@@ -1080,14 +1002,10 @@ json HeatMapSpec(const std::string& title, const std::string& subtitle, int widt
       pts.push_back({{"k", k}, {"u", p.x()}, {"v", p.y()}});
     }
     spec["data"].push_back({{"name", "hull"}, {"values", pts}});
-    spec["marks"].push_back({{"type", "line"},
-                             {"from", {{"data", "hull"}}},
-                             {"encode",
-                              {{"enter",
-                                {{"x", Field("u", "u")},
+    spec["marks"].push_back(Mark("line", "hull", {{"x", Field("u", "u")},
                                  {"y", Field("v", "v")},
                                  {"stroke", {{"value", "white"}}},
-                                 {"strokeWidth", {{"value", 2}}}}}}}});
+                                 {"strokeWidth", {{"value", 2}}}}));
   }
   return spec;
 }
