@@ -88,11 +88,15 @@ std::filesystem::path Zoom3Demo::work_;
 TEST_F(Zoom3Demo, FiguresDrawTheResidualTable) {
   const std::vector<Figure> figs = testing_figures::CheckFiguresAgainstResidualFile(*result_);
   for (const Figure& f : figs) {
-    if (f.section == "photos") EXPECT_TRUE(f.summary["photo"].get<bool>()) << f.name;
+    if (f.section == "photos") {
+      EXPECT_TRUE(f.summary["photo"].get<bool>()) << f.name;
+    }
   }
   // Every observation of a board of unknown pose is predicted.
   for (const ObservationResidual& o : result_->calibration.residuals) {
-    if (o.group == ObsGroup::kPixel) EXPECT_TRUE(o.valid) << o.shot << " " << o.target;
+    if (o.group == ObsGroup::kPixel) {
+      EXPECT_TRUE(o.valid) << o.shot << " " << o.target;
+    }
   }
 }
 

@@ -113,7 +113,8 @@ inline std::vector<Figure> CheckFiguresAgainstResidualFile(const PipelineResult&
           }
         }
       }
-      ASSERT_GT(fitted, 0);
+      EXPECT_GT(fitted, 0);
+      if (fitted == 0) continue;
       EXPECT_EQ(f.summary["fitted_rows"].get<int>(), fitted) << "counts equal the fitted rows";
       int plotted = 0;
       for (const nlohmann::json& c : cells) {
@@ -144,7 +145,8 @@ inline std::vector<Figure> CheckFiguresAgainstResidualFile(const PipelineResult&
         ++fitted;
         ss += std::pow(row.Num("res_x"), 2) + std::pow(row.Num("res_y"), 2);
       }
-      ASSERT_GT(fitted, 0);
+      EXPECT_GT(fitted, 0);
+      if (fitted == 0) continue;
       EXPECT_EQ(Data(f.spec, "corners").size(), static_cast<size_t>(all));
       EXPECT_EQ(f.summary["fitted_rows"].get<int>(), fitted);
       const double rms = std::sqrt(ss / fitted);
