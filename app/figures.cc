@@ -29,6 +29,9 @@ constexpr double kDeg = 180.0 / M_PI;
 constexpr double kArcsec = 180.0 * 3600.0 / M_PI;
 // Display size of an image-shaped panel (the longer side), in SVG pixels.
 constexpr int kImagePanel = 640;
+// Size of the small panels of a figure with several (variables, histograms,
+// ladder), in SVG pixels. The scales of a panel (a group mark) map to it.
+constexpr int kPanelW = 260, kPanelH = 170;
 // Photos shown per zoom, worst first (rms of their fitted corners).
 constexpr int kWorstPhotosPerZoom = 2;
 
@@ -60,13 +63,21 @@ bool Fitted(const ObservationResidual& o) { return o.status == ResidualStatus::k
 
 // A Vega spec with its title; the rest is added by each figure.
 json Chart(const std::string& title, const std::string& subtitle) {
+  // One line per clause: a figure is as wide as its panels, not its text.
+  json lines = json::array();
+  size_t from = 0;
+  for (size_t at = subtitle.find("; "); ; at = subtitle.find("; ", from)) {
+    lines.push_back(subtitle.substr(from, at == std::string::npos ? std::string::npos : at - from));
+    if (at == std::string::npos) break;
+    from = at + 2;
+  }
   return {{"$schema", "https://vega.github.io/schema/vega/v5.json"},
           {"background", "white"},
           {"padding", 10},
           {"autosize", "pad"},
           {"title",
            {{"text", title},
-            {"subtitle", subtitle},
+            {"subtitle", lines},
             {"anchor", "start"},
             {"fontSize", 14},
             {"subtitleFontSize", 11},
@@ -97,11 +108,22 @@ json Mark(const std::string& type, const std::string& data, json enter) {
   return m;
 }
 
+// Panels (group marks) on a grid of `columns`, aligned by their plot areas
+// ("flush": the axes and titles go into the padding between them).
+json Grid(size_t columns, int row_padding, int column_padding) {
+  return {{"columns", columns},
+          {"align", "all"},
+          {"bounds", "flush"},
+          {"padding", {{"row", row_padding}, {"column", column_padding}}}};
+}
+
 // A tooltip: Vega's tooltip handler shows "key: value" per entry.
 json Tip(const std::vector<std::pair<std::string, std::string>>& entries) {
   std::string s = "{";
   for (size_t i = 0; i < entries.size(); ++i) {
-    s += (i ? ", '" : "'") + entries[i].first + "': " + entries[i].second;
+    std::string key;
+    for (char c : entries[i].first) key += c == '\'' ? std::string("\\'") : std::string(1, c);
+    s += (i ? ", '" : "'") + key + "': " + entries[i].second;
   }
   return {{"signal", s + "}"}};
 }
@@ -132,22 +154,30 @@ json SeriesLines(const std::string& data, const std::string& by, const std::stri
           {"marks", marks}};
 }
 
-// A panel of an image's size: u right, v down (SPEC 2), pixel centres at
-// integers, `w` x `h` display pixels.
-void ImageScales(json* spec, int width, int height, int* w, int* h) {
-  const double s = static_cast<double>(kImagePanel) / std::max(width, height);
-  *w = static_cast<int>(std::lround(width * s));
-  *h = static_cast<int>(std::lround(height * s));
+// A panel over the image part [u0, u1] x [v0, v1] (pixel coordinates:
+// u right, v down, SPEC 2), kImagePanel display pixels on its longer side;
+// `w`, `h` its display size.
+struct ImageBox {
+  double u0, u1, v0, v1;
+};
+void ImageScales(json* spec, const ImageBox& box, int* w, int* h) {
+  const double s = kImagePanel / std::max(box.u1 - box.u0, box.v1 - box.v0);
+  *w = static_cast<int>(std::lround((box.u1 - box.u0) * s));
+  *h = static_cast<int>(std::lround((box.v1 - box.v0) * s));
   (*spec)["width"] = *w;
   (*spec)["height"] = *h;
-  (*spec)["scales"].push_back(Linear("u", {-0.5, width - 0.5}, {0, *w}));
-  (*spec)["scales"].push_back(Linear("v", {-0.5, height - 0.5}, {0, *h}));
+  (*spec)["scales"].push_back(Linear("u", {box.u0, box.u1}, {0, *w}));
+  (*spec)["scales"].push_back(Linear("v", {box.v0, box.v1}, {0, *h}));
   json ax = Axis("bottom", "u", "u [px]");
   ax["tickCount"] = 8;
   (*spec)["axes"].push_back(ax);
   json ay = Axis("left", "v", "v [px]");
   ay["tickCount"] = 6;
   (*spec)["axes"].push_back(ay);
+}
+// The whole image.
+void ImageScales(json* spec, int width, int height, int* w, int* h) {
+  ImageScales(spec, {-0.5, width - 0.5, -0.5, height - 0.5}, w, h);
 }
 
 // Arrow marks over an image: a rule from (u, v) to (tip_u, tip_v) and a
@@ -243,7 +273,7 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& ro
                             {"nice", true}});
   spec["legends"].push_back(
       {{"fill", "colour"}, {"title", "rms [" + src.unit + "]"}, {"type", "gradient"}});
-  spec["layout"] = {{"columns", faces.size()}, {"padding", 40}};
+  spec["layout"] = Grid(faces.size(), 60, 90);
   const int w = 420, h = 280;
   const double zmin = fit.min_zenith_rad * kDeg, zmax = fit.max_zenith_rad * kDeg;
   for (int face : faces) {
@@ -441,14 +471,16 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
 // ---------------------------------------------------------------------------
 // A photo with its corners and residual arrows.
 
-std::string PhotoDataUri(const std::string& path, int* width, int* height) {
-  if (path.empty()) return "";
-  cv::Mat img = cv::imread(path, cv::IMREAD_COLOR);
-  if (img.empty()) return "";
-  *width = img.cols;
-  *height = img.rows;
-  // Downscaled to the panel: a photo's pixels beyond what is shown only
-  // make report.html heavier.
+// The part `box` of a photo (pixels at full resolution, then at most the
+// panel's size: a photo's pixels beyond what is shown only make report.html
+// heavier), as a data URI; *crop: the image part it shows.
+std::string PhotoDataUri(const cv::Mat& photo, const ImageBox& box, ImageBox* crop) {
+  const int x0 = std::clamp(static_cast<int>(std::floor(box.u0 + 0.5)), 0, photo.cols - 1);
+  const int y0 = std::clamp(static_cast<int>(std::floor(box.v0 + 0.5)), 0, photo.rows - 1);
+  const int x1 = std::clamp(static_cast<int>(std::ceil(box.u1 + 0.5)), x0 + 1, photo.cols);
+  const int y1 = std::clamp(static_cast<int>(std::ceil(box.v1 + 0.5)), y0 + 1, photo.rows);
+  *crop = {x0 - 0.5, x1 - 0.5, y0 - 0.5, y1 - 0.5};
+  cv::Mat img = photo(cv::Rect(x0, y0, x1 - x0, y1 - y0));
   const double s = static_cast<double>(kImagePanel) / std::max(img.cols, img.rows);
   if (s < 1) cv::resize(img, img, cv::Size(), s, s, cv::INTER_AREA);
   std::vector<unsigned char> jpg;
@@ -460,11 +492,10 @@ std::string PhotoDataUri(const std::string& path, int* width, int* height) {
 
 Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidual>& rows,
                    const std::string& image, int width, int height) {
-  int img_w = width, img_h = height;
-  const std::string uri = PhotoDataUri(image, &img_w, &img_h);
-  if (!uri.empty()) {
-    width = img_w;
-    height = img_h;
+  const cv::Mat photo = image.empty() ? cv::Mat() : cv::imread(image, cv::IMREAD_COLOR);
+  if (!photo.empty()) {
+    width = photo.cols;
+    height = photo.rows;
   }
   std::vector<double> sizes;
   double ss = 0;
@@ -479,7 +510,26 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
   // The reference arrow: a round residual near the largest (95th
   // percentile) drawn 40 image pixels long per the panel's 640.
   const double reference_px = NiceAbove(Percentile(sizes, 0.95));
-  const double drawn = 40.0 * std::max(width, height) / kImagePanel;
+  // Zoomed to the corners (a fifth of their extent around them, at least a
+  // third of the image, the image's aspect), so that arrows of a fraction of
+  // a pixel are seen where they are.
+  double u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
+  for (const ObservationResidual& o : rows) {
+    u0 = std::min(u0, o.u);
+    u1 = std::max(u1, o.u);
+    v0 = std::min(v0, o.v);
+    v1 = std::max(v1, o.v);
+  }
+  const double aspect = double(height) / width;
+  double half_u = std::max({0.6 * (u1 - u0), 0.6 * (v1 - v0) / aspect, width / 6.0});
+  half_u = std::min(half_u, width / 2.0);
+  const double half_v = half_u * aspect;
+  const double cu = std::clamp(0.5 * (u0 + u1), half_u - 0.5, width - 0.5 - half_u);
+  const double cv = std::clamp(0.5 * (v0 + v1), half_v - 0.5, height - 0.5 - half_v);
+  const ImageBox box = rows.empty() ? ImageBox{-0.5, width - 0.5, -0.5, height - 0.5}
+                                    : ImageBox{cu - half_u, cu + half_u, cv - half_v, cv + half_v};
+  // The reference arrow is 40 display pixels long.
+  const double drawn = 40.0 * std::max(box.u1 - box.u0, box.v1 - box.v0) / kImagePanel;
   const double gain = drawn / reference_px;
   json corners = json::array();
   for (const ObservationResidual& o : rows) {
@@ -504,9 +554,11 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
                     std::to_string(fitted) + " fitted corners, rms " + Num(rms) +
                         " px; arrows from each observed corner along observed - predicted, " +
                         Num(reference_px) + " px residual = the red reference arrow" +
-                        (uri.empty() ? "; photo not found, corners only" : ""));
+                        (photo.empty() ? "; photo not found, corners only" : ""));
   int w = 0, h = 0;
-  ImageScales(&spec, width, height, &w, &h);
+  ImageScales(&spec, box, &w, &h);
+  ImageBox crop{};
+  const std::string uri = photo.empty() ? "" : PhotoDataUri(photo, box, &crop);
   spec["data"].push_back({{"name", "corners"}, {"values", corners}});
   spec["data"].push_back(
       {{"name", "arrows"},
@@ -514,13 +566,15 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
        {"transform", {{{"type", "filter"}, {"expr", "datum.status == 'fitted'"}}}}});
   json& marks = spec["marks"];
   if (!uri.empty()) {
-    marks.push_back(Mark("image", "", {{"url", {{"value", uri}}},
-                         {"x", {{"value", 0}}},
-                         {"y", {{"value", 0}}},
-                         {"width", {{"value", w}}},
-                         {"height", {{"value", h}}},
+    json image = Mark("image", "", {{"url", {{"value", uri}}},
+                         {"x", {{"scale", "u"}, {"value", crop.u0}}},
+                         {"y", {{"scale", "v"}, {"value", crop.v0}}},
+                         {"x2", {{"scale", "u"}, {"value", crop.u1}}},
+                         {"y2", {{"scale", "v"}, {"value", crop.v1}}},
                          {"aspect", {{"value", false}}},
-                         {"opacity", {{"value", 0.85}}}}));
+                         {"opacity", {{"value", 0.85}}}});
+    image["clip"] = true;  // the panel shows a part of the photo
+    marks.push_back(image);
   }
   const json tip = Tip({{"shot", "'" + shot + "'"},
                         {"target", "datum.target"},
@@ -538,7 +592,7 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
                        {"strokeWidth", {{"value", 1.2}}},
                        {"tooltip", tip}}));
   Arrows(&marks, "arrows", "#ff3b30", tip);
-  ScaleBar(&marks, drawn * w / width, Num(reference_px) + " px", w);
+  ScaleBar(&marks, 40.0, Num(reference_px) + " px", w);
   Figure f;
   // A file name and an HTML id: shot ids are free text (shots.csv).
   f.name = "photo_";
@@ -558,7 +612,7 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
                {"rows", rows.size()},
                {"rms_px", rms},
                {"arrow_scale_px", reference_px},
-               {"photo", !uri.empty()}};
+               {"photo", !photo.empty()}};
   return f;
 }
 
@@ -641,7 +695,7 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
                             {"range", {"#1f77b4", "#ff7f0e", "#2ca02c"}}});
   spec["legends"].push_back({{"stroke", "group"}, {"fill", "group"}, {"title", "observations"},
                              {"orient", "top"}, {"direction", "horizontal"}});
-  spec["layout"] = {{"columns", Components().size()}, {"padding", {{"row", 30}, {"column", 36}}}};
+  spec["layout"] = Grid(Components().size(), 75, 95);
   json summary = json::array();
   for (const Variable& var : Variables()) {
     for (const Component& comp : Components()) {
@@ -684,12 +738,12 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
         }
       }
       json group = {{"type", "group"},
-                    {"encode", {{"enter", {{"width", {{"value", 250}}}, {"height", {{"value", 150}}}}}}}};
+                    {"encode", {{"enter", {{"width", {{"value", kPanelW}}}, {"height", {{"value", kPanelH}}}}}}}};
       const std::string data = var.key + "_" + comp.key;
       summary.push_back({{"variable", var.key}, {"component", comp.key}, {"bins", values.size()}});
       if (values.empty()) {
-        group["marks"] = {Mark("text", "", {{"x", {{"value", 125}}},
-                               {"y", {{"value", 75}}},
+        group["marks"] = {Mark("text", "", {{"x", {{"value", kPanelW / 2}}},
+                               {"y", {{"value", kPanelH / 2}}},
                                {"align", {{"value", "center"}}},
                                {"fill", {{"value", "#888"}}},
                                {"text", {{"value", "no " + comp.key + " residuals against " + var.key}}}})};
@@ -700,10 +754,10 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
       group["data"] = {{{"name", data}, {"values", values}}};
       group["scales"] = {
           {{"name", "x"}, {"type", "linear"}, {"domain", {{"data", data}, {"field", "x"}}},
-           {"range", "width"}, {"zero", false}, {"nice", true}},
+           {"range", {0, kPanelW}}, {"zero", false}, {"nice", true}},
           {{"name", "y"}, {"type", "linear"},
            {"domain", {{"data", data}, {"fields", {"lo", "hi"}}}},
-           {"range", "height"}, {"zero", true}, {"nice", true}}};
+           {"range", {kPanelH, 0}}, {"zero", true}, {"nice", true}}};
       json ay = Axis("left", "y", comp.label);
       ay["grid"] = true;
       ay["tickCount"] = 5;
@@ -724,7 +778,7 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
       group["marks"] = {
           SeriesLines(data, "group", "group", "x", "mean", 1.5, 14, tip, band),
           Mark("rule", "", {{"x", {{"value", 0}}},
-               {"x2", {{"signal", "width"}}},
+               {"x2", {{"value", kPanelW}}},
                {"y", {{"scale", "y"}, {"value", 0}}},
                {"stroke", {{"value", "#444"}}},
                {"strokeDash", {{"value", {3, 3}}}}})};
@@ -774,7 +828,7 @@ Figure Histograms(const std::vector<ObservationResidual>& rows) {
   json spec = Chart("Residuals against the Gaussian of the fitted sigma (fitted rows)",
                     "bars: residual coordinates; red: the normal density of the fitted "
                     "(a-posteriori) sigma; counts beyond 4.5 sigma in the panel title");
-  spec["layout"] = {{"columns", 3}, {"padding", 40}};
+  spec["layout"] = Grid(3, 60, 80);
   json summary = json::array();
   for (Series& s : all) {
     if (s.values.empty()) continue;
@@ -820,13 +874,13 @@ Figure Histograms(const std::vector<ObservationResidual>& rows) {
                             std::to_string(outside)},
            {"fontSize", 12},
            {"subtitleFontSize", 10}}},
-         {"encode", {{"enter", {{"width", {{"value", 300}}}, {"height", {{"value", 200}}}}}}},
+         {"encode", {{"enter", {{"width", {{"value", kPanelW}}}, {"height", {{"value", kPanelH}}}}}}},
          {"data", {{{"name", key + "_bars"}, {"values", bars}}, {{"name", key + "_curve"}, {"values", curve}}}},
          {"scales",
-          {Linear("x", {-range, range}, "width"),
+          {Linear("x", {-range, range}, {0, kPanelW}),
            {{"name", "y"}, {"type", "linear"},
             {"domain", {{"fields", {{{"data", key + "_bars"}, {"field", "n"}}, {{"data", key + "_curve"}, {"field", "y"}}}}}},
-            {"range", "height"}, {"nice", true}, {"zero", true}}}},
+            {"range", {kPanelH, 0}}, {"nice", true}, {"zero", true}}}},
          {"axes", {ax, ay}},
          {"marks",
           {Mark("rect", key + "_bars", {{"x", Field("x", "x0")},
@@ -881,7 +935,7 @@ Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name,
       px.push_back({{"label", g.label}, {"series", "image points"}, {"value", g.px}});
   }
   json spec = Chart(title, "rms error of each observation group (log scale)");
-  spec["layout"] = {{"columns", 1}, {"padding", 30}};
+  spec["layout"] = Grid(1, 120, 0);
   spec["scales"].push_back({{"name", "series"},
                             {"type", "ordinal"},
                             {"domain", {"EDM points", "camera points", "image points"}},
@@ -902,12 +956,12 @@ Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name,
                           {"rms [" + unit + "]", "format(datum.value, '.4g')"}});
     spec["marks"].push_back(
         {{"type", "group"},
-         {"encode", {{"enter", {{"width", {{"value", width}}}, {"height", {{"value", 220}}}}}}},
+         {"encode", {{"enter", {{"width", {{"value", width}}}, {"height", {{"value", kPanelH}}}}}}},
          {"data", {{{"name", d}, {"values", *data}}}},
          {"scales",
-          {{{"name", "x"}, {"type", "point"}, {"domain", labels}, {"range", "width"}, {"padding", 0.5}},
+          {{{"name", "x"}, {"type", "point"}, {"domain", labels}, {"range", {0, width}}, {"padding", 0.5}},
            {{"name", "y"}, {"type", "log"}, {"domain", {{"data", d}, {"field", "value"}}},
-            {"range", "height"}, {"nice", true}}}},
+            {"range", {kPanelH, 0}}, {"nice", true}}}},
          {"axes", {ax, ay}},
          {"marks", {SeriesLines(d, "series", "series", "label", "value", 2, 50, tip)}}});
     summary.push_back({{"unit", unit}, {"points", *data}});
@@ -1203,6 +1257,11 @@ std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>
   note->clear();
   const std::vector<RenderedFigure> drawn = RenderFigures(specs, note);
   for (size_t i = 0; i < drawn.size(); ++i) {
+    if (drawn[i].svg.empty()) {
+      *note += std::string(note->empty() ? "figures: " : "; ") + figures[i].name +
+               " has no SVG or PNG (" + drawn[i].error + ")";
+      continue;
+    }
     WriteFileAtomic((fs::path(dir) / (figures[i].name + ".svg")).string(), drawn[i].svg);
     WriteFileAtomic((fs::path(dir) / (figures[i].name + ".png")).string(),
                     std::string_view(reinterpret_cast<const char*>(drawn[i].png.data()),

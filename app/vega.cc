@@ -78,11 +78,15 @@ const dir = process.argv[2], n = Number(process.argv[3]);
 (0, eval)(fs.readFileSync(path.join(dir, 'vega.js'), 'utf8'));
 (async () => {
   for (let i = 0; i < n; ++i) {
-    const spec = JSON.parse(fs.readFileSync(path.join(dir, 'spec_' + i + '.json'), 'utf8'));
-    const view = new vega.View(vega.parse(spec), {renderer: 'none'});
-    view.logLevel(vega.Error);
-    fs.writeFileSync(path.join(dir, 'fig_' + i + '.svg'), await view.toSVG());
-    view.finalize();
+    try {
+      const spec = JSON.parse(fs.readFileSync(path.join(dir, 'spec_' + i + '.json'), 'utf8'));
+      const view = new vega.View(vega.parse(spec), {renderer: 'none'});
+      view.logLevel(vega.Error);
+      fs.writeFileSync(path.join(dir, 'fig_' + i + '.svg'), await view.toSVG());
+      view.finalize();
+    } catch (e) {
+      fs.writeFileSync(path.join(dir, 'error_' + i + '.txt'), String(e).slice(0, 400));
+    }
   }
 })().catch(e => { console.error(String((e && e.stack) || e)); process.exit(1); });
 )js";
@@ -99,9 +103,8 @@ std::string FindProgram(const std::string& name) {
   return "";
 }
 
-// Runs argv[0] (a path) with stdout and stderr to `log`; its exit status, or
-// -1 when it could not be started or did not exit normally.
-int Run(const std::vector<std::string>& argv, const fs::path& log) {
+// Starts argv[0] (a path) with stdout and stderr to `log`; its pid, or -1.
+pid_t Start(const std::vector<std::string>& argv, const fs::path& log) {
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -117,12 +120,23 @@ int Run(const std::vector<std::string>& argv, const fs::path& log) {
     ::execv(args[0], args.data());
     ::_exit(127);
   }
+  return pid;
+}
+
+// The exit status of a started program, or -1 when it did not exit normally.
+int Wait(pid_t pid) {
+  if (pid < 0) return -1;
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0) {
     if (errno != EINTR) return -1;
   }
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
+
+int Run(const std::vector<std::string>& argv, const fs::path& log) { return Wait(Start(argv, log)); }
+
+// PNG conversions side by side: the machine's cores, at most this many.
+constexpr size_t kParallelConversions = 2;
 
 std::string Tail(const fs::path& log) {
   std::string s = ReadText(log);
@@ -187,16 +201,33 @@ std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& spe
     return {};
   }
   std::vector<RenderedFigure> out(specs.size());
+  std::vector<std::pair<pid_t, size_t>> running;
+  bool failed = false;
+  auto finish = [&](const std::pair<pid_t, size_t>& job) {
+    if (Wait(job.first) != 0) failed = true;
+    const std::string bytes = ReadText(dir / ("fig_" + std::to_string(job.second) + ".png"));
+    out[job.second].png.assign(bytes.begin(), bytes.end());
+  };
   for (size_t i = 0; i < specs.size(); ++i) {
     const fs::path svg = dir / ("fig_" + std::to_string(i) + ".svg");
     const fs::path png = dir / ("fig_" + std::to_string(i) + ".png");
     out[i].svg = ReadText(svg);
-    if (Run({rsvg, "--background-color=white", "-o", png.string(), svg.string()}, log) != 0) {
-      *note = "figures: no PNG files written: rsvg-convert failed: " + Tail(log);
-      return {};
+    if (out[i].svg.empty()) {
+      out[i].error = ReadText(dir / ("error_" + std::to_string(i) + ".txt"));
+      if (out[i].error.empty()) out[i].error = "no SVG written";
+      continue;
     }
-    const std::string bytes = ReadText(png);
-    out[i].png.assign(bytes.begin(), bytes.end());
+    if (running.size() == kParallelConversions) {
+      finish(running.front());
+      running.erase(running.begin());
+    }
+    running.emplace_back(
+        Start({rsvg, "--background-color=white", "-o", png.string(), svg.string()}, log), i);
+  }
+  for (const auto& job : running) finish(job);
+  if (failed) {
+    *note = "figures: no PNG files written: rsvg-convert failed: " + Tail(log);
+    return {};
   }
   return out;
 }

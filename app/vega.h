@@ -35,8 +35,9 @@ std::string VegaModuleDir();
 const std::string& VegaRuntime(std::string* missing = nullptr);
 
 struct RenderedFigure {
-  std::string svg;
+  std::string svg;  // empty when this spec failed: `error` says why
   std::vector<unsigned char> png;
+  std::string error;
 };
 
 // SVG and PNG of each spec (in order), or an empty vector and *note saying
