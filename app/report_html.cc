@@ -96,14 +96,18 @@ std::string FigureScripts() {
   const std::string& runtime = VegaRuntime(&missing);
   std::string out;
   if (!runtime.empty()) out += "<script>\n" + runtime + "</script>\n";
-  out += R"js(<script>
-(function () {
+  // A JSON string is a JavaScript string literal.
+  std::string why = nlohmann::json(missing).dump();
+  for (size_t at = why.find("</"); at != std::string::npos; at = why.find("</", at + 3))
+    why.replace(at, 2, "<\\/");
+  out += "<script>\nvar rtscalibVegaMissing = " + why + ";\n";
+  out += R"js((function () {
   var figs = document.querySelectorAll('figure.vega');
   figs.forEach(function (f) {
     var plot = f.querySelector('.plot');
     if (!window.vega) {
       plot.textContent = 'This figure needs the Vega runtime, which was not installed when the ' +
-          'report was written (' + )js" + Esc(missing) + R"js(' + '); figures/ holds its spec.';
+          'report was written (' + rtscalibVegaMissing + '); figures/ holds its spec.';
       f.setAttribute('data-error', 'no vega runtime');
       return;
     }

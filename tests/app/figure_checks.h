@@ -106,7 +106,7 @@ inline std::vector<Figure> CheckFiguresAgainstResidualFile(const PipelineResult&
         for (const nlohmann::json& c : cells) {
           if (row.Num("u") >= c["u0"].get<double>() && row.Num("u") < c["u1"].get<double>() &&
               row.Num("v") >= c["v0"].get<double>() && row.Num("v") < c["v1"].get<double>()) {
-            auto& m = mine[{c["i"], c["j"]}];
+            auto& m = mine.try_emplace({c["i"], c["j"]}, Eigen::Vector2d::Zero(), 0).first->second;
             m.first += d;
             ++m.second;
             break;
