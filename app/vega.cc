@@ -45,7 +45,7 @@ std::string BuildRuntime(std::string* missing) {
     std::string src = ReadText(dir / (std::string(m) + ".min.js"));
     if (src.empty()) {
       *missing = (dir / (std::string(m) + ".min.js")).string() +
-                 " (Debian package libjs-vega, scripts/install-deps.sh)";
+                 " (Debian package libjs-vega)";
       return "";
     }
     // The source map is not shipped beside the page: no reference to it.
