@@ -1176,6 +1176,7 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
     if (o.group == ObsGroup::kCam) cam_zooms.insert(o.zoom);
     if (o.group == ObsGroup::kPixel && o.zoom < c.model.NumZooms()) pixel_zooms.insert(o.zoom);
   }
+  std::set<int> pixel_zooms_mapped = pixel_zooms;
   const std::string model = KinematicsName(c.model.kinematics) +
                             std::string(", effects: [") + [&] {
                               std::string s;
@@ -1183,6 +1184,8 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
                                 s += (s.empty() ? "" : ", ") + n;
                               return s;
                             }() + "]";
+  // A camera-only calibration (kinematics none) has no pointings to map.
+  if (c.model.kinematics == Kinematics::kNone) pixel_zooms_mapped.clear();
   if (edm) {
     figs.push_back(ErrorMap({"edm", "EDM points", "mm", 1e3, ObsGroup::kEdm, 0}, rows, faces,
                             c.fit_options, model));
@@ -1192,7 +1195,7 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
                              "mm", 1e3, ObsGroup::kCam, z},
                             rows, faces, c.fit_options, model));
   }
-  for (int z : pixel_zooms) {
+  for (int z : pixel_zooms_mapped) {
     figs.push_back(ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z),
                              "px", 1.0, ObsGroup::kPixel, z},
                             rows, faces, c.fit_options, model));
