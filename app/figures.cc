@@ -66,7 +66,7 @@ json Chart(const std::string& title, const std::string& subtitle) {
   // One line per clause: a figure is as wide as its panels, not its text.
   json lines = json::array();
   size_t from = 0;
-  for (size_t at = subtitle.find("; "); ; at = subtitle.find("; ", from)) {
+  for (size_t at = subtitle.find("; ");; at = subtitle.find("; ", from)) {
     lines.push_back(subtitle.substr(from, at == std::string::npos ? std::string::npos : at - from));
     if (at == std::string::npos) break;
     from = at + 2;
@@ -91,12 +91,15 @@ json Chart(const std::string& title, const std::string& subtitle) {
 
 json Linear(const std::string& name, const json& domain, const json& range, bool nice = false,
             bool zero = false) {
-  return {{"name", name}, {"type", "linear"}, {"domain", domain},
-          {"range", range}, {"nice", nice},   {"zero", zero}};
+  return {{"name", name},   {"type", "linear"}, {"domain", domain},
+          {"range", range}, {"nice", nice},     {"zero", zero}};
 }
 
 json Axis(const std::string& orient, const std::string& scale, const std::string& title) {
-  return {{"orient", orient}, {"scale", scale}, {"title", title}, {"labelFontSize", 10},
+  return {{"orient", orient},
+          {"scale", scale},
+          {"title", title},
+          {"labelFontSize", 10},
           {"titleFontSize", 11}};
 }
 
@@ -140,15 +143,17 @@ json SeriesLines(const std::string& data, const std::string& by, const std::stri
   const std::string each = data + "_series";
   json marks = std::move(extra_marks);
   for (json& m : marks) m["from"] = {{"data", each}};
-  marks.push_back(Mark("line", each, {{"x", Field("x", x)},
-                       {"y", Field("y", y)},
-                       {"stroke", Field(colour, by)},
-                       {"strokeWidth", {{"value", width}}}}));
-  marks.push_back(Mark("symbol", each, {{"x", Field("x", x)},
-                       {"y", Field("y", y)},
-                       {"fill", Field(colour, by)},
-                       {"size", {{"value", dot}}},
-                       {"tooltip", tooltip}}));
+  marks.push_back(Mark("line", each,
+                       {{"x", Field("x", x)},
+                        {"y", Field("y", y)},
+                        {"stroke", Field(colour, by)},
+                        {"strokeWidth", {{"value", width}}}}));
+  marks.push_back(Mark("symbol", each,
+                       {{"x", Field("x", x)},
+                        {"y", Field("y", y)},
+                        {"fill", Field(colour, by)},
+                        {"size", {{"value", dot}}},
+                        {"tooltip", tooltip}}));
   return {{"type", "group"},
           {"from", {{"facet", {{"name", each}, {"data", data}, {"groupby", by}}}}},
           {"marks", marks}};
@@ -183,42 +188,47 @@ void ImageScales(json* spec, int width, int height, int* w, int* h) {
 // Arrow marks over an image: a rule from (u, v) to (tip_u, tip_v) and a
 // wedge at the tip, both from `data`; `tooltip` on both.
 void Arrows(json* marks, const std::string& data, const std::string& colour, const json& tooltip) {
-  marks->push_back(Mark("rule", data, {{"x", Field("u", "u")},
-                        {"y", Field("v", "v")},
-                        {"x2", Field("u", "tip_u")},
-                        {"y2", Field("v", "tip_v")},
-                        {"stroke", {{"value", colour}}},
-                        {"strokeWidth", {{"value", 1.6}}},
-                        {"tooltip", tooltip}}));
-  marks->push_back(Mark("symbol", data, {{"x", Field("u", "tip_u")},
-                        {"y", Field("v", "tip_v")},
-                        {"shape", {{"value", "wedge"}}},
-                        {"angle", {{"field", "angle"}}},
-                        {"size", {{"value", 40}}},
-                        {"fill", {{"value", colour}}},
-                        {"tooltip", tooltip}}));
+  marks->push_back(Mark("rule", data,
+                        {{"x", Field("u", "u")},
+                         {"y", Field("v", "v")},
+                         {"x2", Field("u", "tip_u")},
+                         {"y2", Field("v", "tip_v")},
+                         {"stroke", {{"value", colour}}},
+                         {"strokeWidth", {{"value", 1.6}}},
+                         {"tooltip", tooltip}}));
+  marks->push_back(Mark("symbol", data,
+                        {{"x", Field("u", "tip_u")},
+                         {"y", Field("v", "tip_v")},
+                         {"shape", {{"value", "wedge"}}},
+                         {"angle", {{"field", "angle"}}},
+                         {"size", {{"value", 40}}},
+                         {"fill", {{"value", colour}}},
+                         {"tooltip", tooltip}}));
 }
 
 // The reference arrow of a figure, above the panel's top right corner:
 // `length` display pixels, labelled with the residual it stands for.
 void ScaleBar(json* marks, double length, const std::string& text, int w) {
-  marks->push_back(Mark("rule", "", {{"x", {{"value", w - length}}},
-                        {"x2", {{"value", w}}},
-                        {"y", {{"value", -8}}},
-                        {"stroke", {{"value", "#c0392b"}}},
-                        {"strokeWidth", {{"value", 2}}}}));
-  marks->push_back(Mark("symbol", "", {{"x", {{"value", w}}},
-                        {"y", {{"value", -8}}},
-                        {"shape", {{"value", "wedge"}}},
-                        {"angle", {{"value", 90}}},
-                        {"size", {{"value", 40}}},
-                        {"fill", {{"value", "#c0392b"}}}}));
-  marks->push_back(Mark("text", "", {{"x", {{"value", w - length - 6}}},
-                        {"y", {{"value", -8}}},
-                        {"align", {{"value", "right"}}},
-                        {"baseline", {{"value", "middle"}}},
-                        {"fontSize", {{"value", 11}}},
-                        {"text", {{"value", text}}}}));
+  marks->push_back(Mark("rule", "",
+                        {{"x", {{"value", w - length}}},
+                         {"x2", {{"value", w}}},
+                         {"y", {{"value", -8}}},
+                         {"stroke", {{"value", "#c0392b"}}},
+                         {"strokeWidth", {{"value", 2}}}}));
+  marks->push_back(Mark("symbol", "",
+                        {{"x", {{"value", w}}},
+                         {"y", {{"value", -8}}},
+                         {"shape", {{"value", "wedge"}}},
+                         {"angle", {{"value", 90}}},
+                         {"size", {{"value", 40}}},
+                         {"fill", {{"value", "#c0392b"}}}}));
+  marks->push_back(Mark("text", "",
+                        {{"x", {{"value", w - length - 6}}},
+                         {"y", {{"value", -8}}},
+                         {"align", {{"value", "right"}}},
+                         {"baseline", {{"value", "middle"}}},
+                         {"fontSize", {{"value", 11}}},
+                         {"text", {{"value", text}}}}));
 }
 
 // ---------------------------------------------------------------------------
@@ -287,8 +297,9 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& ro
     // Readings of this face (SPEC 1): face 2's zenith angle z is read 360 - z;
     // zenith at the top in both.
     const json domain = face == 1 ? json{0, 180} : json{360, 180};
-    const json bands = face == 1 ? json{{{"a", 0}, {"b", zmin}}, {{"a", zmax}, {"b", 180}}}
-                                 : json{{{"a", 360 - zmin}, {"b", 360}}, {{"a", 180}, {"b", 360 - zmax}}};
+    const json bands = face == 1
+                           ? json{{{"a", 0}, {"b", zmin}}, {{"a", zmax}, {"b", 180}}}
+                           : json{{{"a", 360 - zmin}, {"b", 360}}, {{"a", 180}, {"b", 360 - zmax}}};
     json ay = Axis("left", "y", "theta [deg] (zenith at the top)");
     json ax = Axis("bottom", "x", "phi [deg]");
     ax["values"] = {0, 45, 90, 135, 180, 225, 270, 315, 360};
@@ -304,22 +315,25 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& ro
         {"scales", {Linear("x", {0, 360}, {0, w}), Linear("y", domain, {0, h})}},
         {"axes", {ax, ay}},
         {"marks",
-         {Mark("rect", "bands", {{"x", {{"value", 0}}},
-               {"x2", {{"value", w}}},
-               {"y", Field("y", "a")},
-               {"y2", Field("y", "b")},
-               {"fill", {{"value", "#dddddd"}}}}),
-          Mark("rect", data, {{"xc", Field("x", "phi")},
-               {"yc", Field("y", "theta")},
-               {"width", {{"value", cw}}},
-               {"height", {{"value", ch}}},
-               {"fill", Field("colour", "rms")},
-               {"stroke", {{"signal", "datum.rms > " + std::to_string(vmax) + " ? '#d62728' : null"}}},
-               {"tooltip", Tip({{"face", "datum.face"},
-                                {"phi [deg]", "format(datum.phi, '.2f')"},
-                                {"theta [deg]", "format(datum.theta, '.2f')"},
-                                {"rms [" + src.unit + "]", "format(datum.rms, '.3g')"},
-                                {"observations", "datum.n"}})}})}}};
+         {Mark("rect", "bands",
+               {{"x", {{"value", 0}}},
+                {"x2", {{"value", w}}},
+                {"y", Field("y", "a")},
+                {"y2", Field("y", "b")},
+                {"fill", {{"value", "#dddddd"}}}}),
+          Mark("rect", data,
+               {{"xc", Field("x", "phi")},
+                {"yc", Field("y", "theta")},
+                {"width", {{"value", cw}}},
+                {"height", {{"value", ch}}},
+                {"fill", Field("colour", "rms")},
+                {"stroke",
+                 {{"signal", "datum.rms > " + std::to_string(vmax) + " ? '#d62728' : null"}}},
+                {"tooltip", Tip({{"face", "datum.face"},
+                                 {"phi [deg]", "format(datum.phi, '.2f')"},
+                                 {"theta [deg]", "format(datum.theta, '.2f')"},
+                                 {"rms [" + src.unit + "]", "format(datum.rms, '.3g')"},
+                                 {"observations", "datum.n"}})}})}}};
     spec["marks"].push_back(group);
   }
   Figure f;
@@ -338,7 +352,8 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& ro
 // ---------------------------------------------------------------------------
 // Image residuals per zoom: the fitted pixel rows binned over the image.
 
-Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<ObservationResidual>& rows) {
+Figure ImageResiduals(int zoom, const CameraTool& cam,
+                      const std::vector<ObservationResidual>& rows) {
   const int nx = 16;
   const int ny = std::max(1, static_cast<int>(std::lround(nx * double(cam.height) / cam.width)));
   struct Cell {
@@ -350,7 +365,8 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
   int n = 0, records = 0;
   for (const ObservationResidual& o : rows) {
     // Fitted image observations: pixels and camera records of this zoom.
-    if (!Fitted(o) || o.group == ObsGroup::kEdm || o.zoom != zoom || !std::isfinite(o.image_delta.x()))
+    if (!Fitted(o) || o.group == ObsGroup::kEdm || o.zoom != zoom ||
+        !std::isfinite(o.image_delta.x()))
       continue;
     const int i = std::clamp(static_cast<int>((o.u + 0.5) / cam.width * nx), 0, nx - 1);
     const int j = std::clamp(static_cast<int>((o.v + 0.5) / cam.height * ny), 0, ny - 1);
@@ -377,8 +393,10 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
       const Cell& c = cells[j * nx + i];
-      const double u0 = i * cam.width / double(nx) - 0.5, u1 = (i + 1) * cam.width / double(nx) - 0.5;
-      const double v0 = j * cam.height / double(ny) - 0.5, v1 = (j + 1) * cam.height / double(ny) - 0.5;
+      const double u0 = i * cam.width / double(nx) - 0.5,
+                   u1 = (i + 1) * cam.width / double(nx) - 0.5;
+      const double v0 = j * cam.height / double(ny) - 0.5,
+                   v1 = (j + 1) * cam.height / double(ny) - 0.5;
       json cell = {{"i", i}, {"j", j}, {"u0", u0}, {"u1", u1}, {"v0", v0}, {"v1", v1}, {"n", c.n}};
       if (c.n) {
         const double du = c.du / c.n, dv = c.dv / c.n;
@@ -398,16 +416,14 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
                         ": mean observed - predicted pixel per cell",
                     std::to_string(n - records) + " fitted image points and " +
                         std::to_string(records) + " camera records, rms " + Num(rms) +
-                        " px; arrow: " +
-                        Num(reference_px) + " px residual = " + Num(0.9) +
+                        " px; arrow: " + Num(reference_px) + " px residual = " + Num(0.9) +
                         " cell widths; cell colour and number: points per cell");
   int w = 0, h = 0;
   ImageScales(&spec, cam.width, cam.height, &w, &h);
   spec["data"].push_back({{"name", "cells"}, {"values", values}});
-  spec["data"].push_back(
-      {{"name", "arrows"},
-       {"source", "cells"},
-       {"transform", {{{"type", "filter"}, {"expr", "datum.n > 0"}}}}});
+  spec["data"].push_back({{"name", "arrows"},
+                          {"source", "cells"},
+                          {"transform", {{{"type", "filter"}, {"expr", "datum.n > 0"}}}}});
   spec["scales"].push_back({{"name", "count"},
                             {"type", "sqrt"},
                             {"domain", {{"data", "cells"}, {"field", "n"}}},
@@ -418,33 +434,40 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
                         {"points", "datum.n"},
                         {"mean du [px]", "format(datum.du, '.4f')"},
                         {"mean dv [px]", "format(datum.dv, '.4f')"}});
-  marks.push_back(Mark("rect", "cells", {{"x", Field("u", "u0")},
-                       {"x2", Field("u", "u1")},
-                       {"y", Field("v", "v0")},
-                       {"y2", Field("v", "v1")},
-                       {"fill", Field("count", "n")},
-                       {"stroke", {{"value", "#e4e4e4"}}},
-                       {"tooltip", tip}}));
+  marks.push_back(Mark("rect", "cells",
+                       {{"x", Field("u", "u0")},
+                        {"x2", Field("u", "u1")},
+                        {"y", Field("v", "v0")},
+                        {"y2", Field("v", "v1")},
+                        {"fill", Field("count", "n")},
+                        {"stroke", {{"value", "#e4e4e4"}}},
+                        {"tooltip", tip}}));
   // The corner ninths of the image: the distortion needs points there.
   json ninths = json::array();
   for (int k = 1; k < 3; ++k) {
-    ninths.push_back({{"u0", k * cam.width / 3.0 - 0.5}, {"u1", k * cam.width / 3.0 - 0.5},
-                      {"v0", -0.5}, {"v1", cam.height - 0.5}});
-    ninths.push_back({{"u0", -0.5}, {"u1", cam.width - 0.5},
-                      {"v0", k * cam.height / 3.0 - 0.5}, {"v1", k * cam.height / 3.0 - 0.5}});
+    ninths.push_back({{"u0", k * cam.width / 3.0 - 0.5},
+                      {"u1", k * cam.width / 3.0 - 0.5},
+                      {"v0", -0.5},
+                      {"v1", cam.height - 0.5}});
+    ninths.push_back({{"u0", -0.5},
+                      {"u1", cam.width - 0.5},
+                      {"v0", k * cam.height / 3.0 - 0.5},
+                      {"v1", k * cam.height / 3.0 - 0.5}});
   }
   spec["data"].push_back({{"name", "ninths"}, {"values", ninths}});
-  marks.push_back(Mark("rule", "ninths", {{"x", Field("u", "u0")},
-                       {"x2", Field("u", "u1")},
-                       {"y", Field("v", "v0")},
-                       {"y2", Field("v", "v1")},
-                       {"stroke", {{"value", "#999"}}},
-                       {"strokeDash", {{"value", {4, 4}}}}}));
-  marks.push_back(Mark("text", "arrows", {{"x", {{"scale", "u"}, {"field", "u0"}, {"offset", 2}}},
-                       {"y", {{"scale", "v"}, {"field", "v1"}, {"offset", -2}}},
-                       {"fontSize", {{"value", 8}}},
-                       {"fill", {{"value", "#555"}}},
-                       {"text", {{"field", "n"}}}}));
+  marks.push_back(Mark("rule", "ninths",
+                       {{"x", Field("u", "u0")},
+                        {"x2", Field("u", "u1")},
+                        {"y", Field("v", "v0")},
+                        {"y2", Field("v", "v1")},
+                        {"stroke", {{"value", "#999"}}},
+                        {"strokeDash", {{"value", {4, 4}}}}}));
+  marks.push_back(Mark("text", "arrows",
+                       {{"x", {{"scale", "u"}, {"field", "u0"}, {"offset", 2}}},
+                        {"y", {{"scale", "v"}, {"field", "v1"}, {"offset", -2}}},
+                        {"fontSize", {{"value", 8}}},
+                        {"fill", {{"value", "#555"}}},
+                        {"text", {{"field", "n"}}}}));
   Arrows(&marks, "arrows", "#c0392b", tip);
   ScaleBar(&marks, 0.9 * cell_w * w / cam.width, Num(reference_px) + " px", w);
   Figure f;
@@ -453,7 +476,8 @@ Figure ImageResiduals(int zoom, const CameraTool& cam, const std::vector<Observa
   f.title = "Image residuals, zoom " + std::to_string(zoom);
   f.caption =
       "The fitted image observations of this zoom (image points and camera records; residual "
-      "table, final model, boards at their estimated poses), binned over the image: each arrow is the mean observed-minus-predicted "
+      "table, final model, boards at their estimated poses), binned over the image: each arrow is "
+      "the mean observed-minus-predicted "
       "pixel of its cell, drawn at the scale the red reference arrow states; the number is the "
       "cell's points. A pattern of arrows is a model error (distortion, a principal point, a "
       "tool); random arrows shorter than the rms are noise. Empty corner ninths (dashed) mean "
@@ -566,13 +590,14 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
        {"transform", {{{"type", "filter"}, {"expr", "datum.status == 'fitted'"}}}}});
   json& marks = spec["marks"];
   if (!uri.empty()) {
-    json image = Mark("image", "", {{"url", {{"value", uri}}},
-                         {"x", {{"scale", "u"}, {"value", crop.u0}}},
-                         {"y", {{"scale", "v"}, {"value", crop.v0}}},
-                         {"x2", {{"scale", "u"}, {"value", crop.u1}}},
-                         {"y2", {{"scale", "v"}, {"value", crop.v1}}},
-                         {"aspect", {{"value", false}}},
-                         {"opacity", {{"value", 0.85}}}});
+    json image = Mark("image", "",
+                      {{"url", {{"value", uri}}},
+                       {"x", {{"scale", "u"}, {"value", crop.u0}}},
+                       {"y", {{"scale", "v"}, {"value", crop.v0}}},
+                       {"x2", {{"scale", "u"}, {"value", crop.u1}}},
+                       {"y2", {{"scale", "v"}, {"value", crop.v1}}},
+                       {"aspect", {{"value", false}}},
+                       {"opacity", {{"value", 0.85}}}});
     image["clip"] = true;  // the panel shows a part of the photo
     marks.push_back(image);
   }
@@ -584,19 +609,22 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
                         {"|r| / sigma", "format(datum.nr, '.2f')"},
                         {"status", "datum.status"},
                         {"pixels.csv line", "datum.line"}});
-  marks.push_back(Mark("symbol", "corners", {{"x", Field("u", "u")},
-                       {"y", Field("v", "v")},
-                       {"shape", {{"value", "circle"}}},
-                       {"size", {{"value", 18}}},
-                       {"stroke", {{"signal", "datum.status == 'fitted' ? '#00e5ff' : '#ff00ff'"}}},
-                       {"strokeWidth", {{"value", 1.2}}},
-                       {"tooltip", tip}}));
+  marks.push_back(
+      Mark("symbol", "corners",
+           {{"x", Field("u", "u")},
+            {"y", Field("v", "v")},
+            {"shape", {{"value", "circle"}}},
+            {"size", {{"value", 18}}},
+            {"stroke", {{"signal", "datum.status == 'fitted' ? '#00e5ff' : '#ff00ff'"}}},
+            {"strokeWidth", {{"value", 1.2}}},
+            {"tooltip", tip}}));
   Arrows(&marks, "arrows", "#ff3b30", tip);
   ScaleBar(&marks, 40.0, Num(reference_px) + " px", w);
   Figure f;
   // A file name and an HTML id: shot ids are free text (shots.csv).
   f.name = "photo_";
-  for (char ch : shot) f.name += std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '.' ? ch : '_';
+  for (char ch : shot)
+    f.name += std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '.' ? ch : '_';
   f.section = "photos";
   f.title = "Photo " + shot + ", zoom " + std::to_string(zoom);
   f.caption =
@@ -606,12 +634,8 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
       "together across the board point at the board pose or the camera model, a single long "
       "one at a bad detection.";
   f.spec = spec;
-  f.summary = {{"shot", shot},
-               {"zoom", zoom},
-               {"fitted_rows", fitted},
-               {"rows", rows.size()},
-               {"rms_px", rms},
-               {"arrow_scale_px", reference_px},
+  f.summary = {{"shot", shot},           {"zoom", zoom},  {"fitted_rows", fitted},
+               {"rows", rows.size()},    {"rms_px", rms}, {"arrow_scale_px", reference_px},
                {"photo", !photo.empty()}};
   return f;
 }
@@ -678,7 +702,9 @@ const std::vector<Component>& Components() {
 }
 
 const char* SeriesName(ObsGroup g) {
-  return g == ObsGroup::kEdm ? "EDM points" : g == ObsGroup::kCam ? "camera points" : "image points";
+  return g == ObsGroup::kEdm   ? "EDM points"
+         : g == ObsGroup::kCam ? "camera points"
+                               : "image points";
 }
 
 Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
@@ -693,8 +719,11 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
                             {"type", "ordinal"},
                             {"domain", series_domain},
                             {"range", {"#1f77b4", "#ff7f0e", "#2ca02c"}}});
-  spec["legends"].push_back({{"stroke", "group"}, {"fill", "group"}, {"title", "observations"},
-                             {"orient", "top"}, {"direction", "horizontal"}});
+  spec["legends"].push_back({{"stroke", "group"},
+                             {"fill", "group"},
+                             {"title", "observations"},
+                             {"orient", "top"},
+                             {"direction", "horizontal"}});
   spec["layout"] = Grid(Components().size(), 75, 95);
   json summary = json::array();
   for (const Variable& var : Variables()) {
@@ -737,27 +766,37 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
                             {"n", n[b]}});
         }
       }
-      json group = {{"type", "group"},
-                    {"encode", {{"enter", {{"width", {{"value", kPanelW}}}, {"height", {{"value", kPanelH}}}}}}}};
+      json group = {
+          {"type", "group"},
+          {"encode",
+           {{"enter", {{"width", {{"value", kPanelW}}}, {"height", {{"value", kPanelH}}}}}}}};
       const std::string data = var.key + "_" + comp.key;
       summary.push_back({{"variable", var.key}, {"component", comp.key}, {"bins", values.size()}});
       if (values.empty()) {
-        group["marks"] = {Mark("text", "", {{"x", {{"value", kPanelW / 2}}},
-                               {"y", {{"value", kPanelH / 2}}},
-                               {"align", {{"value", "center"}}},
-                               {"fill", {{"value", "#888"}}},
-                               {"text", {{"value", "no " + comp.key + " residuals against " + var.key}}}})};
+        group["marks"] = {
+            Mark("text", "",
+                 {{"x", {{"value", kPanelW / 2}}},
+                  {"y", {{"value", kPanelH / 2}}},
+                  {"align", {{"value", "center"}}},
+                  {"fill", {{"value", "#888"}}},
+                  {"text", {{"value", "no " + comp.key + " residuals against " + var.key}}}})};
         group["title"] = {{"text", var.label}, {"fontSize", 10}};
         spec["marks"].push_back(group);
         continue;
       }
       group["data"] = {{{"name", data}, {"values", values}}};
-      group["scales"] = {
-          {{"name", "x"}, {"type", "linear"}, {"domain", {{"data", data}, {"field", "x"}}},
-           {"range", {0, kPanelW}}, {"zero", false}, {"nice", true}},
-          {{"name", "y"}, {"type", "linear"},
-           {"domain", {{"data", data}, {"fields", {"lo", "hi"}}}},
-           {"range", {kPanelH, 0}}, {"zero", true}, {"nice", true}}};
+      group["scales"] = {{{"name", "x"},
+                          {"type", "linear"},
+                          {"domain", {{"data", data}, {"field", "x"}}},
+                          {"range", {0, kPanelW}},
+                          {"zero", false},
+                          {"nice", true}},
+                         {{"name", "y"},
+                          {"type", "linear"},
+                          {"domain", {{"data", data}, {"fields", {"lo", "hi"}}}},
+                          {"range", {kPanelH, 0}},
+                          {"zero", true},
+                          {"nice", true}}};
       json ay = Axis("left", "y", comp.label);
       ay["grid"] = true;
       ay["tickCount"] = 5;
@@ -770,18 +809,19 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
                             {"2 sigma", "format(datum.hi - datum.mean, '.2g')"},
                             {"n", "datum.n"}});
       // The 2-sigma band under each series' line.
-      const json band = json::array({Mark("area", "", {{"x", Field("x", "x")},
-                              {"y", Field("y", "lo")},
-                              {"y2", Field("y", "hi")},
-                              {"fill", Field("group", "group")},
-                              {"fillOpacity", {{"value", 0.18}}}})});
-      group["marks"] = {
-          SeriesLines(data, "group", "group", "x", "mean", 1.5, 14, tip, band),
-          Mark("rule", "", {{"x", {{"value", 0}}},
-               {"x2", {{"value", kPanelW}}},
-               {"y", {{"scale", "y"}, {"value", 0}}},
-               {"stroke", {{"value", "#444"}}},
-               {"strokeDash", {{"value", {3, 3}}}}})};
+      const json band = json::array({Mark("area", "",
+                                          {{"x", Field("x", "x")},
+                                           {"y", Field("y", "lo")},
+                                           {"y2", Field("y", "hi")},
+                                           {"fill", Field("group", "group")},
+                                           {"fillOpacity", {{"value", 0.18}}}})});
+      group["marks"] = {SeriesLines(data, "group", "group", "x", "mean", 1.5, 14, tip, band),
+                        Mark("rule", "",
+                             {{"x", {{"value", 0}}},
+                              {"x2", {{"value", kPanelW}}},
+                              {"y", {{"scale", "y"}, {"value", 0}}},
+                              {"stroke", {{"value", "#444"}}},
+                              {"strokeDash", {{"value", {3, 3}}}}})};
       spec["marks"].push_back(group);
     }
   }
@@ -849,51 +889,67 @@ Figure Histograms(const std::vector<ObservationResidual>& rows) {
     }
     json bars = json::array(), curve = json::array();
     for (int b = 0; b < kBins; ++b) {
-      bars.push_back({{"x0", -range + b * width}, {"x1", -range + (b + 1) * width}, {"n", counts[b]}});
+      bars.push_back(
+          {{"x0", -range + b * width}, {"x1", -range + (b + 1) * width}, {"n", counts[b]}});
     }
     for (int k = 0; k <= 120; ++k) {
       const double x = -range + 2 * range * k / 120;
-      curve.push_back({{"x", x},
-                       {"y", s.values.size() * width * std::exp(-0.5 * x * x / (s.sigma * s.sigma)) /
-                                 (std::sqrt(2 * M_PI) * s.sigma)}});
+      curve.push_back(
+          {{"x", x},
+           {"y", s.values.size() * width * std::exp(-0.5 * x * x / (s.sigma * s.sigma)) /
+                     (std::sqrt(2 * M_PI) * s.sigma)}});
     }
     const double rms = std::sqrt(ss / s.values.size());
-    const std::string key = s.group == ObsGroup::kEdm ? "edm" : s.group == ObsGroup::kCam ? "cam" : "pixels";
+    const std::string key = s.group == ObsGroup::kEdm   ? "edm"
+                            : s.group == ObsGroup::kCam ? "cam"
+                                                        : "pixels";
     json ax = Axis("bottom", "x", "residual [" + s.unit + "]");
     ax["tickCount"] = 6;
     json ay = Axis("left", "y", "count");
     ay["tickCount"] = 5;
-    const json tip = Tip({{"from", "format(datum.x0, '.3g')"}, {"to", "format(datum.x1, '.3g')"},
+    const json tip = Tip({{"from", "format(datum.x0, '.3g')"},
+                          {"to", "format(datum.x1, '.3g')"},
                           {"count", "datum.n"}});
     spec["marks"].push_back(
         {{"type", "group"},
          {"title",
           {{"text", s.title},
            {"subtitle", "fitted sigma " + Num(s.sigma) + ", rms " + Num(rms) + " " + s.unit +
-                            ", n " + std::to_string(s.values.size()) + ", beyond 4.5 sigma: " +
-                            std::to_string(outside)},
+                            ", n " + std::to_string(s.values.size()) +
+                            ", beyond 4.5 sigma: " + std::to_string(outside)},
            {"fontSize", 12},
            {"subtitleFontSize", 10}}},
-         {"encode", {{"enter", {{"width", {{"value", kPanelW}}}, {"height", {{"value", kPanelH}}}}}}},
-         {"data", {{{"name", key + "_bars"}, {"values", bars}}, {{"name", key + "_curve"}, {"values", curve}}}},
+         {"encode",
+          {{"enter", {{"width", {{"value", kPanelW}}}, {"height", {{"value", kPanelH}}}}}}},
+         {"data",
+          {{{"name", key + "_bars"}, {"values", bars}},
+           {{"name", key + "_curve"}, {"values", curve}}}},
          {"scales",
           {Linear("x", {-range, range}, {0, kPanelW}),
-           {{"name", "y"}, {"type", "linear"},
-            {"domain", {{"fields", {{{"data", key + "_bars"}, {"field", "n"}}, {{"data", key + "_curve"}, {"field", "y"}}}}}},
-            {"range", {kPanelH, 0}}, {"nice", true}, {"zero", true}}}},
+           {{"name", "y"},
+            {"type", "linear"},
+            {"domain",
+             {{"fields",
+               {{{"data", key + "_bars"}, {"field", "n"}},
+                {{"data", key + "_curve"}, {"field", "y"}}}}}},
+            {"range", {kPanelH, 0}},
+            {"nice", true},
+            {"zero", true}}}},
          {"axes", {ax, ay}},
          {"marks",
-          {Mark("rect", key + "_bars", {{"x", Field("x", "x0")},
-                {"x2", Field("x", "x1")},
-                {"y", Field("y", "n")},
-                {"y2", {{"scale", "y"}, {"value", 0}}},
-                {"fill", {{"value", "#8cb4d8"}}},
-                {"stroke", {{"value", "#5079a0"}}},
-                {"tooltip", tip}}),
-           Mark("line", key + "_curve", {{"x", Field("x", "x")},
-                {"y", Field("y", "y")},
-                {"stroke", {{"value", "#d62728"}}},
-                {"strokeWidth", {{"value", 2}}}})}}});
+          {Mark("rect", key + "_bars",
+                {{"x", Field("x", "x0")},
+                 {"x2", Field("x", "x1")},
+                 {"y", Field("y", "n")},
+                 {"y2", {{"scale", "y"}, {"value", 0}}},
+                 {"fill", {{"value", "#8cb4d8"}}},
+                 {"stroke", {{"value", "#5079a0"}}},
+                 {"tooltip", tip}}),
+           Mark("line", key + "_curve",
+                {{"x", Field("x", "x")},
+                 {"y", Field("y", "y")},
+                 {"stroke", {{"value", "#d62728"}}},
+                 {"strokeWidth", {{"value", 2}}}})}}});
     summary.push_back({{"group", key},
                        {"values", s.values.size()},
                        {"sigma", s.sigma},
@@ -952,16 +1008,24 @@ Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name,
     ax["labelLimit"] = 220;
     json ay = Axis("left", "y", "rms error [" + unit + "] (log)");
     ay["grid"] = true;
-    const json tip = Tip({{"rung", "datum.label"}, {"series", "datum.series"},
+    const json tip = Tip({{"rung", "datum.label"},
+                          {"series", "datum.series"},
                           {"rms [" + unit + "]", "format(datum.value, '.4g')"}});
     spec["marks"].push_back(
         {{"type", "group"},
          {"encode", {{"enter", {{"width", {{"value", width}}}, {"height", {{"value", kPanelH}}}}}}},
          {"data", {{{"name", d}, {"values", *data}}}},
          {"scales",
-          {{{"name", "x"}, {"type", "point"}, {"domain", labels}, {"range", {0, width}}, {"padding", 0.5}},
-           {{"name", "y"}, {"type", "log"}, {"domain", {{"data", d}, {"field", "value"}}},
-            {"range", {kPanelH, 0}}, {"nice", true}}}},
+          {{{"name", "x"},
+            {"type", "point"},
+            {"domain", labels},
+            {"range", {0, width}},
+            {"padding", 0.5}},
+           {{"name", "y"},
+            {"type", "log"},
+            {"domain", {{"data", d}, {"field", "value"}}},
+            {"range", {kPanelH, 0}},
+            {"nice", true}}}},
          {"axes", {ax, ay}},
          {"marks", {SeriesLines(d, "series", "series", "label", "value", 2, 50, tip)}}});
     summary.push_back({{"unit", unit}, {"points", *data}});
@@ -1027,28 +1091,30 @@ json HeatMapSpec(const std::string& title, const std::string& subtitle, int widt
                             {"zero", true},
                             {"nice", true}});
   spec["legends"].push_back({{"fill", "colour"}, {"title", legend}, {"type", "gradient"}});
-  const json tip = Tip({{"u", "format((datum.u0 + datum.u1) / 2, '.0f')"},
-                        {"v", "format((datum.v0 + datum.v1) / 2, '.0f')"},
-                        {legend, "datum.value === null ? 'not predictable' : format(datum.value, '.3g')"},
-                        {"inside the points' hull", "datum.inside"}});
-  spec["marks"].push_back(
-      Mark("rect", "cells", {{"x", Field("u", "u0")},
-           {"x2", Field("u", "u1")},
-           {"y", Field("v", "v0")},
-           {"y2", Field("v", "v1")},
-           {"fill", {{"signal", "datum.value === null ? '#bbbbbb' : scale('colour', datum.value)"}}},
-           {"opacity", {{"signal", "datum.inside ? 1 : 0.55"}}},
-           {"tooltip", tip}}));
-  spec["data"].push_back(
-      {{"name", "outside"},
-       {"source", "cells"},
-       {"transform", {{{"type", "filter"}, {"expr", "!datum.inside"}}}}});
-  spec["marks"].push_back(Mark("rule", "outside", {{"x", Field("u", "u0")},
-                               {"y", Field("v", "v1")},
-                               {"x2", Field("u", "u1")},
-                               {"y2", Field("v", "v0")},
-                               {"stroke", {{"value", "white"}}},
-                               {"strokeOpacity", {{"value", 0.8}}}}));
+  const json tip =
+      Tip({{"u", "format((datum.u0 + datum.u1) / 2, '.0f')"},
+           {"v", "format((datum.v0 + datum.v1) / 2, '.0f')"},
+           {legend, "datum.value === null ? 'not predictable' : format(datum.value, '.3g')"},
+           {"inside the points' hull", "datum.inside"}});
+  spec["marks"].push_back(Mark(
+      "rect", "cells",
+      {{"x", Field("u", "u0")},
+       {"x2", Field("u", "u1")},
+       {"y", Field("v", "v0")},
+       {"y2", Field("v", "v1")},
+       {"fill", {{"signal", "datum.value === null ? '#bbbbbb' : scale('colour', datum.value)"}}},
+       {"opacity", {{"signal", "datum.inside ? 1 : 0.55"}}},
+       {"tooltip", tip}}));
+  spec["data"].push_back({{"name", "outside"},
+                          {"source", "cells"},
+                          {"transform", {{{"type", "filter"}, {"expr", "!datum.inside"}}}}});
+  spec["marks"].push_back(Mark("rule", "outside",
+                               {{"x", Field("u", "u0")},
+                                {"y", Field("v", "v1")},
+                                {"x2", Field("u", "u1")},
+                                {"y2", Field("v", "v0")},
+                                {"stroke", {{"value", "white"}}},
+                                {"strokeOpacity", {{"value", 0.8}}}}));
   if (hull.size() >= 3) {
     json pts = json::array();
     for (size_t k = 0; k <= hull.size(); ++k) {
@@ -1056,10 +1122,11 @@ json HeatMapSpec(const std::string& title, const std::string& subtitle, int widt
       pts.push_back({{"k", k}, {"u", p.x()}, {"v", p.y()}});
     }
     spec["data"].push_back({{"name", "hull"}, {"values", pts}});
-    spec["marks"].push_back(Mark("line", "hull", {{"x", Field("u", "u")},
-                                 {"y", Field("v", "v")},
-                                 {"stroke", {{"value", "white"}}},
-                                 {"strokeWidth", {{"value", 2}}}}));
+    spec["marks"].push_back(Mark("line", "hull",
+                                 {{"x", Field("u", "u")},
+                                  {"y", Field("v", "v")},
+                                  {"stroke", {{"value", "white"}}},
+                                  {"strokeWidth", {{"value", 2}}}}));
   }
   return spec;
 }
@@ -1071,16 +1138,16 @@ Figure UncertaintyFigure(const UncertaintyMap& m, const UncertaintyMapOptions& o
   f.section = "uncertainty";
   f.title = "Projection uncertainty, zoom " + std::to_string(m.zoom) + ", point at " +
             Num(o.range_m) + " m";
-  f.spec = HeatMapSpec(
-      f.title,
-      "1 sigma, worst direction [px]: min " + Num(m.min_px) + ", median " + Num(m.median_px) +
-          ", max " + Num(m.max_px) + "; pointing phi " + Num(o.phi, 4) + ", theta " +
-          Num(o.theta, 4) + " rad; " +
-          (full ? "full covariance" : "diagonal approximation (no full covariance)") +
-          "; faded and struck through: outside the points' hull (white)",
-      m.width, m.height, m.cols, m.rows, m.sigma_px,
-      std::vector<unsigned char>(m.inside.begin(), m.inside.end()), "1-sigma [px]",
-      cam.valid_region);
+  f.spec =
+      HeatMapSpec(f.title,
+                  "1 sigma, worst direction [px]: min " + Num(m.min_px) + ", median " +
+                      Num(m.median_px) + ", max " + Num(m.max_px) + "; pointing phi " +
+                      Num(o.phi, 4) + ", theta " + Num(o.theta, 4) + " rad; " +
+                      (full ? "full covariance" : "diagonal approximation (no full covariance)") +
+                      "; faded and struck through: outside the points' hull (white)",
+                  m.width, m.height, m.cols, m.rows, m.sigma_px,
+                  std::vector<unsigned char>(m.inside.begin(), m.inside.end()), "1-sigma [px]",
+                  cam.valid_region);
   f.caption =
       "How far (1 sigma, worst direction, pixels) the pixel where a point at " + Num(o.range_m) +
       " m is seen may lie from the model's prediction, from the uncertainty of this zoom's "
@@ -1100,9 +1167,9 @@ Figure DifferenceFigure(const ZoomDifference& d) {
   f.section = "compare";
   f.title = "Projection difference, zoom " + std::to_string(d.zoom);
   f.spec = HeatMapSpec(f.title,
-                       "RMS " + Num(d.rms_px) + ", max " + Num(d.max_px) + " px; rotation removed " +
-                           Num(d.rotation_rad * kArcsec) + "\"; " + std::to_string(d.width) +
-                           " x " + std::to_string(d.height) +
+                       "RMS " + Num(d.rms_px) + ", max " + Num(d.max_px) +
+                           " px; rotation removed " + Num(d.rotation_rad * kArcsec) + "\"; " +
+                           std::to_string(d.width) + " x " + std::to_string(d.height) +
                            " px (first model's image); faded: outside either model's valid region",
                        d.width, d.height, d.cols, d.rows, d.diff_px,
                        std::vector<unsigned char>(d.inside.begin(), d.inside.end()),
@@ -1124,11 +1191,13 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
     std::vector<Rung> rungs;
     for (size_t i = 0; i < c.ladder.size(); ++i) {
       const LadderStep& s = c.ladder[i];
-      rungs.push_back({"step " + std::to_string(i) + ": " + (s.added.empty() ? "start" : "+" + s.added),
-                       s.rms.edm_n ? s.rms.edm_m * 1e3 : NAN, s.rms.cam_n ? s.rms.cam_m * 1e3 : NAN,
-                       s.rms.pixels_n ? s.rms.pixels_px : NAN});
+      rungs.push_back(
+          {"step " + std::to_string(i) + ": " + (s.added.empty() ? "start" : "+" + s.added),
+           s.rms.edm_n ? s.rms.edm_m * 1e3 : NAN, s.rms.cam_n ? s.rms.cam_m * 1e3 : NAN,
+           s.rms.pixels_n ? s.rms.pixels_px : NAN});
     }
-    figs.push_back(LadderFigure(rungs, "ladder_stepwise", "The ladder of this run (diagnose --auto)",
+    figs.push_back(LadderFigure(rungs, "ladder_stepwise",
+                                "The ladder of this run (diagnose --auto)",
                                 "Error of the fitted rows after each effect the forward stepwise "
                                 "search added (rtscalib diagnose --auto)."));
   }
@@ -1152,7 +1221,8 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
       if (!h.contains("final")) continue;
       std::vector<std::string> effects;
       if (h.contains("effects")) effects = h["effects"].get<std::vector<std::string>>();
-      add("run " + h.value("run", std::string("?")).substr(0, 3), effects, h["final"], rungs.empty());
+      add("run " + h.value("run", std::string("?")).substr(0, 3), effects, h["final"],
+          rungs.empty());
     }
     const FinalErrors& e = c.final_errors;
     const json final = {{"records",
@@ -1177,13 +1247,11 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
     if (o.group == ObsGroup::kPixel && o.zoom < c.model.NumZooms()) pixel_zooms.insert(o.zoom);
   }
   std::set<int> pixel_zooms_mapped = pixel_zooms;
-  const std::string model = KinematicsName(c.model.kinematics) +
-                            std::string(", effects: [") + [&] {
-                              std::string s;
-                              for (const std::string& n : c.model.effects.Names())
-                                s += (s.empty() ? "" : ", ") + n;
-                              return s;
-                            }() + "]";
+  const std::string model = KinematicsName(c.model.kinematics) + std::string(", effects: [") + [&] {
+    std::string s;
+    for (const std::string& n : c.model.effects.Names()) s += (s.empty() ? "" : ", ") + n;
+    return s;
+  }() + "]";
   // A camera-only calibration (kinematics none) has no pointings to map.
   if (c.model.kinematics == Kinematics::kNone) pixel_zooms_mapped.clear();
   if (edm) {
@@ -1191,14 +1259,16 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
                             c.fit_options, model));
   }
   for (int z : cam_zooms) {
-    figs.push_back(ErrorMap({"cam_zoom" + std::to_string(z), "Camera points, zoom " + std::to_string(z),
-                             "mm", 1e3, ObsGroup::kCam, z},
-                            rows, faces, c.fit_options, model));
+    figs.push_back(
+        ErrorMap({"cam_zoom" + std::to_string(z), "Camera points, zoom " + std::to_string(z), "mm",
+                  1e3, ObsGroup::kCam, z},
+                 rows, faces, c.fit_options, model));
   }
   for (int z : pixel_zooms_mapped) {
-    figs.push_back(ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z),
-                             "px", 1.0, ObsGroup::kPixel, z},
-                            rows, faces, c.fit_options, model));
+    figs.push_back(
+        ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z),
+                  "px", 1.0, ObsGroup::kPixel, z},
+                 rows, faces, c.fit_options, model));
   }
 
   // The image: binned residuals per zoom, then the worst photos.
@@ -1237,8 +1307,8 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   figs.push_back(Histograms(rows));
   for (const UncertaintyMap& m : r.uncertainty_maps) {
     if (m.determined) {
-      figs.push_back(UncertaintyFigure(m, r.uncertainty_options, c.model.cams[m.zoom],
-                                       r.full_covariance));
+      figs.push_back(
+          UncertaintyFigure(m, r.uncertainty_options, c.model.cams[m.zoom], r.full_covariance));
     }
   }
   return figs;
@@ -1266,9 +1336,9 @@ std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>
       continue;
     }
     WriteFileAtomic((fs::path(dir) / (figures[i].name + ".svg")).string(), drawn[i].svg);
-    WriteFileAtomic((fs::path(dir) / (figures[i].name + ".png")).string(),
-                    std::string_view(reinterpret_cast<const char*>(drawn[i].png.data()),
-                                     drawn[i].png.size()));
+    WriteFileAtomic(
+        (fs::path(dir) / (figures[i].name + ".png")).string(),
+        std::string_view(reinterpret_cast<const char*>(drawn[i].png.data()), drawn[i].png.size()));
     written[i].push_back(figures[i].name + ".svg");
     written[i].push_back(figures[i].name + ".png");
   }

@@ -82,8 +82,10 @@ std::string Img(const Figure& f) {
   for (size_t at = spec.find("</"); at != std::string::npos; at = spec.find("</", at + 3))
     spec.replace(at, 2, "<\\/");
   return "<figure class=\"vega\" id=\"fig-" + Esc(f.name) + "\" data-figure=\"" + Esc(f.name) +
-         "\" aria-label=\"" + Esc(f.title) + "\"><div class=\"plot\"></div><script type=\"application/json\" "
-         "id=\"spec-" + Esc(f.name) + "\">" + spec + "</script><figcaption>" + Esc(f.caption) +
+         "\" aria-label=\"" + Esc(f.title) +
+         "\"><div class=\"plot\"></div><script type=\"application/json\" "
+         "id=\"spec-" +
+         Esc(f.name) + "\">" + spec + "</script><figcaption>" + Esc(f.caption) +
          "</figcaption></figure>\n";
 }
 

@@ -435,12 +435,42 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
 
 // ---------------------------------------------------------------------------
 const std::vector<std::string>& ResidualColumns() {
-  static const std::vector<std::string> columns = {
-      "kind",   "index",  "line",   "status",  "face",   "zoom",   "phi",    "theta",
-      "d",      "shot",   "placement", "target", "corner", "point", "obs_x", "obs_y",
-      "obs_z",  "pred_x", "pred_y", "pred_z",  "res_x",  "res_y",  "res_z",  "size",
-      "sigma",  "normalised", "along_m", "hz_rad", "zenith_rad", "target_distance_m",
-      "image_radius_px", "u", "v", "image_du", "image_dv", "reason"};
+  static const std::vector<std::string> columns = {"kind",
+                                                   "index",
+                                                   "line",
+                                                   "status",
+                                                   "face",
+                                                   "zoom",
+                                                   "phi",
+                                                   "theta",
+                                                   "d",
+                                                   "shot",
+                                                   "placement",
+                                                   "target",
+                                                   "corner",
+                                                   "point",
+                                                   "obs_x",
+                                                   "obs_y",
+                                                   "obs_z",
+                                                   "pred_x",
+                                                   "pred_y",
+                                                   "pred_z",
+                                                   "res_x",
+                                                   "res_y",
+                                                   "res_z",
+                                                   "size",
+                                                   "sigma",
+                                                   "normalised",
+                                                   "along_m",
+                                                   "hz_rad",
+                                                   "zenith_rad",
+                                                   "target_distance_m",
+                                                   "image_radius_px",
+                                                   "u",
+                                                   "v",
+                                                   "image_du",
+                                                   "image_dv",
+                                                   "reason"};
   return columns;
 }
 
@@ -467,8 +497,8 @@ std::string ResidualsCsv(const PipelineResult& r) {
     const char* kind = px ? "pixel" : x.group == ObsGroup::kEdm ? "edm" : "cam";
     o << kind << "," << x.index << "," << x.line << "," << ResidualStatusName(x.status) << ","
       << x.face << "," << x.zoom << "," << num(x.phi, "%.10g") << ",";
-    o << num(x.theta, "%.10g") << "," << (px ? "" : num(x.d, "%.10g")) << "," << text(x.shot)
-      << "," << text(x.placement) << "," << (px ? std::to_string(x.target) : "") << ","
+    o << num(x.theta, "%.10g") << "," << (px ? "" : num(x.d, "%.10g")) << "," << text(x.shot) << ","
+      << text(x.placement) << "," << (px ? std::to_string(x.target) : "") << ","
       << (px ? std::to_string(x.corner) : "") << "," << text(x.point);
     const int k = px ? 2 : 3;
     for (const Eigen::Vector3d* v : {&x.observed, &x.predicted}) {

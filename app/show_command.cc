@@ -133,10 +133,10 @@ int RunShow(const ShowArgs& args) {
       }
       known += (known.empty() ? "" : ", ") + s;
     }
-    throw InputError::File(csv.string(), 0, "--shot",
-                           known.empty() ? "a shot of the run (the run has no photos)"
-                                         : "a shot of the run: " + known,
-                           args.shot);
+    throw InputError::File(
+        csv.string(), 0, "--shot",
+        known.empty() ? "a shot of the run (the run has no photos)" : "a shot of the run: " + known,
+        args.shot);
   }
   // Where the photo is, and the size of its zoom's images.
   PhotoSessionSummary photos;

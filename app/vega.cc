@@ -22,11 +22,11 @@ namespace fs = std::filesystem;
 // first; vega-functions asks for "vega-selections", Debian's file is
 // vega-selection.
 const char* const kModules[] = {
-    "vega-util",      "vega-canvas",      "vega-time",           "vega-format",
-    "vega-loader",    "vega-dataflow",    "vega-scale",          "vega-statistics",
-    "vega-transforms", "vega-scenegraph", "vega-encode",         "vega-view-transforms",
-    "vega-expression", "vega-event-selector", "vega-selection",  "vega-functions",
-    "vega-runtime",   "vega-view",        "vega-parser"};
+    "vega-util",       "vega-canvas",         "vega-time",      "vega-format",
+    "vega-loader",     "vega-dataflow",       "vega-scale",     "vega-statistics",
+    "vega-transforms", "vega-scenegraph",     "vega-encode",    "vega-view-transforms",
+    "vega-expression", "vega-event-selector", "vega-selection", "vega-functions",
+    "vega-runtime",    "vega-view",           "vega-parser"};
 
 std::string ReadText(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -44,8 +44,7 @@ std::string BuildRuntime(std::string* missing) {
   for (const char* m : kModules) {
     std::string src = ReadText(dir / (std::string(m) + ".min.js"));
     if (src.empty()) {
-      *missing = (dir / (std::string(m) + ".min.js")).string() +
-                 " (Debian package libjs-vega)";
+      *missing = (dir / (std::string(m) + ".min.js")).string() + " (Debian package libjs-vega)";
       return "";
     }
     // The source map is not shipped beside the page: no reference to it.
@@ -133,7 +132,9 @@ int Wait(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-int Run(const std::vector<std::string>& argv, const fs::path& log) { return Wait(Start(argv, log)); }
+int Run(const std::vector<std::string>& argv, const fs::path& log) {
+  return Wait(Start(argv, log));
+}
 
 // PNG conversions side by side: the machine's cores, at most this many.
 constexpr size_t kParallelConversions = 2;
@@ -165,14 +166,15 @@ std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& spe
   if (specs.empty()) return {};
   std::string missing;
   const std::string& runtime = VegaRuntime(&missing);
-  const std::string node = !FindProgram("node").empty() ? FindProgram("node") : FindProgram("nodejs");
+  const std::string node =
+      !FindProgram("node").empty() ? FindProgram("node") : FindProgram("nodejs");
   const std::string rsvg = FindProgram("rsvg-convert");
   if (runtime.empty() || node.empty() || rsvg.empty()) {
     *note = "figures: no PNG files written (report.html and figures/*.vg.json have them): " +
             (runtime.empty() ? "the Vega modules are missing: " + missing
              : node.empty()  ? std::string("node is not installed (Debian package nodejs)")
                              : std::string("rsvg-convert is not installed (Debian package "
-                                           "librsvg2-bin)")) +
+                                            "librsvg2-bin)")) +
             "; scripts/install-deps.sh installs it";
     return {};
   }
@@ -192,7 +194,8 @@ std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& spe
   std::ofstream(dir / "vega.js", std::ios::binary) << runtime;
   std::ofstream(dir / "render.js", std::ios::binary) << kRenderScript;
   for (size_t i = 0; i < specs.size(); ++i) {
-    std::ofstream(dir / ("spec_" + std::to_string(i) + ".json"), std::ios::binary) << specs[i].dump();
+    std::ofstream(dir / ("spec_" + std::to_string(i) + ".json"), std::ios::binary)
+        << specs[i].dump();
   }
   const fs::path log = dir / "log.txt";
   if (Run({node, (dir / "render.js").string(), dir.string(), std::to_string(specs.size())}, log) !=

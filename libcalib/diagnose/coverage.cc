@@ -77,10 +77,9 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
     g.zoom = z;
     g.width = model.cams[z].width;
     g.height = model.cams[z].height;
-    g.covered_fraction =
-        static_cast<double>(std::count_if(g.counts.begin(), g.counts.end(),
-                                          [](int n) { return n > 0; })) /
-        g.counts.size();
+    g.covered_fraction = static_cast<double>(std::count_if(g.counts.begin(), g.counts.end(),
+                                                           [](int n) { return n > 0; })) /
+                         g.counts.size();
     g.corners_covered = ninths[z][0] && ninths[z][1] && ninths[z][2] && ninths[z][3];
     c.images.push_back(std::move(g));
   }

@@ -55,7 +55,7 @@ struct ImageCoverage {
   int zoom = 0;
   int width = 0, height = 0;
   int points = 0;
-  std::vector<int> counts;  // kCoverageCells^2, row-major by v cell, then u cell
+  std::vector<int> counts;       // kCoverageCells^2, row-major by v cell, then u cell
   double covered_fraction = 0;   // cells with points / all cells
   bool corners_covered = false;  // each corner ninth of the image holds points
 };

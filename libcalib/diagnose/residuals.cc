@@ -130,12 +130,13 @@ const char* ResidualStatusName(ResidualStatus s) {
 }
 
 std::vector<ObservationResidual> ResidualTable(const Observations& obs,
-                                               const InstrumentModel& model,
-                                               const FitOptions& fit, const FitSummary& summary,
+                                               const InstrumentModel& model, const FitOptions& fit,
+                                               const FitSummary& summary,
                                                const std::vector<ExcludedRow>& gross) {
   // The boards and points of unknown position at the model's estimate:
   // the rows' positions as the fit placed them.
-  std::vector<ObservationResidual> out = ObservationResiduals(WithEstimates(obs, model), model, fit);
+  std::vector<ObservationResidual> out =
+      ObservationResiduals(WithEstimates(obs, model), model, fit);
   const double sigma_edm = summary.sigma_edm_m > 0 ? summary.sigma_edm_m : fit.sigma_edm_m;
   const double sigma_cam = summary.sigma_cam_m > 0 ? summary.sigma_cam_m : fit.sigma_cam_m;
   const double sigma_px = summary.sigma_pixel_px > 0 ? summary.sigma_pixel_px : fit.sigma_pixel_px;
@@ -164,7 +165,8 @@ std::vector<ObservationResidual> ResidualTable(const Observations& obs,
       o.reason = "the model cannot predict it (point behind the camera or outside its image model)";
     } else if (o.critical) {
       o.status = ResidualStatus::kCriticalRegion;
-      o.reason = "zenith angle in a critical region (critical_region.min_zenith_deg, max_zenith_deg)";
+      o.reason =
+          "zenith angle in a critical region (critical_region.min_zenith_deg, max_zenith_deg)";
     }
   }
   for (const ExcludedRow& e : gross) {

@@ -72,14 +72,14 @@ struct ObservationResidual {
 
   // Filled by ResidualTable (ObservationResiduals leaves the defaults):
   ResidualStatus status = ResidualStatus::kFitted;
-  std::string reason;      // why the row is not fitted; "" when it is
-  int line = 0;            // line in its file (0: not from a file)
-  std::string shot;        // pixels: the photo
-  std::string placement;   // pixels: SPEC 7.1
+  std::string reason;            // why the row is not fitted; "" when it is
+  int line = 0;                  // line in its file (0: not from a file)
+  std::string shot;              // pixels: the photo
+  std::string placement;         // pixels: SPEC 7.1
   int target = -1, corner = -1;  // pixels: tag id and corner
-  std::string point;       // records of a point of unknown position (SPEC 7)
-  double sigma = 0;        // the group's fitted sigma [m] or [px] (pixels: of the zoom)
-  double normalised = 0;   // size / sigma
+  std::string point;             // records of a point of unknown position (SPEC 7)
+  double sigma = 0;              // the group's fitted sigma [m] or [px] (pixels: of the zoom)
+  double normalised = 0;         // size / sigma
 };
 
 // Every observation, critical-region rows marked (zenith limits of `fit`).
@@ -92,8 +92,8 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
 // gross_rows) marked kGrossError with their reason; sigmas from `summary`
 // (a-posteriori, falling back to `fit`'s a-priori ones).
 std::vector<ObservationResidual> ResidualTable(const Observations& obs,
-                                               const InstrumentModel& model,
-                                               const FitOptions& fit, const FitSummary& summary,
+                                               const InstrumentModel& model, const FitOptions& fit,
+                                               const FitSummary& summary,
                                                const std::vector<ExcludedRow>& gross);
 
 // "records.csv:17" or "simulated records, row 17 (edm, phi 30.0, theta 80.0 deg, d 2 m)".

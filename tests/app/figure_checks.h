@@ -165,9 +165,9 @@ inline std::vector<Figure> CheckFiguresAgainstResidualFile(const PipelineResult&
     } else if (f.section == "maps") {
       // Fitted and critical-region rows of the map's group and zoom.
       const std::string name = f.name;
-      const std::string kind = name.find("edm") != std::string::npos      ? "edm"
+      const std::string kind = name.find("edm") != std::string::npos        ? "edm"
                                : name.find("cam_zoom") != std::string::npos ? "cam"
-                                                                           : "pixel";
+                                                                            : "pixel";
       const int zoom = kind == "edm" ? -1 : std::stoi(name.substr(name.rfind("zoom") + 4));
       int n = 0;
       for (const Row& row : rows) {
@@ -187,7 +187,8 @@ inline std::vector<Figure> CheckFiguresAgainstResidualFile(const PipelineResult&
   for (const Row& row : rows) {
     if (row.f.at("kind") == "edm" || row.f.at("status") != "fitted") continue;
     ++zooms[static_cast<int>(row.Num("zoom"))];
-    if (row.f.at("kind") == "pixel" && row.Has("shot")) ++shot_zooms[static_cast<int>(row.Num("zoom"))];
+    if (row.f.at("kind") == "pixel" && row.Has("shot"))
+      ++shot_zooms[static_cast<int>(row.Num("zoom"))];
   }
   EXPECT_EQ(image_figures, static_cast<int>(zooms.size()));
   EXPECT_GE(photo_figures, static_cast<int>(shot_zooms.size()));

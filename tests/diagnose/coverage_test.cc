@@ -67,13 +67,13 @@ TEST(Coverage, ImageGridCountsTheFittedPointsPerCell) {
     obs.pixels.push_back(p);
   };
   // Cells are 160 x 120 px: (-0.5 + 160 i, -0.5 + 120 j) starts cell (i, j).
-  add(10, 10, M_PI / 2);      // cell (0, 0), top-left ninth
-  add(1270, 10, M_PI / 2);    // cell (7, 0), top-right ninth
-  add(10, 950, M_PI / 2);     // cell (0, 7), bottom-left ninth
-  add(1270, 950, M_PI / 2);   // cell (7, 7), bottom-right ninth
+  add(10, 10, M_PI / 2);        // cell (0, 0), top-left ninth
+  add(1270, 10, M_PI / 2);      // cell (7, 0), top-right ninth
+  add(10, 950, M_PI / 2);       // cell (0, 7), bottom-left ninth
+  add(1270, 950, M_PI / 2);     // cell (7, 7), bottom-right ninth
   add(159.4, 119.4, M_PI / 2);  // still cell (0, 0): its last pixel centre
-  add(640, 480, M_PI / 2);    // cell (4, 4)
-  add(640, 480, 0.05);        // critical region: not fitted, not counted
+  add(640, 480, M_PI / 2);      // cell (4, 4)
+  add(640, 480, 0.05);          // critical region: not fitted, not counted
   const Coverage c = MeasureCoverage(obs, m, fit);
   ASSERT_EQ(c.images.size(), 1u);
   const ImageCoverage& g = c.images[0];

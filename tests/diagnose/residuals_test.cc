@@ -193,7 +193,7 @@ TEST(ResidualTable, EveryRowAsGivenWithWhatAPictureNeeds) {
   p.target = 12;
   p.corner = 3;
   p.line = 9;
-  p.X = PredictEdm(m, p.phi, p.theta, 5.0);  // on the optical axis, 5 m from the camera
+  p.X = PredictEdm(m, p.phi, p.theta, 5.0);        // on the optical axis, 5 m from the camera
   p.uv = Eigen::Vector2d(k[2] + 0.3, k[3] - 0.4);  // |r| = 0.5 px
   obs.pixels.push_back(p);
   FitSummary summary;
