@@ -868,7 +868,7 @@ Figure Histograms(const std::vector<ObservationResidual>& rows) {
   json spec = Chart("Residuals against the Gaussian of the fitted sigma (fitted rows)",
                     "bars: residual coordinates; red: the normal density of the fitted "
                     "(a-posteriori) sigma; counts beyond 4.5 sigma in the panel title");
-  spec["layout"] = Grid(3, 60, 80);
+  spec["layout"] = Grid(3, 60, 130);
   json summary = json::array();
   for (Series& s : all) {
     if (s.values.empty()) continue;
