@@ -80,4 +80,15 @@ struct CompareArgs {
 };
 int RunCompare(const CompareArgs& args);
 
+// `rtscalib show --output OUT --shot ID [--out DIR]` (app/show_command.cc):
+// one photo of a run with its corners and residual arrows, as
+// photo_<ID>.{html, vg.json, svg, png} in DIR.
+struct ShowArgs {
+  std::string output;  // the run's output folder (or one history entry)
+  std::string shot;
+  std::string out = ".";
+  bool force = false;  // allow replacing existing files
+};
+int RunShow(const ShowArgs& args);
+
 }  // namespace rtscalib::app

@@ -2,7 +2,7 @@
 // per zoom the projection difference of the two calibrations after the best
 // rotation between their camera frames, and the parameter differences with
 // their combined sigmas (libcalib/api/compare.h). Prints the text; with
-// --output also writes compare.txt, compare.json and figures/compare_zoomN.png
+// --output also writes compare.txt, compare.json and figures/compare_zoomN.{vg.json, svg, png}
 // there (never replacing a file that exists).
 #include <cmath>
 #include <cstdio>
@@ -150,7 +150,10 @@ int RunCompare(const CompareArgs& args) {
       if (z.compared) figs.push_back(DifferenceFigure(z));
     }
     std::vector<fs::path> files = {dir / "compare.txt", dir / "compare.json"};
-    for (const Figure& f : figs) files.push_back(dir / "figures" / f.name);
+    for (const Figure& f : figs) {
+      for (const char* ext : {".vg.json", ".svg", ".png"})
+        files.push_back(dir / "figures" / (f.name + ext));
+    }
     for (const fs::path& f : files) {
       std::error_code ec;
       if (fs::exists(f, ec)) {
@@ -158,15 +161,9 @@ int RunCompare(const CompareArgs& args) {
                                     "' exists; rtscalib does not overwrite files you have");
       }
     }
-    std::error_code ec;
-    fs::create_directories(dir / "figures", ec);
-    if (ec) throw WriteError((dir / "figures").string(), ec.message() + " (creating the folder)");
-    for (const Figure& f : figs) {
-      const std::vector<unsigned char> png = EncodePng(f.image);
-      WriteFileAtomic((dir / "figures" / f.name).string(),
-                      std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),
-                      Existing::kKeep);
-    }
+    std::string note;
+    WriteFigureFiles(figs, (dir / "figures").string(), &note);
+    if (!note.empty()) std::cerr << "rtscalib compare: " << note << "\n";
     WriteFileAtomic((dir / "compare.json").string(), Json(args, c).dump(2) + "\n", Existing::kKeep);
     WriteFileAtomic((dir / "compare.txt").string(), text, Existing::kKeep);
   }

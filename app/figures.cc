@@ -1,89 +1,54 @@
 #include "app/figures.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
-#include <cstdio>
+#include <filesystem>
 #include <functional>
+#include <iomanip>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
-#include <stdexcept>
+#include <string_view>
 #include <tuple>
-#include "app/coverage.h"
 
+#include "app/report_html.h"
+#include "libcalib/io/safe_write.h"
+#include "app/vega.h"
 #include "libcalib/eval/error_measures.h"
-#include "libcalib/model/kinematics.h"
 
 namespace rtscalib::app {
 namespace {
 
+namespace fs = std::filesystem;
 using nlohmann::json;
 
-const cv::Scalar kInk(40, 40, 40);
-const cv::Scalar kGrid(225, 225, 225);
-const cv::Scalar kWhite(255, 255, 255);
-const cv::Scalar kHatch(190, 190, 190);
-// Series colours (BGR): blue, orange, green, red.
-const cv::Scalar kSeries[4] = {cv::Scalar(180, 119, 31), cv::Scalar(14, 127, 255),
-                               cv::Scalar(44, 160, 44), cv::Scalar(40, 39, 214)};
-constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr double kDeg = 180.0 / M_PI;
+constexpr double kArcsec = 180.0 * 3600.0 / M_PI;
+// Display size of an image-shaped panel (the longer side), in SVG pixels.
+constexpr int kImagePanel = 640;
+// Size of the small panels of a figure with several (variables, histograms,
+// ladder), in SVG pixels. The scales of a panel (a group mark) map to it.
+constexpr int kPanelW = 260, kPanelH = 170;
+// Photos shown per zoom, worst first (rms of their fitted corners).
+constexpr int kWorstPhotosPerZoom = 2;
 
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), f, v);
-  return buf;
+// Significant digits for titles (the plots format their own numbers).
+std::string Num(double x, int digits = 3) {
+  std::ostringstream o;
+  o << std::setprecision(digits) << x;
+  return o.str();
 }
 
-// Text with alignment: h = 0 left, 1 centre, 2 right; v = 0 baseline, 1 centre, 2 top.
-void Put(cv::Mat& img, const std::string& s, cv::Point p, double scale = 0.45, int h = 0, int v = 0,
-         const cv::Scalar& color = kInk, int thickness = 1) {
-  int base = 0;
-  const cv::Size sz = cv::getTextSize(s, kFont, scale, thickness, &base);
-  const int x = p.x - (h == 1 ? sz.width / 2 : h == 2 ? sz.width : 0);
-  const int y = p.y + (v == 1 ? sz.height / 2 : v == 2 ? sz.height : 0);
-  cv::putText(img, s, cv::Point(x, y), kFont, scale, color, thickness, cv::LINE_AA);
-}
-
-// Text turned by 90 degrees (reads bottom to top), centred at p.
-void PutVertical(cv::Mat& img, const std::string& s, cv::Point p, double scale = 0.45) {
-  int base = 0;
-  const cv::Size sz = cv::getTextSize(s, kFont, scale, 1, &base);
-  cv::Mat strip(sz.height + base + 4, sz.width + 4, CV_8UC3, kWhite);
-  cv::putText(strip, s, cv::Point(2, sz.height + 1), kFont, scale, kInk, 1, cv::LINE_AA);
-  cv::Mat turned;
-  cv::rotate(strip, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
-  const cv::Rect roi(p.x - turned.cols / 2, p.y - turned.rows / 2, turned.cols, turned.rows);
-  const cv::Rect inside = roi & cv::Rect(0, 0, img.cols, img.rows);
-  if (inside.area() == 0) return;
-  turned(cv::Rect(inside.x - roi.x, inside.y - roi.y, inside.width, inside.height))
-      .copyTo(img(inside));
-}
-
-// 1, 2, 5 x 10^k steps covering [lo, hi] with about n ticks.
-std::vector<double> NiceTicks(double lo, double hi, int n) {
-  if (!(hi > lo)) return {lo};
-  const double raw = (hi - lo) / std::max(n, 1);
-  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0}) {
-    if (m * mag >= raw) {
-      step = m * mag;
-      break;
-    }
-  }
-  std::vector<double> t;
-  for (double x = std::ceil(lo / step - 1e-9) * step; x <= hi + 1e-9 * step; x += step)
-    t.push_back(std::abs(x) < 1e-12 * step ? 0.0 : x);
-  return t;
-}
-
-double NiceNumber(double x) {
-  if (!(x > 0)) return 1.0;
+// 1, 2 or 5 times a power of ten, at least x: the length a reference arrow
+// stands for.
+double NiceAbove(double x) {
+  if (!(x > 0) || !std::isfinite(x)) return 1.0;
   const double mag = std::pow(10.0, std::floor(std::log10(x)));
-  for (double m : {1.0, 2.0, 5.0, 10.0}) {
-    if (m * mag >= x * 0.999) return m * mag;
+  for (double m : {1.0, 2.0, 5.0}) {
+    if (m * mag >= x * (1 - 1e-12)) return m * mag;
   }
   return 10 * mag;
 }
@@ -91,89 +56,183 @@ double NiceNumber(double x) {
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  const size_t i = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
-  return v[i];
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
 }
 
-// A plotting area: data coordinates -> image pixels.
-struct Panel {
-  cv::Rect r;
-  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;  // y0 maps to the top when y_down, else to the bottom
-  bool y_down = false;
-  bool log_y = false;
-  cv::Point Map(double x, double y) const {
-    const double tx = (x - x0) / (x1 - x0);
-    double ty =
-        log_y ? (std::log(y) - std::log(y0)) / (std::log(y1) - std::log(y0)) : (y - y0) / (y1 - y0);
-    if (!y_down) ty = 1.0 - ty;
-    return cv::Point(static_cast<int>(std::lround(r.x + tx * r.width)),
-                     static_cast<int>(std::lround(r.y + ty * r.height)));
+bool Fitted(const ObservationResidual& o) { return o.status == ResidualStatus::kFitted; }
+
+// A Vega spec with its title; the rest is added by each figure.
+json Chart(const std::string& title, const std::string& subtitle) {
+  // One line per clause: a figure is as wide as its panels, not its text.
+  json lines = json::array();
+  size_t from = 0;
+  for (size_t at = subtitle.find("; ");; at = subtitle.find("; ", from)) {
+    lines.push_back(subtitle.substr(from, at == std::string::npos ? std::string::npos : at - from));
+    if (at == std::string::npos) break;
+    from = at + 2;
   }
+  return {{"$schema", "https://vega.github.io/schema/vega/v5.json"},
+          {"background", "white"},
+          {"padding", 10},
+          {"autosize", "pad"},
+          {"title",
+           {{"text", title},
+            {"subtitle", lines},
+            {"anchor", "start"},
+            {"fontSize", 14},
+            {"subtitleFontSize", 11},
+            {"offset", 12}}},
+          {"data", json::array()},
+          {"scales", json::array()},
+          {"axes", json::array()},
+          {"legends", json::array()},
+          {"marks", json::array()}};
+}
+
+json Linear(const std::string& name, const json& domain, const json& range, bool nice = false,
+            bool zero = false) {
+  return {{"name", name},   {"type", "linear"}, {"domain", domain},
+          {"range", range}, {"nice", nice},     {"zero", zero}};
+}
+
+json Axis(const std::string& orient, const std::string& scale, const std::string& title) {
+  return {{"orient", orient},
+          {"scale", scale},
+          {"title", title},
+          {"labelFontSize", 10},
+          {"titleFontSize", 11}};
+}
+
+// A mark of `type` drawn from `data` ("" for one item) with its `enter`
+// encoding.
+json Mark(const std::string& type, const std::string& data, json enter) {
+  json m = {{"type", type}, {"encode", {{"enter", std::move(enter)}}}};
+  if (!data.empty()) m["from"] = {{"data", data}};
+  return m;
+}
+
+// Panels (group marks) on a grid of `columns`, aligned by their plot areas
+// ("flush": the axes and titles go into the padding between them).
+json Grid(size_t columns, int row_padding, int column_padding) {
+  return {{"columns", columns},
+          {"align", "all"},
+          {"bounds", "flush"},
+          {"padding", {{"row", row_padding}, {"column", column_padding}}}};
+}
+
+// A tooltip: Vega's tooltip handler shows "key: value" per entry.
+json Tip(const std::vector<std::pair<std::string, std::string>>& entries) {
+  std::string s = "{";
+  for (size_t i = 0; i < entries.size(); ++i) {
+    std::string key;
+    for (char c : entries[i].first) key += c == '\'' ? std::string("\\'") : std::string(1, c);
+    s += (i ? ", '" : "'") + key + "': " + entries[i].second;
+  }
+  return {{"signal", s + "}"}};
+}
+
+json Field(const std::string& scale, const std::string& field) {
+  return {{"scale", scale}, {"field", field}};
+}
+
+// A line through (x, y) per series of `data` (grouped by `by`, coloured by
+// the ordinal scale `colour`), with a dot and `tooltip` on each point.
+json SeriesLines(const std::string& data, const std::string& by, const std::string& colour,
+                 const std::string& x, const std::string& y, double width, double dot,
+                 const json& tooltip, json extra_marks = json::array()) {
+  const std::string each = data + "_series";
+  json marks = std::move(extra_marks);
+  for (json& m : marks) m["from"] = {{"data", each}};
+  marks.push_back(Mark("line", each,
+                       {{"x", Field("x", x)},
+                        {"y", Field("y", y)},
+                        {"stroke", Field(colour, by)},
+                        {"strokeWidth", {{"value", width}}}}));
+  marks.push_back(Mark("symbol", each,
+                       {{"x", Field("x", x)},
+                        {"y", Field("y", y)},
+                        {"fill", Field(colour, by)},
+                        {"size", {{"value", dot}}},
+                        {"tooltip", tooltip}}));
+  return {{"type", "group"},
+          {"from", {{"facet", {{"name", each}, {"data", data}, {"groupby", by}}}}},
+          {"marks", marks}};
+}
+
+// A panel over the image part [u0, u1] x [v0, v1] (pixel coordinates:
+// u right, v down, SPEC 2), kImagePanel display pixels on its longer side;
+// `w`, `h` its display size.
+struct ImageBox {
+  double u0, u1, v0, v1;
 };
-
-void Axes(cv::Mat& img, const Panel& p, const std::vector<double>& xt,
-          const std::vector<double>& yt, const std::string& xlabel, const std::string& ylabel,
-          const char* xfmt = "%g", const char* yfmt = "%g", bool grid = true) {
-  for (double x : xt) {
-    const cv::Point a = p.Map(x, p.y0);
-    if (grid) cv::line(img, cv::Point(a.x, p.r.y), cv::Point(a.x, p.r.y + p.r.height), kGrid, 1);
-    cv::line(img, cv::Point(a.x, p.r.y + p.r.height), cv::Point(a.x, p.r.y + p.r.height + 5), kInk,
-             1);
-    Put(img, Fmt(xfmt, x), cv::Point(a.x, p.r.y + p.r.height + 8), 0.42, 1, 2);
-  }
-  for (double y : yt) {
-    const cv::Point a = p.Map(p.x0, y);
-    if (grid) cv::line(img, cv::Point(p.r.x, a.y), cv::Point(p.r.x + p.r.width, a.y), kGrid, 1);
-    cv::line(img, cv::Point(p.r.x - 5, a.y), cv::Point(p.r.x, a.y), kInk, 1);
-    Put(img, Fmt(yfmt, y), cv::Point(p.r.x - 8, a.y), 0.42, 2, 1);
-  }
-  cv::rectangle(img, p.r, kInk, 1);
-  Put(img, xlabel, cv::Point(p.r.x + p.r.width / 2, p.r.y + p.r.height + 30), 0.48, 1, 2);
-  if (!ylabel.empty())
-    PutVertical(img, ylabel, cv::Point(p.r.x - 52, p.r.y + p.r.height / 2), 0.48);
+void ImageScales(json* spec, const ImageBox& box, int* w, int* h) {
+  const double s = kImagePanel / std::max(box.u1 - box.u0, box.v1 - box.v0);
+  *w = static_cast<int>(std::lround((box.u1 - box.u0) * s));
+  *h = static_cast<int>(std::lround((box.v1 - box.v0) * s));
+  (*spec)["width"] = *w;
+  (*spec)["height"] = *h;
+  (*spec)["scales"].push_back(Linear("u", {box.u0, box.u1}, {0, *w}));
+  (*spec)["scales"].push_back(Linear("v", {box.v0, box.v1}, {0, *h}));
+  json ax = Axis("bottom", "u", "u [px]");
+  ax["tickCount"] = 8;
+  (*spec)["axes"].push_back(ax);
+  json ay = Axis("left", "v", "v [px]");
+  ay["tickCount"] = 6;
+  (*spec)["axes"].push_back(ay);
+}
+// The whole image.
+void ImageScales(json* spec, int width, int height, int* w, int* h) {
+  ImageScales(spec, {-0.5, width - 0.5, -0.5, height - 0.5}, w, h);
 }
 
-cv::Mat ViridisLut() {
-  cv::Mat ramp(256, 1, CV_8UC1);
-  for (int i = 0; i < 256; ++i) ramp.at<uchar>(i) = static_cast<uchar>(i);
-  cv::Mat lut;
-  cv::applyColorMap(ramp, lut, cv::COLORMAP_VIRIDIS);
-  return lut;
+// Arrow marks over an image: a rule from (u, v) to (tip_u, tip_v) and a
+// wedge at the tip, both from `data`; `tooltip` on both.
+void Arrows(json* marks, const std::string& data, const std::string& colour, const json& tooltip) {
+  marks->push_back(Mark("rule", data,
+                        {{"x", Field("u", "u")},
+                         {"y", Field("v", "v")},
+                         {"x2", Field("u", "tip_u")},
+                         {"y2", Field("v", "tip_v")},
+                         {"stroke", {{"value", colour}}},
+                         {"strokeWidth", {{"value", 1.6}}},
+                         {"tooltip", tooltip}}));
+  marks->push_back(Mark("symbol", data,
+                        {{"x", Field("u", "tip_u")},
+                         {"y", Field("v", "tip_v")},
+                         {"shape", {{"value", "wedge"}}},
+                         {"angle", {{"field", "angle"}}},
+                         {"size", {{"value", 40}}},
+                         {"fill", {{"value", colour}}},
+                         {"tooltip", tooltip}}));
 }
 
-cv::Scalar ColourOf(const cv::Mat& lut, double t) {
-  const int i = std::clamp(static_cast<int>(std::lround(255 * t)), 0, 255);
-  const cv::Vec3b c = lut.at<cv::Vec3b>(i);
-  return cv::Scalar(c[0], c[1], c[2]);
-}
-
-void ColourBar(cv::Mat& img, const cv::Mat& lut, cv::Rect r, double vmax,
-               const std::string& label) {
-  for (int y = 0; y < r.height; ++y) {
-    const double t = 1.0 - static_cast<double>(y) / std::max(r.height - 1, 1);
-    cv::line(img, cv::Point(r.x, r.y + y), cv::Point(r.x + r.width, r.y + y), ColourOf(lut, t), 1);
-  }
-  cv::rectangle(img, r, kInk, 1);
-  for (double v : NiceTicks(0, vmax, 5)) {
-    const int y = r.y + r.height - static_cast<int>(std::lround(v / vmax * r.height));
-    cv::line(img, cv::Point(r.x + r.width, y), cv::Point(r.x + r.width + 4, y), kInk, 1);
-    Put(img, Fmt("%g", v), cv::Point(r.x + r.width + 7, y), 0.4, 0, 1);
-  }
-  PutVertical(img, label, cv::Point(r.x + r.width + 58, r.y + r.height / 2), 0.45);
-}
-
-void Hatch(cv::Mat& img, cv::Rect r) {
-  r &= cv::Rect(0, 0, img.cols, img.rows);
-  if (r.area() <= 0) return;
-  cv::Mat roi = img(r);
-  roi = cv::Scalar(240, 240, 240);
-  for (int k = -r.height; k < r.width; k += 8) {
-    cv::line(roi, cv::Point(k, r.height), cv::Point(k + r.height, 0), kHatch, 1, cv::LINE_AA);
-  }
+// The reference arrow of a figure, above the panel's top right corner:
+// `length` display pixels, labelled with the residual it stands for.
+void ScaleBar(json* marks, double length, const std::string& text, int w) {
+  marks->push_back(Mark("rule", "",
+                        {{"x", {{"value", w - length}}},
+                         {"x2", {{"value", w}}},
+                         {"y", {{"value", -8}}},
+                         {"stroke", {{"value", "#c0392b"}}},
+                         {"strokeWidth", {{"value", 2}}}}));
+  marks->push_back(Mark("symbol", "",
+                        {{"x", {{"value", w}}},
+                         {"y", {{"value", -8}}},
+                         {"shape", {{"value", "wedge"}}},
+                         {"angle", {{"value", 90}}},
+                         {"size", {{"value", 40}}},
+                         {"fill", {{"value", "#c0392b"}}}}));
+  marks->push_back(Mark("text", "",
+                        {{"x", {{"value", w - length - 6}}},
+                         {"y", {{"value", -8}}},
+                         {"align", {{"value", "right"}}},
+                         {"baseline", {{"value", "middle"}}},
+                         {"fontSize", {{"value", 11}}},
+                         {"text", {{"value", text}}}}));
 }
 
 // ---------------------------------------------------------------------------
-// Error maps.
+// Error maps: rms of |observed - model| per pointing and face.
 
 struct MapSource {
   std::string key, title, unit;
@@ -182,385 +241,809 @@ struct MapSource {
   int zoom = 0;
 };
 
-Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& res,
+Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& rows,
                 const std::set<int>& faces, const FitOptions& fit, const std::string& model) {
-  // rms of |residual| per pointing and face.
   std::map<std::tuple<int, double, double>, std::pair<double, int>> cells;
-  std::set<double> phis, thetas;
-  for (const ObservationResidual& o : res) {
-    if (!o.valid || o.group != src.group || (src.group != ObsGroup::kEdm && o.zoom != src.zoom))
+  std::map<int, std::set<long>> phis, thetas;
+  for (const ObservationResidual& o : rows) {
+    // Fitted and critical-region rows: the map shows where the model fails,
+    // in the critical regions too (shaded).
+    if (!o.valid || o.status == ResidualStatus::kGrossError || o.group != src.group ||
+        (src.group != ObsGroup::kEdm && o.zoom != src.zoom))
       continue;
-    auto& c = cells[{o.face, o.phi, o.theta}];
+    const double phi = std::fmod(std::fmod(o.phi * kDeg, 360.0) + 360.0, 360.0);
+    auto& c = cells[{o.face, phi, o.theta * kDeg}];
     c.first += o.size * o.size;
     ++c.second;
-    phis.insert(std::round(o.phi * 1e4));
-    thetas.insert(std::round(ZenithOf(o.theta) * 1e4));
+    phis[o.face].insert(std::lround(phi * 100));
+    thetas[o.face].insert(std::lround(o.theta * kDeg * 100));
   }
-  std::vector<double> values;
-  for (const auto& [k, c] : cells) values.push_back(std::sqrt(c.first / c.second) * src.scale);
-  const double vmax = NiceNumber(std::max(Percentile(values, 0.98), 1e-12));
-
-  const int panel_w = 430, panel_h = 300, left = 80, top = 84, gap = 90;
-  const int n = static_cast<int>(faces.size());
-  cv::Mat img(top + panel_h + 70, left + n * panel_w + (n - 1) * gap + 140, CV_8UC3, kWhite);
-  Put(img, src.title + ": rms error per pointing [" + src.unit + "]", cv::Point(left, 26), 0.6, 0,
-      0, kInk, 1);
-  Put(img,
-      "model " + model +
-          "; hatched: critical regions (not fitted); same colour scale for both faces",
-      cv::Point(left, 48), 0.42);
-  const cv::Mat lut = ViridisLut();
-  const int cell_w = std::clamp(panel_w / std::max<int>(phis.size(), 8), 6, 28);
-  const int cell_h = std::clamp(panel_h / std::max<int>(thetas.size(), 6), 6, 28);
-  int i = 0;
+  json values = json::array();
+  std::vector<double> rms;
+  for (const auto& [k, c] : cells) {
+    const double v = std::sqrt(c.first / c.second) * src.scale;
+    rms.push_back(v);
+    values.push_back({{"face", std::get<0>(k)},
+                      {"phi", std::get<1>(k)},
+                      {"theta", std::get<2>(k)},
+                      {"rms", v},
+                      {"n", c.second}});
+  }
+  const double vmax = std::max(Percentile(rms, 0.98), 1e-12);
+  json spec = Chart(src.title + ": rms error per pointing [" + src.unit + "]",
+                    "model " + model +
+                        "; grey bands: critical regions (not fitted); one colour scale for both "
+                        "faces; cells beyond the scale outlined red");
+  spec["data"].push_back({{"name", "cells"}, {"values", values}});
+  spec["scales"].push_back({{"name", "colour"},
+                            {"type", "linear"},
+                            {"scheme", "viridis"},
+                            {"domain", {0, vmax}},
+                            {"clamp", true},
+                            {"nice", true}});
+  spec["legends"].push_back(
+      {{"fill", "colour"}, {"title", "rms [" + src.unit + "]"}, {"type", "gradient"}});
+  spec["layout"] = Grid(faces.size(), 60, 90);
+  const int w = 420, h = 280;
+  const double zmin = fit.min_zenith_rad * kDeg, zmax = fit.max_zenith_rad * kDeg;
   for (int face : faces) {
-    Panel p;
-    p.r = cv::Rect(left + i * (panel_w + gap), top, panel_w, panel_h);
-    p.x0 = 0;
-    p.x1 = 360;
-    p.y_down = true;
-    if (face == 1) {
-      p.y0 = 0;
-      p.y1 = 180;
-    } else {
-      p.y0 = 360;
-      p.y1 = 180;
-    }
-    // Critical regions: zenith below min or above max (SPEC 1), in readings of this face.
-    const double zmin = fit.min_zenith_rad * 180 / M_PI, zmax = fit.max_zenith_rad * 180 / M_PI;
-    auto band = [&](double t_a, double t_b) {
-      const cv::Point a = p.Map(0, t_a), b = p.Map(360, t_b);
-      Hatch(img, cv::Rect(cv::Point(a.x, std::min(a.y, b.y)), cv::Point(b.x, std::max(a.y, b.y))));
-    };
-    if (face == 1) {
-      band(0, zmin);
-      band(zmax, 180);
-    } else {
-      band(360 - zmin, 360);
-      band(180, 360 - zmax);
-    }
-    Axes(img, p, NiceTicks(0, 360, 8),
-         face == 1 ? NiceTicks(0, 180, 6) : std::vector<double>{180, 210, 240, 270, 300, 330, 360},
-         "phi [deg]", "theta [deg] (zenith at the top)", "%g", "%g", false);
-    for (const auto& [k, c] : cells) {
-      if (std::get<0>(k) != face) continue;
-      const double v = std::sqrt(c.first / c.second) * src.scale;
-      const cv::Point m = p.Map(std::get<1>(k) * 180 / M_PI, std::get<2>(k) * 180 / M_PI);
-      const cv::Rect box(m.x - cell_w / 2, m.y - cell_h / 2, cell_w, cell_h);
-      cv::rectangle(img, box, ColourOf(lut, std::min(v / vmax, 1.0)), cv::FILLED);
-      if (v > vmax) cv::rectangle(img, box, cv::Scalar(0, 0, 200), 1);
-    }
-    cv::rectangle(img, p.r, kInk, 1);
-    Put(img, "face " + std::to_string(face), cv::Point(p.r.x + p.r.width / 2, p.r.y - 6), 0.5, 1,
-        0);
-    ++i;
+    const std::string data = "face" + std::to_string(face);
+    spec["data"].push_back(
+        {{"name", data},
+         {"source", "cells"},
+         {"transform", {{{"type", "filter"}, {"expr", "datum.face == " + std::to_string(face)}}}}});
+    const int cw = std::clamp(w / std::max<int>(phis[face].size(), 8), 6, 28);
+    const int ch = std::clamp(h / std::max<int>(thetas[face].size(), 6), 6, 28);
+    // Readings of this face (SPEC 1): face 2's zenith angle z is read 360 - z;
+    // zenith at the top in both.
+    const json domain = face == 1 ? json{0, 180} : json{360, 180};
+    const json bands = face == 1
+                           ? json{{{"a", 0}, {"b", zmin}}, {{"a", zmax}, {"b", 180}}}
+                           : json{{{"a", 360 - zmin}, {"b", 360}}, {{"a", 180}, {"b", 360 - zmax}}};
+    json ay = Axis("left", "y", "theta [deg] (zenith at the top)");
+    json ax = Axis("bottom", "x", "phi [deg]");
+    ax["values"] = {0, 45, 90, 135, 180, 225, 270, 315, 360};
+    json group = {
+        {"type", "group"},
+        {"title", {{"text", "face " + std::to_string(face)}, {"fontSize", 12}}},
+        {"encode",
+         {{"enter",
+           {{"width", {{"value", w}}},
+            {"height", {{"value", h}}},
+            {"stroke", {{"value", "#888"}}}}}}},
+        {"data", {{{"name", "bands"}, {"values", bands}}}},
+        {"scales", {Linear("x", {0, 360}, {0, w}), Linear("y", domain, {0, h})}},
+        {"axes", {ax, ay}},
+        {"marks",
+         {Mark("rect", "bands",
+               {{"x", {{"value", 0}}},
+                {"x2", {{"value", w}}},
+                {"y", Field("y", "a")},
+                {"y2", Field("y", "b")},
+                {"fill", {{"value", "#dddddd"}}}}),
+          Mark("rect", data,
+               {{"xc", Field("x", "phi")},
+                {"yc", Field("y", "theta")},
+                {"width", {{"value", cw}}},
+                {"height", {{"value", ch}}},
+                {"fill", Field("colour", "rms")},
+                {"stroke",
+                 {{"signal", "datum.rms > " + std::to_string(vmax) + " ? '#d62728' : null"}}},
+                {"tooltip", Tip({{"face", "datum.face"},
+                                 {"phi [deg]", "format(datum.phi, '.2f')"},
+                                 {"theta [deg]", "format(datum.theta, '.2f')"},
+                                 {"rms [" + src.unit + "]", "format(datum.rms, '.3g')"},
+                                 {"observations", "datum.n"}})}})}}};
+    spec["marks"].push_back(group);
   }
-  ColourBar(img, lut, cv::Rect(img.cols - 120, top, 18, panel_h), vmax,
-            "rms error [" + src.unit + "]");
   Figure f;
-  f.name = "error_map_" + src.key + ".png";
+  f.name = "error_map_" + src.key;
   f.section = "maps";
   f.title = src.title;
-  f.caption = "Root mean square of the observed-minus-model point error at each pointing (" +
-              src.unit +
-              "), for every observation including the critical regions. Cells outlined in red "
-              "exceed the scale.";
-  f.image = img;
+  f.caption = "Root mean square of the observed-minus-model error (" + src.unit +
+              ") at each pointing, from the residual table at the final model (boards and points "
+              "of unknown position at their estimates), for the fitted rows and the critical "
+              "regions (grey, not fitted); gross errors are left out.";
+  f.spec = spec;
+  f.summary = {{"pointings", cells.size()}, {"colour_max", vmax}, {"unit", src.unit}};
   return f;
 }
 
 // ---------------------------------------------------------------------------
-// Image-space residual arrows.
+// Image residuals per zoom: the fitted pixel rows binned over the image.
 
-Figure ImageArrows(int zoom, const PipelineResult& r) {
-  const CameraTool& cam = r.calibration.model.cams[zoom];
-  struct Arrow {
-    double u, v, du, dv;
-    int n;
+Figure ImageResiduals(int zoom, const CameraTool& cam,
+                      const std::vector<ObservationResidual>& rows) {
+  const int nx = 16;
+  const int ny = std::max(1, static_cast<int>(std::lround(nx * double(cam.height) / cam.width)));
+  struct Cell {
+    double du = 0, dv = 0;
+    int n = 0;
   };
-  std::vector<Arrow> raw;
-  const double zmin = r.calibration.fit_options.min_zenith_rad,
-               zmax = r.calibration.fit_options.max_zenith_rad;
-  for (const PixelObservation& p : r.obs.pixels) {
-    if (p.zoom != zoom || InCriticalRegion(p.theta, zmin, zmax)) continue;
-    Eigen::Vector2d pred;
-    if (!PredictPixel(r.calibration.model, zoom, p.phi, p.theta, p.X, &pred)) continue;
-    raw.push_back({p.uv.x(), p.uv.y(), p.uv.x() - pred.x(), p.uv.y() - pred.y(), 1});
-  }
-  for (const Record& rec : r.obs.records) {
-    if (rec.tool != Tool::kCam || rec.zoom != zoom || InCriticalRegion(rec.theta, zmin, zmax))
+  std::vector<Cell> cells(nx * ny);
+  double ss = 0;
+  int n = 0, records = 0;
+  for (const ObservationResidual& o : rows) {
+    // Fitted image observations: pixels and camera records of this zoom.
+    if (!Fitted(o) || o.group == ObsGroup::kEdm || o.zoom != zoom ||
+        !std::isfinite(o.image_delta.x()))
       continue;
-    Eigen::Vector2d pred;
-    if (!PredictPixel(r.calibration.model, zoom, rec.phi, rec.theta, rec.x, &pred)) continue;
-    raw.push_back({rec.u, rec.v, rec.u - pred.x(), rec.v - pred.y(), 1});
-  }
-  // Mean per image cell (16 x 12): the systematic part a person can read.
-  const int nx = 16, ny = 12;
-  std::map<std::pair<int, int>, Arrow> cells;
-  for (const Arrow& a : raw) {
-    const int cx = std::clamp(static_cast<int>(a.u / cam.width * nx), 0, nx - 1);
-    const int cy = std::clamp(static_cast<int>(a.v / cam.height * ny), 0, ny - 1);
-    Arrow& c = cells[{cx, cy}];
-    c.u += a.u;
-    c.v += a.v;
-    c.du += a.du;
-    c.dv += a.dv;
+    const int i = std::clamp(static_cast<int>((o.u + 0.5) / cam.width * nx), 0, nx - 1);
+    const int j = std::clamp(static_cast<int>((o.v + 0.5) / cam.height * ny), 0, ny - 1);
+    Cell& c = cells[j * nx + i];
+    c.du += o.image_delta.x();
+    c.dv += o.image_delta.y();
     ++c.n;
+    ss += o.image_delta.squaredNorm();
+    ++n;
+    records += o.group == ObsGroup::kCam;
   }
-  std::vector<Arrow> arrows;
+  const double rms = n ? std::sqrt(ss / n) : 0;
   std::vector<double> lengths;
-  for (auto& [k, c] : cells) {
-    arrows.push_back({c.u / c.n, c.v / c.n, c.du / c.n, c.dv / c.n, c.n});
-    lengths.push_back(std::hypot(c.du / c.n, c.dv / c.n));
+  for (const Cell& c : cells) {
+    if (c.n) lengths.push_back(std::hypot(c.du / c.n, c.dv / c.n));
   }
-  const int left = 70, top = 64;
-  const double fit_scale = std::min(640.0 / cam.width, 480.0 / cam.height);
-  const int w = static_cast<int>(cam.width * fit_scale),
-            h = static_cast<int>(cam.height * fit_scale);
-  cv::Mat img(top + h + 90, left + w + 40, CV_8UC3, kWhite);
-  Put(img,
-      "Image residuals, zoom " + std::to_string(zoom) +
-          ": observed - predicted pixel, mean per cell",
-      cv::Point(left, 26), 0.6);
-  Put(img,
-      std::to_string(raw.size()) +
-          " observations outside the critical regions (image points and camera records), " +
-          std::to_string(arrows.size()) + " cells",
-      cv::Point(left, 48), 0.42);
-  Panel p;
-  p.r = cv::Rect(left, top, w, h);
-  p.x0 = 0;
-  p.x1 = cam.width;
-  p.y0 = 0;
-  p.y1 = cam.height;
-  p.y_down = true;
-  Axes(img, p, NiceTicks(0, cam.width, 6), NiceTicks(0, cam.height, 5), "u [px]", "v [px]");
-  const double p95 = Percentile(lengths, 0.95);
-  const double bar = NiceNumber(std::max(p95, 1e-6));
-  const double px_per_unit =
-      0.08 * w / bar;  // a bar-sized residual is drawn 8% of the image width long
-  for (const Arrow& a : arrows) {
-    const cv::Point from = p.Map(a.u, a.v);
-    const cv::Point to(static_cast<int>(from.x + a.du * px_per_unit),
-                       static_cast<int>(from.y + a.dv * px_per_unit));
-    cv::circle(img, from, 2, kSeries[0], cv::FILLED, cv::LINE_AA);
-    if (from != to) cv::arrowedLine(img, from, to, kSeries[3], 2, cv::LINE_AA, 0, 0.25);
+  // The reference arrow: a round residual near the longest cell means (the
+  // 90th percentile, so that one cell of few points does not set it), drawn
+  // 0.9 cell widths long.
+  const double reference_px = NiceAbove(Percentile(lengths, 0.9));
+  const double cell_w = double(cam.width) / nx;
+  const double gain = 0.9 * cell_w / reference_px;
+  json values = json::array();
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const Cell& c = cells[j * nx + i];
+      const double u0 = i * cam.width / double(nx) - 0.5,
+                   u1 = (i + 1) * cam.width / double(nx) - 0.5;
+      const double v0 = j * cam.height / double(ny) - 0.5,
+                   v1 = (j + 1) * cam.height / double(ny) - 0.5;
+      json cell = {{"i", i}, {"j", j}, {"u0", u0}, {"u1", u1}, {"v0", v0}, {"v1", v1}, {"n", c.n}};
+      if (c.n) {
+        const double du = c.du / c.n, dv = c.dv / c.n;
+        const double u = 0.5 * (u0 + u1), v = 0.5 * (v0 + v1);
+        cell.update({{"du", du},
+                     {"dv", dv},
+                     {"u", u},
+                     {"v", v},
+                     {"tip_u", u + gain * du},
+                     {"tip_v", v + gain * dv},
+                     {"angle", std::atan2(du, -dv) * kDeg}});
+      }
+      values.push_back(cell);
+    }
   }
-  // Scale bar below the image.
-  const cv::Point a(left, top + h + 62),
-      b(left + static_cast<int>(bar * px_per_unit), top + h + 62);
-  cv::arrowedLine(img, a, b, kSeries[3], 2, cv::LINE_AA, 0, 0.25);
-  Put(img, Fmt("%g px", bar), cv::Point(b.x + 10, b.y), 0.48, 0, 1);
+  json spec = Chart("Image residuals, zoom " + std::to_string(zoom) +
+                        ": mean observed - predicted pixel per cell",
+                    std::to_string(n - records) + " fitted image points and " +
+                        std::to_string(records) + " camera records, rms " + Num(rms) +
+                        " px; arrow: " + Num(reference_px) + " px residual = " + Num(0.9) +
+                        " cell widths; cell colour and number: points per cell");
+  int w = 0, h = 0;
+  ImageScales(&spec, cam.width, cam.height, &w, &h);
+  spec["data"].push_back({{"name", "cells"}, {"values", values}});
+  spec["data"].push_back({{"name", "arrows"},
+                          {"source", "cells"},
+                          {"transform", {{{"type", "filter"}, {"expr", "datum.n > 0"}}}}});
+  spec["scales"].push_back({{"name", "count"},
+                            {"type", "sqrt"},
+                            {"domain", {{"data", "cells"}, {"field", "n"}}},
+                            {"zero", true},
+                            {"range", {"#ffffff", "#6baed6"}}});
+  json& marks = spec["marks"];
+  const json tip = Tip({{"cell", "datum.i + ', ' + datum.j"},
+                        {"points", "datum.n"},
+                        {"mean du [px]", "format(datum.du, '.4f')"},
+                        {"mean dv [px]", "format(datum.dv, '.4f')"}});
+  marks.push_back(Mark("rect", "cells",
+                       {{"x", Field("u", "u0")},
+                        {"x2", Field("u", "u1")},
+                        {"y", Field("v", "v0")},
+                        {"y2", Field("v", "v1")},
+                        {"fill", Field("count", "n")},
+                        {"stroke", {{"value", "#e4e4e4"}}},
+                        {"tooltip", tip}}));
+  // The corner ninths of the image: the distortion needs points there.
+  json ninths = json::array();
+  for (int k = 1; k < 3; ++k) {
+    ninths.push_back({{"u0", k * cam.width / 3.0 - 0.5},
+                      {"u1", k * cam.width / 3.0 - 0.5},
+                      {"v0", -0.5},
+                      {"v1", cam.height - 0.5}});
+    ninths.push_back({{"u0", -0.5},
+                      {"u1", cam.width - 0.5},
+                      {"v0", k * cam.height / 3.0 - 0.5},
+                      {"v1", k * cam.height / 3.0 - 0.5}});
+  }
+  spec["data"].push_back({{"name", "ninths"}, {"values", ninths}});
+  marks.push_back(Mark("rule", "ninths",
+                       {{"x", Field("u", "u0")},
+                        {"x2", Field("u", "u1")},
+                        {"y", Field("v", "v0")},
+                        {"y2", Field("v", "v1")},
+                        {"stroke", {{"value", "#999"}}},
+                        {"strokeDash", {{"value", {4, 4}}}}}));
+  marks.push_back(Mark("text", "arrows",
+                       {{"x", {{"scale", "u"}, {"field", "u0"}, {"offset", 2}}},
+                        {"y", {{"scale", "v"}, {"field", "v1"}, {"offset", -2}}},
+                        {"fontSize", {{"value", 8}}},
+                        {"fill", {{"value", "#555"}}},
+                        {"text", {{"field", "n"}}}}));
+  Arrows(&marks, "arrows", "#c0392b", tip);
+  ScaleBar(&marks, 0.9 * cell_w * w / cam.width, Num(reference_px) + " px", w);
   Figure f;
-  f.name = "image_residuals_zoom" + std::to_string(zoom) + ".png";
+  f.name = "image_residuals_zoom" + std::to_string(zoom);
   f.section = "image";
   f.title = "Image residuals, zoom " + std::to_string(zoom);
   f.caption =
-      "Observed minus predicted pixel of every image point and camera record of this zoom, "
-      "averaged per "
-      "image cell; the scale bar gives the arrow length of " +
-      Fmt("%g", bar) + " px. A radial or swirling pattern is a missing distortion term.";
-  f.image = img;
+      "The fitted image observations of this zoom (image points and camera records; residual "
+      "table, final model, boards at their estimated poses), binned over the image: each arrow is "
+      "the mean observed-minus-predicted "
+      "pixel of its cell, drawn at the scale the red reference arrow states; the number is the "
+      "cell's points. A pattern of arrows is a model error (distortion, a principal point, a "
+      "tool); random arrows shorter than the rms are noise. Empty corner ninths (dashed) mean "
+      "the distortion is extrapolated there.";
+  f.spec = spec;
+  f.summary = {{"zoom", zoom},
+               {"fitted_rows", n},
+               {"camera_records", records},
+               {"rms_px", rms},
+               {"arrow_scale_px", reference_px},
+               {"cells", {nx, ny}}};
   return f;
 }
 
 // ---------------------------------------------------------------------------
-// Histograms against the fitted Gaussian.
+// A photo with its corners and residual arrows.
 
-struct Series {
-  std::string title, unit;
-  std::vector<double> values;  // in `unit`
-  double sigma = 0;            // fitted, in `unit`
-};
-
-void HistogramPanel(cv::Mat& img, cv::Rect area, const Series& s) {
-  const int bins = 36;
-  const double range = 4.5 * s.sigma;
-  std::vector<int> counts(bins, 0);
-  int outside = 0;
-  for (double v : s.values) {
-    if (std::abs(v) >= range) {
-      ++outside;
-      continue;
-    }
-    counts[std::clamp(static_cast<int>((v + range) / (2 * range) * bins), 0, bins - 1)]++;
-  }
-  const double width = 2 * range / bins;
-  double peak = 1;
-  for (int c : counts) peak = std::max(peak, static_cast<double>(c));
-  const double gauss_peak = s.values.size() * width / (std::sqrt(2 * M_PI) * s.sigma);
-  peak = std::max(peak, gauss_peak) * 1.1;
-  Panel p;
-  p.r = area;
-  p.x0 = -range;
-  p.x1 = range;
-  p.y0 = 0;
-  p.y1 = peak;
-  Axes(img, p, NiceTicks(-range, range, 6), NiceTicks(0, peak, 4), "residual [" + s.unit + "]",
-       "count", "%g", "%g");
-  for (int i = 0; i < bins; ++i) {
-    const cv::Point a = p.Map(-range + i * width, counts[i]),
-                    b = p.Map(-range + (i + 1) * width, 0);
-    cv::rectangle(img, cv::Rect(a, b), cv::Scalar(215, 180, 140), cv::FILLED);
-    cv::rectangle(img, cv::Rect(a, b), cv::Scalar(160, 120, 80), 1);
-  }
-  cv::Point last;
-  for (int k = 0; k <= 200; ++k) {
-    const double x = -range + 2 * range * k / 200;
-    const double y = s.values.size() * width * std::exp(-0.5 * x * x / (s.sigma * s.sigma)) /
-                     (std::sqrt(2 * M_PI) * s.sigma);
-    const cv::Point q = p.Map(x, y);
-    if (k > 0) cv::line(img, last, q, kSeries[3], 2, cv::LINE_AA);
-    last = q;
-  }
-  cv::rectangle(img, p.r, kInk, 1);
-  double ss = 0;
-  for (double v : s.values) ss += v * v;
-  const double rms = s.values.empty() ? 0 : std::sqrt(ss / s.values.size());
-  Put(img, s.title, cv::Point(area.x + area.width / 2, area.y - 24), 0.5, 1, 0);
-  Put(img,
-      "fitted sigma " + Fmt("%.3g", s.sigma) + ", rms " + Fmt("%.3g", rms) + " " + s.unit + ", n " +
-          std::to_string(s.values.size()) + ", beyond 4.5 sigma: " + std::to_string(outside),
-      cv::Point(area.x + area.width / 2, area.y - 7), 0.38, 1, 0);
+// The part `box` of a photo (pixels at full resolution, then at most the
+// panel's size: a photo's pixels beyond what is shown only make report.html
+// heavier), as a data URI; *crop: the image part it shows.
+std::string PhotoDataUri(const cv::Mat& photo, const ImageBox& box, ImageBox* crop) {
+  const int x0 = std::clamp(static_cast<int>(std::floor(box.u0 + 0.5)), 0, photo.cols - 1);
+  const int y0 = std::clamp(static_cast<int>(std::floor(box.v0 + 0.5)), 0, photo.rows - 1);
+  const int x1 = std::clamp(static_cast<int>(std::ceil(box.u1 + 0.5)), x0 + 1, photo.cols);
+  const int y1 = std::clamp(static_cast<int>(std::ceil(box.v1 + 0.5)), y0 + 1, photo.rows);
+  *crop = {x0 - 0.5, x1 - 0.5, y0 - 0.5, y1 - 0.5};
+  cv::Mat img = photo(cv::Rect(x0, y0, x1 - x0, y1 - y0));
+  const double s = static_cast<double>(kImagePanel) / std::max(img.cols, img.rows);
+  if (s < 1) cv::resize(img, img, cv::Size(), s, s, cv::INTER_AREA);
+  std::vector<unsigned char> jpg;
+  if (!cv::imencode(".jpg", img, jpg, {cv::IMWRITE_JPEG_QUALITY, 85})) return "";
+  return "data:image/jpeg;base64," + Base64(jpg);
 }
 
-Figure Histograms(const PipelineResult& r) {
-  const Diagnosis& d = *r.calibration.diagnosis;
-  Series edm{"EDM points (x, y, z)", "mm", {}, d.sigma[0] * 1e3};
-  Series cam{"camera points (x, y, z)", "mm", {}, d.sigma[1] * 1e3};
-  Series px{"image points (u, v)", "px", {}, d.sigma[2]};
-  for (const ObservationResidual& o : d.residuals) {
-    if (!o.valid || o.critical) continue;
-    if (o.group == ObsGroup::kPixel) {
-      px.values.push_back(o.delta.x());
-      px.values.push_back(o.delta.y());
-    } else {
-      Series& s = o.group == ObsGroup::kEdm ? edm : cam;
-      for (int k = 0; k < 3; ++k) s.values.push_back(o.delta[k] * 1e3);
+}  // namespace
+
+Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidual>& rows,
+                   const std::string& image, int width, int height) {
+  const cv::Mat photo = image.empty() ? cv::Mat() : cv::imread(image, cv::IMREAD_COLOR);
+  if (!photo.empty()) {
+    width = photo.cols;
+    height = photo.rows;
+  }
+  std::vector<double> sizes;
+  double ss = 0;
+  int zoom = rows.empty() ? 0 : rows.front().zoom, fitted = 0;
+  for (const ObservationResidual& o : rows) {
+    if (!Fitted(o)) continue;
+    sizes.push_back(o.size);
+    ss += o.size * o.size;
+    ++fitted;
+  }
+  const double rms = fitted ? std::sqrt(ss / fitted) : 0;
+  // The reference arrow: a round residual near the largest (95th
+  // percentile) drawn 40 image pixels long per the panel's 640.
+  const double reference_px = NiceAbove(Percentile(sizes, 0.95));
+  // Zoomed to the corners (a fifth of their extent around them, at least a
+  // third of the image, the image's aspect), so that arrows of a fraction of
+  // a pixel are seen where they are.
+  double u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
+  for (const ObservationResidual& o : rows) {
+    u0 = std::min(u0, o.u);
+    u1 = std::max(u1, o.u);
+    v0 = std::min(v0, o.v);
+    v1 = std::max(v1, o.v);
+  }
+  const double aspect = double(height) / width;
+  double half_u = std::max({0.6 * (u1 - u0), 0.6 * (v1 - v0) / aspect, width / 6.0});
+  half_u = std::min(half_u, width / 2.0);
+  const double half_v = half_u * aspect;
+  const double cu = std::clamp(0.5 * (u0 + u1), half_u - 0.5, width - 0.5 - half_u);
+  const double cv = std::clamp(0.5 * (v0 + v1), half_v - 0.5, height - 0.5 - half_v);
+  const ImageBox box = rows.empty() ? ImageBox{-0.5, width - 0.5, -0.5, height - 0.5}
+                                    : ImageBox{cu - half_u, cu + half_u, cv - half_v, cv + half_v};
+  // The reference arrow is 40 display pixels long.
+  const double drawn = 40.0 * std::max(box.u1 - box.u0, box.v1 - box.v0) / kImagePanel;
+  const double gain = drawn / reference_px;
+  json corners = json::array();
+  for (const ObservationResidual& o : rows) {
+    json c = {{"target", o.target},
+              {"corner", o.corner},
+              {"u", o.u},
+              {"v", o.v},
+              {"status", ResidualStatusName(o.status)},
+              {"line", o.line}};
+    if (o.valid) {
+      c.update({{"du", o.delta.x()},
+                {"dv", o.delta.y()},
+                {"r", o.size},
+                {"nr", o.normalised},
+                {"tip_u", o.u + gain * o.delta.x()},
+                {"tip_v", o.v + gain * o.delta.y()},
+                {"angle", std::atan2(o.delta.x(), -o.delta.y()) * kDeg}});
+    }
+    corners.push_back(c);
+  }
+  json spec = Chart("Photo " + shot + " (zoom " + std::to_string(zoom) + "): corners and residuals",
+                    std::to_string(fitted) + " fitted corners, rms " + Num(rms) +
+                        " px; arrows from each observed corner along observed - predicted, " +
+                        Num(reference_px) + " px residual = the red reference arrow" +
+                        (photo.empty() ? "; photo not found, corners only" : ""));
+  int w = 0, h = 0;
+  ImageScales(&spec, box, &w, &h);
+  ImageBox crop{};
+  const std::string uri = photo.empty() ? "" : PhotoDataUri(photo, box, &crop);
+  spec["data"].push_back({{"name", "corners"}, {"values", corners}});
+  spec["data"].push_back(
+      {{"name", "arrows"},
+       {"source", "corners"},
+       {"transform", {{{"type", "filter"}, {"expr", "datum.status == 'fitted'"}}}}});
+  json& marks = spec["marks"];
+  if (!uri.empty()) {
+    json image = Mark("image", "",
+                      {{"url", {{"value", uri}}},
+                       {"x", {{"scale", "u"}, {"value", crop.u0}}},
+                       {"y", {{"scale", "v"}, {"value", crop.v0}}},
+                       {"x2", {{"scale", "u"}, {"value", crop.u1}}},
+                       {"y2", {{"scale", "v"}, {"value", crop.v1}}},
+                       {"aspect", {{"value", false}}},
+                       {"opacity", {{"value", 0.85}}}});
+    image["clip"] = true;  // the panel shows a part of the photo
+    marks.push_back(image);
+  }
+  const json tip = Tip({{"shot", "'" + shot + "'"},
+                        {"target", "datum.target"},
+                        {"corner", "datum.corner"},
+                        {"u, v [px]", "format(datum.u, '.2f') + ', ' + format(datum.v, '.2f')"},
+                        {"du, dv [px]", "format(datum.du, '.3f') + ', ' + format(datum.dv, '.3f')"},
+                        {"|r| / sigma", "format(datum.nr, '.2f')"},
+                        {"status", "datum.status"},
+                        {"pixels.csv line", "datum.line"}});
+  marks.push_back(
+      Mark("symbol", "corners",
+           {{"x", Field("u", "u")},
+            {"y", Field("v", "v")},
+            {"shape", {{"value", "circle"}}},
+            {"size", {{"value", 18}}},
+            {"stroke", {{"signal", "datum.status == 'fitted' ? '#00e5ff' : '#ff00ff'"}}},
+            {"strokeWidth", {{"value", 1.2}}},
+            {"tooltip", tip}}));
+  Arrows(&marks, "arrows", "#ff3b30", tip);
+  ScaleBar(&marks, 40.0, Num(reference_px) + " px", w);
+  Figure f;
+  // A file name and an HTML id: shot ids are free text (shots.csv).
+  f.name = "photo_";
+  for (char ch : shot)
+    f.name += std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '.' ? ch : '_';
+  f.section = "photos";
+  f.title = "Photo " + shot + ", zoom " + std::to_string(zoom);
+  f.caption =
+      "The photo with its detected corners (cyan: fitted, magenta: left out, see the tooltip) "
+      "and each fitted corner's residual (observed minus predicted at the final model, the "
+      "board at its estimated pose), scaled by the red reference arrow. Arrows that turn "
+      "together across the board point at the board pose or the camera model, a single long "
+      "one at a bad detection.";
+  f.spec = spec;
+  f.summary = {{"shot", shot},           {"zoom", zoom},  {"fitted_rows", fitted},
+               {"rows", rows.size()},    {"rms_px", rms}, {"arrow_scale_px", reference_px},
+               {"photo", !photo.empty()}};
+  return f;
+}
+
+std::map<std::string, std::string> PhotoFiles(const PhotoSessionSummary& photos) {
+  std::map<std::string, std::string> out;
+  const fs::path base = fs::path(photos.shots_path).parent_path();
+  for (const PhotoSessionSummary::Photo& p : photos.photos) {
+    const fs::path img(p.image);
+    out[p.shot] = (img.is_absolute() ? img : base / img).string();
+  }
+  return out;
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------
+// Residuals against the variables the diagnosis tests.
+
+// One variable: a new one is one entry here (and its column in the residual
+// table).
+struct Variable {
+  std::string key, label;
+  std::function<double(const ObservationResidual&)> value;  // NaN: not for this row
+};
+
+const std::vector<Variable>& Variables() {
+  static const std::vector<Variable> vars = {
+      {"phi", "phi [deg]",
+       [](const ObservationResidual& o) {
+         return std::fmod(std::fmod(o.phi * kDeg, 360.0) + 360.0, 360.0);
+       }},
+      {"theta", "zenith angle [deg]",
+       [](const ObservationResidual& o) { return ZenithOf(o.theta) * kDeg; }},
+      {"d", "distance d [m] (records)",
+       [](const ObservationResidual& o) { return o.group == ObsGroup::kPixel ? NAN : o.d; }},
+      {"target_distance", "camera to point [m] (image points)",
+       [](const ObservationResidual& o) {
+         return o.group == ObsGroup::kPixel ? o.target_distance : NAN;
+       }},
+      {"image_radius", "image radius [px]",
+       [](const ObservationResidual& o) { return o.image_radius >= 0 ? o.image_radius : NAN; }},
+  };
+  return vars;
+}
+
+struct Component {
+  std::string key, label;
+  std::function<double(const ObservationResidual&)> value;
+};
+
+const std::vector<Component>& Components() {
+  static const std::vector<Component> comps = {
+      {"hz", "horizontal direction error [\"]",
+       [](const ObservationResidual& o) { return o.hz * kArcsec; }},
+      {"zenith", "zenith angle error [\"]",
+       [](const ObservationResidual& o) { return o.zenith * kArcsec; }},
+      {"along", "error along the ray [mm] (records)",
+       [](const ObservationResidual& o) {
+         return o.group == ObsGroup::kPixel ? NAN : o.along * 1e3;
+       }},
+  };
+  return comps;
+}
+
+const char* SeriesName(ObsGroup g) {
+  return g == ObsGroup::kEdm   ? "EDM points"
+         : g == ObsGroup::kCam ? "camera points"
+                               : "image points";
+}
+
+Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
+  constexpr int kBins = 16;
+  constexpr int kMinPerBin = 3;
+  json spec = Chart("Residuals against the variables the diagnosis tests",
+                    "fitted rows; per bin the mean residual (line) and its 2-sigma band (mean +- "
+                    "2 std / sqrt(n)); a mean outside the band around zero is structure");
+  const json series_domain = {SeriesName(ObsGroup::kEdm), SeriesName(ObsGroup::kCam),
+                              SeriesName(ObsGroup::kPixel)};
+  spec["scales"].push_back({{"name", "group"},
+                            {"type", "ordinal"},
+                            {"domain", series_domain},
+                            {"range", {"#1f77b4", "#ff7f0e", "#2ca02c"}}});
+  spec["legends"].push_back({{"stroke", "group"},
+                             {"fill", "group"},
+                             {"title", "observations"},
+                             {"orient", "top"},
+                             {"direction", "horizontal"}});
+  spec["layout"] = Grid(Components().size(), 75, 95);
+  json summary = json::array();
+  for (const Variable& var : Variables()) {
+    for (const Component& comp : Components()) {
+      // Per group: the variable's range, then its bins.
+      json values = json::array();
+      for (ObsGroup g : {ObsGroup::kEdm, ObsGroup::kCam, ObsGroup::kPixel}) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (const ObservationResidual& o : rows) {
+          if (!Fitted(o) || o.group != g) continue;
+          const double x = var.value(o), y = comp.value(o);
+          if (!std::isfinite(x) || !std::isfinite(y)) continue;
+          lo = std::min(lo, x);
+          hi = std::max(hi, x);
+        }
+        if (!(hi >= lo)) continue;
+        std::vector<double> sx(kBins), sy(kBins), syy(kBins);
+        std::vector<int> n(kBins);
+        const double width = hi > lo ? (hi - lo) / kBins : 1.0;
+        for (const ObservationResidual& o : rows) {
+          if (!Fitted(o) || o.group != g) continue;
+          const double x = var.value(o), y = comp.value(o);
+          if (!std::isfinite(x) || !std::isfinite(y)) continue;
+          const int b = std::clamp(static_cast<int>((x - lo) / width), 0, kBins - 1);
+          sx[b] += x;
+          sy[b] += y;
+          syy[b] += y * y;
+          ++n[b];
+        }
+        for (int b = 0; b < kBins; ++b) {
+          if (n[b] < kMinPerBin) continue;
+          const double mean = sy[b] / n[b];
+          const double var_y = std::max(0.0, syy[b] / n[b] - mean * mean) * n[b] / (n[b] - 1);
+          const double se = std::sqrt(var_y / n[b]);
+          values.push_back({{"group", SeriesName(g)},
+                            {"x", sx[b] / n[b]},
+                            {"mean", mean},
+                            {"lo", mean - 2 * se},
+                            {"hi", mean + 2 * se},
+                            {"n", n[b]}});
+        }
+      }
+      json group = {
+          {"type", "group"},
+          {"encode",
+           {{"enter", {{"width", {{"value", kPanelW}}}, {"height", {{"value", kPanelH}}}}}}}};
+      const std::string data = var.key + "_" + comp.key;
+      summary.push_back({{"variable", var.key}, {"component", comp.key}, {"bins", values.size()}});
+      if (values.empty()) {
+        group["marks"] = {
+            Mark("text", "",
+                 {{"x", {{"value", kPanelW / 2}}},
+                  {"y", {{"value", kPanelH / 2}}},
+                  {"align", {{"value", "center"}}},
+                  {"fill", {{"value", "#888"}}},
+                  {"text", {{"value", "no " + comp.key + " residuals against " + var.key}}}})};
+        group["title"] = {{"text", var.label}, {"fontSize", 10}};
+        spec["marks"].push_back(group);
+        continue;
+      }
+      group["data"] = {{{"name", data}, {"values", values}}};
+      group["scales"] = {{{"name", "x"},
+                          {"type", "linear"},
+                          {"domain", {{"data", data}, {"field", "x"}}},
+                          {"range", {0, kPanelW}},
+                          {"zero", false},
+                          {"nice", true}},
+                         {{"name", "y"},
+                          {"type", "linear"},
+                          {"domain", {{"data", data}, {"fields", {"lo", "hi"}}}},
+                          {"range", {kPanelH, 0}},
+                          {"zero", true},
+                          {"nice", true}}};
+      json ay = Axis("left", "y", comp.label);
+      ay["grid"] = true;
+      ay["tickCount"] = 5;
+      json ax = Axis("bottom", "x", var.label);
+      ax["tickCount"] = 6;
+      group["axes"] = {ax, ay};
+      const json tip = Tip({{"observations", "datum.group"},
+                            {var.key, "format(datum.x, '.4g')"},
+                            {"mean", "format(datum.mean, '.3g')"},
+                            {"2 sigma", "format(datum.hi - datum.mean, '.2g')"},
+                            {"n", "datum.n"}});
+      // The 2-sigma band under each series' line.
+      const json band = json::array({Mark("area", "",
+                                          {{"x", Field("x", "x")},
+                                           {"y", Field("y", "lo")},
+                                           {"y2", Field("y", "hi")},
+                                           {"fill", Field("group", "group")},
+                                           {"fillOpacity", {{"value", 0.18}}}})});
+      group["marks"] = {SeriesLines(data, "group", "group", "x", "mean", 1.5, 14, tip, band),
+                        Mark("rule", "",
+                             {{"x", {{"value", 0}}},
+                              {"x2", {{"value", kPanelW}}},
+                              {"y", {{"scale", "y"}, {"value", 0}}},
+                              {"stroke", {{"value", "#444"}}},
+                              {"strokeDash", {{"value", {3, 3}}}}})};
+      spec["marks"].push_back(group);
     }
   }
-  std::vector<const Series*> shown;
-  for (const Series* s : {&edm, &cam, &px}) {
-    if (!s->values.empty() && s->sigma > 0) shown.push_back(s);
+  Figure f;
+  f.name = "residuals_vs_variables";
+  f.section = "variables";
+  f.title = "Residuals against the variables";
+  f.caption =
+      "Each row is one variable the diagnosis tests (phi, zenith angle, distance, camera-to-point "
+      "distance, image radius), each column one residual component (horizontal direction and "
+      "zenith angle in arcseconds for every observation kind, along the ray in millimetres for "
+      "records). A once-per-turn wave against phi is an eccentricity or a wobble, a slope against "
+      "distance a scale error, a trend against the image radius a distortion term the model "
+      "lacks.";
+  f.spec = spec;
+  f.summary = {{"panels", summary}};
+  return f;
+}
+
+// ---------------------------------------------------------------------------
+// Histograms of the fitted residual coordinates against the fitted sigma.
+
+Figure Histograms(const std::vector<ObservationResidual>& rows) {
+  constexpr int kBins = 36;
+  constexpr double kRange = 4.5;  // sigmas each side
+  struct Series {
+    ObsGroup group;
+    std::string title, unit;
+    double scale;
+    std::vector<double> values;
+    double sigma = 0;
+  };
+  std::vector<Series> all = {{ObsGroup::kEdm, "EDM points (x, y, z)", "mm", 1e3, {}, 0},
+                             {ObsGroup::kCam, "camera points (x, y, z)", "mm", 1e3, {}, 0},
+                             {ObsGroup::kPixel, "image points (u, v)", "px", 1.0, {}, 0}};
+  for (const ObservationResidual& o : rows) {
+    if (!Fitted(o)) continue;
+    Series& s = all[static_cast<int>(o.group)];
+    const int k = o.group == ObsGroup::kPixel ? 2 : 3;
+    for (int i = 0; i < k; ++i) s.values.push_back(o.delta[i] * s.scale);
+    // Pixels of several zooms: their sigmas' root mean square.
+    s.sigma += o.sigma * o.sigma * s.scale * s.scale;
   }
-  const int pw = 380, ph = 260, left = 80, gap = 110, top = 100;
-  cv::Mat img(top + ph + 60, left + static_cast<int>(shown.size()) * (pw + gap), CV_8UC3, kWhite);
-  Put(img, "Residuals against the Gaussian of the fitted sigma (fitted rows)", cv::Point(left, 28),
-      0.6);
-  for (size_t i = 0; i < shown.size(); ++i) {
-    HistogramPanel(img, cv::Rect(left + static_cast<int>(i) * (pw + gap), top, pw, ph), *shown[i]);
+  json spec = Chart("Residuals against the Gaussian of the fitted sigma (fitted rows)",
+                    "bars: residual coordinates; red: the normal density of the fitted "
+                    "(a-posteriori) sigma; counts beyond 4.5 sigma in the panel title");
+  spec["layout"] = Grid(3, 60, 130);
+  json summary = json::array();
+  for (Series& s : all) {
+    if (s.values.empty()) continue;
+    const int rows_n = static_cast<int>(s.values.size()) / (s.group == ObsGroup::kPixel ? 2 : 3);
+    s.sigma = std::sqrt(s.sigma / rows_n);
+    if (!(s.sigma > 0)) continue;
+    const double range = kRange * s.sigma, width = 2 * range / kBins;
+    std::vector<int> counts(kBins);
+    int outside = 0;
+    double ss = 0;
+    for (double v : s.values) {
+      ss += v * v;
+      if (std::abs(v) >= range) {
+        ++outside;
+        continue;
+      }
+      ++counts[std::clamp(static_cast<int>((v + range) / width), 0, kBins - 1)];
+    }
+    json bars = json::array(), curve = json::array();
+    for (int b = 0; b < kBins; ++b) {
+      bars.push_back(
+          {{"x0", -range + b * width}, {"x1", -range + (b + 1) * width}, {"n", counts[b]}});
+    }
+    for (int k = 0; k <= 120; ++k) {
+      const double x = -range + 2 * range * k / 120;
+      curve.push_back(
+          {{"x", x},
+           {"y", s.values.size() * width * std::exp(-0.5 * x * x / (s.sigma * s.sigma)) /
+                     (std::sqrt(2 * M_PI) * s.sigma)}});
+    }
+    const double rms = std::sqrt(ss / s.values.size());
+    const std::string key = s.group == ObsGroup::kEdm   ? "edm"
+                            : s.group == ObsGroup::kCam ? "cam"
+                                                        : "pixels";
+    json ax = Axis("bottom", "x", "residual [" + s.unit + "]");
+    ax["tickCount"] = 6;
+    json ay = Axis("left", "y", "count");
+    ay["tickCount"] = 5;
+    const json tip = Tip({{"from", "format(datum.x0, '.3g')"},
+                          {"to", "format(datum.x1, '.3g')"},
+                          {"count", "datum.n"}});
+    spec["marks"].push_back(
+        {{"type", "group"},
+         {"title",
+          {{"text", s.title},
+           {"subtitle", "fitted sigma " + Num(s.sigma) + ", rms " + Num(rms) + " " + s.unit +
+                            ", n " + std::to_string(s.values.size()) +
+                            ", beyond 4.5 sigma: " + std::to_string(outside)},
+           {"fontSize", 12},
+           {"subtitleFontSize", 10}}},
+         {"encode",
+          {{"enter", {{"width", {{"value", kPanelW}}}, {"height", {{"value", kPanelH}}}}}}},
+         {"data",
+          {{{"name", key + "_bars"}, {"values", bars}},
+           {{"name", key + "_curve"}, {"values", curve}}}},
+         {"scales",
+          {Linear("x", {-range, range}, {0, kPanelW}),
+           {{"name", "y"},
+            {"type", "linear"},
+            {"domain",
+             {{"fields",
+               {{{"data", key + "_bars"}, {"field", "n"}},
+                {{"data", key + "_curve"}, {"field", "y"}}}}}},
+            {"range", {kPanelH, 0}},
+            {"nice", true},
+            {"zero", true}}}},
+         {"axes", {ax, ay}},
+         {"marks",
+          {Mark("rect", key + "_bars",
+                {{"x", Field("x", "x0")},
+                 {"x2", Field("x", "x1")},
+                 {"y", Field("y", "n")},
+                 {"y2", {{"scale", "y"}, {"value", 0}}},
+                 {"fill", {{"value", "#8cb4d8"}}},
+                 {"stroke", {{"value", "#5079a0"}}},
+                 {"tooltip", tip}}),
+           Mark("line", key + "_curve",
+                {{"x", Field("x", "x")},
+                 {"y", Field("y", "y")},
+                 {"stroke", {{"value", "#d62728"}}},
+                 {"strokeWidth", {{"value", 2}}}})}}});
+    summary.push_back({{"group", key},
+                       {"values", s.values.size()},
+                       {"sigma", s.sigma},
+                       {"rms", rms},
+                       {"unit", s.unit},
+                       {"beyond_4_5_sigma", outside}});
   }
   Figure f;
-  f.name = "residual_histograms.png";
+  f.name = "residual_histograms";
   f.section = "histograms";
   f.title = "Residual histograms";
   f.caption =
       "Coordinates of observed minus model for the rows the fit uses; the red curve is the normal "
       "density with the fitted (a-posteriori) sigma of the group. Heavy tails point at outliers, a "
       "curve narrower than the bars at a missing effect or an optimistic sigma.";
-  f.image = img;
+  f.spec = spec;
+  f.summary = {{"groups", summary}};
   return f;
 }
 
 // ---------------------------------------------------------------------------
-// Ladders.
+// The ladder: error per observation group across rungs or runs.
 
 struct Rung {
-  std::string label, added;
+  std::string label;  // "step 1: +hz_eccentricity"
   double edm_mm = NAN, cam_mm = NAN, px = NAN;
 };
 
 Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name,
                     const std::string& title, const std::string& caption) {
-  const int left = 90, top = 70, step = 150;
-  const bool has_px =
-      std::any_of(rungs.begin(), rungs.end(), [](const Rung& g) { return std::isfinite(g.px); });
-  const bool has_mm = std::any_of(rungs.begin(), rungs.end(), [](const Rung& g) {
-    return std::isfinite(g.edm_mm) || std::isfinite(g.cam_mm);
-  });
-  const int pw = std::max(520, static_cast<int>(rungs.size()) * step), ph = 260;
-  const int panels = (has_mm ? 1 : 0) + (has_px ? 1 : 0);
-  cv::Mat img(top + panels * (ph + 110), left + pw + 60, CV_8UC3, kWhite);
-  Put(img, title, cv::Point(left, 28), 0.6);
-  int row = 0;
-  auto panel = [&](const std::vector<std::pair<std::string, double Rung::*>>& series,
-                   const std::string& unit) {
-    std::vector<double> all;
-    for (const Rung& g : rungs) {
-      for (const auto& s : series) {
-        if (std::isfinite(g.*(s.second)) && g.*(s.second) > 0) all.push_back(g.*(s.second));
-      }
-    }
-    if (all.empty()) return;
-    const double lo = *std::min_element(all.begin(), all.end()),
-                 hi = *std::max_element(all.begin(), all.end());
-    Panel p;
-    p.r = cv::Rect(left, top + row * (ph + 110), pw, ph);
-    p.x0 = -0.5;
-    p.x1 = rungs.size() - 0.5;
-    p.log_y = true;
-    p.y0 = std::pow(10.0, std::floor(std::log10(lo)));
-    p.y1 = std::pow(10.0, std::ceil(std::log10(hi * 1.0001)));
-    if (p.y1 / p.y0 < 10) p.y1 = p.y0 * 10;
-    std::vector<double> yt;
-    for (double d = p.y0; d <= p.y1 * 1.0001; d *= 10) {
-      for (double m : {1.0, 2.0, 5.0}) {
-        if (m * d <= p.y1 * 1.0001) yt.push_back(m * d);
-      }
-    }
-    Axes(img, p, {}, yt, "", "rms error [" + unit + "] (log)", "%g", "%g");
-    for (size_t i = 0; i < rungs.size(); ++i) {
-      const cv::Point a = p.Map(static_cast<double>(i), p.y0);
-      cv::line(img, cv::Point(a.x, p.r.y + p.r.height), cv::Point(a.x, p.r.y + p.r.height + 5),
-               kInk, 1);
-      Put(img, rungs[i].label, cv::Point(a.x, p.r.y + p.r.height + 10), 0.42, 1, 2);
-      // One effect per line under the tick.
-      std::istringstream words(rungs[i].added);
-      std::string word;
-      for (int line = 0; words >> word; ++line) {
-        Put(img, word, cv::Point(a.x, p.r.y + p.r.height + 30 + 17 * line), 0.4, 1, 2, kSeries[3]);
-      }
-    }
-    int k = 0;
-    for (const auto& [label, member] : series) {
-      cv::Point last(-1, -1);
-      bool any = false;
-      for (size_t i = 0; i < rungs.size(); ++i) {
-        const double v = rungs[i].*member;
-        if (!(std::isfinite(v) && v > 0)) continue;
-        const cv::Point q = p.Map(static_cast<double>(i), v);
-        if (last.x >= 0) cv::line(img, last, q, kSeries[k], 2, cv::LINE_AA);
-        cv::circle(img, q, 4, kSeries[k], cv::FILLED, cv::LINE_AA);
-        last = q;
-        any = true;
-      }
-      if (any) {
-        const cv::Point legend(p.r.x + p.r.width - 170, p.r.y + 18 + 18 * k);
-        cv::line(img, legend, legend + cv::Point(20, 0), kSeries[k], 2, cv::LINE_AA);
-        Put(img, label, legend + cv::Point(26, 0), 0.42, 0, 1);
-      }
-      ++k;
-    }
-    ++row;
-  };
-  if (has_mm) panel({{"EDM points", &Rung::edm_mm}, {"camera points", &Rung::cam_mm}}, "mm");
-  if (has_px) panel({{"image points", &Rung::px}}, "px");
+  json mm = json::array(), px = json::array(), labels = json::array();
+  for (const Rung& g : rungs) {
+    labels.push_back(g.label);
+    if (std::isfinite(g.edm_mm) && g.edm_mm > 0)
+      mm.push_back({{"label", g.label}, {"series", "EDM points"}, {"value", g.edm_mm}});
+    if (std::isfinite(g.cam_mm) && g.cam_mm > 0)
+      mm.push_back({{"label", g.label}, {"series", "camera points"}, {"value", g.cam_mm}});
+    if (std::isfinite(g.px) && g.px > 0)
+      px.push_back({{"label", g.label}, {"series", "image points"}, {"value", g.px}});
+  }
+  json spec = Chart(title, "rms error of each observation group (log scale)");
+  spec["layout"] = Grid(1, 120, 0);
+  spec["scales"].push_back({{"name", "series"},
+                            {"type", "ordinal"},
+                            {"domain", {"EDM points", "camera points", "image points"}},
+                            {"range", {"#1f77b4", "#ff7f0e", "#2ca02c"}}});
+  spec["legends"].push_back({{"stroke", "series"}, {"fill", "series"}, {"orient", "right"}});
+  const int width = std::max(420, 110 * static_cast<int>(rungs.size()));
+  json summary = json::array();
+  for (const auto& [data, unit] : {std::pair<json*, std::string>{&mm, "mm"}, {&px, "px"}}) {
+    if (data->empty()) continue;
+    const std::string d = unit == "mm" ? "mm" : "px";
+    json ax = Axis("bottom", "x", "");
+    ax["labelAngle"] = rungs.size() > 4 ? -20 : 0;
+    ax["labelAlign"] = rungs.size() > 4 ? "right" : "center";
+    ax["labelLimit"] = 220;
+    json ay = Axis("left", "y", "rms error [" + unit + "] (log)");
+    ay["grid"] = true;
+    const json tip = Tip({{"rung", "datum.label"},
+                          {"series", "datum.series"},
+                          {"rms [" + unit + "]", "format(datum.value, '.4g')"}});
+    spec["marks"].push_back(
+        {{"type", "group"},
+         {"encode", {{"enter", {{"width", {{"value", width}}}, {"height", {{"value", kPanelH}}}}}}},
+         {"data", {{{"name", d}, {"values", *data}}}},
+         {"scales",
+          {{{"name", "x"},
+            {"type", "point"},
+            {"domain", labels},
+            {"range", {0, width}},
+            {"padding", 0.5}},
+           {{"name", "y"},
+            {"type", "log"},
+            {"domain", {{"data", d}, {"field", "value"}}},
+            {"range", {kPanelH, 0}},
+            {"nice", true}}}},
+         {"axes", {ax, ay}},
+         {"marks", {SeriesLines(d, "series", "series", "label", "value", 2, 50, tip)}}});
+    summary.push_back({{"unit", unit}, {"points", *data}});
+  }
   Figure f;
   f.name = name;
   f.section = "ladder";
   f.title = title;
   f.caption = caption;
-  f.image = img;
+  f.spec = spec;
+  f.summary = {{"rungs", labels}, {"series", summary}};
   return f;
 }
 
-double JsonRms(const json& j, const char* a, const char* b, const char* key) {
-  if (!j.contains(a)) return NAN;
-  const json& x = b ? j[a] : j;
-  if (b && !x.contains(b)) return NAN;
-  const json& y = b ? x[b] : x[a];
-  if (!y.is_object() || !y.contains(key) || !y.contains("n") || y["n"].get<int>() == 0) return NAN;
-  return y[key].get<double>();
+double JsonRms(const json& final, const char* tool) {
+  if (!final.contains("records") || !final["records"].contains(tool)) return NAN;
+  const json& t = final["records"][tool];
+  return t.value("n", 0) > 0 ? t.value("rms_m", NAN) * 1e3 : NAN;
 }
 
 std::string Added(const std::vector<std::string>& before, const std::vector<std::string>& after) {
@@ -576,305 +1059,290 @@ std::string Added(const std::vector<std::string>& before, const std::vector<std:
   return out;
 }
 
-// A heat map of cols x rows cells over a width x height image, 480 px wide:
-// cells coloured by value / vmax (viridis; vmax a nice number above `max`),
-// grey where not finite, white diagonal strokes where `inside` is false
-// (extrapolated). The figure's text goes around the panel.
-struct HeatMapPanel {
-  static constexpr int left = 30, top = 40;
-  int width = 480, height = 1;
-  cv::Mat image, lut;
-  double vmax = 1;
-  HeatMapPanel(int image_w, int image_h, int cols, int rows, double max,
-               const std::function<double(int, int)>& value,
-               const std::function<bool(int, int)>& inside) {
-    height =
-        std::max(1, static_cast<int>(std::lround(width * double(image_h) / std::max(1, image_w))));
-    image = cv::Mat(height + top + 70, width + 2 * left + 110, CV_8UC3, kWhite);
-    lut = ViridisLut();
-    vmax = std::isfinite(max) && max > 0 ? NiceNumber(max) : 1.0;
-    for (int j = 0; j < rows; ++j) {
-      for (int i = 0; i < cols; ++i) {
-        const cv::Rect r(left + i * width / cols, top + j * height / rows,
-                         (i + 1) * width / cols - i * width / cols,
-                         (j + 1) * height / rows - j * height / rows);
-        const double v = value(i, j);
-        if (!std::isfinite(v)) {
-          cv::rectangle(image, r, kHatch, cv::FILLED);
-          continue;
-        }
-        cv::rectangle(image, r, ColourOf(lut, std::min(v / vmax, 1.0)), cv::FILLED);
-        if (!inside(i, j)) {
-          cv::Mat roi = image(r & cv::Rect(0, 0, image.cols, image.rows));
-          for (int k = -roi.rows; k < roi.cols; k += 6) {
-            cv::line(roi, cv::Point(k, roi.rows), cv::Point(k + roi.rows, 0), kWhite, 1,
-                     cv::LINE_AA);
-          }
-        }
-      }
+// ---------------------------------------------------------------------------
+// Heat maps over an image: cols x rows cells (row-major from the top-left),
+// NaN: not predictable (grey); `inside` false: outside the valid region
+// (faded, struck through); `hull`: the valid region's outline.
+json HeatMapSpec(const std::string& title, const std::string& subtitle, int width, int height,
+                 int cols, int rows, const std::vector<double>& value,
+                 const std::vector<unsigned char>& inside, const std::string& legend,
+                 const std::vector<Eigen::Vector2d>& hull) {
+  json spec = Chart(title, subtitle);
+  int w = 0, h = 0;
+  ImageScales(&spec, width, height, &w, &h);
+  json cells = json::array();
+  for (int j = 0; j < rows; ++j) {
+    for (int i = 0; i < cols; ++i) {
+      const double v = value[j * cols + i];
+      json c = {{"u0", i * width / double(cols) - 0.5},
+                {"u1", (i + 1) * width / double(cols) - 0.5},
+                {"v0", j * height / double(rows) - 0.5},
+                {"v1", (j + 1) * height / double(rows) - 0.5},
+                {"inside", bool(inside[j * cols + i])}};
+      c["value"] = std::isfinite(v) ? json(v) : json(nullptr);
+      cells.push_back(c);
     }
   }
-};
+  spec["data"].push_back({{"name", "cells"}, {"values", cells}});
+  spec["scales"].push_back({{"name", "colour"},
+                            {"type", "linear"},
+                            {"scheme", "viridis"},
+                            {"domain", {{"data", "cells"}, {"field", "value"}}},
+                            {"zero", true},
+                            {"nice", true}});
+  spec["legends"].push_back({{"fill", "colour"}, {"title", legend}, {"type", "gradient"}});
+  const json tip =
+      Tip({{"u", "format((datum.u0 + datum.u1) / 2, '.0f')"},
+           {"v", "format((datum.v0 + datum.v1) / 2, '.0f')"},
+           {legend, "datum.value === null ? 'not predictable' : format(datum.value, '.3g')"},
+           {"inside the points' hull", "datum.inside"}});
+  spec["marks"].push_back(Mark(
+      "rect", "cells",
+      {{"x", Field("u", "u0")},
+       {"x2", Field("u", "u1")},
+       {"y", Field("v", "v0")},
+       {"y2", Field("v", "v1")},
+       {"fill", {{"signal", "datum.value === null ? '#bbbbbb' : scale('colour', datum.value)"}}},
+       {"opacity", {{"signal", "datum.inside ? 1 : 0.55"}}},
+       {"tooltip", tip}}));
+  spec["data"].push_back({{"name", "outside"},
+                          {"source", "cells"},
+                          {"transform", {{{"type", "filter"}, {"expr", "!datum.inside"}}}}});
+  spec["marks"].push_back(Mark("rule", "outside",
+                               {{"x", Field("u", "u0")},
+                                {"y", Field("v", "v1")},
+                                {"x2", Field("u", "u1")},
+                                {"y2", Field("v", "v0")},
+                                {"stroke", {{"value", "white"}}},
+                                {"strokeOpacity", {{"value", 0.8}}}}));
+  if (hull.size() >= 3) {
+    json pts = json::array();
+    for (size_t k = 0; k <= hull.size(); ++k) {
+      const Eigen::Vector2d& p = hull[k % hull.size()];
+      pts.push_back({{"k", k}, {"u", p.x()}, {"v", p.y()}});
+    }
+    spec["data"].push_back({{"name", "hull"}, {"values", pts}});
+    spec["marks"].push_back(Mark("line", "hull",
+                                 {{"x", Field("u", "u")},
+                                  {"y", Field("v", "v")},
+                                  {"stroke", {{"value", "white"}}},
+                                  {"strokeWidth", {{"value", 2}}}}));
+  }
+  return spec;
+}
+
+Figure UncertaintyFigure(const UncertaintyMap& m, const UncertaintyMapOptions& o,
+                         const CameraTool& cam, bool full) {
+  Figure f;
+  f.name = "uncertainty_zoom" + std::to_string(m.zoom);
+  f.section = "uncertainty";
+  f.title = "Projection uncertainty, zoom " + std::to_string(m.zoom) + ", point at " +
+            Num(o.range_m) + " m";
+  f.spec =
+      HeatMapSpec(f.title,
+                  "1 sigma, worst direction [px]: min " + Num(m.min_px) + ", median " +
+                      Num(m.median_px) + ", max " + Num(m.max_px) + "; pointing phi " +
+                      Num(o.phi, 4) + ", theta " + Num(o.theta, 4) + " rad; " +
+                      (full ? "full covariance" : "diagonal approximation (no full covariance)") +
+                      "; faded and struck through: outside the points' hull (white)",
+                  m.width, m.height, m.cols, m.rows, m.sigma_px,
+                  std::vector<unsigned char>(m.inside.begin(), m.inside.end()), "1-sigma [px]",
+                  cam.valid_region);
+  f.caption =
+      "How far (1 sigma, worst direction, pixels) the pixel where a point at " + Num(o.range_m) +
+      " m is seen may lie from the model's prediction, from the uncertainty of this zoom's "
+      "intrinsics, distortion and camera tool and of the kinematic chain (first order, J P J^T "
+      "with the fit's full covariance). Cells outside the convex hull of the calibration's image "
+      "points (white outline) are faded and struck through: there the distortion is extrapolated "
+      "and the number is a lower bound at best.";
+  f.summary = {{"zoom", m.zoom}, {"max_px", m.max_px}, {"median_px", m.median_px}};
+  return f;
+}
 
 }  // namespace
 
 Figure DifferenceFigure(const ZoomDifference& d) {
-  const HeatMapPanel p(
-      d.width, d.height, d.cols, d.rows, d.max_px,
-      [&](int i, int j) { return d.diff_px[j * d.cols + i]; },
-      [&](int i, int j) { return bool(d.inside[j * d.cols + i]); });
-  cv::Mat img = p.image;
-  const int left = p.left, top = p.top, panel_w = p.width, panel_h = p.height;
-  const cv::Mat& lut = p.lut;
-  const double vmax = p.vmax;
-  cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
-  ColourBar(img, lut, cv::Rect(left + panel_w + 20, top, 18, panel_h), vmax, "difference [px]");
-  Put(img,
-      "zoom " + std::to_string(d.zoom) + ": RMS " + Fmt("%.3g", d.rms_px) + ", max " +
-          Fmt("%.3g", d.max_px) + " px; rotation removed " +
-          Fmt("%.3g", d.rotation_rad * 180 / M_PI * 3600) + "\"",
-      cv::Point(left, 25), 0.45);
-  Put(img, std::to_string(d.width) + " x " + std::to_string(d.height) + " px (first model's image)",
-      cv::Point(left, top + panel_h + 25), 0.42);
-  Put(img, "hatched: outside either model's valid region; grey: not predictable",
-      cv::Point(left, top + panel_h + 48), 0.42);
   Figure f;
-  f.name = "compare_zoom" + std::to_string(d.zoom) + ".png";
+  f.name = "compare_zoom" + std::to_string(d.zoom);
   f.section = "compare";
   f.title = "Projection difference, zoom " + std::to_string(d.zoom);
+  f.spec = HeatMapSpec(f.title,
+                       "RMS " + Num(d.rms_px) + ", max " + Num(d.max_px) +
+                           " px; rotation removed " + Num(d.rotation_rad * kArcsec) + "\"; " +
+                           std::to_string(d.width) + " x " + std::to_string(d.height) +
+                           " px (first model's image); faded: outside either model's valid region",
+                       d.width, d.height, d.cols, d.rows, d.diff_px,
+                       std::vector<unsigned char>(d.inside.begin(), d.inside.end()),
+                       "difference [px]", {});
   f.caption =
       "How far apart the two models project one ray, after the best rotation between "
       "their camera frames is removed (docs/compare.md).";
-  f.image = img;
+  f.summary = {{"zoom", d.zoom}, {"rms_px", d.rms_px}, {"max_px", d.max_px}};
   return f;
 }
 
-std::vector<unsigned char> EncodePng(const cv::Mat& image) {
-  std::vector<unsigned char> out;
-  if (image.empty() || !cv::imencode(".png", image, out) || out.empty()) {
-    throw std::runtime_error("PNG encoding failed for a " + std::to_string(image.cols) + "x" +
-                             std::to_string(image.rows) + " figure");
-  }
-  return out;
-}
-
-// ---------------------------------------------------------------------------
-// Image coverage per zoom (app/coverage.h): points per cell of the image and
-// every observed point, with the 3x3 ninths whose corners the distortion
-// needs.
-
-Figure CoverageFigure(const ZoomCoverage& c, const Observations& obs) {
-  const int panel_w = 480;
-  const int panel_h =
-      std::max(1, static_cast<int>(std::lround(panel_w * double(c.height) / std::max(1, c.width))));
-  const int left = 30, top = 40;
-  cv::Mat img(panel_h + top + 60, panel_w + 2 * left, CV_8UC3, kWhite);
-  const cv::Mat lut = ViridisLut();
-  const int vmax = std::max(1, *std::max_element(c.counts.begin(), c.counts.end()));
-  for (int j = 0; j < kCoverageCells; ++j) {
-    for (int i = 0; i < kCoverageCells; ++i) {
-      const int n = c.counts[j * kCoverageCells + i];
-      const cv::Rect r(left + i * panel_w / kCoverageCells, top + j * panel_h / kCoverageCells,
-                       panel_w / kCoverageCells, panel_h / kCoverageCells);
-      if (n == 0) {
-        Hatch(img, r);
-      } else {
-        cv::rectangle(img, r, ColourOf(lut, 0.25 + 0.75 * std::log1p(n) / std::log1p(vmax)),
-                      cv::FILLED);
-      }
-    }
-  }
-  const double sx = double(panel_w) / std::max(1, c.width),
-               sy = double(panel_h) / std::max(1, c.height);
-  for (const PixelObservation& p : obs.pixels) {
-    if (p.zoom != c.zoom) continue;
-    cv::circle(img, cv::Point(left + int(p.uv.x() * sx), top + int(p.uv.y() * sy)), 1, kWhite,
-               cv::FILLED);
-  }
-  for (int k = 1; k < 3; ++k) {
-    cv::line(img, cv::Point(left + k * panel_w / 3, top),
-             cv::Point(left + k * panel_w / 3, top + panel_h), kInk, 1);
-    cv::line(img, cv::Point(left, top + k * panel_h / 3),
-             cv::Point(left + panel_w, top + k * panel_h / 3), kInk, 1);
-  }
-  cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
-  Put(img,
-      "zoom " + std::to_string(c.zoom) + ": " + std::to_string(c.points) + " points, " +
-          Fmt("%.0f", 100 * c.covered_fraction) + "% of cells, radius " +
-          Fmt("%.0f", 100 * c.radius_fraction) + "% of corner",
-      cv::Point(left, 25), 0.45);
-  Put(img, std::to_string(c.width) + " x " + std::to_string(c.height) + " px",
-      cv::Point(left, top + panel_h + 25), 0.45);
-  Figure f;
-  f.name = "coverage_zoom" + std::to_string(c.zoom) + ".png";
-  f.section = "image";
-  f.title = "Image coverage, zoom " + std::to_string(c.zoom);
-  f.caption =
-      "Where the observed points fell in the image: points per cell (colour, log scale; hatched "
-      "= none) and each point (white). The distortion polynomial is only determined where "
-      "points are: empty corner ninths mean it is extrapolated there.";
-  f.image = img;
-  return f;
-}
-
-// Projection uncertainty of one zoom (libcalib/api/uncertainty_map.h): the
-// 1-sigma semi-major axis per cell, hatched where the cell centre is outside
-// the valid region (the convex hull of the calibration's points, drawn as a
-// white polygon), grey where the model cannot predict.
-Figure UncertaintyFigure(const UncertaintyMap& m, const UncertaintyMapOptions& o,
-                         const CameraTool& cam, bool full) {
-  const HeatMapPanel p(
-      m.width, m.height, m.cols, m.rows, m.max_px, [&](int i, int j) { return m.Cell(i, j); },
-      [&](int i, int j) { return bool(m.inside[j * m.cols + i]); });
-  cv::Mat img = p.image;
-  const int left = p.left, top = p.top, panel_w = p.width, panel_h = p.height;
-  const cv::Mat& lut = p.lut;
-  const double vmax = p.vmax;
-  const double sx = double(panel_w) / std::max(1, m.width),
-               sy = double(panel_h) / std::max(1, m.height);
-  if (cam.valid_region.size() >= 3) {
-    std::vector<cv::Point> hull;
-    for (const Eigen::Vector2d& p : cam.valid_region) {
-      hull.emplace_back(left + int(std::lround((p.x() + 0.5) * sx)),
-                        top + int(std::lround((p.y() + 0.5) * sy)));
-    }
-    cv::polylines(img, hull, true, kWhite, 2, cv::LINE_AA);
-  }
-  cv::rectangle(img, cv::Rect(left, top, panel_w, panel_h), kInk, 1);
-  ColourBar(img, lut, cv::Rect(left + panel_w + 20, top, 18, panel_h), vmax, "1-sigma [px]");
-  Put(img,
-      "zoom " + std::to_string(m.zoom) + ": point at " + Fmt("%g", o.range_m) + " m, min " +
-          Fmt("%.3g", m.min_px) + ", median " + Fmt("%.3g", m.median_px) + ", max " +
-          Fmt("%.3g", m.max_px) + " px",
-      cv::Point(left, 25), 0.45);
-  Put(img,
-      std::to_string(m.width) + " x " + std::to_string(m.height) + " px; pointing phi " +
-          Fmt("%.4g", o.phi) + ", theta " + Fmt("%.4g", o.theta) + " rad; " +
-          (full ? "full covariance" : "diagonal approximation (no full covariance)"),
-      cv::Point(left, top + panel_h + 25), 0.42);
-  Put(img, "hatched: outside the calibration points' hull (white); grey: not predictable",
-      cv::Point(left, top + panel_h + 48), 0.42);
-  Figure f;
-  f.name = "uncertainty_zoom" + std::to_string(m.zoom) + ".png";
-  f.section = "uncertainty";
-  f.title = "Projection uncertainty, zoom " + std::to_string(m.zoom) + ", point at " +
-            Fmt("%g", o.range_m) + " m";
-  f.caption =
-      "How far (1 sigma, worst direction, pixels) the pixel where a point at " +
-      Fmt("%g", o.range_m) +
-      " m is seen may lie from the model's prediction, from the uncertainty of this zoom's "
-      "intrinsics, distortion and camera tool and of the kinematic chain (first order, J P J^T "
-      "with the fit's full covariance). Hatched cells lie outside the convex hull of the "
-      "calibration's image points (white outline): there the distortion is extrapolated and "
-      "the number is a lower bound at best.";
-  f.image = img;
-  return f;
-}
-
-// ---------------------------------------------------------------------------
 std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   std::vector<Figure> figs;
-  for (const ZoomCoverage& c : ComputeCoverage(r.obs, r.calibration.model).zooms) {
-    figs.push_back(CoverageFigure(c, r.obs));
-  }
-  for (const UncertaintyMap& m : r.uncertainty_maps) {
-    if (m.determined) {
-      figs.push_back(UncertaintyFigure(m, r.uncertainty_options, r.calibration.model.cams[m.zoom],
-                                       r.full_covariance));
-    }
-  }
-  if (!r.calibration.diagnosis) return figs;
-  const Diagnosis& d = *r.calibration.diagnosis;
-  const std::string model = d.model_description;
-  // Faces and zooms present.
-  std::set<int> faces;
-  std::set<int> cam_zooms, pixel_zooms;
-  bool edm = false;
-  for (const ObservationResidual& o : d.residuals) {
-    if (!o.valid) continue;
-    faces.insert(o.face);
-    if (o.group == ObsGroup::kEdm) edm = true;
-    if (o.group == ObsGroup::kCam) cam_zooms.insert(o.zoom);
-    if (o.group == ObsGroup::kPixel) pixel_zooms.insert(o.zoom);
-  }
-  if (edm)
-    figs.push_back(ErrorMap({"edm", "EDM points", "mm", 1e3, ObsGroup::kEdm, 0}, d.residuals, faces,
-                            r.calibration.fit_options, model));
-  for (int z : cam_zooms) {
-    figs.push_back(
-        ErrorMap({"cam_zoom" + std::to_string(z), "Camera points, zoom " + std::to_string(z), "mm",
-                  1e3, ObsGroup::kCam, z},
-                 d.residuals, faces, r.calibration.fit_options, model));
-  }
-  for (int z : pixel_zooms) {
-    figs.push_back(
-        ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z),
-                  "px", 1.0, ObsGroup::kPixel, z},
-                 d.residuals, faces, r.calibration.fit_options, model));
-  }
+  const CalibrationResult& c = r.calibration;
+  const std::vector<ObservationResidual>& rows = c.residuals;
 
   // This run's stepwise ladder.
-  if (r.calibration.ladder.size() > 1) {
+  if (c.ladder.size() > 1) {
     std::vector<Rung> rungs;
-    for (size_t i = 0; i < r.calibration.ladder.size(); ++i) {
-      const LadderStep& s = r.calibration.ladder[i];
-      rungs.push_back({"step " + std::to_string(i), s.added.empty() ? "(start)" : "+" + s.added,
-                       s.rms.edm_n ? s.rms.edm_m * 1e3 : NAN, s.rms.cam_n ? s.rms.cam_m * 1e3 : NAN,
-                       s.rms.pixels_n ? s.rms.pixels_px : NAN});
+    for (size_t i = 0; i < c.ladder.size(); ++i) {
+      const LadderStep& s = c.ladder[i];
+      rungs.push_back(
+          {"step " + std::to_string(i) + ": " + (s.added.empty() ? "start" : "+" + s.added),
+           s.rms.edm_n ? s.rms.edm_m * 1e3 : NAN, s.rms.cam_n ? s.rms.cam_m * 1e3 : NAN,
+           s.rms.pixels_n ? s.rms.pixels_px : NAN});
     }
-    figs.push_back(
-        LadderFigure(rungs, "ladder_stepwise.png", "The ladder of this run (forward stepwise)",
-                     "Error of the fitted rows after each effect the stepwise search added."));
+    figs.push_back(LadderFigure(rungs, "ladder_stepwise",
+                                "The ladder of this run (diagnose --auto)",
+                                "Error of the fitted rows after each effect the forward stepwise "
+                                "search added (rtscalib diagnose --auto)."));
   }
-  // Across runs: earlier runs of this output folder, then this one.
+  // Across runs: earlier complete runs of this output folder, then this one.
   if (history.is_array() && !history.empty()) {
     std::vector<Rung> rungs;
     std::vector<std::string> prev;
-    bool first = true;
-    auto add = [&](const std::string& label, const std::vector<std::string>& effects,
-                   const json& final) {
+    auto add = [&](const std::string& run, const std::vector<std::string>& effects,
+                   const json& final, bool first) {
+      const std::string added = first ? "" : Added(prev, effects);
       Rung g;
-      g.label = label;
-      g.added = first ? "" : Added(prev, effects);
-      g.edm_mm = JsonRms(final, "records", "edm", "rms_m") * 1e3;
-      g.cam_mm = JsonRms(final, "records", "cam", "rms_m") * 1e3;
+      g.label = run + (added.empty() ? "" : ": " + added);
+      g.edm_mm = JsonRms(final, "edm");
+      g.cam_mm = JsonRms(final, "cam");
       if (final.contains("pixels") && final["pixels"].value("n", 0) > 0)
-        g.px = final["pixels"]["rms_px"].get<double>();
+        g.px = final["pixels"].value("rms_px", NAN);
       rungs.push_back(g);
       prev = effects;
-      first = false;
     };
     for (const json& h : history) {
       if (!h.contains("final")) continue;
       std::vector<std::string> effects;
       if (h.contains("effects")) effects = h["effects"].get<std::vector<std::string>>();
-      add("run " + h.value("run", std::string("?")).substr(0, 3), effects, h["final"]);
+      add("run " + h.value("run", std::string("?")).substr(0, 3), effects, h["final"],
+          rungs.empty());
     }
-    json final = {{"records",
-                   {{"edm",
-                     {{"rms_m", r.calibration.final_errors.edm.rms_m},
-                      {"n", r.calibration.final_errors.edm.n}}},
-                    {"cam",
-                     {{"rms_m", r.calibration.final_errors.cam.rms_m},
-                      {"n", r.calibration.final_errors.cam.n}}}}},
-                  {"pixels",
-                   {{"rms_px", r.calibration.final_errors.pixels.rms_px},
-                    {"n", r.calibration.final_errors.pixels.n}}}};
-    add("this run", r.calibration.model.effects.Names(), final);
+    const FinalErrors& e = c.final_errors;
+    const json final = {{"records",
+                         {{"edm", {{"rms_m", e.edm.rms_m}, {"n", e.edm.n}}},
+                          {"cam", {{"rms_m", e.cam.rms_m}, {"n", e.cam.n}}}}},
+                        {"pixels", {{"rms_px", e.pixels.rms_px}, {"n", e.pixels.n}}}};
+    add("this run", c.model.effects.Names(), final, rungs.empty());
     figs.push_back(LadderFigure(
-        rungs, "ladder_runs.png", "The ladder across runs (this output folder's history)",
-        "Final error of every run kept in the output folder (all rows, SPEC 6 `final`); "
-        "red: the effects added (+) or removed (-) relative to the run before."));
+        rungs, "ladder_runs", "The ladder across runs (this output folder's history)",
+        "Final error of every complete run kept in the output folder (all rows, SPEC 6 `final`), "
+        "labelled with the effects added (+) or removed (-) relative to the run before."));
+  }
+
+  // Maps per tool.
+  std::set<int> faces, cam_zooms, pixel_zooms;
+  bool edm = false;
+  for (const ObservationResidual& o : rows) {
+    if (!o.valid || o.status == ResidualStatus::kGrossError) continue;
+    faces.insert(o.face);
+    if (o.group == ObsGroup::kEdm) edm = true;
+    if (o.group == ObsGroup::kCam) cam_zooms.insert(o.zoom);
+    if (o.group == ObsGroup::kPixel && o.zoom < c.model.NumZooms()) pixel_zooms.insert(o.zoom);
+  }
+  std::set<int> pixel_zooms_mapped = pixel_zooms;
+  const std::string model = KinematicsName(c.model.kinematics) + std::string(", effects: [") + [&] {
+    std::string s;
+    for (const std::string& n : c.model.effects.Names()) s += (s.empty() ? "" : ", ") + n;
+    return s;
+  }() + "]";
+  // A camera-only calibration (kinematics none) has no pointings to map.
+  if (c.model.kinematics == Kinematics::kNone) pixel_zooms_mapped.clear();
+  if (edm) {
+    figs.push_back(ErrorMap({"edm", "EDM points", "mm", 1e3, ObsGroup::kEdm, 0}, rows, faces,
+                            c.fit_options, model));
   }
   for (int z : cam_zooms) {
-    if (z < r.calibration.model.NumZooms()) figs.push_back(ImageArrows(z, r));
+    figs.push_back(
+        ErrorMap({"cam_zoom" + std::to_string(z), "Camera points, zoom " + std::to_string(z), "mm",
+                  1e3, ObsGroup::kCam, z},
+                 rows, faces, c.fit_options, model));
   }
-  for (int z : pixel_zooms) {
-    if (z < r.calibration.model.NumZooms() && !cam_zooms.count(z))
-      figs.push_back(ImageArrows(z, r));
+  for (int z : pixel_zooms_mapped) {
+    figs.push_back(
+        ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z),
+                  "px", 1.0, ObsGroup::kPixel, z},
+                 rows, faces, c.fit_options, model));
   }
-  figs.push_back(Histograms(r));
+
+  // The image: binned residuals per zoom, then the worst photos.
+  std::set<int> image_zooms = pixel_zooms;
+  image_zooms.insert(cam_zooms.begin(), cam_zooms.end());
+  for (int z : image_zooms) {
+    if (z < c.model.NumZooms()) figs.push_back(ImageResiduals(z, c.model.cams[z], rows));
+  }
+  std::map<std::string, std::vector<ObservationResidual>> by_shot;
+  for (const ObservationResidual& o : rows) {
+    if (o.group == ObsGroup::kPixel && !o.shot.empty()) by_shot[o.shot].push_back(o);
+  }
+  std::map<int, std::vector<std::pair<double, std::string>>> worst;  // zoom -> (rms, shot)
+  for (const auto& [shot, shot_rows] : by_shot) {
+    double ss = 0;
+    int n = 0;
+    for (const ObservationResidual& o : shot_rows) {
+      if (!Fitted(o)) continue;
+      ss += o.size * o.size;
+      ++n;
+    }
+    if (n > 0) worst[shot_rows.front().zoom].push_back({std::sqrt(ss / n), shot});
+  }
+  const std::map<std::string, std::string> files = PhotoFiles(r.photos);
+  for (auto& [z, shots] : worst) {
+    if (z >= c.model.NumZooms()) continue;
+    std::sort(shots.rbegin(), shots.rend());
+    for (size_t k = 0; k < shots.size() && k < kWorstPhotosPerZoom; ++k) {
+      const auto file = files.find(shots[k].second);
+      figs.push_back(PhotoFigure(shots[k].second, by_shot[shots[k].second],
+                                 file == files.end() ? "" : file->second, c.model.cams[z].width,
+                                 c.model.cams[z].height));
+    }
+  }
+  figs.push_back(VariablesFigure(rows));
+  figs.push_back(Histograms(rows));
+  for (const UncertaintyMap& m : r.uncertainty_maps) {
+    if (m.determined) {
+      figs.push_back(
+          UncertaintyFigure(m, r.uncertainty_options, c.model.cams[m.zoom], r.full_covariance));
+    }
+  }
   return figs;
+}
+
+std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>& figures,
+                                                       const std::string& dir, std::string* note) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw WriteError(dir, ec.message() + " (creating the folder)");
+  std::vector<std::vector<std::string>> written(figures.size());
+  std::vector<json> specs;
+  for (size_t i = 0; i < figures.size(); ++i) {
+    const std::string name = figures[i].name + ".vg.json";
+    WriteFileAtomic((fs::path(dir) / name).string(), figures[i].spec.dump() + "\n");
+    written[i].push_back(name);
+    specs.push_back(figures[i].spec);
+  }
+  note->clear();
+  const std::vector<RenderedFigure> drawn = RenderFigures(specs, note);
+  for (size_t i = 0; i < drawn.size(); ++i) {
+    if (drawn[i].svg.empty()) {
+      *note += std::string(note->empty() ? "figures: " : "; ") + figures[i].name +
+               " has no SVG or PNG (" + drawn[i].error + ")";
+      continue;
+    }
+    WriteFileAtomic((fs::path(dir) / (figures[i].name + ".svg")).string(), drawn[i].svg);
+    WriteFileAtomic(
+        (fs::path(dir) / (figures[i].name + ".png")).string(),
+        std::string_view(reinterpret_cast<const char*>(drawn[i].png.data()), drawn[i].png.size()));
+    written[i].push_back(figures[i].name + ".svg");
+    written[i].push_back(figures[i].name + ".png");
+  }
+  return written;
 }
 
 }  // namespace rtscalib::app

@@ -1,21 +1,28 @@
-// The pictures of a run (PNG, drawn with OpenCV), in the order report.html
-// shows them:
-//   error maps      rms error per pointing over phi (x) and theta (y, zenith at
-//                   the top), one panel per face, one figure per tool (EDM, camera
-//                   rows and image points per zoom); the faces of one tool share
-//                   one colour scale; critical regions are hatched
-//   ladder          error per observation group across the runs in the output
-//                   folder's history and across this run's stepwise rungs
-//   image arrows    image-space residuals per zoom (observed minus predicted
-//                   pixel) at the observed points, averaged per image cell, with
-//                   a scale bar
-//   histograms      residual coordinates per group against the Gaussian of the
-//                   fitted sigma
-// Only formats what the pipeline and the diagnosis computed.
+// The pictures of a run, as Vega specs (app/vega.h draws them: SVG in
+// report.html, PNG files beside it). Every plotted number comes from the
+// calibration's own tables: the residual table (CalibrationResult::residuals,
+// one row per observation at the final model, boards of unknown pose at their
+// estimates), the coverage, the ladder, the run history and the uncertainty
+// maps. Nothing here predicts or fits; axes, ticks, legends and colour
+// schemes are Vega's. In the order report.html shows them:
+//   ladder        error per observation group across this run's stepwise rungs
+//                 and across the runs of the output folder
+//   maps          rms error per pointing over phi and theta, per face, per tool
+//                 (EDM, camera rows and image points per zoom)
+//   image         per zoom: fitted image residuals binned over the image (mean
+//                 vector per cell, scaled, the scale in pixels, points per cell)
+//   photos        the worst photos of each zoom with their corners and scaled
+//                 residual arrows (any photo: `rtscalib show --shot ID`)
+//   variables     residuals against each variable the diagnosis tests (binned
+//                 mean and its 2-sigma band), one row per variable
+//   histograms    residual coordinates per group against the Gaussian of the
+//                 fitted sigma
+//   uncertainty   projection uncertainty per zoom
+// `summary` holds each figure's key numbers for report.json (docs/output.md).
 #pragma once
 
+#include <map>
 #include <nlohmann/json.hpp>
-#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -25,22 +32,37 @@
 namespace rtscalib::app {
 
 struct Figure {
-  std::string name;     // file name, e.g. "error_map_edm.png"
-  std::string section;  // "maps", "ladder", "image", "histograms"
+  std::string name;     // file stem: figures/<name>.vg.json, .svg, .png
+  std::string section;  // "ladder", "maps", "image", "photos", "variables", ...
   std::string title;
   std::string caption;
-  cv::Mat image;  // BGR, 8 bit
-  std::vector<unsigned char> png;  // the image encoded once, when written (EncodePng)
+  nlohmann::json spec;     // Vega 5
+  nlohmann::json summary;  // what report.json says of the figure
 };
 
 // `history` = report.json's "history" array (earlier runs, oldest first).
 std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
 
+// One photo with its observed corners and scaled residual arrows. `rows`:
+// the residual table's pixel rows of that shot (any status: only fitted
+// rows get arrows, the others are marked); `image` the photo file ("" or
+// unreadable: the corners on a blank image of width x height).
+Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidual>& rows,
+                   const std::string& image, int width, int height);
+
+// The photo files of a run by shot id (the photo session's shots.csv rows,
+// resolved against its folder).
+std::map<std::string, std::string> PhotoFiles(const PhotoSessionSummary& photos);
+
 // The projection difference of one zoom between two models (`rtscalib
 // compare`, libcalib/api/compare.h) as a heat map.
 Figure DifferenceFigure(const ZoomDifference& d);
 
-// PNG bytes of a figure (for writing and for embedding).
-std::vector<unsigned char> EncodePng(const cv::Mat& image);
+// Writes <dir>/<name>.vg.json for each figure and, when the PNG renderer is
+// installed (app/vega.h), <name>.svg and <name>.png; returns the names of
+// the files written per figure (in figure order) and, in *note, why no PNG
+// was written ("" when they were).
+std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>& figures,
+                                                       const std::string& dir, std::string* note);
 
 }  // namespace rtscalib::app

@@ -105,6 +105,16 @@ int main(int argc, char** argv) {
   cm->add_option("--output", cmp.output,
                  "also write compare.txt, compare.json and figures/ into this folder");
 
+  rtscalib::app::ShowArgs show;
+  CLI::App* sh = app.add_subcommand(
+      "show", "draw one photo of a run with its corners and residual arrows (photo_<ID>.html/png)");
+  sh->add_option("--output", show.output, "the run's output folder (or one history entry)")
+      ->required();
+  sh->add_option("--shot", show.shot, "shot id (shots.csv; default the image file's stem)")
+      ->required();
+  sh->add_option("--out", show.out, "folder for photo_<ID>.{html, vg.json, svg, png} (default .)");
+  sh->add_flag("--force", show.force, "replace files that exist");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -117,6 +127,7 @@ int main(int argc, char** argv) {
     if (ex->parsed()) return rtscalib::app::RunExport(exp);
     if (det->parsed()) return rtscalib::app::RunDetect(detect);
     if (cm->parsed()) return rtscalib::app::RunCompare(cmp);
+    if (sh->parsed()) return rtscalib::app::RunShow(show);
     if (run.config.empty()) {
       std::cerr << app.help();
       return kExitUsage;

@@ -330,8 +330,8 @@ const char* RunStateName(RunState state) {
 }
 
 const std::vector<std::string>& OutputFolder::TopFiles() {
-  static const std::vector<std::string> names = {"model.yaml", "covariance.yaml", "report.json",
-                                                 "report.txt", "report.html"};
+  static const std::vector<std::string> names = {"model.yaml",    "covariance.yaml", "report.json",
+                                                 "residuals.csv", "report.txt",      "report.html"};
   return names;
 }
 

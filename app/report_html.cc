@@ -8,7 +8,7 @@
 #include <string_view>
 
 #include "app/reports.h"
-#include "libcalib/io/safe_write.h"
+#include "app/vega.h"
 
 namespace rtscalib::app {
 namespace {
@@ -68,16 +68,73 @@ td.notes { max-width: 300px; font-size: 12px; color: #555; }
 tr.sig td { background: #fff6e0; }
 tr.red td { color: #888; }
 figure { margin: 14px 0 22px 0; }
-figure img { max-width: 100%; border: 1px solid #e2e2e2; }
+figure .plot { overflow-x: auto; }
+figure .plot svg { max-width: 100%; height: auto; }
 figcaption { font-size: 13px; color: #555; max-width: 1000px; }
 .small { font-size: 12px; color: #666; }
 )";
 
+// A figure: its Vega spec as JSON data (drawn by the script at the end of the
+// page), its caption.
 std::string Img(const Figure& f) {
-  const std::vector<unsigned char> png = f.png.empty() ? EncodePng(f.image) : f.png;
-  return "<figure><img alt=\"" + Esc(f.title) + "\" src=\"data:image/png;base64," + Base64(png) +
-         "\"><figcaption>" + Esc(f.caption) +
+  std::string spec = f.spec.dump();
+  // "</" would end the script element early; "<\/" is the same JSON string.
+  for (size_t at = spec.find("</"); at != std::string::npos; at = spec.find("</", at + 3))
+    spec.replace(at, 2, "<\\/");
+  return "<figure class=\"vega\" id=\"fig-" + Esc(f.name) + "\" data-figure=\"" + Esc(f.name) +
+         "\" aria-label=\"" + Esc(f.title) +
+         "\"><div class=\"plot\"></div><script type=\"application/json\" "
+         "id=\"spec-" +
+         Esc(f.name) + "\">" + spec + "</script><figcaption>" + Esc(f.caption) +
          "</figcaption></figure>\n";
+}
+
+// The Vega runtime (app/vega.h) and the script that draws every figure of
+// the page as SVG; each figure says when it is drawn (data-rendered: the
+// number of SVG elements, data-marks: the items of its data marks) or why not
+// (data-error), for the checks of scripts/render-report.sh.
+std::string FigureScripts() {
+  std::string missing;
+  const std::string& runtime = VegaRuntime(&missing);
+  std::string out;
+  if (!runtime.empty()) out += "<script>\n" + runtime + "</script>\n";
+  // A JSON string is a JavaScript string literal.
+  std::string why = nlohmann::json(missing).dump();
+  for (size_t at = why.find("</"); at != std::string::npos; at = why.find("</", at + 3))
+    why.replace(at, 2, "<\\/");
+  out += "<script>\nvar rtscalibVegaMissing = " + why + ";\n";
+  out += R"js((function () {
+  var figs = document.querySelectorAll('figure.vega');
+  figs.forEach(function (f) {
+    var plot = f.querySelector('.plot');
+    if (!window.vega) {
+      plot.textContent = 'This figure needs the Vega runtime, which was not installed when the ' +
+          'report was written (' + rtscalibVegaMissing + '); figures/ holds its spec.';
+      f.setAttribute('data-error', 'no vega runtime');
+      return;
+    }
+    try {
+      var spec = JSON.parse(document.getElementById('spec-' + f.dataset.figure).textContent);
+      new vega.View(vega.parse(spec), {renderer: 'svg', container: plot, hover: true})
+        .runAsync()
+        .then(function () {
+          f.setAttribute('data-rendered', plot.querySelectorAll('svg *').length);
+          // Items of the data marks (not axes, legends or titles): a figure
+          // with none is blank.
+          f.setAttribute('data-marks', plot.querySelectorAll(
+              ['symbol', 'rect', 'rule', 'line', 'area', 'image'].map(function (m) {
+                return '.role-mark.mark-' + m + ' > *'; }).join(', ')).length);
+        })
+        .catch(function (e) { f.setAttribute('data-error', String(e)); console.error('figure ' + f.dataset.figure + ': ' + e); });
+    } catch (e) {
+      f.setAttribute('data-error', String(e));
+      console.error('figure ' + f.dataset.figure + ': ' + e);
+    }
+  });
+})();
+</script>
+)js";
+  return out;
 }
 
 std::string Figures(const std::vector<Figure>& figs, const std::string& section) {
@@ -415,36 +472,35 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
       << Figures(figs, "uncertainty");
   }
   o << "<h2 id=\"image\">Image residuals</h2>\n" << Figures(figs, "image");
+  if (!Figures(figs, "photos").empty()) {
+    o << "<h2 id=\"photos\">The worst photos of each zoom</h2>\n<p class=small>Any photo: "
+         "<code>rtscalib show --output OUT --shot ID</code>.</p>\n"
+      << Figures(figs, "photos");
+  }
+  o << "<h2 id=\"variables\">Residuals against the variables</h2>\n" << Figures(figs, "variables");
   o << "<h2 id=\"histograms\">Residual distributions</h2>\n" << Figures(figs, "histograms");
   if (!r.calibration.gross_rows.empty()) {
     o << "<h2 id=\"gross\">Gross errors</h2>\n<pre class=small>" << Esc(GrossRowsText(r))
       << "</pre>\n";
   }
-  if (!r.notes.empty()) {
+  std::vector<std::string> notes = r.notes;
+  if (report.contains("figures") && report["figures"].contains("note"))
+    notes.push_back(report["figures"]["note"].get<std::string>());
+  if (!notes.empty()) {
     o << "<h2>Notes</h2><ul class=small>";
-    for (const std::string& n : r.notes) o << "<li>" << Esc(n) << "</li>";
+    for (const std::string& n : notes) o << "<li>" << Esc(n) << "</li>";
     o << "</ul>\n";
   }
   o << "<p class=small>rtscalib 0.1.0 &middot; report.json holds every number of this "
-       "page.</p>\n</body></html>\n";
+       "page, residuals.csv every residual, figures/*.vg.json every figure's data (Vega 5).</p>\n"
+    << FigureScripts() << "</body></html>\n";
   return o.str();
 }
 
-void WriteReportHtml(const RunConfig& config, const PipelineResult& r, const json& report,
-                     const OutputFolder& out) {
-  const json history = report.value("history", json::array());
-  std::vector<Figure> figs = MakeFigures(r, history);
-  const std::filesystem::path dir = std::filesystem::path(out.run_dir()) / "figures";
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw WriteError(dir.string(), ec.message() + " (creating the folder)");
-  // Encoded once: the same bytes go to figures/ and into report.html.
-  for (Figure& f : figs) {
-    f.png = EncodePng(f.image);
-    WriteFileAtomic((dir / f.name).string(),
-                    std::string_view(reinterpret_cast<const char*>(f.png.data()), f.png.size()));
-  }
-  out.Write("report.html", ReportHtml(config, r, report, figs));
+std::string FigurePage(const Figure& f) {
+  return "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" + Esc(f.title) +
+         "</title><style>" + kStyle + "</style></head><body>\n" + Img(f) + FigureScripts() +
+         "</body></html>\n";
 }
 
 }  // namespace rtscalib::app

@@ -1,12 +1,14 @@
-// report.html: one self-contained page (pictures embedded as base64 PNG, no
-// scripts, no external files) that a person reads top-down:
+// report.html: one self-contained page (no external files: the figures are
+// Vega specs drawn as SVG by the Vega runtime inlined in the page, app/vega.h)
+// that a person reads top-down:
 //   verdict (how good the model is, what to add next, the config line)
 //   the ladder (this run's stepwise rungs, the runs in the output folder)
 //   error maps
 //   tables: ranking of the missing effects, structure outside the catalogue,
 //           outliers, final errors, fit
-//   image residuals and histograms
-// The same pictures are written as PNG files to the run's figures/ folder.
+//   image residuals, the worst photos, residuals against the variables,
+//   histograms
+// The same figures are files in the run's figures/ folder (WriteFigureFiles).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -24,9 +26,8 @@ namespace rtscalib::app {
 std::string ReportHtml(const RunConfig& config, const PipelineResult& result,
                        const nlohmann::json& report, const std::vector<Figure>& figures);
 
-// Writes <run>/figures/*.png and <run>/report.html.
-void WriteReportHtml(const RunConfig& config, const PipelineResult& result,
-                     const nlohmann::json& report, const OutputFolder& out);
+// A page with one figure (`rtscalib show`).
+std::string FigurePage(const Figure& f);
 
 std::string Base64(const std::vector<unsigned char>& bytes);
 

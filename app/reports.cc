@@ -4,10 +4,10 @@
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
-#include "app/coverage.h"
 #include "app/diagnosis_report.h"
 #include "libcalib/model/kinematics.h"
 
@@ -374,18 +374,18 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
       sizes[std::to_string(z)] = {{"width", c.width}, {"height", c.height}, {"source", source}};
     }
     j["image_sizes"] = sizes;
-    const CoverageReport cov = ComputeCoverage(r.obs, r.calibration.model);
+    const Coverage& cov = r.calibration.coverage;
     json zooms = json::array();
-    for (const ZoomCoverage& c : cov.zooms) {
+    for (const ImageCoverage& c : cov.images) {
       zooms.push_back({{"zoom", c.zoom},
                        {"points", c.points},
                        {"cells", kCoverageCells},
                        {"counts", c.counts},
                        {"covered_fraction", c.covered_fraction},
-                       {"radius_fraction", c.radius_fraction},
+                       {"corner_fraction", cov.corner_fraction[c.zoom]},
                        {"corners_covered", c.corners_covered}});
     }
-    j["coverage"] = {{"zooms", zooms}, {"warnings", cov.warnings}};
+    j["coverage"] = {{"zooms", zooms}, {"warnings", r.calibration.coverage_warnings}};
   }
   json gross = json::array();
   for (const ExcludedRow& e : r.calibration.gross_rows) {
@@ -427,8 +427,148 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                         {"full_covariance", r.full_covariance},
                         {"zooms", zooms}};
   }
+  j["residuals"] = ResidualsJson(r);
   j["notes"] = r.notes;
   j["history"] = HistoryJson(out);
+  return j;
+}
+
+// ---------------------------------------------------------------------------
+const std::vector<std::string>& ResidualColumns() {
+  static const std::vector<std::string> columns = {"kind",
+                                                   "index",
+                                                   "line",
+                                                   "status",
+                                                   "face",
+                                                   "zoom",
+                                                   "phi",
+                                                   "theta",
+                                                   "d",
+                                                   "shot",
+                                                   "placement",
+                                                   "target",
+                                                   "corner",
+                                                   "point",
+                                                   "obs_x",
+                                                   "obs_y",
+                                                   "obs_z",
+                                                   "pred_x",
+                                                   "pred_y",
+                                                   "pred_z",
+                                                   "res_x",
+                                                   "res_y",
+                                                   "res_z",
+                                                   "size",
+                                                   "sigma",
+                                                   "normalised",
+                                                   "along_m",
+                                                   "hz_rad",
+                                                   "zenith_rad",
+                                                   "target_distance_m",
+                                                   "image_radius_px",
+                                                   "u",
+                                                   "v",
+                                                   "image_du",
+                                                   "image_dv",
+                                                   "reason"};
+  return columns;
+}
+
+std::string ResidualsCsv(const PipelineResult& r) {
+  std::ostringstream o;
+  o << "# rtscalib residual table: every observation at the final model (docs/output.md)\n";
+  for (size_t i = 0; i < ResidualColumns().size(); ++i) o << (i ? "," : "") << ResidualColumns()[i];
+  o << "\n";
+  char buf[64];
+  auto num = [&](double x, const char* f) -> const char* {
+    if (!std::isfinite(x)) return "";
+    std::snprintf(buf, sizeof buf, f, x);
+    return buf;
+  };
+  // Text fields: quoted when they hold a comma or a quote (RFC 4180).
+  auto text = [](const std::string& t) {
+    if (t.find_first_of(",\"\n") == std::string::npos) return t;
+    std::string q = "\"";
+    for (char c : t) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  };
+  for (const ObservationResidual& x : r.calibration.residuals) {
+    const bool px = x.group == ObsGroup::kPixel;
+    const char* kind = px ? "pixel" : x.group == ObsGroup::kEdm ? "edm" : "cam";
+    o << kind << "," << x.index << "," << x.line << "," << ResidualStatusName(x.status) << ","
+      << x.face << "," << x.zoom << "," << num(x.phi, "%.10g") << ",";
+    o << num(x.theta, "%.10g") << "," << (px ? "" : num(x.d, "%.10g")) << "," << text(x.shot) << ","
+      << text(x.placement) << "," << (px ? std::to_string(x.target) : "") << ","
+      << (px ? std::to_string(x.corner) : "") << "," << text(x.point);
+    const int k = px ? 2 : 3;
+    for (const Eigen::Vector3d* v : {&x.observed, &x.predicted}) {
+      for (int i = 0; i < 3; ++i) o << "," << (x.valid && i < k ? num((*v)[i], "%.10g") : "");
+    }
+    for (int i = 0; i < 3; ++i) o << "," << (x.valid && i < k ? num(x.delta[i], "%.6g") : "");
+    o << "," << (x.valid ? num(x.size, "%.6g") : "") << "," << num(x.sigma, "%.6g") << ","
+      << (x.valid ? num(x.normalised, "%.6g") : "");
+    o << "," << (x.valid && !px ? num(x.along, "%.6g") : "") << ","
+      << (x.valid ? num(x.hz, "%.6g") : "");
+    o << "," << (x.valid ? num(x.zenith, "%.6g") : "") << ","
+      << (x.valid ? num(x.target_distance, "%.8g") : "");
+    o << "," << (x.image_radius >= 0 ? num(x.image_radius, "%.8g") : "");
+    const bool image = px || x.group == ObsGroup::kCam;
+    o << "," << (image ? num(x.u, "%.10g") : "") << "," << (image ? num(x.v, "%.10g") : "");
+    o << "," << num(x.image_delta.x(), "%.6g") << "," << num(x.image_delta.y(), "%.6g") << ","
+      << text(x.reason) << "\n";
+  }
+  return o.str();
+}
+
+json ResidualsJson(const PipelineResult& r) {
+  json status = json::object();
+  for (ResidualStatus s : {ResidualStatus::kFitted, ResidualStatus::kCriticalRegion,
+                           ResidualStatus::kGrossError, ResidualStatus::kNotPredicted}) {
+    status[ResidualStatusName(s)] = 0;
+  }
+  double ss[3] = {0, 0, 0};
+  int n[3] = {0, 0, 0};
+  std::map<int, std::pair<double, int>> zooms;
+  for (const ObservationResidual& x : r.calibration.residuals) {
+    status[ResidualStatusName(x.status)] = status[ResidualStatusName(x.status)].get<int>() + 1;
+    if (x.status != ResidualStatus::kFitted) continue;
+    const int g = static_cast<int>(x.group);
+    ss[g] += x.size * x.size;
+    ++n[g];
+    if (x.group == ObsGroup::kPixel) {
+      zooms[x.zoom].first += x.size * x.size;
+      ++zooms[x.zoom].second;
+    }
+  }
+  auto rms = [](double s, int k) { return k ? std::sqrt(s / k) : 0.0; };
+  json per_zoom = json::array();
+  for (const auto& [z, v] : zooms)
+    per_zoom.push_back({{"zoom", z}, {"n", v.second}, {"rms_px", rms(v.first, v.second)}});
+  return {{"file", "residuals.csv"},
+          {"rows", r.calibration.residuals.size()},
+          {"columns", ResidualColumns()},
+          {"status", status},
+          {"fitted",
+           {{"edm", {{"n", n[0]}, {"rms_m", rms(ss[0], n[0])}}},
+            {"cam", {{"n", n[1]}, {"rms_m", rms(ss[1], n[1])}}},
+            {"pixels", {{"n", n[2]}, {"rms_px", rms(ss[2], n[2])}, {"zooms", per_zoom}}}}}};
+}
+
+json FiguresJson(const std::vector<Figure>& figures,
+                 const std::vector<std::vector<std::string>>& files, const std::string& note) {
+  json list = json::array();
+  for (size_t i = 0; i < figures.size(); ++i) {
+    const Figure& f = figures[i];
+    json files_j = json::array();
+    for (const std::string& name : files[i]) files_j.push_back("figures/" + name);
+    list.push_back({{"name", f.name},
+                    {"section", f.section},
+                    {"title", f.title},
+                    {"files", files_j},
+                    {"summary", f.summary}});
+  }
+  json j = {{"library", "vega 5 (Debian libjs-vega)"}, {"list", list}};
+  if (!note.empty()) j["note"] = note;
   return j;
 }
 
@@ -635,19 +775,20 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     o << "\n";
   }
   {
-    const CoverageReport cov = ComputeCoverage(r.obs, r.calibration.model);
-    if (!cov.zooms.empty()) {
-      o << "Image coverage (" << kCoverageCells << "x" << kCoverageCells << " cells):\n";
-      for (const ZoomCoverage& c : cov.zooms) {
+    const Coverage& cov = r.calibration.coverage;
+    if (!cov.images.empty()) {
+      o << "Image coverage of the fitted points (" << kCoverageCells << "x" << kCoverageCells
+        << " cells):\n";
+      for (const ImageCoverage& c : cov.images) {
         const auto src = r.calibration.size_source.find(c.zoom);
         o << "  zoom " << c.zoom << ": " << c.width << "x" << c.height << " px ("
           << (src == r.calibration.size_source.end() ? "?" : src->second) << "), " << c.points
           << " points, " << Fmt("%.0f", 100 * c.covered_fraction) << "% of the image covered, "
-          << "largest radius " << Fmt("%.0f", 100 * c.radius_fraction)
-          << "% of the corner's, corners " << (c.corners_covered ? "covered" : "NOT covered")
+          << "farthest " << Fmt("%.0f", 100 * cov.corner_fraction[c.zoom])
+          << "% of the half-diagonal, corners " << (c.corners_covered ? "covered" : "NOT covered")
           << "\n";
       }
-      for (const std::string& w : cov.warnings) o << "  WARNING: " << w << "\n";
+      for (const std::string& w : r.calibration.coverage_warnings) o << "  WARNING: " << w << "\n";
       o << "\n";
     }
   }

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "app/figures.h"
 #include "app/output_folder.h"
 #include "app/pipeline.h"
 
@@ -35,5 +36,18 @@ nlohmann::json HistoryJson(const OutputFolder& out);
 std::string HistoryText(const nlohmann::json& history);
 
 nlohmann::json StatsJson(const ErrorStats& s);
+
+// residuals.csv: the calibration's residual table (CalibrationResult::
+// residuals), one row per observation as given, columns ResidualColumns()
+// (docs/output.md); report.json's "residuals" says what it holds (rows per
+// status, rms of the fitted rows per group and zoom).
+const std::vector<std::string>& ResidualColumns();
+std::string ResidualsCsv(const PipelineResult& result);
+nlohmann::json ResidualsJson(const PipelineResult& result);
+// report.json's "figures": each figure's name, section, title, files and
+// key numbers; `note` says why no PNG was written ("" when they were).
+nlohmann::json FiguresJson(const std::vector<Figure>& figures,
+                           const std::vector<std::vector<std::string>>& files,
+                           const std::string& note);
 
 }  // namespace rtscalib::app

@@ -4,6 +4,7 @@
 
 #include "app/commands.h"
 #include "app/diagnosis_report.h"
+#include "app/figures.h"
 #include "app/output_folder.h"
 #include "app/pipeline.h"
 #include "app/progress.h"
@@ -76,9 +77,18 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   } else {
     progress.Note("no full parameter covariance (the fit computed none): no covariance.yaml");
   }
-  const nlohmann::json report = ReportJson(config, result, out);
+  // The figures first: report.json lists them with their key numbers.
+  progress.Step("drawing the figures");
+  const std::vector<Figure> figures = MakeFigures(result, HistoryJson(out));
+  std::string figures_note;
+  const std::vector<std::vector<std::string>> figure_files =
+      WriteFigureFiles(figures, out.RunFile("figures"), &figures_note);
+  if (!figures_note.empty()) progress.Note(figures_note);
+  nlohmann::json report = ReportJson(config, result, out);
+  report["figures"] = FiguresJson(figures, figure_files, figures_note);
+  out.Write("residuals.csv", ResidualsCsv(result));
   out.Write("report.json", report.dump(2) + "\n");
-  WriteReportHtml(config, result, report, out);
+  out.Write("report.html", ReportHtml(config, result, report, figures));
   const std::string text = ReportText(config, result) +
                            HistoryText(report.value("history", nlohmann::json::array())) + "\n" +
                            DiagnosisText(result.calibration);
@@ -88,8 +98,8 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   progress.Done();
   std::cout << (args.diagnose ? DiagnosisText(result.calibration) : text);
   std::cout << "\nwritten: " << out.run_dir()
-            << "/{model.yaml, covariance.yaml, report.json, report.txt, report.html, "
-               "figures/}\nshown at the top of "
+            << "/{model.yaml, covariance.yaml, report.json, residuals.csv, report.txt, "
+               "report.html, figures/}\nshown at the top of "
             << out.root() << " (symlinks through " << out.root() << "/latest)\n";
   for (const std::string& f : kept) {
     std::cout << "kept your file " << out.root() << "/figures/" << f << "; this run's " << f

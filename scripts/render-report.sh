@@ -4,10 +4,13 @@
 #
 #   scripts/render-report.sh OUT/report.html [report.png] [width]
 #
-# Exit status: 0 when the page loaded and the PNG was written; 1 when Chromium
-# reported a page error (JavaScript error, resource that failed to load), the
-# page refers to other files (a report must be self-contained) or no PNG was
-# written; 2 on bad usage; 3 when Chromium is not installed
+# Exit status: 0 when the page loaded, every figure was drawn and the PNG was
+# written; 1 when Chromium reported a page error (JavaScript error, resource
+# that failed to load), the page refers to other files (a report must be
+# self-contained), a figure is missing, failed or drew no data marks (the
+# page's DOM after its scripts ran: each <figure class="vega"> says
+# data-rendered="<SVG elements>" and data-marks="<data mark items>", or
+# data-error) or no PNG was written; 2 on bad usage; 3 when Chromium is not installed
 # (scripts/install-deps.sh installs Debian's `chromium`). Chromium's own log
 # goes to <png>.log.
 set -euo pipefail
@@ -42,9 +45,12 @@ rm -f "$png"
 url="file://$(realpath "$html")"
 # A tall window: the whole report in one picture. --enable-logging=stderr
 # --v=0 makes Chromium log the page's console messages (and errors) to stderr.
-timeout 120 "$browser" --headless --no-sandbox --disable-gpu --disable-background-networking \
-  --no-first-run --user-data-dir="$profile" --hide-scrollbars --enable-logging=stderr --v=0 \
-  --window-size="$width,${RENDER_HEIGHT:-6000}" --screenshot="$png" "$url" > "$log" 2>&1 || true
+# --virtual-time-budget lets the page's scripts (the figures) finish first.
+opts=(--headless --no-sandbox --disable-gpu --disable-background-networking --no-first-run
+  --user-data-dir="$profile" --hide-scrollbars --enable-logging=stderr --v=0
+  --virtual-time-budget=20000)
+timeout 120 "$browser" "${opts[@]}" --window-size="$width,${RENDER_HEIGHT:-6000}" \
+  --screenshot="$png" "$url" > "$log" 2>&1 || true
 
 if [[ ! -s $png ]]; then
   echo "render-report: chromium wrote no screenshot (see $log)" >&2
@@ -65,4 +71,28 @@ if grep -E "Uncaught|CONSOLE\(.*\)\] \"?(Error|Failed)|ERR_FILE_NOT_FOUND|net::E
   grep -E "Uncaught|CONSOLE|ERR_|Failed to load" "$log" >&2 || true
   exit 1
 fi
-echo "render-report: $png"
+# The figures, in the DOM after the page's scripts ran.
+dom="$png.dom.html"
+timeout 120 "$browser" "${opts[@]}" --dump-dom "$url" > "$dom" 2>> "$log" || true
+declared=$(grep -o 'data-figure="[^"]*"' "$html" | sort -u | wc -l)
+bad=0
+drawn=0
+while IFS= read -r tag; do
+  name=$(sed -n 's/.*data-figure="\([^"]*\)".*/\1/p' <<< "$tag")
+  marks=$(sed -n 's/.*data-marks="\([0-9]*\)".*/\1/p' <<< "$tag")
+  if [[ $tag == *data-error=* || -z $marks || $marks -lt 1 ]]; then
+    echo "render-report: figure $name was not drawn: ${tag:0:300}" >&2
+    bad=1
+  else
+    drawn=$((drawn + 1))
+  fi
+done < <(grep -o '<figure class="vega"[^>]*>' "$dom")
+if ((drawn != declared)); then
+  echo "render-report: $drawn of $declared figures drawn (see $dom)" >&2
+  bad=1
+fi
+if ((bad)); then
+  exit 1
+fi
+rm -f "$dom"
+echo "render-report: $png ($drawn figures drawn)"

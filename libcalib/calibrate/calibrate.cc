@@ -660,6 +660,10 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
     }
   }
   result.final_errors = ComputeFinalErrors(result.model, WithEstimates(used, result.model));
+  result.residuals =
+      ResidualTable(obs, result.model, result.fit_options, result.fit, result.gross_rows);
+  result.coverage = MeasureCoverage(used, result.model, result.fit_options);
+  result.coverage_warnings = CoverageWarnings(result.coverage, result.model);
   progress->Done();
   return result;
 }

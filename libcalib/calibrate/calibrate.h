@@ -15,7 +15,8 @@
 //   5. with faces: separate, one model per face and the two-face check;
 //   6. the diagnosis (libcalib/diagnose) of the refined model, or with
 //      diagnose.auto the forward stepwise ladder that starts from it;
-//   7. the final errors of the final model.
+//   7. the final errors of the final model, its residual table (every row,
+//      excluded ones marked) and the coverage of the fitted rows.
 // Nothing here reads or writes files or prints: progress goes to a
 // CalibrationProgress, the caller writes the reports.
 #pragma once
@@ -99,6 +100,13 @@ struct CalibrationResult {
   FitSummary fit;
   std::optional<Diagnosis> diagnosis;  // absent when off or failed (see notes)
   FinalErrors final_errors;
+  // Every observation as given at `model` (ResidualTable, diagnose/residuals.h):
+  // the one table reports, files and figures draw residuals from.
+  std::vector<ObservationResidual> residuals;
+  // What the fitted rows cover (angles, distances, the image per zoom) and
+  // the warnings it gives (CoverageWarnings).
+  Coverage coverage;
+  std::vector<std::string> coverage_warnings;
   // Per zoom of the model, where its image size came from (SPEC 7: never
   // guessed from where the points fall): "images" (Observations::image_sizes,
   // read from the photos), "config" (model.cameras) or "estimated" (neither:

@@ -1,6 +1,7 @@
 #include "libcalib/diagnose/coverage.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 
@@ -23,6 +24,8 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
   Coverage c;
   std::vector<double> phis, zeniths, edm;
   c.corner_fraction.assign(model.NumZooms(), 0.0);
+  std::vector<ImageCoverage> images(model.NumZooms());
+  std::vector<std::array<bool, 4>> ninths(model.NumZooms(), {false, false, false, false});
   auto corner = [&](int zoom, double u, double v) {
     if (zoom < 0 || zoom >= model.NumZooms()) return;
     const CameraTool& cam = model.cams[zoom];
@@ -30,6 +33,18 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
     const double half_diag = 0.5 * std::hypot(cam.width, cam.height);
     c.corner_fraction[zoom] =
         std::max(c.corner_fraction[zoom], std::hypot(u - cx, v - cy) / half_diag);
+    if (cam.width <= 0 || cam.height <= 0) return;
+    ImageCoverage& g = images[zoom];
+    if (g.counts.empty()) g.counts.assign(kCoverageCells * kCoverageCells, 0);
+    ++g.points;
+    // Pixel centres are integers (SPEC 2): the image spans [-0.5, W - 0.5).
+    const double fu = (u + 0.5) / cam.width, fv = (v + 0.5) / cam.height;
+    const int i = std::clamp(static_cast<int>(fu * kCoverageCells), 0, kCoverageCells - 1);
+    const int j = std::clamp(static_cast<int>(fv * kCoverageCells), 0, kCoverageCells - 1);
+    ++g.counts[j * kCoverageCells + i];
+    const int i3 = std::clamp(static_cast<int>(fu * 3), 0, 2);
+    const int j3 = std::clamp(static_cast<int>(fv * 3), 0, 2);
+    if (i3 != 1 && j3 != 1) ninths[zoom][(j3 / 2) * 2 + i3 / 2] = true;
   };
   auto pointing = [&](int face, double phi, double theta) {
     c.faces.insert(face);
@@ -67,6 +82,18 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
     pointing(p.face, p.phi, p.theta);
     corner(p.zoom, p.uv.x(), p.uv.y());
     target(p.zoom, focus[i]);
+  }
+  for (int z = 0; z < model.NumZooms(); ++z) {
+    ImageCoverage& g = images[z];
+    if (g.points == 0) continue;
+    g.zoom = z;
+    g.width = model.cams[z].width;
+    g.height = model.cams[z].height;
+    g.covered_fraction = static_cast<double>(std::count_if(g.counts.begin(), g.counts.end(),
+                                                           [](int n) { return n > 0; })) /
+                         g.counts.size();
+    g.corners_covered = ninths[z][0] && ninths[z][1] && ninths[z][2] && ninths[z][3];
+    c.images.push_back(std::move(g));
   }
   if (!zeniths.empty()) {
     c.min_zenith_deg = *std::min_element(zeniths.begin(), zeniths.end());
@@ -207,6 +234,54 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
       case kNeedNearAndFar:
         need_near_and_far();
         break;
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> CoverageWarnings(const Coverage& c, const InstrumentModel& model,
+                                          const CoverageRules& rules) {
+  std::vector<std::string> out;
+  char line[400];
+  for (const ImageCoverage& g : c.images) {
+    const int z = g.zoom;
+    const double reach = z < static_cast<int>(c.corner_fraction.size()) ? c.corner_fraction[z] : 0;
+    if (reach < rules.corner_fraction || !g.corners_covered) {
+      std::snprintf(line, sizeof line,
+                    "zoom %d: distortion extrapolated: points reach %.0f%% of the half-diagonal%s "
+                    "(%.0f%% of the image covered); take photos with the boards in the image "
+                    "corners",
+                    z, 100 * reach,
+                    g.corners_covered ? "" : ", some corner ninths of the image hold no points",
+                    100 * g.covered_fraction);
+      out.push_back(line);
+    }
+    if (!model.sigmas.valid || z >= static_cast<int>(model.sigmas.distortion.size())) continue;
+    const CameraTool& cam = model.cams[z];
+    const double corner_r = 0.5 * std::hypot(cam.width, cam.height) / cam.intrinsics[0];
+    for (int k = 0; k < kNumDistortion; ++k) {
+      const double x = cam.distortion[k], s = model.sigmas.distortion[z][k];
+      if (!(s > 0 && s > std::abs(x))) continue;
+      // What one sigma means in the image: the shift it gives at the image
+      // corner (radial terms k r^(2n) on a radius r; tangential ones at most
+      // 3 p r^2), so that a coefficient that is merely near zero can be told
+      // from one that moves pixels.
+      double shift = -1;
+      if (k == 0) shift = s * std::pow(corner_r, 3);
+      if (k == 1) shift = s * std::pow(corner_r, 5);
+      if (k == 4) shift = s * std::pow(corner_r, 7);
+      if (k == 2 || k == 3) shift = 3 * s * corner_r * corner_r;
+      char effect[96] = "";
+      if (shift >= 0) {
+        std::snprintf(effect, sizeof effect, "; 1 sigma moves the image corner by %.2g px",
+                      shift * cam.intrinsics[0]);
+      }
+      std::snprintf(line, sizeof line,
+                    "zoom %d: distortion %s = %.3g +- %.3g is badly determined (relative sigma "
+                    "%.1f > 1%s)",
+                    z, kDistortionCoefficientNames[k], x, s, x != 0 ? s / std::abs(x) : INFINITY,
+                    effect);
+      out.push_back(line);
     }
   }
   return out;

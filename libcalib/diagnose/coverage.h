@@ -13,6 +13,20 @@
 //   distortion groups                               -> points near the image corners
 //   focus                                           -> camera targets near and far (per zoom)
 // `WhatWouldHelp` returns the requirements the data do not meet, in words.
+//
+// Image coverage per zoom (ImageCoverage): an occupancy grid of
+// kCoverageCells x kCoverageCells cells over the image (cell (i, j) covers
+// u in [i W/n, (i+1) W/n), v in [j H/n, (j+1) H/n), pixel centres at integers,
+// SPEC 2), the share of cells holding points, and whether each corner ninth
+// of the image (3 x 3 grid) holds points. `CoverageWarnings` turns coverage and
+// the fitted distortion into sentences:
+//   * extrapolated: the farthest point below CoverageRules::corner_fraction of
+//     the half-diagonal, or a corner ninth without points: the distortion
+//     polynomial is evaluated at the image's corners beyond the data;
+//   * badly determined: a fitted distortion coefficient whose sigma exceeds its
+//     absolute value, with the shift one sigma gives at the image corner (k1,
+//     k2, k3, p1, p2), so that a coefficient merely near zero (a small shift)
+//     can be told from one that leaves the outer image undetermined.
 #pragma once
 
 #include <map>
@@ -39,6 +53,17 @@ struct CoverageRules {
   double focus_distance_ratio = 2.0;  // farthest / nearest camera target of a zoom
 };
 
+inline constexpr int kCoverageCells = 8;
+
+struct ImageCoverage {
+  int zoom = 0;
+  int width = 0, height = 0;
+  int points = 0;
+  std::vector<int> counts;       // kCoverageCells^2, row-major by v cell, then u cell
+  double covered_fraction = 0;   // cells with points / all cells
+  bool corners_covered = false;  // each corner ninth of the image holds points
+};
+
 struct Coverage {
   std::set<int> faces;
   double min_zenith_deg = 0, max_zenith_deg = 0;
@@ -50,11 +75,17 @@ struct Coverage {
   std::vector<double> corner_fraction;  // per zoom: farthest observed pixel / half-diagonal
   // per zoom: nearest and farthest camera target (photos' D, cam rows' d) [m]
   std::map<int, std::pair<double, double>> target_distance;
+  std::vector<ImageCoverage> images;    // per zoom with image points
   int records = 0, pixels = 0;          // used (outside the critical regions)
 };
 
+// Over the rows the fit uses (outside the critical regions): pixels and cam
+// records.
 Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
                          const FitOptions& fit);
+
+std::vector<std::string> CoverageWarnings(const Coverage& c, const InstrumentModel& model,
+                                          const CoverageRules& rules = {});
 
 std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const InstrumentModel& model,
                                        const CoverageRules& rules = {});

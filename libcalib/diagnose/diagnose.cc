@@ -359,10 +359,9 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
     }
     d.wild = FindWildParameters(lin, model, d.distortion_terms, nearest);
   }
-  d.residuals = ObservationResiduals(obs, model, fit.options);
   if (settings.outliers) {
-    d.outliers =
-        TestOutliers(obs, lin, red, d.residuals, settings.significance, settings.outliers_listed);
+    d.outliers = TestOutliers(obs, lin, red, ObservationResiduals(obs, model, fit.options),
+                              settings.significance, settings.outliers_listed);
   }
   d.verdict = Verdict(d);
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -75,7 +75,6 @@ struct Diagnosis {
   DistortionTerms distortion_terms;
   Coverage coverage;
   EquivalentTerms equivalents;
-  std::vector<ObservationResidual> residuals;  // every observation (for maps and histograms)
   double sigma[3] = {0, 0, 0};                 // whitening sigmas (fitted noise per group)
   int num_rows = 0, num_parameters = 0;
   int excluded_critical = 0;

@@ -6,6 +6,7 @@
 #include "libcalib/camera/opencv_model.h"
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/model/focus.h"
+#include "libcalib/fit/unknowns.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib {
@@ -60,7 +61,17 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
         o.along = o.delta.dot(dir);
         AngularComponents(dir, o.delta / len, &o.hz, &o.zenith);
         o.size = o.delta.norm();
+        o.observed = r.x;
+        o.predicted = calc;
+        o.target_distance = (r.x - origin).norm();
         o.valid = true;
+      }
+      if (r.tool == Tool::kCam && r.zoom >= 0 && r.zoom < model.NumZooms()) {
+        const CameraTool& cam = model.cams[r.zoom];
+        o.image_radius = std::hypot(r.u - cam.intrinsics[2], r.v - cam.intrinsics[3]);
+        Eigen::Vector2d pred;
+        if (PredictPixel(model, r.zoom, r.phi, r.theta, r.x, &pred))
+          o.image_delta = Eigen::Vector2d(r.u, r.v) - pred;
       }
     } catch (const std::exception&) {
       o.valid = false;
@@ -99,10 +110,78 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
         AngularComponents(b, a - b, &o.hz, &o.zenith);
         o.delta = Eigen::Vector3d(p.uv.x() - pred.x(), p.uv.y() - pred.y(), 0.0);
         o.size = o.delta.norm();
+        o.image_delta = p.uv - pred;
+        o.observed = Eigen::Vector3d(p.uv.x(), p.uv.y(), 0.0);
+        o.predicted = Eigen::Vector3d(pred.x(), pred.y(), 0.0);
+        o.target_distance = (p.X - RefFromCam(model, p.zoom, p.phi, p.theta).translation).norm();
+        o.image_radius = std::hypot(p.uv.x() - cam.intrinsics[2], p.uv.y() - cam.intrinsics[3]);
         o.valid = true;
       }
     }
     out.push_back(o);
+  }
+  return out;
+}
+
+const char* ResidualStatusName(ResidualStatus s) {
+  switch (s) {
+    case ResidualStatus::kFitted:
+      return "fitted";
+    case ResidualStatus::kCriticalRegion:
+      return "critical_region";
+    case ResidualStatus::kGrossError:
+      return "gross_error";
+    case ResidualStatus::kNotPredicted:
+      return "not_predicted";
+  }
+  return "?";
+}
+
+std::vector<ObservationResidual> ResidualTable(const Observations& obs,
+                                               const InstrumentModel& model, const FitOptions& fit,
+                                               const FitSummary& summary,
+                                               const std::vector<ExcludedRow>& gross) {
+  // The boards and points of unknown position at the model's estimate:
+  // the rows' positions as the fit placed them.
+  std::vector<ObservationResidual> out =
+      ObservationResiduals(WithEstimates(obs, model), model, fit);
+  const double sigma_edm = summary.sigma_edm_m > 0 ? summary.sigma_edm_m : fit.sigma_edm_m;
+  const double sigma_cam = summary.sigma_cam_m > 0 ? summary.sigma_cam_m : fit.sigma_cam_m;
+  const double sigma_px = summary.sigma_pixel_px > 0 ? summary.sigma_pixel_px : fit.sigma_pixel_px;
+  const size_t num_records = obs.records.size();
+  for (ObservationResidual& o : out) {
+    if (o.group == ObsGroup::kPixel) {
+      const PixelObservation& p = obs.pixels[o.index];
+      o.line = p.line;
+      o.shot = p.shot;
+      o.placement = p.placement;
+      o.target = p.target;
+      o.corner = p.corner;
+      const bool zoom_sigma = p.zoom >= 0 &&
+                              p.zoom < static_cast<int>(summary.sigma_pixel_px_zoom.size()) &&
+                              summary.sigma_pixel_px_zoom[p.zoom] > 0;
+      o.sigma = zoom_sigma ? summary.sigma_pixel_px_zoom[p.zoom] : sigma_px;
+    } else {
+      const Record& r = obs.records[o.index];
+      o.line = r.line;
+      o.point = r.point;
+      o.sigma = o.group == ObsGroup::kEdm ? sigma_edm : sigma_cam;
+    }
+    if (o.valid && o.sigma > 0) o.normalised = o.size / o.sigma;
+    if (!o.valid) {
+      o.status = ResidualStatus::kNotPredicted;
+      o.reason = "the model cannot predict it (point behind the camera or outside its image model)";
+    } else if (o.critical) {
+      o.status = ResidualStatus::kCriticalRegion;
+      o.reason =
+          "zenith angle in a critical region (critical_region.min_zenith_deg, max_zenith_deg)";
+    }
+  }
+  for (const ExcludedRow& e : gross) {
+    const size_t i = e.pixel ? num_records + e.index : e.index;
+    if (i >= out.size()) continue;
+    out[i].status = ResidualStatus::kGrossError;
+    out[i].reason = e.reason;
   }
   return out;
 }

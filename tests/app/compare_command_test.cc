@@ -58,7 +58,7 @@ TEST_F(CompareCommand, ExitCodesFilesAndMessages) {
   ASSERT_EQ(j["zooms"].size(), 2u);
   for (const auto& z : j["zooms"]) EXPECT_EQ(z["max_px"].get<double>(), 0.0);
   EXPECT_TRUE(fs::exists(out / "compare.txt"));
-  EXPECT_TRUE(fs::exists(out / "figures" / "compare_zoom0.png"));
+  EXPECT_TRUE(fs::exists(out / "figures" / "compare_zoom0.vg.json"));
   // The same --output again: files exist, never replaced (exit 1).
   EXPECT_EQ(Run("compare '" + a.string() + "' '" + a.string() + "' --output '" + out.string() + "'",
                 &err),

@@ -15,6 +15,8 @@
 #include "libcalib/fit/unknowns.h"
 #include "libcalib/io/config.h"
 
+#include "tests/app/figure_checks.h"
+
 namespace rtscalib::app {
 namespace {
 
@@ -80,6 +82,24 @@ std::filesystem::path Zoom3Demo::work_;
 
 // Issue 4: detected corners against the exact projections, RMS <= 0.1 px,
 // with distortion on; nothing visible is lost.
+// The figures draw the residual table at the final model, boards of unknown
+// pose at their estimated poses: arrows per image cell of the fitted points,
+// at a scale of the order of their rms.
+TEST_F(Zoom3Demo, FiguresDrawTheResidualTable) {
+  const std::vector<Figure> figs = testing_figures::CheckFiguresAgainstResidualFile(*result_);
+  for (const Figure& f : figs) {
+    if (f.section == "photos") {
+      EXPECT_TRUE(f.summary["photo"].get<bool>()) << f.name;
+    }
+  }
+  // Every observation of a board of unknown pose is predicted.
+  for (const ObservationResidual& o : result_->calibration.residuals) {
+    if (o.group == ObsGroup::kPixel) {
+      EXPECT_TRUE(o.valid) << o.shot << " " << o.target;
+    }
+  }
+}
+
 TEST_F(Zoom3Demo, DetectionAccurate) {
   ASSERT_TRUE(result_->render.ran) << result_->render.note;
   EXPECT_GT(result_->render.shots, 10);

@@ -14,11 +14,16 @@
 
 #include <unistd.h>
 
+#include "app/commands.h"
+#include "app/output_folder.h"
 #include "app/pipeline.h"
+#include "app/reports.h"
 #include "libcalib/io/errors.h"
 #include "libcalib/io/records.h"
 #include "libcalib/io/targets_io.h"
 #include "libcalib/sim/simulator.h"
+
+#include "tests/app/figure_checks.h"
 
 namespace rtscalib::app {
 namespace {
@@ -143,6 +148,64 @@ TEST_F(PhotoSession, CalibrationFromThePhotosMatchesTheTruth) {
   EXPECT_LT(result_->calibration.final_errors.pixels.rms_px, 0.3);
 }
 
+TEST_F(PhotoSession, FiguresDrawTheResidualTable) {
+  const std::vector<Figure> figs = testing_figures::CheckFiguresAgainstResidualFile(*result_);
+  // The worst photos are drawn on the photo itself.
+  int photos = 0;
+  for (const Figure& f : figs) {
+    if (f.section != "photos") continue;
+    ++photos;
+    EXPECT_TRUE(f.summary["photo"].get<bool>()) << f.name << ": the photo file was not found";
+  }
+  EXPECT_GT(photos, 0);
+}
+
+// `rtscalib show --shot ID`: any photo of a run, from the run's files alone.
+TEST_F(PhotoSession, ShowDrawsAnyPhotoFromTheRunFiles) {
+  OutputFolder out((work_ / "show_run").string());
+  RunConfig config;
+  config.config_path = (work_ / "photos.yaml").string();
+  out.Write("residuals.csv", ResidualsCsv(*result_));
+  out.Write("report.json", ReportJson(config, *result_, out).dump());
+  // The last photo with corners (the worst ones are in report.html already).
+  std::string shot;
+  int corners = 0;
+  for (const ObservationResidual& o : result_->calibration.residuals) {
+    if (o.group != ObsGroup::kPixel) continue;
+    if (o.shot != shot) corners = 0;
+    shot = o.shot;
+    ++corners;
+  }
+  ASSERT_FALSE(shot.empty());
+  ShowArgs args;
+  args.output = out.run_dir();
+  args.shot = shot;
+  args.out = (work_ / "show").string();
+  ::testing::internal::CaptureStdout();
+  EXPECT_EQ(RunShow(args), 0);
+  const std::string printed = ::testing::internal::GetCapturedStdout();
+  EXPECT_NE(printed.find("shot " + shot), std::string::npos) << printed;
+  const fs::path spec = work_ / "show" / ("photo_" + shot + ".vg.json");
+  ASSERT_TRUE(fs::exists(spec));
+  EXPECT_TRUE(fs::exists(work_ / "show" / ("photo_" + shot + ".html")));
+  std::ifstream in(spec);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(testing_figures::Data(j, "corners").size(), static_cast<size_t>(corners));
+  bool photo = false;
+  for (const nlohmann::json& m : j["marks"]) photo = photo || m["type"] == "image";
+  EXPECT_TRUE(photo) << "the photo is drawn under its corners";
+  // Existing files are kept; an unknown shot names the run's shots.
+  EXPECT_THROW(RunShow(args), std::invalid_argument);
+  args.force = true;
+  args.shot = "no-such-shot";
+  try {
+    RunShow(args);
+    ADD_FAILURE() << "an unknown shot was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(shot.substr(0, 3)), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(PhotoSession, BoardsWithoutPoseAreEstimatedWithEverythingElse) {
   // The same folder with the boards' poses left out (SPEC 7): the corners are
   // points of boards without pose (X_known = false), estimated with
@@ -167,6 +230,17 @@ TEST_F(PhotoSession, BoardsWithoutPoseAreEstimatedWithEverythingElse) {
   EXPECT_EQ(r.photos.boards_without_pose, 4);
   ASSERT_FALSE(r.obs.pixels.empty());
   for (const PixelObservation& p : r.obs.pixels) EXPECT_FALSE(p.X_known);
+  {
+    // The figures of boards without pose: every corner's residual at the
+    // board's estimated pose, none left unpredicted.
+    SCOPED_TRACE("figures, boards without pose");
+    testing_figures::CheckFiguresAgainstResidualFile(r);
+    for (const ObservationResidual& o : r.calibration.residuals) {
+      if (o.group == ObsGroup::kPixel) {
+        EXPECT_TRUE(o.valid) << o.shot << " " << o.target;
+      }
+    }
+  }
 
   // Unknown poses cost little: the same tolerances as the surveyed session
   // above, and both errors printed side by side.

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "app/commands.h"
@@ -104,11 +105,33 @@ TEST_F(ReportRun, HtmlIsSelfContainedAndReadsTopDown) {
   EXPECT_LT(verdict, maps);
   EXPECT_LT(maps, ranking);
   EXPECT_NE(html.find("model.effects: [hz_eccentricity]"), std::string::npos);
-  EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
-  for (const char* f : {"error_map_edm.png", "error_map_cam_zoom0.png", "residual_histograms.png",
-                        "image_residuals_zoom0.png"}) {
-    EXPECT_TRUE(fs::exists(Out("figures") / f)) << f;
+  // The figures: Vega specs drawn by the runtime inlined in the page.
+  EXPECT_NE(html.find("new vega.View"), std::string::npos);
+  const nlohmann::json& figures = (*report_)["figures"]["list"];
+  std::set<std::string> names;
+  for (const nlohmann::json& f : figures) {
+    names.insert(f["name"].get<std::string>());
+    EXPECT_NE(html.find("data-figure=\"" + f["name"].get<std::string>() + "\""), std::string::npos)
+        << f["name"];
+    // Each file report.json names is there: the spec, and the SVG and PNG
+    // when the renderer is installed (else report.json says why not).
+    for (const nlohmann::json& file : f["files"]) {
+      EXPECT_TRUE(fs::exists(Out(file.get<std::string>()))) << file;
+    }
+    EXPECT_EQ(f["files"].size() == 3, !(*report_)["figures"].contains("note"));
   }
+  for (const char* f : {"error_map_edm", "error_map_cam_zoom0", "image_residuals_zoom0",
+                        "residuals_vs_variables", "residual_histograms"}) {
+    EXPECT_TRUE(names.count(f)) << f;
+  }
+  // The residual table beside report.json: one row per record, every row fitted
+  // or excluded with a reason.
+  const nlohmann::json& res = (*report_)["residuals"];
+  EXPECT_EQ(res["file"], "residuals.csv");
+  EXPECT_EQ(res["rows"].get<size_t>(), (*report_)["data"]["records"].get<size_t>() +
+                                           (*report_)["data"]["pixels"].get<size_t>());
+  EXPECT_TRUE(fs::exists(Out("residuals.csv")));
+  EXPECT_GT(res["status"]["fitted"].get<int>(), 0);
 }
 
 bool HaveChromium() {
@@ -127,6 +150,8 @@ TEST_F(ReportRun, LoadsInHeadlessChromiumWithoutErrors) {
   const std::string cmd = std::string(RTSCALIB_SOURCE_DIR) + "/scripts/render-report.sh '" +
                           Out("report.html").string() + "' '" + png.string() + "' > /dev/null 2>&1";
   const int rc = std::system(cmd.c_str());
+  // render-report.sh also fails when a figure of the page is missing, failed
+  // to draw or drew no data marks (its DOM check).
   ASSERT_EQ(rc, 0) << "render-report.sh failed; see " << png.string() << ".log";
   ASSERT_TRUE(fs::exists(png));
   EXPECT_GT(fs::file_size(png), 20000u);  // a rendered page, not a blank one

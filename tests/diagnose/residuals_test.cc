@@ -172,6 +172,99 @@ TEST(ObservationResiduals, CriticalRowsAreMarkedWithTheFitsLimits) {
   }
 }
 
+// The calibration's one residual table: every row as given, what a figure
+// or a file needs, and why a row is not fitted.
+TEST(ResidualTable, EveryRowAsGivenWithWhatAPictureNeeds) {
+  const InstrumentModel m = IdealModel(Kinematics::kSpherical, 1, CameraTool{});
+  const auto& k = m.cams[0].intrinsics;  // f = 1000 px, principal point (640, 480)
+  FitOptions fit;
+  fit.min_zenith_rad = 0.3;
+  fit.max_zenith_rad = 2.0;
+  Observations obs;
+  obs.records.push_back(EdmRecord(m, 1, 0.5, 1.0, 2.0));
+  obs.records.back().x += Eigen::Vector3d(3e-5, 0, 4e-5);  // |r| = 5e-5 m
+  obs.records.push_back(EdmRecord(m, 1, 0.5, 0.1, 2.0));   // critical region
+  obs.records.push_back(EdmRecord(m, 1, 0.7, 1.2, 3.0));   // taken out as gross
+  PixelObservation p;
+  p.phi = 0.4;
+  p.theta = 1.2;
+  p.shot = "s7";
+  p.placement = "left";
+  p.target = 12;
+  p.corner = 3;
+  p.line = 9;
+  p.X = PredictEdm(m, p.phi, p.theta, 5.0);        // on the optical axis, 5 m from the camera
+  p.uv = Eigen::Vector2d(k[2] + 0.3, k[3] - 0.4);  // |r| = 0.5 px
+  obs.pixels.push_back(p);
+  FitSummary summary;
+  summary.sigma_edm_m = 2e-5;
+  summary.sigma_pixel_px = 0.25;
+  summary.sigma_pixel_px_zoom = {0.5};
+  ExcludedRow gross;
+  gross.index = 2;
+  gross.line = 17;
+  gross.reason = "point 1 m from its distance";
+
+  const std::vector<ObservationResidual> t = ResidualTable(obs, m, fit, summary, {gross});
+  ASSERT_EQ(t.size(), 4u);
+  EXPECT_EQ(t[0].status, ResidualStatus::kFitted);
+  EXPECT_TRUE(t[0].reason.empty());
+  EXPECT_EQ(t[1].status, ResidualStatus::kCriticalRegion);
+  EXPECT_FALSE(t[1].reason.empty());
+  EXPECT_EQ(t[2].status, ResidualStatus::kGrossError);
+  EXPECT_EQ(t[2].reason, gross.reason);
+  // Records: observed and predicted point, the group's sigma, |r| / sigma;
+  // round-off of a 2 m point ~1e-15 m.
+  EXPECT_LT((t[0].observed - obs.records[0].x).norm(), 1e-15);
+  EXPECT_LT((t[0].predicted - PredictEdm(m, 0.5, 1.0, 2.0)).norm(), 1e-15);
+  EXPECT_EQ(t[0].sigma, 2e-5);
+  EXPECT_NEAR(t[0].normalised, 2.5, 1e-9);
+  EXPECT_TRUE(std::isnan(t[0].image_delta.x())) << "no image residual for an EDM row";
+  // The pixel row: where it came from, its zoom's sigma, the pixel residual
+  // and the variables of the diagnosis. The prediction of a point on the
+  // axis is the principal point to round-off (f * 1e-16).
+  const ObservationResidual& px = t[3];
+  EXPECT_EQ(px.status, ResidualStatus::kFitted);
+  EXPECT_EQ(px.shot, "s7");
+  EXPECT_EQ(px.placement, "left");
+  EXPECT_EQ(px.target, 12);
+  EXPECT_EQ(px.corner, 3);
+  EXPECT_EQ(px.line, 9);
+  EXPECT_EQ(px.sigma, 0.5);
+  EXPECT_NEAR(px.normalised, 1.0, 1e-9);
+  EXPECT_NEAR(px.predicted.x(), k[2], 1e-9);
+  EXPECT_NEAR(px.predicted.y(), k[3], 1e-9);
+  EXPECT_NEAR(px.image_delta.x(), 0.3, 1e-9);
+  EXPECT_NEAR(px.image_delta.y(), -0.4, 1e-9);
+  EXPECT_NEAR(px.image_radius, 0.5, 1e-9);
+  EXPECT_NEAR(px.target_distance, 5.0, 1e-9);  // the ideal camera sits at the origin
+  EXPECT_STREQ(ResidualStatusName(ResidualStatus::kGrossError), "gross_error");
+}
+
+TEST(ResidualTable, CameraRecordsCarryTheirPixelResidual) {
+  // A cam record whose point is seen 0.2 px right of where it was read:
+  // observed (u, v) minus the projection of its point is (-0.2, 0).
+  const InstrumentModel m = IdealModel(Kinematics::kSpherical, 1, CameraTool{});
+  Record cam;
+  cam.tool = Tool::kCam;
+  cam.phi = 2.0;
+  cam.theta = 1.0;
+  cam.u = 700;
+  cam.v = 400;
+  cam.d = 3.0;
+  cam.x = PredictCam(m, 0, cam.phi, cam.theta, cam.u + 0.2, cam.v, cam.d);
+  Observations obs;
+  obs.records.push_back(cam);
+  const auto t = ResidualTable(obs, m, FitOptions(), FitSummary(), {});
+  ASSERT_EQ(t.size(), 1u);
+  // Back-projection and projection agree to ~1e-9 px (the undistortion's
+  // iteration is exact without distortion).
+  EXPECT_NEAR(t[0].image_delta.x(), -0.2, 1e-6);
+  EXPECT_NEAR(t[0].image_delta.y(), 0.0, 1e-6);
+  EXPECT_NEAR(t[0].image_radius, std::hypot(700 - 640, 400 - 480), 1e-9);
+  EXPECT_NEAR(t[0].target_distance, 3.0, 1e-9);
+}
+
 TEST(Where, NamesTheFileLineOrTheRow) {
   Observations obs;
   obs.records_source = "records.csv";
