@@ -15,7 +15,7 @@
 #include "app/figures.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/api/compare.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 
 namespace rtscalib::app {
 namespace {

@@ -9,7 +9,7 @@
 #include "libcalib/export/opencv_export.h"
 #include "libcalib/export/surveyor_export.h"
 #include "libcalib/export/urdf_export.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/model_io.h"
 
 namespace rtscalib::app {

@@ -8,7 +8,7 @@
 #include "libcalib/io/safe_write.h"
 #include "libcalib/calibrate/validate.h"
 #include "libcalib/extract/options.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 
 namespace {
 

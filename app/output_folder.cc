@@ -18,7 +18,7 @@
 #include <sstream>
 
 #include "libcalib/io/safe_write.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 
 namespace fs = std::filesystem;
 

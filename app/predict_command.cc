@@ -5,7 +5,7 @@
 #include "app/commands.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/api/rtscalib.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
 

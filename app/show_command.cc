@@ -13,8 +13,8 @@
 #include "app/figures.h"
 #include "app/report_html.h"
 #include "libcalib/io/safe_write.h"
-#include "libcalib/io/errors.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {
 namespace {

@@ -19,9 +19,9 @@
 #include "detect/point_boards.h"
 #include "detect/tag_family.h"
 #include "libcalib/io/csv.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/targets_io.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib::detect {
 namespace {

@@ -16,7 +16,7 @@
 
 #include "fuzz/fuzz_util.h"
 #include "libcalib/io/config.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/sim/simulator.h"
 
 namespace {

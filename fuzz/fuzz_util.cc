@@ -9,7 +9,7 @@
 #include <fstream>
 #include <typeinfo>
 
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 
 namespace rtscalib::fuzz {
 namespace {

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "fuzz/fuzz_util.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/model/kinematics.h"
 

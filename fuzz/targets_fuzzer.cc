@@ -10,7 +10,7 @@
 #include <string>
 
 #include "fuzz/fuzz_util.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/targets_io.h"
 
 namespace {

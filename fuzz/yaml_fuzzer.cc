@@ -9,7 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "fuzz/fuzz_util.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/yaml_reader.h"
 
 namespace {

@@ -3,7 +3,7 @@
 #include <functional>
 #include <vector>
 
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib::render {
 namespace {

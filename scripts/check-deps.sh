@@ -4,7 +4,11 @@
 # libraries its headers and sources #include (found with grep) must equal the
 # DEPS of its `rtscalib_add_layer(<f> DEPS ...)` line. A dependency declared
 # but never included, or included but not declared, fails (exit 1) with one
-# line per difference. Run from anywhere; ctest runs it as `check_deps`.
+# line per difference. Then the include graph of every folder of the tree
+# (libcalib/<f>/, detect/, render/, app/) must have no circle: a folder that
+# includes another, directly or through others, that includes it back fails,
+# with the circle named (tsort). Run from anywhere; ctest runs it as
+# `check_deps`.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -61,7 +65,24 @@ for f in $(comm -12 <(echo "$declared_folders") <(echo "$actual_folders")); do
   done < <(comm -23 <(echo "$declared") <(echo "$actual"))
 done
 
+# Folder include graph: one "from to" pair per include of another folder.
+folder_edges() {
+  local from dir
+  for dir in "$root"/libcalib/*/ "$root"/detect/ "$root"/render/ "$root"/app/; do
+    from="${dir#"$root"/}"
+    from="${from%/}"
+    grep -ho '^#include "\(libcalib/[a-z_0-9]*\|detect\|render\|app\)/' "$dir"*.h "$dir"*.cc \
+      2>/dev/null | sed 's|^#include "||; s|/$||' | grep -vx "$from" | sed "s|^|$from |" || true
+  done | sort -u
+}
+edges="$(folder_edges)"
+if ! loops="$(tsort <<<"$edges" 2>&1 >/dev/null)" || [[ -n "$loops" ]]; then
+  echo "the folders include each other in a circle (each line of tsort's loop is one folder):"
+  echo "$loops"
+  status=1
+fi
+
 if [[ $status -eq 0 ]]; then
-  echo "libcalib/CMakeLists.txt matches the include graph"
+  echo "libcalib/CMakeLists.txt matches the include graph; no folder includes another in a circle"
 fi
 exit $status

@@ -64,7 +64,7 @@ enum class PredictionFailure {
   kNoSuchBoard,     // the tag is on no board the model estimated (SPEC 7)
 };
 // what() is one sentence; expected/got are its parts for messages that name a
-// file, line and column (`rtscalib predict`, io/errors.h style).
+// file, line and column (`rtscalib predict`, text/errors.h style).
 struct PredictionError : std::runtime_error {
   PredictionError(PredictionFailure why, const std::string& expected_text,
                   const std::string& got_text)

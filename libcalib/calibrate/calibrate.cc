@@ -16,7 +16,7 @@
 #include "libcalib/fit/two_face.h"
 #include "libcalib/fit/unknowns.h"
 #include "libcalib/geometry/convex_hull.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/model/kinematics.h"
 #include "libcalib/screen/gross.h"
 #include "libcalib/screen/screen.h"

@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "libcalib/diagnose/equivalents.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {

@@ -4,7 +4,7 @@
 #include <iomanip>
 #include <sstream>
 
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/number_text.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib {

@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <thread>
 
-#include "libcalib/io/errors.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 #include "libcalib/io/yaml_reader.h"
 #include "libcalib/model/effects.h"
 #include "libcalib/model/instrument.h"

@@ -5,8 +5,8 @@
 #include <stdexcept>
 
 #include "libcalib/fit/parameter_layout.h"
-#include "libcalib/io/errors.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 #include "libcalib/io/yaml_reader.h"
 
 namespace rtscalib {

@@ -9,8 +9,8 @@
 #include <set>
 #include <stdexcept>
 
-#include "libcalib/io/errors.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {

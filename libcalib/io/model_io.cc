@@ -11,8 +11,8 @@
 #include <stdexcept>
 
 #include "libcalib/fit/parameterization.h"
-#include "libcalib/io/errors.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 #include "libcalib/io/targets_io.h"
 #include "libcalib/io/yaml_reader.h"
 
@@ -503,7 +503,7 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
         s.focus.emplace_back();
         if (cam.determined) {
           ReadNamedInto(item.Require("focus_sigma"), kFocusParamNames, s.focus.back().data(),
-                        kNumFocus, true);
+                        kNumFocus, Number::kSigma);
         } else {
           s.focus.back().fill(std::numeric_limits<double>::quiet_NaN());
         }

@@ -5,8 +5,8 @@
 #include <map>
 
 #include "libcalib/io/csv.h"
-#include "libcalib/io/errors.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 

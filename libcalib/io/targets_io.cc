@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "libcalib/geometry/rotation.h"
-#include "libcalib/io/errors.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/io/yaml_reader.h"
 

@@ -14,7 +14,7 @@
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/parser.h>
 
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace yaml_internal {

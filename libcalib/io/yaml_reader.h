@@ -28,7 +28,7 @@
 #include <utility>
 #include <vector>
 
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 
 namespace rtscalib {
 

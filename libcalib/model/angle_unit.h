@@ -3,7 +3,7 @@
 // detect). Inside rtscalib every angle is in radians (SPEC 1): readings are
 // converted once, when a file is read (CsvTable::Angle, libcalib/io/csv.h),
 // and written back in the file's unit by the commands that echo a user's
-// rows (FormatReading, libcalib/io/number_text.h).
+// rows (FormatReading, libcalib/text/number_text.h).
 //
 //   rad   radians (SPEC 1; the default)
 //   deg   degrees, a full turn is 360:  rad = deg * pi / 180

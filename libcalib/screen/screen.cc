@@ -7,7 +7,7 @@
 #include <set>
 #include <stdexcept>
 
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/number_text.h"
 #include "libcalib/screen/gross.h"
 
 namespace rtscalib {

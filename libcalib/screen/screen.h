@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 #include "libcalib/screen/options.h"

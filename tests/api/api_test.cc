@@ -12,7 +12,7 @@
 
 #include "app/commands.h"
 #include "libcalib/fit/manifolds.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
 #include "libcalib/model/kinematics.h"

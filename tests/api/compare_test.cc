@@ -15,7 +15,7 @@
 #include "libcalib/fit/refine.h"
 #include "libcalib/geometry/convex_hull.h"
 #include "libcalib/io/covariance_io.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/model/gauge.h"
 #include "libcalib/fit/parameter_layout.h"
@@ -26,7 +26,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TestDir(const std::string& name) { return testing_api::TestDir("api_compare", name); }
+fs::path CompareDir(const std::string& name) { return testing_api::TestDir("api_compare", name); }
 
 InstrumentModel Truth() { return testing_api::DistortedTruth(); }
 
@@ -42,7 +42,7 @@ InstrumentModel Fit(const InstrumentModel& truth, int seed) {
 }
 
 std::string Save(const InstrumentModel& m, const std::string& name) {
-  const fs::path dir = TestDir(name);
+  const fs::path dir = CompareDir(name);
   WriteModelYaml((dir / "model.yaml").string(), m);
   if (m.sigmas.covariance.rows() > 0) WriteCovarianceYaml((dir / "covariance.yaml").string(), m);
   return (dir / "model.yaml").string();
@@ -183,7 +183,7 @@ TEST(Compare, BadInputNamesTheFile) {
   const std::string a = Save(one, "bad_a");
   app::CompareArgs args;
   args.a = a;
-  args.b = (TestDir("missing") / "model.yaml").string();
+  args.b = (CompareDir("missing") / "model.yaml").string();
   try {
     app::RunCompare(args);
     FAIL() << "a missing file was accepted";

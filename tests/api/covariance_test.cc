@@ -15,7 +15,7 @@
 #include "libcalib/fit/parameter_layout.h"
 #include "libcalib/fit/refine.h"
 #include "libcalib/io/covariance_io.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/model/kinematics.h"
 #include "tests/api/pixel_calibration.h"
@@ -25,15 +25,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TestDir(const std::string& name) { return testing_api::TestDir("api_covariance", name); }
+fs::path CovarianceDir(const std::string& name) { return testing_api::TestDir("api_covariance", name); }
 
 constexpr double kNoisePx = 0.3;
 
-InstrumentModel Truth() { return testing_api::DistortedTruth(); }
+InstrumentModel CovarianceTruth() { return testing_api::DistortedTruth(); }
 
 // One calibration from pixels of seed `seed` (joint_uncertainty_test's scene:
 // 2 boards x 3 shots x 2 faces, ~2,000 corners).
-InstrumentModel Fit(const InstrumentModel& truth, int seed, Observations* obs_out = nullptr) {
+InstrumentModel CovarianceFit(const InstrumentModel& truth, int seed, Observations* obs_out = nullptr) {
   return testing_api::FitFromPixels(truth, 5000 + seed, kNoisePx, obs_out);
 }
 
@@ -41,8 +41,8 @@ InstrumentModel Fit(const InstrumentModel& truth, int seed, Observations* obs_ou
 // square of the per-parameter sigmas model.yaml states (same numbers, two
 // routes), and a covariance.yaml round-trips it bit for bit (%.17g).
 TEST(FullCovariance, FitKeepsItAndTheFileRoundTripsExactly) {
-  const InstrumentModel truth = Truth();
-  InstrumentModel model = Fit(truth, 0);
+  const InstrumentModel truth = CovarianceTruth();
+  InstrumentModel model = CovarianceFit(truth, 0);
   model.cams[0].valid_region = {{0.25, 1.5}, {600.125, 3}, {630, 470.0625}, {2, 460}};
   const std::vector<LayoutBlock> layout = ParameterLayout(model);
   const int n = LayoutSize(layout);
@@ -58,7 +58,7 @@ TEST(FullCovariance, FitKeepsItAndTheFileRoundTripsExactly) {
     }
   }
 
-  const fs::path dir = TestDir("round_trip");
+  const fs::path dir = CovarianceDir("round_trip");
   WriteModelYaml((dir / "model.yaml").string(), model);
   WriteCovarianceYaml((dir / "covariance.yaml").string(), model);
   const CalibratedInstrument inst = CalibratedInstrument::Load((dir / "model.yaml").string());
@@ -69,7 +69,7 @@ TEST(FullCovariance, FitKeepsItAndTheFileRoundTripsExactly) {
   ASSERT_EQ(inst.NumParameters(), n);
 
   // Through a symlink (the output folder's top): the file beside the target.
-  const fs::path top = TestDir("top");
+  const fs::path top = CovarianceDir("top");
   fs::create_symlink(dir / "model.yaml", top / "model.yaml");
   EXPECT_TRUE(
       CalibratedInstrument::Load((top / "model.yaml").string()).HasFullParameterCovariance());
@@ -84,9 +84,9 @@ TEST(FullCovariance, FitKeepsItAndTheFileRoundTripsExactly) {
 // A covariance.yaml beside another model's model.yaml is refused, naming the
 // file and the block, never paired silently.
 TEST(FullCovariance, AForeignCovarianceFileIsRefused) {
-  const InstrumentModel truth = Truth();
-  InstrumentModel model = Fit(truth, 1);
-  const fs::path dir = TestDir("foreign");
+  const InstrumentModel truth = CovarianceTruth();
+  InstrumentModel model = CovarianceFit(truth, 1);
+  const fs::path dir = CovarianceDir("foreign");
   WriteCovarianceYaml((dir / "covariance.yaml").string(), model);
   model.cams[0].intrinsics[0] += 1e-9;
   WriteModelYaml((dir / "model.yaml").string(), model);
@@ -118,9 +118,9 @@ TEST(FullCovariance, AForeignCovarianceFileIsRefused) {
 // full covariance's to be closer to 1 in log scale, and prints both.
 TEST(FullCovariance, PredictedPixelCovarianceMatchesTheScatterBetterThanTheDiagonal) {
   constexpr int kSeeds = 20;
-  const InstrumentModel truth = Truth();
+  const InstrumentModel truth = CovarianceTruth();
   Observations obs0;
-  Fit(truth, 100, &obs0);
+  CovarianceFit(truth, 100, &obs0);
   const double phi = obs0.pixels.front().phi, theta = obs0.pixels.front().theta;
   const CameraTool& cam = truth.cams[0];
   const Rigid3 ref_from_cam = RefFromCam(truth, 0, phi, theta);
@@ -137,7 +137,7 @@ TEST(FullCovariance, PredictedPixelCovarianceMatchesTheScatterBetterThanTheDiago
   double full_sum = 0, diag_sum = 0, full_sigma = 0, diag_sigma = 0, err2 = 0;
   int n = 0;
   for (int seed = 0; seed < kSeeds; ++seed) {
-    const InstrumentModel model = Fit(truth, seed);
+    const InstrumentModel model = CovarianceFit(truth, seed);
     ASSERT_GT(model.sigmas.covariance.rows(), 0);
     const CalibratedInstrument full(model);
     InstrumentModel without = model;

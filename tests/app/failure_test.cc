@@ -27,7 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Read(const fs::path& p) {
+std::string ReadAll(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::stringstream s;
   s << in.rdbuf();
@@ -90,7 +90,7 @@ void ExpectFiniteJson(const nlohmann::json& j, const std::string& path,
 void ExpectAllFinite(const fs::path& dir) {
   std::vector<std::string> bad;
   ExpectFiniteYaml(YAML::LoadFile((dir / "model.yaml").string()), "", &bad);
-  ExpectFiniteJson(nlohmann::json::parse(Read(dir / "report.json")), "", &bad);
+  ExpectFiniteJson(nlohmann::json::parse(ReadAll(dir / "report.json")), "", &bad);
   std::string all;
   for (const std::string& b : bad) all += b + "\n";
   EXPECT_TRUE(bad.empty()) << dir << ":\n" << all;
@@ -114,7 +114,7 @@ class Failure : public ::testing::Test {
     const std::string cmd = std::string("'") + RTSCALIB_BINARY_DIR + "/app/rtscalib' " + args +
                             " > /dev/null 2> '" + log.string() + "'";
     const int status = std::system(cmd.c_str());
-    *err = Read(log);
+    *err = ReadAll(log);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
   int RunConfig(const fs::path& config, std::string* err) {
@@ -152,7 +152,7 @@ class Failure : public ::testing::Test {
   // protections of a single fit must hold on their own.
   fs::path ConfigWithoutGrossErrors(const std::vector<Record>& records, const std::string& name) {
     const fs::path config = Config(records, name);
-    std::string text = Read(config);
+    std::string text = ReadAll(config);
     text.replace(text.find("fit:\n"), 5, "fit:\n  gross_errors: {enabled: false}\n");
     Put(config, text + "screen: {gross_errors: {enabled: false}}\n");
     return config;
@@ -202,14 +202,14 @@ TEST_F(Failure, BrokenRowIsAGrossRowListedInTheReport) {
     std::string err;
     ASSERT_EQ(RunConfig(Config(broken, "broken.csv"), &err), 0) << err;
     ExpectAllFinite(root_);
-    const std::string text = Read(root_ / "report.txt");
+    const std::string text = ReadAll(root_ / "report.txt");
     EXPECT_NE(text.find("Gross errors: 1 rows taken out before the fit"), std::string::npos)
         << text;
     EXPECT_NE(text.find((dir_ / "broken.csv").string() + ":" + std::to_string(row + 2) + ": " +
                         (tool == Tool::kEdm ? "EDM row" : "camera row")),
               std::string::npos)
         << text;
-    const nlohmann::json report = nlohmann::json::parse(Read(root_ / "report.json"));
+    const nlohmann::json report = nlohmann::json::parse(ReadAll(root_ / "report.json"));
     ASSERT_EQ(report["gross_errors"].size(), 1u);
     EXPECT_EQ(report["gross_errors"][0]["line"], row + 2);
   }
@@ -222,8 +222,8 @@ TEST_F(Failure, BrokenRowExitsThreeNamesTheRowAndLeavesTheTopAlone) {
   const std::vector<Record> good = Records();
   ASSERT_EQ(RunConfig(Config(good, "good.csv"), &err), 0) << err;
   ExpectAllFinite(root_);
-  const std::string model = Read(root_ / "model.yaml");
-  const std::string report = Read(root_ / "report.json");
+  const std::string model = ReadAll(root_ / "model.yaml");
+  const std::string report = ReadAll(root_ / "report.json");
   const fs::path latest = fs::read_symlink(root_ / "latest");
 
   // A coordinate of 1e308 is caught by the screening before any fit (an input
@@ -251,13 +251,13 @@ TEST_F(Failure, BrokenRowExitsThreeNamesTheRowAndLeavesTheTopAlone) {
               std::string::npos)
         << err;
     EXPECT_EQ(fs::read_symlink(root_ / "latest"), latest);
-    EXPECT_EQ(Read(root_ / "model.yaml"), model);
-    EXPECT_EQ(Read(root_ / "report.json"), report);
+    EXPECT_EQ(ReadAll(root_ / "model.yaml"), model);
+    EXPECT_EQ(ReadAll(root_ / "report.json"), report);
   }
   // Both failed entries say so.
   int failed = 0;
   for (const auto& e : fs::directory_iterator(root_ / "history")) {
-    if (Read(e.path() / "status").rfind("failed: ", 0) == 0) ++failed;
+    if (ReadAll(e.path() / "status").rfind("failed: ", 0) == 0) ++failed;
   }
   EXPECT_EQ(failed, 2);
 }
@@ -284,7 +284,7 @@ TEST_F(Failure, ResidualsFarBeyondTheSigmasExitThreeNamingTheRow) {
 // model "NOT converged" published.
 TEST_F(Failure, NotConvergedExitsThree) {
   const fs::path config = Config(Records(), "records.csv");
-  std::string text = Read(config);
+  std::string text = ReadAll(config);
   text.replace(text.find("fit:\n"), 5, "fit:\n  max_iterations: 1\n");
   Put(config, text);
   std::string err;
@@ -307,10 +307,10 @@ TEST_F(Failure, ToolWithoutDataIsNotDeterminedAndPredictRefusesIt) {
   EXPECT_FALSE(model["edm"]["determined"].as<bool>());
   EXPECT_FALSE(model["edm"]["sigma"]) << "no sigma for a tool that was not estimated";
   EXPECT_TRUE(model["cameras"][0]["flange_from_cam"]["sigma"]);
-  const nlohmann::json report = nlohmann::json::parse(Read(root_ / "report.json"));
+  const nlohmann::json report = nlohmann::json::parse(ReadAll(root_ / "report.json"));
   EXPECT_EQ(report["model"]["edm"]["determined"], false);
   EXPECT_FALSE(report["model"]["edm"].contains("t_sigma"));
-  EXPECT_NE(Read(root_ / "report.txt").find("not determined by the data"), std::string::npos);
+  EXPECT_NE(ReadAll(root_ / "report.txt").find("not determined by the data"), std::string::npos);
 
   const fs::path in = dir_ / "edm_rows.csv";
   WriteRecords(in.string(), {cam[0], edm[0]});
@@ -339,7 +339,7 @@ TEST_F(Failure, ExitCodesOfUsageAndInputErrorsAndHelp) {
                           log.string() + "' 2>&1";
   const int status = std::system(cmd.c_str());
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
-  const std::string help = Read(log);
+  const std::string help = ReadAll(log);
   EXPECT_NE(help.find("Exit codes"), std::string::npos) << help;
   EXPECT_NE(help.find("3  fit failure"), std::string::npos) << help;
 }

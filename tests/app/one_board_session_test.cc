@@ -3,15 +3,18 @@
 // the instrument, both faces, three zoom levels, the demo's hidden effect
 // (hz_eccentricity), no records. Simulated, rendered into a photo folder
 // (shots.csv with `placement`, targets.yaml without poses) and calibrated
-// through the user's photo path (RunPipeline), for three seeds:
+// through the user's photo path (RunPipeline), for two seeds with two
+// pointings per placement, zoom and face (72 photos each; the config's four
+// make the demo, the test needs no more than these to hold its bounds):
 //   - the diagnosis of the configured model (without the effect) names
 //     hz_eccentricity first and significant;
 //   - with the effect in the model (Calibrate on the same detected corners):
 //     the normalised errors (fit - truth) / sigma of every zoom's fx, fy,
 //     cx, cy and of the effect's two parameters have a mean square in
-//     [0.5, 2] over the seeds (1 if the sigmas hold; 42 values, ~30
-//     independent: the mean square's standard deviation is ~0.25, so the
-//     bounds are wide of chance and fail a sigma off by 1.5x);
+//     [0.5, 2] over the seeds (1 if the sigmas hold; 28 values, ~20
+//     independent: the mean square's standard deviation is ~0.3, so the
+//     bounds are ~1.7 standard deviations wide of chance below and 3 above,
+//     and fail a sigma off by 1.5x);
 //   - held-out corners: other pointings of the same placements (each
 //     pointing turned by (0.01, 0.005) rad), the model's pixel of the board
 //     corner (its own pose of that placement) against the truth's, RMS per
@@ -57,11 +60,12 @@ TEST(OneBoardSession, MovedBoardCalibratesWithHonestSigmasAndFindsTheHiddenEffec
   Sums normalised;
   double held_sq = 0, detection_rms = 0;
   int held_n = 0;
-  for (const int seed : {3, 4, 5}) {
+  for (const int seed : {3, 4}) {
     RunSettings settings =
         LoadRunSettings(std::string(RTSCALIB_SOURCE_DIR) + "/configs/one_board.yaml");
     RunConfig& c = settings.config;
     c.simulate->seed = seed;
+    c.simulate->shots.shots_per_board = 2;
     ASSERT_EQ(c.simulate->placements.size(), 6u);
     ASSERT_TRUE(c.simulate->targets.boards.empty());
     const std::filesystem::path dir = work / std::to_string(seed);
@@ -139,7 +143,7 @@ TEST(OneBoardSession, MovedBoardCalibratesWithHonestSigmasAndFindsTheHiddenEffec
   const double noise = detection_rms / std::sqrt(2.0);
   ASSERT_GT(held_n, 1000);
   const double held_rms = std::sqrt(held_sq / (2.0 * held_n));
-  std::cout << "one board, 6 placements, seeds 3-5: mean square normalised error "
+  std::cout << "one board, 6 placements, seeds 3-4: mean square normalised error "
             << normalised.MeanSquare() << " (" << normalised.n << " values); held-out RMS "
             << held_rms << " px per coordinate over " << held_n
             << " corners (detection noise " << noise << " px)\n";

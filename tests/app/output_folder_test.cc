@@ -22,14 +22,14 @@
 
 #include "app/reports.h"
 #include "libcalib/io/safe_write.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 
 namespace rtscalib::app {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string Read(const fs::path& p) {
+std::string ReadBytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::ostringstream s;
   s << in.rdbuf();
@@ -104,14 +104,14 @@ std::string TopRun(const fs::path& root) {
   EXPECT_EQ(latest.rfind("history/", 0), 0u) << latest;
   const std::string run = latest.substr(8);
   for (const std::string& name : OutputFolder::TopFiles()) {
-    EXPECT_EQ(Read(root / name), Content(name, run)) << name;
+    EXPECT_EQ(ReadBytes(root / name), Content(name, run)) << name;
   }
   std::set<std::string> resolving;
   for (const auto& e : fs::directory_iterator(root / "figures")) {
     const std::string f = e.path().filename().string();
     if (!e.is_symlink() || !fs::exists(e.path())) continue;
     resolving.insert(f);
-    EXPECT_EQ(Read(e.path()), Content(f, run)) << f;
+    EXPECT_EQ(ReadBytes(e.path()), Content(f, run)) << f;
   }
   std::set<std::string> of_run;
   for (const auto& e : fs::directory_iterator(root / "history" / run / "figures")) {
@@ -150,7 +150,7 @@ TEST_F(OutputFolderTest, WriterReplacesAFileWholeAndLeavesNoTmp) {
   const fs::path p = dir_ / "report.json";
   WriteFileAtomic(p.string(), "old");
   WriteFileAtomic(p.string(), "new content");
-  EXPECT_EQ(Read(p), "new content");
+  EXPECT_EQ(ReadBytes(p), "new content");
   EXPECT_FALSE(Exists(dir_ / "report.json.tmp"));
 }
 
@@ -167,7 +167,7 @@ TEST_F(OutputFolderTest, WriterFailureNamesTheFileAndTheOsReasonAndKeepsTheOldFi
     EXPECT_NE(std::string(e.what()).find(p.string()), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(std::strerror(EFBIG)), std::string::npos) << e.what();
   }
-  EXPECT_EQ(Read(p), "the previous good copy");
+  EXPECT_EQ(ReadBytes(p), "the previous good copy");
   EXPECT_FALSE(Exists(dir_ / "report.json.tmp"));
 }
 
@@ -191,7 +191,7 @@ TEST_F(OutputFolderTest, WriterWithAPathWriterReportsItsFailureWithErrno) {
   EXPECT_FALSE(Exists(p));
   EXPECT_FALSE(Exists(dir_ / "model.yaml.tmp"));
   WriteFileAtomicWith(p.string(), [](const std::string& tmp) { std::ofstream(tmp) << "ok"; });
-  EXPECT_EQ(Read(p), "ok");
+  EXPECT_EQ(ReadBytes(p), "ok");
 }
 
 TEST_F(OutputFolderTest, WriterFailsOnAMissingFolderAndOnAFolderInTheWay) {
@@ -217,10 +217,10 @@ TEST_F(OutputFolderTest, WriterKeepModeNeverReplacesAnExistingFile) {
   const fs::path p = dir_ / "my.yaml";
   Put(p, "the user's");
   EXPECT_THROW(WriteFileAtomic(p.string(), "ours", Existing::kKeep), WriteError);
-  EXPECT_EQ(Read(p), "the user's");
+  EXPECT_EQ(ReadBytes(p), "the user's");
   EXPECT_FALSE(Exists(dir_ / "my.yaml.tmp"));
   WriteFileAtomic((dir_ / "new.yaml").string(), "ours", Existing::kKeep);
-  EXPECT_EQ(Read(dir_ / "new.yaml"), "ours");
+  EXPECT_EQ(ReadBytes(dir_ / "new.yaml"), "ours");
 }
 
 // --- history and publishing ----------------------------------------------
@@ -233,11 +233,11 @@ TEST_F(OutputFolderTest, TopShowsTheLatestRunAndHistoryKeepsTheEarlierOne) {
   EXPECT_EQ(TopRun(root_), b);
   // a.png was only in run A: its link is gone from figures/, its file kept.
   EXPECT_FALSE(Exists(root_ / "figures" / "a.png"));
-  EXPECT_EQ(Read(root_ / "history" / a / "figures" / "a.png"), Content("a.png", a));
+  EXPECT_EQ(ReadBytes(root_ / "history" / a / "figures" / "a.png"), Content("a.png", a));
   for (const std::string& name : OutputFolder::TopFiles()) {
-    EXPECT_EQ(Read(root_ / "history" / a / name), Content(name, a));
+    EXPECT_EQ(ReadBytes(root_ / "history" / a / name), Content(name, a));
   }
-  const nlohmann::json manifest = nlohmann::json::parse(Read(root_ / ".rtscalib-published"));
+  const nlohmann::json manifest = nlohmann::json::parse(ReadBytes(root_ / ".rtscalib-published"));
   EXPECT_EQ(manifest["run"], b);
 
   const OutputFolder next(root_.string());
@@ -246,7 +246,7 @@ TEST_F(OutputFolderTest, TopShowsTheLatestRunAndHistoryKeepsTheEarlierOne) {
   EXPECT_EQ(next.earlier()[1].name, b);
   EXPECT_EQ(next.earlier()[1].state, RunState::kComplete);
   EXPECT_EQ(next.run().number, 3);
-  EXPECT_EQ(Read(root_ / "history" / "2024-notes" / "x.txt"), "the user's, not a run");
+  EXPECT_EQ(ReadBytes(root_ / "history" / "2024-notes" / "x.txt"), "the user's, not a run");
 }
 
 TEST_F(OutputFolderTest, UsersFilesUnderPublishedNamesStopTheRunBeforeItStarts) {
@@ -261,9 +261,9 @@ TEST_F(OutputFolderTest, UsersFilesUnderPublishedNamesStopTheRunBeforeItStarts) 
     EXPECT_NE(what.find((root_ / "model.yaml").string()), std::string::npos) << what;
     EXPECT_NE(what.find((root_ / "report.txt").string()), std::string::npos) << what;
   }
-  EXPECT_EQ(Read(root_ / "model.yaml"), "my model");
-  EXPECT_EQ(Read(root_ / "report.txt"), "my report");
-  EXPECT_EQ(Read(root_ / "figures" / "notes.txt"), "my notes");
+  EXPECT_EQ(ReadBytes(root_ / "model.yaml"), "my model");
+  EXPECT_EQ(ReadBytes(root_ / "report.txt"), "my report");
+  EXPECT_EQ(ReadBytes(root_ / "figures" / "notes.txt"), "my notes");
   EXPECT_FALSE(Exists(root_ / "history"));  // nothing was written
 }
 
@@ -276,12 +276,12 @@ TEST_F(OutputFolderTest, UsersOtherFilesSurviveRunsAndPublishing) {
   WriteFakeRun(out, kFiguresB);
   out.MarkComplete();
   EXPECT_EQ(out.Publish(), std::vector<std::string>{"c.png"});
-  EXPECT_EQ(Read(root_ / "README.md"), "my readme");
-  EXPECT_EQ(Read(root_ / "figures" / "notes.txt"), "my notes");
-  EXPECT_EQ(Read(root_ / "figures" / "c.png"), "my picture");
-  EXPECT_EQ(Read(root_ / "figures" / "b.png"), Content("b.png", out.run().name));
-  EXPECT_EQ(Read(root_ / "model.yaml"), Content("model.yaml", out.run().name));
-  const nlohmann::json manifest = nlohmann::json::parse(Read(root_ / ".rtscalib-published"));
+  EXPECT_EQ(ReadBytes(root_ / "README.md"), "my readme");
+  EXPECT_EQ(ReadBytes(root_ / "figures" / "notes.txt"), "my notes");
+  EXPECT_EQ(ReadBytes(root_ / "figures" / "c.png"), "my picture");
+  EXPECT_EQ(ReadBytes(root_ / "figures" / "b.png"), Content("b.png", out.run().name));
+  EXPECT_EQ(ReadBytes(root_ / "model.yaml"), Content("model.yaml", out.run().name));
+  const nlohmann::json manifest = nlohmann::json::parse(ReadBytes(root_ / ".rtscalib-published"));
   EXPECT_EQ(manifest["kept_user_files"], nlohmann::json::array({"figures/c.png"}));
 }
 
@@ -293,9 +293,9 @@ TEST_F(OutputFolderTest, AUsersFileAppearingDuringARunIsKeptAndTheOldRunStaysSho
   fs::remove(root_ / "report.html");  // the user replaces rtscalib's link by a file
   Put(root_ / "report.html", "my page");
   EXPECT_THROW(out.Publish(), InputError);
-  EXPECT_EQ(Read(root_ / "report.html"), "my page");
+  EXPECT_EQ(ReadBytes(root_ / "report.html"), "my page");
   EXPECT_EQ(fs::read_symlink(root_ / "latest").string(), "history/" + a);
-  EXPECT_EQ(Read(root_ / "model.yaml"), Content("model.yaml", a));
+  EXPECT_EQ(ReadBytes(root_ / "model.yaml"), Content("model.yaml", a));
 }
 
 TEST_F(OutputFolderTest, PlainCopiesOfAnEarlierVersionAreAdoptedWithoutLoss) {
@@ -319,7 +319,7 @@ TEST_F(OutputFolderTest, PlainCopiesOfAnEarlierVersionAreAdoptedWithoutLoss) {
   steps[0].run();  // adopting: the top still shows the old run, now through latest
   EXPECT_EQ(fs::read_symlink(root_ / "latest").string(), "history/" + old);
   for (const std::string& name : OutputFolder::TopFiles()) {
-    EXPECT_EQ(Read(root_ / name), Content(name, old));
+    EXPECT_EQ(ReadBytes(root_ / name), Content(name, old));
   }
   WriteFakeRun(out, kFiguresB);
   out.MarkComplete();
@@ -327,9 +327,9 @@ TEST_F(OutputFolderTest, PlainCopiesOfAnEarlierVersionAreAdoptedWithoutLoss) {
   EXPECT_EQ(TopRun(root_), out.run().name);
   EXPECT_FALSE(Exists(root_ / "figures" / "a.png"));  // the old copy, not in this run
   for (const std::string& name : OutputFolder::TopFiles()) {
-    EXPECT_EQ(Read(root_ / "history" / old / name), Content(name, old));
+    EXPECT_EQ(ReadBytes(root_ / "history" / old / name), Content(name, old));
   }
-  EXPECT_EQ(Read(root_ / "history" / old / "figures" / "a.png"), Content("a.png", old));
+  EXPECT_EQ(ReadBytes(root_ / "history" / old / "figures" / "a.png"), Content("a.png", old));
 }
 
 TEST_F(OutputFolderTest, ConcurrentProcessesGetDistinctEntries) {
@@ -373,7 +373,7 @@ TEST_F(OutputFolderTest, ConcurrentProcessesGetDistinctEntries) {
     const HistoryEntry& e = after.earlier()[i];
     EXPECT_EQ(e.number, i + 1) << e.name;
     EXPECT_EQ(e.state, RunState::kComplete) << e.name;
-    writers.insert(Read(fs::path(e.dir) / "who"));
+    writers.insert(ReadBytes(fs::path(e.dir) / "who"));
   }
   EXPECT_EQ(writers, pids);  // one entry per process
   const std::string shown = fs::read_symlink(root_ / "latest").string();
@@ -503,16 +503,31 @@ TEST_F(OutputFolderTest, AnotherLiveProcessesEntryIsListedAsRunning) {
 
 class RtscalibBinary : public OutputFolderTest {
  protected:
-  // Runs `rtscalib --config configs/paper.yaml --output root` in bash after
-  // `prefix`; returns the exit code, stderr in *err.
+  // Runs `rtscalib --config small.yaml --output root` in bash after
+  // `prefix`; returns the exit code, stderr in *err. small.yaml is
+  // configs/paper.yaml with a coarse grid of records (8 x 4 instead of
+  // 24 x 12): what is tested here is the output folder, not the
+  // calibration, and six sanitized runs of the paper's grid took a minute.
   int Run(const fs::path& root, const std::string& prefix, std::string* err) {
+    const fs::path config = dir_ / "small.yaml";
+    if (!fs::exists(config)) {
+      std::ofstream(config) << "model:\n  kinematics: dh\n  effects: []\n  cameras:\n"
+                               "    - {width: 1280, height: 960, fx: 1500, fy: 1500, cx: 637.5, "
+                               "cy: 481.5}\n"
+                               "fit:\n  sigmas: {edm_m: 1.0e-5, cam_m: 1.0e-5, pixel_px: 0.5}\n"
+                               "simulate:\n  seed: 2018\n"
+                               "  noise: {angle_arcsec: 1.0, distance_m: 1.0e-5, point_m: 5.0e-6}\n"
+                               "  plan:\n    sweep_points: 15\n    edm_distances: [1, 2]\n"
+                               "    cam_ray_length: 1\n    pixel_offset: 1\n"
+                               "    grid: {phi_steps: 8, theta_steps: 4}\n"
+                               "    faces: [1]\n    zooms: [0]\n";
+    }
     const fs::path log = dir_ / "stderr.txt";
     const std::string cmd = "bash -c \"" + prefix + " '" + RTSCALIB_BINARY_DIR +
-                            "/app/rtscalib' --config '" + RTSCALIB_SOURCE_DIR +
-                            "/configs/paper.yaml' --output '" + root.string() +
-                            "' --quiet > /dev/null 2> '" + log.string() + "'\"";
+                            "/app/rtscalib' --config '" + config.string() + "' --output '" +
+                            root.string() + "' --quiet > /dev/null 2> '" + log.string() + "'\"";
     const int status = std::system(cmd.c_str());
-    *err = Read(log);
+    *err = ReadBytes(log);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
 };
@@ -521,7 +536,7 @@ TEST_F(RtscalibBinary, TwoRunsAFullDiskAndAUsersFile) {
   std::string err;
   ASSERT_EQ(Run(root_, "", &err), 0) << err;
   ASSERT_EQ(Run(root_, "", &err), 0) << err;
-  const nlohmann::json report = nlohmann::json::parse(Read(root_ / "report.json"));
+  const nlohmann::json report = nlohmann::json::parse(ReadBytes(root_ / "report.json"));
   const std::string second = report["rtscalib"]["run"];
   EXPECT_EQ(second.substr(0, 4), "002-");
   EXPECT_EQ(fs::read_symlink(root_ / "latest").string(), "history/" + second);
@@ -529,7 +544,7 @@ TEST_F(RtscalibBinary, TwoRunsAFullDiskAndAUsersFile) {
   EXPECT_EQ(report["history"][0]["status"], "complete");
   EXPECT_TRUE(report["history"][0].contains("final"));
   EXPECT_TRUE(fs::exists(root_ / "history" / report["history"][0]["run"] / "model.yaml"));
-  const std::string model = Read(root_ / "model.yaml");
+  const std::string model = ReadBytes(root_ / "model.yaml");
 
   // A full disk (the file size limit gives the same failed writes): a
   // non-zero exit naming the file and the OS reason; the top is untouched;
@@ -538,10 +553,10 @@ TEST_F(RtscalibBinary, TwoRunsAFullDiskAndAUsersFile) {
   EXPECT_NE(err.find("cannot write '" + root_.string() + "/history/003-"), std::string::npos)
       << err;
   EXPECT_NE(err.find(std::strerror(EFBIG)), std::string::npos) << err;
-  EXPECT_EQ(Read(root_ / "model.yaml"), model);
-  EXPECT_EQ(Read(root_ / "latest" / "status").substr(0, 8), "complete");
+  EXPECT_EQ(ReadBytes(root_ / "model.yaml"), model);
+  EXPECT_EQ(ReadBytes(root_ / "latest" / "status").substr(0, 8), "complete");
   ASSERT_EQ(Run(root_, "", &err), 0) << err;
-  const nlohmann::json fourth = nlohmann::json::parse(Read(root_ / "report.json"));
+  const nlohmann::json fourth = nlohmann::json::parse(ReadBytes(root_ / "report.json"));
   ASSERT_EQ(fourth["history"].size(), 3u);
   EXPECT_EQ(fourth["history"][2]["status"], "failed");
 
@@ -553,14 +568,14 @@ TEST_F(RtscalibBinary, TwoRunsAFullDiskAndAUsersFile) {
   Put(mine / "figures" / "notes.txt", "my notes");
   EXPECT_EQ(Run(mine, "", &err), 1);
   EXPECT_NE(err.find((mine / "model.yaml").string()), std::string::npos) << err;
-  EXPECT_EQ(Read(mine / "model.yaml"), "my model");
-  EXPECT_EQ(Read(mine / "report.txt"), "my report");
-  EXPECT_EQ(Read(mine / "figures" / "notes.txt"), "my notes");
+  EXPECT_EQ(ReadBytes(mine / "model.yaml"), "my model");
+  EXPECT_EQ(ReadBytes(mine / "report.txt"), "my report");
+  EXPECT_EQ(ReadBytes(mine / "figures" / "notes.txt"), "my notes");
   // Only figures/notes.txt: the run goes ahead and keeps it.
   fs::remove(mine / "model.yaml");
   fs::remove(mine / "report.txt");
   ASSERT_EQ(Run(mine, "", &err), 0) << err;
-  EXPECT_EQ(Read(mine / "figures" / "notes.txt"), "my notes");
+  EXPECT_EQ(ReadBytes(mine / "figures" / "notes.txt"), "my notes");
   EXPECT_TRUE(fs::exists(mine / "report.html"));
 }
 

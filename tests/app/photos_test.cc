@@ -18,7 +18,7 @@
 #include "app/output_folder.h"
 #include "app/pipeline.h"
 #include "app/reports.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/records.h"
 #include "libcalib/io/targets_io.h"
 #include "libcalib/sim/simulator.h"

@@ -10,7 +10,7 @@
 #include <fstream>
 
 #include "app/commands.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/model/kinematics.h"
 #include "libcalib/io/records.h"

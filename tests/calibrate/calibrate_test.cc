@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "libcalib/eval/error_measures.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/sim/simulator.h"
 
 namespace rtscalib {

@@ -14,7 +14,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib {

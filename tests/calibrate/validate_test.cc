@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "libcalib/calibrate/calibrate.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/sim/simulator.h"
 
 namespace rtscalib {

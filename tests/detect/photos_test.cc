@@ -20,7 +20,7 @@
 
 #include "detect/tag_family.h"
 #include "libcalib/io/csv.h"
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/records.h"
 #include "libcalib/io/targets_io.h"
 #include "tests/detect/synthetic_photo.h"

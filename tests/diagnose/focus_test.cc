@@ -70,7 +70,7 @@ SimulationOptions Session(std::uint64_t seed, bool report_focus_distance) {
   return o;
 }
 
-struct Fit {
+struct FocusFit {
   SimulatedData data;
   InstrumentModel model;
   FitOptions options;
@@ -91,9 +91,9 @@ FitOptions AprioriOf(const SimulatedData& data, const InstrumentModel& truth) {
   return o;
 }
 
-Fit FitModel(SimulatedData data, const InstrumentModel& truth, const EffectSet& effects,
+FocusFit FitModel(SimulatedData data, const InstrumentModel& truth, const EffectSet& effects,
              std::uint64_t seed) {
-  Fit f;
+  FocusFit f;
   f.data = std::move(data);
   f.options = AprioriOf(f.data, truth);
   f.model = Perturbed(truth, seed);  // effects removed, focus terms zeroed
@@ -125,7 +125,7 @@ std::string Verdict(const Diagnosis& d) {
 
 TEST(Focus, HiddenInRecordsAndPixelsIsFoundAndPredictsHeldOutData) {
   const SimulationOptions o = Session(31, /*report_focus_distance=*/true);
-  Fit f = FitModel(Simulate(o), o.truth, EffectSet(), 32);
+  FocusFit f = FitModel(Simulate(o), o.truth, EffectSet(), 32);
   ASSERT_GT(f.data.obs.pixels.size(), 3000u);
 
   // Without focus among the candidates: the image points fit worse than the
@@ -200,7 +200,7 @@ TEST(Focus, TermsAreRecoveredWithinTheirSigmas) {
     const SimulationOptions o = Session(seed, reported);
     EffectSet effects;
     effects.Add(Effect::kFocus);
-    const Fit f = FitModel(Simulate(o), o.truth, effects, seed + 50);
+    const FocusFit f = FitModel(Simulate(o), o.truth, effects, seed + 50);
     ASSERT_TRUE(f.model.sigmas.valid);
     ASSERT_EQ(f.model.sigmas.focus.size(), 2u);
     for (int z = 0; z < 2; ++z) {

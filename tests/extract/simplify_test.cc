@@ -39,7 +39,7 @@ const char* const kEq90 =
 // Snapped transforms are products of exact quarter turns and of the joint
 // rotations: entries are sums of a few unit-magnitude products, exact to a
 // few 1e-16; 1e-12 is generous.
-constexpr double kExact = 1e-12;
+constexpr double kSimplifyExact = 1e-12;
 
 TEST(Simplify, Tables1And2SnapToEq90) {
   for (int zoom : {-1, 0}) {  // EDM and camera tool (identical in Table 2)
@@ -55,10 +55,10 @@ TEST(Simplify, Tables1And2SnapToEq90) {
     for (int i = 0; i < 100; ++i) {
       const double p = phi(rng), t = theta(rng);
       const Rigid3 tool = zoom < 0 ? RefFromEdm(s.model, p, t) : RefFromCam(s.model, 0, p, t);
-      EXPECT_LT((tool.rotation - Eq90(p, t)).norm(), kExact);
-      EXPECT_LT(tool.translation.norm(), kExact);
-      EXPECT_LT((s.rotation.Evaluate(p, t) - Eq90(p, t)).norm(), kExact);
-      EXPECT_LT((s.euler->Evaluate(p, t) - Eq90(p, t)).norm(), kExact);
+      EXPECT_LT((tool.rotation - Eq90(p, t)).norm(), kSimplifyExact);
+      EXPECT_LT(tool.translation.norm(), kSimplifyExact);
+      EXPECT_LT((s.rotation.Evaluate(p, t) - Eq90(p, t)).norm(), kSimplifyExact);
+      EXPECT_LT((s.euler->Evaluate(p, t) - Eq90(p, t)).norm(), kSimplifyExact);
     }
   }
 }
@@ -69,9 +69,9 @@ TEST(Simplify, SnappedParametersAreEq85To88) {
   EXPECT_DOUBLE_EQ(m.links[0].p[kDhGamma], -M_PI / 2);  // Eq. 85
   EXPECT_DOUBLE_EQ(m.links[0].p[kDhAlpha], M_PI / 2);
   for (double v : m.links[1].p) EXPECT_EQ(v, 0.0);                   // Eq. 86
-  EXPECT_LT((m.base.ToRigid().rotation - Rx(M_PI)).norm(), kExact);  // Eq. 87
+  EXPECT_LT((m.base.ToRigid().rotation - Rx(M_PI)).norm(), kSimplifyExact);  // Eq. 87
   EXPECT_LT((m.edm.ToRigid().rotation - Rz(M_PI) * Ry(M_PI / 2) * Rx(-M_PI / 2)).norm(),
-            kExact);  // Eq. 88
+            kSimplifyExact);  // Eq. 88
   EXPECT_EQ(m.edm.ToRigid().translation.norm(), 0.0);
 }
 
@@ -136,7 +136,7 @@ TEST(FitTrigForm, RecognisesOnlyTheEq91Shape) {
   std::uniform_real_distribution<double> a(-3, 3);
   for (int i = 0; i < 20; ++i) {
     const double p = a(rng), t = a(rng);
-    EXPECT_LT((e->Evaluate(p, t) - rotation(p, t)).norm(), kExact);
+    EXPECT_LT((e->Evaluate(p, t) - rotation(p, t)).norm(), kSimplifyExact);
   }
   EXPECT_EQ(EulerForm({1, 1, 2, -1, -1}).ToString(), "Rz(phi + pi/2) Ry(pi) Rx(-theta - pi/2)");
 }

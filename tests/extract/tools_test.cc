@@ -11,7 +11,7 @@ namespace {
 
 // Exact data at unit scale; the camera tool's triangle is 1 mm wide, so its
 // rotation carries ~1e-16 / 1e-3 rad of round-off. 1e-10 bounds both.
-constexpr double kExact = 1e-10;
+constexpr double kToolsExact = 1e-10;
 
 std::vector<int> AllRows(const std::vector<Record>& records) {
   std::vector<int> rows;
@@ -46,22 +46,22 @@ TEST(ExtractTools, RecoverTheTruthToolsGivenTheChain) {
   const auto cam = ExtractCameraTool(records, rows, chain, 0, pp, &truth.cams[0], ExtractOptions());
   ASSERT_TRUE(cam.has_value());
   EXPECT_EQ(cam->poses, 24);
-  EXPECT_LT(cam->rms, kExact);
+  EXPECT_LT(cam->rms, kToolsExact);
   const Rigid3 c_true = truth.cams[0].flange_from_cam.ToRigid();
   const Rigid3 c_found = cam->camera.flange_from_cam.ToRigid();
-  EXPECT_LT((c_true.rotation - c_found.rotation).norm(), kExact);
-  EXPECT_LT((c_true.translation - c_found.translation).norm(), kExact);
+  EXPECT_LT((c_true.rotation - c_found.rotation).norm(), kToolsExact);
+  EXPECT_LT((c_true.translation - c_found.translation).norm(), kToolsExact);
 
   chain.cams[0] = cam->camera;
   const auto edm = ExtractEdmTool(records, rows, chain, 0, ExtractOptions());
   ASSERT_TRUE(edm.has_value());
   const Rigid3 e_true = truth.edm.ToRigid();
   const Rigid3 e_found = edm->flange_from_edm.ToRigid();
-  EXPECT_LT((e_true.rotation.col(2) - e_found.rotation.col(2)).norm(), kExact);  // ray
-  EXPECT_LT((e_true.translation - e_found.translation).norm(), kExact);          // origin
+  EXPECT_LT((e_true.rotation.col(2) - e_found.rotation.col(2)).norm(), kToolsExact);  // ray
+  EXPECT_LT((e_true.translation - e_found.translation).norm(), kToolsExact);          // origin
   // Eq. 79: the EDM x axis is the camera x projected off the ray.
   const Eigen::Vector3d xc = c_true.rotation.col(0), z = e_found.rotation.col(2);
-  EXPECT_LT(((xc - xc.dot(z) * z).normalized() - e_found.rotation.col(0)).norm(), kExact);
+  EXPECT_LT(((xc - xc.dot(z) * z).normalized() - e_found.rotation.col(0)).norm(), kToolsExact);
   EXPECT_NE(edm->x_reference.find("camera x of zoom 0 at 24 poses"), std::string::npos);
 }
 

@@ -22,7 +22,7 @@ constexpr double kArcsec = M_PI / (180.0 * 3600.0);
 
 // What a device API reports about its camera: image size, principal point at
 // the image centre, a nominal focal length 10 % off.
-std::vector<CameraTool> ApiCameras(const InstrumentModel& truth) {
+std::vector<CameraTool> StartCameras(const InstrumentModel& truth) {
   std::vector<CameraTool> cams;
   for (const CameraTool& t : truth.cams) {
     CameraTool c;
@@ -60,7 +60,7 @@ Observations Face(const Observations& obs, int face) {
 TEST(JointFaces, OneModelFitsBothFacesToTheNoiseFloor) {
   const InstrumentModel truth = DhTruth(1);
   const SimulatedData data = Simulate(RecordsAndPixels(truth, 5, 2e-5, 0.3));
-  InstrumentModel model = ExtractDhModel(data.obs.records, ApiCameras(truth)).model;
+  InstrumentModel model = ExtractDhModel(data.obs.records, StartCameras(truth)).model;
   FitOptions fo;
   fo.fit_intrinsics = true;
   fo.sigma_edm_m = fo.sigma_cam_m = 2e-5;
@@ -105,7 +105,7 @@ TEST(JointFaces, SeparateFacesReproduceCollimationTiltingAxisAndVerticalIndex) {
   const SimulatedData data = Simulate(RecordsAndPixels(truth, 8, 0.0, 0.0));
   // The calibration's path (libcalib/calibrate, faces: separate): extraction ->
   // joint dh fit -> one dh fit per face from it -> two-face check.
-  InstrumentModel joint = ExtractDhModel(data.obs.records, ApiCameras(truth)).model;
+  InstrumentModel joint = ExtractDhModel(data.obs.records, StartCameras(truth)).model;
   FitOptions fo;
   fo.fit_intrinsics = true;
   Refine(data.obs, fo, &joint);

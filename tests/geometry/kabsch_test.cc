@@ -17,7 +17,7 @@ Eigen::Matrix3d RandomRotation(std::mt19937& rng) {
 
 // Exact correspondences of unit-scale point sets: round-off only (the SVD of
 // a 3x3 matrix with well separated singular values); 1e-12 is generous.
-constexpr double kExact = 1e-12;
+constexpr double kKabschExact = 1e-12;
 
 TEST(Kabsch, RecoversRandomTransforms) {
   std::mt19937 rng(4);
@@ -31,9 +31,9 @@ TEST(Kabsch, RecoversRandomTransforms) {
         b.push_back(truth * a.back());
       }
       const KabschResult r = Kabsch(a, b);
-      EXPECT_LT((r.b_from_a.rotation - truth.rotation).norm(), kExact) << n;
-      EXPECT_LT((r.b_from_a.translation - truth.translation).norm(), kExact * 10) << n;
-      EXPECT_LT(r.rms, kExact);
+      EXPECT_LT((r.b_from_a.rotation - truth.rotation).norm(), kKabschExact) << n;
+      EXPECT_LT((r.b_from_a.translation - truth.translation).norm(), kKabschExact * 10) << n;
+      EXPECT_LT(r.rms, kKabschExact);
       EXPECT_EQ(r.rank, n == 3 ? 2 : 3);  // three points are always coplanar
     }
   }
@@ -52,8 +52,8 @@ TEST(Kabsch, CoplanarPointsGiveTheRotationNotItsMirror) {
       b.push_back(truth * a.back());
     }
     const KabschResult r = Kabsch(a, b);
-    EXPECT_NEAR(r.b_from_a.rotation.determinant(), 1.0, kExact);
-    EXPECT_LT((r.b_from_a.rotation - truth.rotation).norm(), kExact);
+    EXPECT_NEAR(r.b_from_a.rotation.determinant(), 1.0, kKabschExact);
+    EXPECT_LT((r.b_from_a.rotation - truth.rotation).norm(), kKabschExact);
   }
 }
 
@@ -72,10 +72,10 @@ TEST(Kabsch, ReflectedDataStillGivesAProperRotation) {
     }
   }
   const KabschResult r = Kabsch(a, b);
-  EXPECT_NEAR(r.b_from_a.rotation.determinant(), 1.0, kExact);
+  EXPECT_NEAR(r.b_from_a.rotation.determinant(), 1.0, kKabschExact);
   // H = diag(Sxx, Syy, -Szz): the best proper rotation keeps x and y and
   // gives up the thin z extent, i.e. the identity.
-  EXPECT_LT((r.b_from_a.rotation - Eigen::Matrix3d::Identity()).norm(), kExact);
+  EXPECT_LT((r.b_from_a.rotation - Eigen::Matrix3d::Identity()).norm(), kKabschExact);
   EXPECT_GT(r.rms, 0.0);
 }
 

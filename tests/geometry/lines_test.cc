@@ -10,7 +10,7 @@ namespace {
 
 // Unit-scale exact geometry: Eq. 37 divides by a c - b^2 ~ sin^2 = O(1), so
 // round-off stays within a few 1e-16; 1e-12 is a generous bound.
-constexpr double kExact = 1e-12;
+constexpr double kLinesExact = 1e-12;
 
 TEST(ClosestPointsOfLines, SkewedLinesMeetTheCommonNormal) {
   std::mt19937 rng(1);
@@ -35,14 +35,14 @@ TEST(ClosestPointsOfLines, SkewedLinesMeetTheCommonNormal) {
     const Line3 l1{q_t - t_true * d1, d1};
     const ClosestPoints cp = ClosestPointsOfLines(l0, l1);
     EXPECT_EQ(cp.constellation, LineConstellation::kSkewed);
-    EXPECT_NEAR(cp.s, s_true, kExact * 10);
-    EXPECT_NEAR(cp.t, t_true, kExact * 10);
-    EXPECT_LT((cp.q_s - q_s).norm(), kExact * 10);
-    EXPECT_LT((cp.q_t - q_t).norm(), kExact * 10);
-    EXPECT_NEAR(cp.distance, dist, kExact * 10);
+    EXPECT_NEAR(cp.s, s_true, kLinesExact * 10);
+    EXPECT_NEAR(cp.t, t_true, kLinesExact * 10);
+    EXPECT_LT((cp.q_s - q_s).norm(), kLinesExact * 10);
+    EXPECT_LT((cp.q_t - q_t).norm(), kLinesExact * 10);
+    EXPECT_NEAR(cp.distance, dist, kLinesExact * 10);
     // Eq. 36: v is perpendicular to both directions.
-    EXPECT_NEAR(d0.dot(cp.q_s - cp.q_t), 0.0, kExact * 10);
-    EXPECT_NEAR(d1.dot(cp.q_s - cp.q_t), 0.0, kExact * 10);
+    EXPECT_NEAR(d0.dot(cp.q_s - cp.q_t), 0.0, kLinesExact * 10);
+    EXPECT_NEAR(d1.dot(cp.q_s - cp.q_t), 0.0, kLinesExact * 10);
   }
 }
 
@@ -52,10 +52,10 @@ TEST(ClosestPointsOfLines, IntersectingLines) {
   const Line3 l1{x - 0.7 * Eigen::Vector3d(1, 1, 1), {2, 2, 2}};
   const ClosestPoints cp = ClosestPointsOfLines(l0, l1);
   EXPECT_EQ(cp.constellation, LineConstellation::kIntersecting);
-  EXPECT_LT((cp.q_s - x).norm(), kExact);
-  EXPECT_LT((cp.q_t - x).norm(), kExact);
-  EXPECT_NEAR(cp.s, -2.0, kExact);
-  EXPECT_NEAR(cp.t, 0.35, kExact);
+  EXPECT_LT((cp.q_s - x).norm(), kLinesExact);
+  EXPECT_LT((cp.q_t - x).norm(), kLinesExact);
+  EXPECT_NEAR(cp.s, -2.0, kLinesExact);
+  EXPECT_NEAR(cp.t, 0.35, kLinesExact);
 }
 
 TEST(ClosestPointsOfLines, ParallelLinesUseTheFootOfQ0) {
@@ -65,9 +65,9 @@ TEST(ClosestPointsOfLines, ParallelLinesUseTheFootOfQ0) {
     const ClosestPoints cp = ClosestPointsOfLines(l0, l1);
     EXPECT_EQ(cp.constellation, LineConstellation::kParallel) << scale;
     EXPECT_EQ(cp.s, 0.0);
-    EXPECT_LT((cp.q_s - l0.point).norm(), kExact);
-    EXPECT_LT((cp.q_t - Eigen::Vector3d(1, 2.5, 3)).norm(), kExact) << scale;
-    EXPECT_NEAR(cp.distance, 0.5, kExact);
+    EXPECT_LT((cp.q_s - l0.point).norm(), kLinesExact);
+    EXPECT_LT((cp.q_t - Eigen::Vector3d(1, 2.5, 3)).norm(), kLinesExact) << scale;
+    EXPECT_NEAR(cp.distance, 0.5, kLinesExact);
   }
 }
 
@@ -76,8 +76,8 @@ TEST(ClosestPointsOfLines, IdenticalLines) {
   const Line3 l1{{3, 4, 3}, {-2, -2, 0}};  // same line, other point, antiparallel
   const ClosestPoints cp = ClosestPointsOfLines(l0, l1);
   EXPECT_EQ(cp.constellation, LineConstellation::kIdentical);
-  EXPECT_LT(cp.distance, kExact);
-  EXPECT_LT((cp.q_t - l0.point).norm(), kExact);
+  EXPECT_LT(cp.distance, kLinesExact);
+  EXPECT_LT((cp.q_t - l0.point).norm(), kLinesExact);
 }
 
 // The tolerances decide borderline cases: a 1e-6 offset and a 1e-7 rad tilt

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <string>
 
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 
 namespace rtscalib::testing_io {
 

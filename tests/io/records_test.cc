@@ -7,7 +7,7 @@
 #include <random>
 
 #include "libcalib/io/csv.h"
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/number_text.h"
 #include "tests/io/io_test_util.h"
 
 namespace rtscalib {

@@ -12,7 +12,7 @@ using ::testing::HasSubstr;
 using testing_io::CatchInputError;
 using testing_io::TempDir;
 
-constexpr const char* kHeader = "face,zoom,phi,theta,image\n";
+constexpr const char* kShotsHeader = "face,zoom,phi,theta,image\n";
 
 // shots.csv in `dir` with `text`, plus the image files it may name.
 InputError ShotsError(const TempDir& dir, const std::string& text) {
@@ -26,7 +26,7 @@ InputError ShotsError(const TempDir& dir, const std::string& text) {
 void ExpectCellError(const std::string& row, const std::string& column, const std::string& got,
                      const std::string& expected) {
   TempDir dir;
-  const InputError e = ShotsError(dir, std::string("# test\n") + kHeader + row);
+  const InputError e = ShotsError(dir, std::string("# test\n") + kShotsHeader + row);
   EXPECT_EQ(e.file, dir.Path("shots.csv"));
   EXPECT_EQ(e.line, 3);
   EXPECT_EQ(e.column, column);
@@ -89,7 +89,7 @@ TEST(Shots, MissingRequiredColumnIsNamed) {
 TEST(Shots, MissingHeaderOrRowsIsAnError) {
   TempDir dir;
   EXPECT_EQ(ShotsError(dir, "# nothing\n").subject, "no rows");
-  EXPECT_EQ(ShotsError(dir, kHeader).subject, "no rows");
+  EXPECT_EQ(ShotsError(dir, kShotsHeader).subject, "no rows");
 }
 
 TEST(Shots, BadCellsNameLineColumnExpectedAndGot) {
@@ -104,7 +104,7 @@ TEST(Shots, BadCellsNameLineColumnExpectedAndGot) {
 TEST(Shots, MissingImageNamesLineAndPath) {
   TempDir dir;
   const InputError e =
-      ShotsError(dir, std::string(kHeader) + "1,0,0,1.5,photos/a.png\n1,0,0,1.5,photos/c.png\n");
+      ShotsError(dir, std::string(kShotsHeader) + "1,0,0,1.5,photos/a.png\n1,0,0,1.5,photos/c.png\n");
   EXPECT_EQ(e.line, 3);
   EXPECT_EQ(e.column, "image");
   EXPECT_EQ(e.got, dir.Path("photos/c.png"));
@@ -117,7 +117,7 @@ TEST(Shots, DuplicateShotIdsNameBothLines) {
   TempDir dir;
   // Two folders, one stem: the default ids collide.
   dir.Write("x/a.png", "x");
-  InputError e = ShotsError(dir, std::string(kHeader) +
+  InputError e = ShotsError(dir, std::string(kShotsHeader) +
                                      "1,0,0,1.5,photos/a.png\n"
                                      "# comment\n"
                                      "2,0,0,1.5,x/a.png\n");
@@ -158,7 +158,7 @@ TEST(ShotsAngleUnit, DegreesAndGonGiveTheRadianReadings) {
   const double phi[2] = {0.123456789012345, 5.4321098765432};
   const double theta[2] = {1.5707963267948966, 4.6};  // face 1, face 2
   auto file = [&](const char* name, double scale) {
-    std::string text = kHeader;
+    std::string text = kShotsHeader;
     for (int i = 0; i < 2; ++i) {
       char row[160];
       std::snprintf(row, sizeof row, "%d,1,%.17g,%.17g,%s\n", i + 1, phi[i] * scale,

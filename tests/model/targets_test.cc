@@ -9,7 +9,7 @@ namespace rtscalib {
 namespace {
 
 // Sums and products of a few decimetre-scale numbers: round-off only.
-constexpr double kRoundOff = 1e-14;
+constexpr double kTargetsRoundOff = 1e-14;
 
 TagBoard Board(int first_id, int rows, int cols, double tag, double spacing) {
   TagBoard b;
@@ -32,7 +32,7 @@ TEST(Targets, TagTopLeftCornerFollowsTheSpecLayout) {
       const auto k = b.CornersInBoard(r * b.cols + c);
       const Eigen::Vector3d top_left(0.075 * c, 0.075 * r, 0.0);
       // Corner 3 is the top-left one (libapriltag's order, SPEC 7).
-      EXPECT_LT((k[3] - top_left).norm(), kRoundOff) << r << "," << c;
+      EXPECT_LT((k[3] - top_left).norm(), kTargetsRoundOff) << r << "," << c;
       for (const auto& p : k) EXPECT_EQ(p.z(), 0.0);
     }
   }
@@ -44,12 +44,12 @@ TEST(Targets, CornerOrderIsBottomLeftBottomRightTopRightTopLeft) {
   const TagBoard b = Board(0, 2, 2, 0.1, 0.02);
   const auto k = b.CornersInBoard(3);  // tag (1, 1): top-left at (0.12, 0.12)
   const double x0 = 0.12, y0 = 0.12, s = 0.1;
-  EXPECT_LT((k[0] - Eigen::Vector3d(x0, y0 + s, 0)).norm(), kRoundOff);      // bottom-left
-  EXPECT_LT((k[1] - Eigen::Vector3d(x0 + s, y0 + s, 0)).norm(), kRoundOff);  // bottom-right
-  EXPECT_LT((k[2] - Eigen::Vector3d(x0 + s, y0, 0)).norm(), kRoundOff);      // top-right
-  EXPECT_LT((k[3] - Eigen::Vector3d(x0, y0, 0)).norm(), kRoundOff);          // top-left
+  EXPECT_LT((k[0] - Eigen::Vector3d(x0, y0 + s, 0)).norm(), kTargetsRoundOff);      // bottom-left
+  EXPECT_LT((k[1] - Eigen::Vector3d(x0 + s, y0 + s, 0)).norm(), kTargetsRoundOff);  // bottom-right
+  EXPECT_LT((k[2] - Eigen::Vector3d(x0 + s, y0, 0)).norm(), kTargetsRoundOff);      // top-right
+  EXPECT_LT((k[3] - Eigen::Vector3d(x0, y0, 0)).norm(), kTargetsRoundOff);          // top-left
   // The edges are tag_size long and the square is closed.
-  for (int i = 0; i < 4; ++i) EXPECT_NEAR((k[(i + 1) % 4] - k[i]).norm(), s, kRoundOff);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR((k[(i + 1) % 4] - k[i]).norm(), s, kTargetsRoundOff);
 }
 
 TEST(Targets, CornerOrderAsSeenByACameraFacingThePrintedSide) {
@@ -86,16 +86,16 @@ TEST(Targets, CornerOrderAsSeenByACameraFacingThePrintedSide) {
   EXPECT_LT(area2, 0.0);
   // The board frame is right-handed: z = x cross y, out of the back.
   const Eigen::Vector3d ex = (k[1] - k[0]).normalized(), ey = (k[0] - k[3]).normalized();
-  EXPECT_LT((ex.cross(ey) - Eigen::Vector3d::UnitZ()).norm(), kRoundOff);
+  EXPECT_LT((ex.cross(ey) - Eigen::Vector3d::UnitZ()).norm(), kTargetsRoundOff);
 }
 
 TEST(Targets, CentreInRefIsTheBoardMiddleMovedByThePose) {
   TagBoard b = Board(0, 3, 4, 0.08, 0.02);
   // Width 4 * 0.08 + 3 * 0.02 = 0.38, height 3 * 0.08 + 2 * 0.02 = 0.28.
-  EXPECT_LT((b.CentreInRef() - Eigen::Vector3d(0.19, 0.14, 0)).norm(), kRoundOff);
+  EXPECT_LT((b.CentreInRef() - Eigen::Vector3d(0.19, 0.14, 0)).norm(), kTargetsRoundOff);
   b.ref_from_board = Rigid3::FromEuler({0.3, -0.2, 1.0}, {1.0, 2.0, 3.0});
   const Eigen::Vector3d expected = b.ref_from_board * Eigen::Vector3d(0.19, 0.14, 0);
-  EXPECT_LT((b.CentreInRef() - expected).norm(), kRoundOff);
+  EXPECT_LT((b.CentreInRef() - expected).norm(), kTargetsRoundOff);
   // The centre is the mean of all the board's corners (the layout is symmetric).
   TargetScene scene;
   scene.boards.push_back(b);
@@ -136,14 +136,14 @@ TEST(Targets, AllCornersCarryIdsCornersAndReferencePositions) {
     const TagBoard& b = c.target >= 48 ? scene.boards[1] : scene.boards[0];
     const Eigen::Vector3d expected =
         b.ref_from_board * b.CornersInBoard(c.target - b.first_id)[c.corner];
-    EXPECT_LT((c.X - expected).norm(), kRoundOff) << c.target << "/" << c.corner;
+    EXPECT_LT((c.X - expected).norm(), kTargetsRoundOff) << c.target << "/" << c.corner;
   }
   // Tag 4 = row 1, column 1 of the first board (3 columns): top-left corner
   // at (0.06, 0.06, 0) in the identity-posed board.
   bool found = false;
   for (const TargetCorner& c : all) {
     if (c.target == 4 && c.corner == 3) {
-      EXPECT_LT((c.X - Eigen::Vector3d(0.06, 0.06, 0)).norm(), kRoundOff);
+      EXPECT_LT((c.X - Eigen::Vector3d(0.06, 0.06, 0)).norm(), kTargetsRoundOff);
       found = true;
     }
   }

@@ -52,7 +52,7 @@ TagBoard PointBoard(BoardKind kind) {
   return b;
 }
 
-struct Errors {
+struct CornerErrors {
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   double sum_sq = 0, max = 0;
   int n = 0;
@@ -63,7 +63,7 @@ struct Errors {
 // The detected inner corners against their exact projections: every one
 // must be an inner corner of the board, each at most once.
 void Accumulate(const PointBoardDetection& d, const TagBoard& board, const Rigid3& ref_from_cam,
-                const CameraTool& cam, Errors* errors) {
+                const CameraTool& cam, CornerErrors* errors) {
   const Rigid3 cam_from_board = ref_from_cam.Inverse() * board.ref_from_board;
   std::vector<bool> seen(board.NumTags(), false);
   for (const auto& [k, uv] : d.corners) {
@@ -101,13 +101,13 @@ std::vector<Rigid3> Poses(const TagBoard& board, const CameraTool& cam, int face
 
 // Renders `board` at Poses() in `faces` and detects it; every inner corner
 // is expected (ExpectTags: visible) and found.
-Errors RenderAndDetect(const TagBoard& board, const RenderOptions& options,
+CornerErrors RenderAndDetect(const TagBoard& board, const RenderOptions& options,
                        const std::vector<int>& faces = {1, 2}) {
   EnsureDisplay();
   const TargetScene scene = SceneOf(board);
   SceneRenderer renderer(scene, options);
   const CameraTool cam = TestCamera(true);
-  Errors errors;
+  CornerErrors errors;
   int image = 0;
   for (int face : faces) {
     for (const Rigid3& pose : Poses(board, cam, face)) {
@@ -125,7 +125,7 @@ Errors RenderAndDetect(const TagBoard& board, const RenderOptions& options,
   return errors;
 }
 
-void Print(const char* what, const Errors& e) {
+void Print(const char* what, const CornerErrors& e) {
   std::printf("%s: %d corners, RMS %.4f px, max %.4f px, mean (%.4f, %.4f) px\n", what, e.n,
               e.Rms(), e.max, e.Mean().x(), e.Mean().y());
 }
@@ -140,7 +140,7 @@ void Print(const char* what, const Errors& e) {
 // 0.7 px, a board drawn mirrored or turned would swap ids; an offset of the
 // drawn squares would show in the mean.
 TEST(PointBoardsRenderTest, CharucoCornersMatchExactProjections) {
-  const Errors e = RenderAndDetect(PointBoard(BoardKind::kCharuco), {});
+  const CornerErrors e = RenderAndDetect(PointBoard(BoardKind::kCharuco), {});
   Print("rendered charuco", e);
   EXPECT_EQ(e.n, 18 * 24);
   EXPECT_LT(e.Rms(), 0.1);
@@ -149,7 +149,7 @@ TEST(PointBoardsRenderTest, CharucoCornersMatchExactProjections) {
 }
 
 TEST(PointBoardsRenderTest, ChessboardCornersMatchExactProjections) {
-  const Errors e = RenderAndDetect(PointBoard(BoardKind::kChessboard), {});
+  const CornerErrors e = RenderAndDetect(PointBoard(BoardKind::kChessboard), {});
   Print("rendered chessboard", e);
   EXPECT_EQ(e.n, 18 * 40);
   EXPECT_LT(e.Rms(), 0.1);
@@ -162,8 +162,8 @@ TEST(PointBoardsRenderTest, ChessboardCornersMatchExactProjections) {
 TEST(PointBoardsRenderTest, SensorNoiseKeepsSubPixelAccuracy) {
   RenderOptions options;
   options.noise_sigma = 1.0;
-  const Errors charuco = RenderAndDetect(PointBoard(BoardKind::kCharuco), options, {1});
-  const Errors chessboard = RenderAndDetect(PointBoard(BoardKind::kChessboard), options, {1});
+  const CornerErrors charuco = RenderAndDetect(PointBoard(BoardKind::kCharuco), options, {1});
+  const CornerErrors chessboard = RenderAndDetect(PointBoard(BoardKind::kChessboard), options, {1});
   Print("rendered charuco, noise 1", charuco);
   Print("rendered chessboard, noise 1", chessboard);
   EXPECT_LT(charuco.Rms(), 0.1);

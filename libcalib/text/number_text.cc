@@ -1,4 +1,4 @@
-#include "libcalib/io/number_text.h"
+#include "libcalib/text/number_text.h"
 
 #include <charconv>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "libcalib/io/errors.h"
+#include "libcalib/text/errors.h"
 
 #include <cassert>
 
