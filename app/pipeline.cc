@@ -96,7 +96,7 @@ PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_
                            Progress* progress) {
   PipelineResult result;
   result.obs = LoadObservations(settings, work_dir, &result, progress);
-  result.calibration = Calibrate(result.obs, CalibrationOptionsOf(settings.config), progress);
+  result.calibration = Calibrate(result.obs, settings.config.calibration, progress);
   result.notes.insert(result.notes.end(), result.calibration.notes.begin(),
                       result.calibration.notes.end());
   // Projection uncertainty per zoom (libcalib/api/uncertainty_map.h), from
@@ -105,15 +105,8 @@ PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_
   result.full_covariance = inst.HasFullParameterCovariance();
   if (inst.HasParameterCovariance() && inst.NumZooms() > 0) {
     if (progress) progress->Step("projection uncertainty maps");
-    const UncertaintyMapSettings& u = settings.config.uncertainty_map;
-    UncertaintyMapOptions o;
-    o.range_m = u.range_m;
-    o.cols = u.cols;
-    o.rows = u.rows;
-    o.phi = u.phi;
-    o.theta = u.theta;
-    result.uncertainty_options = o;
-    result.uncertainty_maps = ProjectionUncertaintyMaps(inst, o);
+    result.uncertainty_options = settings.config.uncertainty_map;
+    result.uncertainty_maps = ProjectionUncertaintyMaps(inst, result.uncertainty_options);
   }
   return result;
 }

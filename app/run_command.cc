@@ -25,8 +25,8 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   RunConfig& config = settings.config;
   out.Write("config.yaml", DumpRunSettings(settings));
 
-  if (args.diagnose) config.diagnose.enabled = true;
-  if (args.diagnose_auto) config.diagnose.auto_add = true;
+  if (args.diagnose) config.calibration.diagnose.enabled = true;
+  if (args.diagnose_auto) config.calibration.diagnose.auto_add = true;
   const PipelineResult result = RunPipeline(settings, out.run_dir(), &progress);
 
   progress.Step("writing the model and the reports");

@@ -36,7 +36,7 @@ Problem Fit(const SimulationOptions& o, bool fit_intrinsics) {
   return p;
 }
 
-void Run(benchmark::State& state, const Problem& p, const Settings& s) {
+void Run(benchmark::State& state, const Problem& p, const DiagnosisSettings& s) {
   const FitContext ctx = ContextOf(p.options, p.fit);
   for (auto _ : state) {
     const Diagnosis d = Diagnose(p.data.obs, p.model, ctx, s);
@@ -57,7 +57,7 @@ void BM_DiagnosePaperSize(benchmark::State& state) {
   SimulationOptions o;
   o.truth = PaperTruth(1);
   static const Problem p = Fit(PaperNoise(o), false);
-  Run(state, p, Settings{});
+  Run(state, p, DiagnosisSettings{});
 }
 BENCHMARK(BM_DiagnosePaperSize)->Unit(benchmark::kMillisecond);
 
@@ -72,13 +72,13 @@ SimulationOptions PaperConfig() {
 
 void BM_DiagnosePaperConfig(benchmark::State& state) {
   static const Problem p = Fit(PaperConfig(), true);
-  Run(state, p, Settings{});
+  Run(state, p, DiagnosisSettings{});
 }
 BENCHMARK(BM_DiagnosePaperConfig)->Unit(benchmark::kMillisecond);
 
 void BM_RankOnlyPaperConfig(benchmark::State& state) {
   static const Problem p = Fit(PaperConfig(), true);
-  Settings s;
+  DiagnosisSettings s;
   s.harmonics = false;
   s.outliers = false;
   Run(state, p, s);
@@ -110,7 +110,7 @@ void BM_DiagnoseThreeZoomPixels(benchmark::State& state) {
   o = PaperNoise(o);
   o.noise.pixel_px = 0.3;
   static const Problem p = Fit(o, true);
-  Run(state, p, Settings{});
+  Run(state, p, DiagnosisSettings{});
 }
 BENCHMARK(BM_DiagnoseThreeZoomPixels)->Unit(benchmark::kMillisecond);
 

@@ -43,9 +43,10 @@ void RequireFiniteCamera(const rtscalib::CameraTool& cam, const std::string& wha
 }
 
 void RequireValid(const RunConfig& c) {
-  RequireFinite(c.model.edm_cyclic_unit_length, "model.edm_cyclic.unit_length");
-  for (const rtscalib::CameraTool& cam : c.model.cameras) RequireFiniteCamera(cam, "model.cameras");
-  const rtscalib::FitOptions& f = c.fit;
+  RequireFinite(c.calibration.model.edm_cyclic_unit_length, "model.edm_cyclic.unit_length");
+  for (const rtscalib::CameraTool& cam : c.calibration.model.cameras)
+    RequireFiniteCamera(cam, "model.cameras");
+  const rtscalib::FitOptions& f = c.calibration.fit;
   for (double x : {f.sigma_edm_m, f.sigma_cam_m, f.sigma_pixel_px, f.loss_scale,
                    f.translation_bound_m, f.min_zenith_rad, f.max_zenith_rad}) {
     RequireFinite(x, "a fit option");
@@ -57,7 +58,7 @@ void RequireValid(const RunConfig& c) {
   Require(f.translation_bound_m >= 0, "fit.translation_bound_m >= 0");
   Require(f.min_zenith_rad < f.max_zenith_rad, "fit.critical_region min < max");
   Require(f.num_threads >= 1, "fit.threads >= 1");
-  RequireFinite(c.diagnose.significance, "diagnose.significance");
+  RequireFinite(c.calibration.diagnose.significance, "diagnose.significance");
 
   if (c.simulate) {
     rtscalib::SimulationOptions sim = *c.simulate;

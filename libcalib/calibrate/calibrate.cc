@@ -433,7 +433,7 @@ FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResu
 // Throws what the diagnosis throws.
 void DiagnoseModel(const Observations& obs, const CalibrationOptions& options,
                    CalibrationProgress* progress, CalibrationResult* r) {
-  Settings s;
+  DiagnosisSettings s;
   s.significance = options.diagnose.significance;
   if (options.diagnose.auto_add) {
     progress->Step("forward stepwise: adding significant effects one at a time");

@@ -42,7 +42,9 @@ struct ModelSettings {
 struct DiagnoseOptions {
   bool enabled = true;         // rank missing effects and look for unexplained patterns
   bool auto_add = false;       // key `auto`: add significant effects and refit
-  double significance = 0.01;  // test level for "significant"
+  // Test level for "significant" (Calibrate passes it on as
+  // DiagnosisSettings::significance, libcalib/diagnose/diagnose.h).
+  double significance = 0.01;
 };
 
 // What a fit's outcome must satisfy to be a model (libcalib/calibrate/validate.h;

@@ -218,7 +218,7 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
 
 }  // namespace
 
-std::string Settings::Check() const {
+std::string DiagnosisSettings::Check() const {
   if (!(significance > 0 && significance < 1)) return "diagnose.significance must be in (0, 1)";
   if (refine_top < 0) return "diagnose: refine_top must be >= 0";
   if (max_harmonic < 1 || max_harmonic > 12) return "diagnose: max_harmonic must be in 1..12";
@@ -243,7 +243,7 @@ const RankedEffect* Diagnosis::Next() const {
 }
 
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
-                   const Settings& settings) {
+                   const DiagnosisSettings& settings) {
   const std::string msg = settings.Check();
   if (!msg.empty()) throw std::invalid_argument(msg);
   const auto t0 = std::chrono::steady_clock::now();

@@ -32,7 +32,11 @@
 
 namespace rtscalib {
 
-struct Settings {
+// How Diagnose (and ForwardStepwise, stepwise.h) test. Not the config's
+// `diagnose` section (DiagnoseOptions, libcalib/calibrate/options.h: whether
+// Calibrate diagnoses, whether it adds effects): Calibrate passes that
+// section's significance on and leaves the rest at these defaults.
+struct DiagnosisSettings {
   double significance = 0.01;  // family-wise level of each of: ranking, harmonics, outliers
   int refine_top = 2;          // best significant effects confirmed by a refinement
   bool harmonics = true;
@@ -86,6 +90,6 @@ struct Diagnosis {
 };
 
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
-                   const Settings& settings);
+                   const DiagnosisSettings& settings);
 
 }  // namespace rtscalib

@@ -4,7 +4,7 @@ namespace rtscalib {
 
 StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& model,
                                const FitSummary& fit, const FitOptions& fit_options,
-                               const Settings& settings, int max_steps) {
+                               const DiagnosisSettings& settings, int max_steps) {
   StepwiseResult out;
   out.model = model;
   out.fit = fit;

@@ -35,6 +35,6 @@ struct StepwiseResult {
 // fit used. Throws what Refine throws.
 StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& model,
                                const FitSummary& fit, const FitOptions& fit_options,
-                               const Settings& settings, int max_steps = 8);
+                               const DiagnosisSettings& settings, int max_steps = 8);
 
 }  // namespace rtscalib

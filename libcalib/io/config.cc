@@ -8,11 +8,13 @@
 #include <filesystem>
 #include <thread>
 
-#include "libcalib/text/errors.h"
-#include "libcalib/text/number_text.h"
+#include "libcalib/fit/options.h"
 #include "libcalib/io/yaml_reader.h"
 #include "libcalib/model/effects.h"
 #include "libcalib/model/instrument.h"
+#include "libcalib/screen/options.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {
@@ -772,16 +774,6 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
 const char* FaceModeName(FaceMode m) { return NameOf(kFaceModeNames, m).c_str(); }
 const char* IntrinsicsModeName(IntrinsicsMode m) { return NameOf(kIntrinsicsNames, m).c_str(); }
 
-CalibrationOptions CalibrationOptionsOf(const RunConfig& config) {
-  CalibrationOptions options;
-  options.model = config.model;
-  options.fit = config.fit;
-  options.diagnose = config.diagnose;
-  options.screen = config.screen;
-  options.checks = config.checks;
-  return options;
-}
-
 RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& sections) {
   // A run's settings take a few kB; 4 MiB leaves room for long simulated
   // target lists and bounds what a runaway file costs to parse (~200 MB).
@@ -791,32 +783,33 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
   const fs::path absolute = fs::absolute(path).lexically_normal();
   config.config_path = absolute.string();
   config.config_dir = absolute.parent_path().string();
+  CalibrationOptions& options = config.calibration;
 
   if (const std::optional<YamlNode> n = root.Find("data")) ReadData(*n, config.config_dir, &config);
-  if (const std::optional<YamlNode> n = root.Find("model")) ReadModel(*n, &config.model);
+  if (const std::optional<YamlNode> n = root.Find("model")) ReadModel(*n, &options.model);
   if (const std::optional<YamlNode> n = root.Find("fit")) {
-    ReadFit(*n, &config.fit);
+    ReadFit(*n, &options.fit);
     ReadNumber(
-        *n, "max_sigma0", &config.checks.max_sigma0, [](double x) { return x > 1; },
+        *n, "max_sigma0", &options.checks.max_sigma0, [](double x) { return x > 1; },
         "a factor > 1 (a-posteriori over a-priori sigma beyond which a fit fails)");
   }
-  config.fit.fit_intrinsics = config.model.intrinsics == IntrinsicsMode::kFit;
+  options.fit.fit_intrinsics = options.model.intrinsics == IntrinsicsMode::kFit;
   const std::optional<YamlNode> simulate = root.Find("simulate");
   if (simulate) {
     config.simulate.emplace();
-    ReadSimulate(*simulate, config.model, &*config.simulate, &config.truth_from_paper);
+    ReadSimulate(*simulate, options.model, &*config.simulate, &config.truth_from_paper);
   }
   for (const ConfigSection& section : sections) {
     if (const std::optional<YamlNode> n = root.Find(section.key)) section.read(*n);
   }
-  if (const std::optional<YamlNode> n = root.Find("diagnose")) ReadDiagnose(*n, &config.diagnose);
+  if (const std::optional<YamlNode> n = root.Find("diagnose")) ReadDiagnose(*n, &options.diagnose);
   if (const std::optional<YamlNode> n = root.Find("detect")) {
     ReadCount(*n, "jobs", &config.detect_jobs, 1, "detection threads");
   }
-  if (const std::optional<YamlNode> n = root.Find("screen")) ReadScreen(*n, &config.screen);
+  if (const std::optional<YamlNode> n = root.Find("screen")) ReadScreen(*n, &options.screen);
   if (const std::optional<YamlNode> report = root.Find("report")) {
     if (const std::optional<YamlNode> n = report->Find("uncertainty_map")) {
-      UncertaintyMapSettings& u = config.uncertainty_map;
+      UncertaintyMapOptions& u = config.uncertainty_map;
       ReadNumber(
           *n, "range_m", &u.range_m, [](double x) { return x > 0; }, "a range > 0 [m]");
       if (const std::optional<YamlNode> cells = n->Find("cells")) {
@@ -861,6 +854,7 @@ RunConfig LoadConfig(const std::string& path, const std::vector<ConfigSection>& 
 }
 
 std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sections) {
+  const CalibrationOptions& options = c.calibration;
   YAML::Emitter e;
   e << YAML::BeginMap;
   if (!c.records_path.empty() || !c.pixels_path.empty() || !c.shots_path.empty()) {
@@ -878,7 +872,7 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
     e << YAML::EndMap;
   }
 
-  const ModelSettings& m = c.model;
+  const ModelSettings& m = options.model;
   e << YAML::Key << "model" << YAML::Value << YAML::BeginMap;
   e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(m.kinematics);
   e << YAML::Key << "effects" << YAML::Value << YAML::Flow << m.effects.Names();
@@ -914,7 +908,7 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   }
   e << YAML::EndMap;
 
-  const FitOptions& f = c.fit;
+  const FitOptions& f = options.fit;
   e << YAML::Key << "fit" << YAML::Value << YAML::BeginMap;
   e << YAML::Key << "sigmas" << YAML::Value << YAML::Flow << YAML::BeginMap;
   e << YAML::Key << "edm_m" << YAML::Value << Num(f.sigma_edm_m);
@@ -934,7 +928,7 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
   e << YAML::EndMap;
   e << YAML::Key << "max_iterations" << YAML::Value << f.max_iterations;
   e << YAML::Key << "translation_bound_m" << YAML::Value << Num(f.translation_bound_m);
-  e << YAML::Key << "max_sigma0" << YAML::Value << Num(c.checks.max_sigma0);
+  e << YAML::Key << "max_sigma0" << YAML::Value << Num(options.checks.max_sigma0);
   e << YAML::Key << "critical_region" << YAML::Value << YAML::Flow << YAML::BeginMap;
   e << YAML::Key << "min_zenith_deg" << YAML::Value << ExactScaled(f.min_zenith_rad, kRadPerDeg);
   e << YAML::Key << "max_zenith_deg" << YAML::Value << ExactScaled(f.max_zenith_rad, kRadPerDeg);
@@ -960,19 +954,20 @@ std::string DumpConfig(const RunConfig& c, const std::vector<ConfigSection>& sec
     e << YAML::EndMap;
   }
   e << YAML::Key << "diagnose" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  e << YAML::Key << "enabled" << YAML::Value << c.diagnose.enabled;
-  e << YAML::Key << "auto" << YAML::Value << c.diagnose.auto_add;
-  e << YAML::Key << "significance" << YAML::Value << Num(c.diagnose.significance);
+  e << YAML::Key << "enabled" << YAML::Value << options.diagnose.enabled;
+  e << YAML::Key << "auto" << YAML::Value << options.diagnose.auto_add;
+  e << YAML::Key << "significance" << YAML::Value << Num(options.diagnose.significance);
   e << YAML::EndMap;
   e << YAML::Key << "screen" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  e << YAML::Key << "pixel_margin_px" << YAML::Value << Num(c.screen.pixel_margin_px);
-  e << YAML::Key << "max_extent_m" << YAML::Value << Num(c.screen.max_extent_m);
-  e << YAML::Key << "max_missing_zooms" << YAML::Value << c.screen.max_missing_zooms;
+  e << YAML::Key << "pixel_margin_px" << YAML::Value << Num(options.screen.pixel_margin_px);
+  e << YAML::Key << "max_extent_m" << YAML::Value << Num(options.screen.max_extent_m);
+  e << YAML::Key << "max_missing_zooms" << YAML::Value << options.screen.max_missing_zooms;
   e << YAML::Key << "gross_errors" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  e << YAML::Key << "enabled" << YAML::Value << c.screen.gross_errors.enabled;
+  e << YAML::Key << "enabled" << YAML::Value << options.screen.gross_errors.enabled;
   e << YAML::Key << "sphere_threshold" << YAML::Value
-    << Num(c.screen.gross_errors.sphere_threshold);
-  e << YAML::Key << "sphere_floor_m" << YAML::Value << Num(c.screen.gross_errors.sphere_floor_m);
+    << Num(options.screen.gross_errors.sphere_threshold);
+  e << YAML::Key << "sphere_floor_m" << YAML::Value
+    << Num(options.screen.gross_errors.sphere_floor_m);
   e << YAML::EndMap;
   e << YAML::EndMap;
   e << YAML::Key << "report" << YAML::Value << YAML::BeginMap;

@@ -16,32 +16,21 @@
 // built here: `truth_from_paper` tells the caller to build it.
 #pragma once
 
-#include <cmath>
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "libcalib/calibrate/options.h"
-#include "libcalib/fit/options.h"
+#include "libcalib/io/uncertainty_map_options.h"
 #include "libcalib/io/yaml_reader.h"
 #include "libcalib/model/angle_unit.h"
-#include "libcalib/screen/options.h"
 #include "libcalib/sim/options.h"
 
 namespace rtscalib {
 
 const char* FaceModeName(FaceMode m);
 const char* IntrinsicsModeName(IntrinsicsMode m);
-
-// report.uncertainty_map (docs/config.md): the projection uncertainty maps
-// of the report (libcalib/api/uncertainty_map.h).
-struct UncertaintyMapSettings {
-  double range_m = 10.0;  // ray length of the points [m]
-  int cols = 24, rows = 18;
-  double phi = 0.0;         // pointing [rad]
-  double theta = M_PI / 2;  // zenith angle [rad]
-};
 
 struct RunConfig {
   std::string config_path;   // absolute, normalised
@@ -56,26 +45,24 @@ struct RunConfig {
   // shots.csv; the readers convert to radians (libcalib/model/angle_unit.h).
   AngleUnit angle_unit = AngleUnit::kRad;
   int detect_jobs = 1;  // detect.jobs: threads detecting the photos
-  ModelSettings model;
-  // model.intrinsics kFit sets fit.fit_intrinsics; kAuto leaves it false for
-  // Calibrate to decide from the data.
-  FitOptions fit;
-  FitChecks checks;  // fit.max_sigma0 (libcalib/calibrate/validate.h)
+  // The `model`, `fit`, `diagnose` and `screen` sections: the options of the
+  // calibration itself (Calibrate, libcalib/calibrate), passed as they are.
+  // model.intrinsics kFit sets calibration.fit.fit_intrinsics; kAuto leaves it
+  // false for Calibrate to decide from the data. fit.max_sigma0 is
+  // calibration.checks.max_sigma0 (libcalib/calibrate/validate.h).
+  CalibrationOptions calibration;
   // Present when the config has a `simulate` section. Used only when there
   // are no data files (then it is required).
   std::optional<SimulationOptions> simulate;
   // simulate.truth absent: the caller sets simulate->truth =
   // PaperTruth(PlanNumZooms(simulate->plan)) (libcalib/sim/simulator.h).
   bool truth_from_paper = false;
-  DiagnoseOptions diagnose;
-  ScreenOptions screen;
-  UncertaintyMapSettings uncertainty_map;
+  // report.uncertainty_map: the options of the report's projection
+  // uncertainty maps (libcalib/api/uncertainty_map.h), passed as they are.
+  UncertaintyMapOptions uncertainty_map;
   std::string output_dir;          // absolute; default <config_dir>/out
   std::vector<std::string> notes;  // things worth a line in the run log
 };
-
-// The options of the calibration itself (libcalib/calibrate).
-CalibrationOptions CalibrationOptionsOf(const RunConfig& config);
 
 // A top-level section that belongs to a module outside libcalib (`render`,
 // read by render/options.h). `read` gets the section's node before unknown

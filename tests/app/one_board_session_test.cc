@@ -91,7 +91,7 @@ TEST(OneBoardSession, MovedBoardCalibratesWithHonestSigmasAndFindsTheHiddenEffec
     EXPECT_EQ(Info(next->effect).name, std::string("hz_eccentricity")) << "seed " << seed;
 
     // The hidden effect in the model, on the same detected corners.
-    CalibrationOptions with = CalibrationOptionsOf(c);
+    CalibrationOptions with = c.calibration;
     with.model.effects.Add(Effect::kHzEccentricity);
     with.diagnose.enabled = false;
     const CalibrationResult fit = Calibrate(r.obs, with);

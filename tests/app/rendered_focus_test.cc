@@ -95,7 +95,7 @@ TEST(RenderedFocus, RefocusingCameraInRenderedPhotosIsFoundAndCalibrated) {
 
   // The same fit without focus among the candidates.
   const InstrumentModel& fitted = r.calibration.model;
-  Settings untested;
+  DiagnosisSettings untested;
   untested.untested = {Effect::kFocus};
   const Diagnosis without =
       Diagnose(WithEstimates(r.obs, fitted), fitted,
@@ -118,7 +118,7 @@ TEST(RenderedFocus, RefocusingCameraInRenderedPhotosIsFoundAndCalibrated) {
   EXPECT_TRUE(distance) << Verdict(without);
 
   // Focus in the model, on the same detected corners.
-  CalibrationOptions options = CalibrationOptionsOf(c);
+  CalibrationOptions options = c.calibration;
   options.model.effects.Add(Effect::kFocus);
   options.diagnose.enabled = false;
   const CalibrationResult fit = Calibrate(r.obs, options);

@@ -90,8 +90,9 @@ class RenderedPointBoards : public ::testing::Test {
     c.simulate->plan.grid_phi_steps = 6;
     c.simulate->plan.grid_theta_steps = 3;
     c.simulate->shots.shots_per_board = 2;
-    c.model.effects.Add(Effect::kHzEccentricity);  // the hidden effect: the model is right
-    c.diagnose.enabled = false;
+    // The hidden effect: the model is right.
+    c.calibration.model.effects.Add(Effect::kHzEccentricity);
+    c.calibration.diagnose.enabled = false;
     ASSERT_FALSE(settings.render.board_poses_known);  // estimated, as a user's boards
     Progress progress(true);
     result_ = std::make_unique<PipelineResult>(RunPipeline(settings, dir.string(), &progress));

@@ -238,8 +238,9 @@ void RunSeed(int seed, SeedResult* out) {
   // Fewer grid records than the demo (the photos are what is tested).
   c.simulate->plan.grid_phi_steps = 8;
   c.simulate->plan.grid_theta_steps = 4;
-  c.model.effects.Add(Effect::kHzEccentricity);  // the hidden effect, found by the diagnosis
-  c.diagnose.enabled = false;
+  // The hidden effect, found by the diagnosis.
+  c.calibration.model.effects.Add(Effect::kHzEccentricity);
+  c.calibration.diagnose.enabled = false;
   const fs::path dir =
       ResultDir() / ("seed" + std::to_string(seed) + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -250,7 +251,7 @@ void RunSeed(int seed, SeedResult* out) {
   fs::remove_all(dir);
   ASSERT_TRUE(r.truth.has_value());
   ASSERT_TRUE(r.render.ran) << r.render.note;
-  const CalibrationOptions options = CalibrationOptionsOf(c);
+  const CalibrationOptions& options = c.calibration;
   const CalibrationResult with_records = Calibrate(r.obs, options, &progress);
   AddErrors(with_records.model, *r.truth, &out->with_records);
 

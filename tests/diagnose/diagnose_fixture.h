@@ -79,7 +79,7 @@ inline Fitted FitBaseline(SimulatedData data, const InstrumentModel& truth, std:
   return f;
 }
 
-inline Diagnosis DiagnoseFitted(const Fitted& f, const Settings& s = {}) {
+inline Diagnosis DiagnoseFitted(const Fitted& f, const DiagnosisSettings& s = {}) {
   return Diagnose(f.data.obs, f.model, ContextOf(f.options, f.fit), s);
 }
 

@@ -51,7 +51,8 @@ const Scenario& TheScenario() {
     }
     data.obs.records[out.outlier].x += Eigen::Vector3d(3e-3, 0, 0);
     out.f = FitBaseline(std::move(data), o.truth, 11);
-    out.d = Diagnose(out.f.data.obs, out.f.model, ContextOf(out.f.options, out.f.fit), Settings());
+    out.d = Diagnose(out.f.data.obs, out.f.model, ContextOf(out.f.options, out.f.fit),
+                     DiagnosisSettings());
     return out;
   }();
   return s;
@@ -169,18 +170,18 @@ TEST(Diagnose, FlagsTheGrossErrorAndSaysSoInTheVerdict) {
 }
 
 TEST(Diagnose, SettingsAreChecked) {
-  EXPECT_EQ(Settings().Check(), "");
-  Settings s;
+  EXPECT_EQ(DiagnosisSettings().Check(), "");
+  DiagnosisSettings s;
   s.significance = 0.0;
   EXPECT_NE(s.Check().find("significance"), std::string::npos) << s.Check();
-  s = Settings();
+  s = DiagnosisSettings();
   s.max_harmonic = 13;
   EXPECT_NE(s.Check().find("max_harmonic"), std::string::npos) << s.Check();
-  s = Settings();
+  s = DiagnosisSettings();
   s.refine_top = -1;
   EXPECT_NE(s.Check().find("refine_top"), std::string::npos) << s.Check();
   const Scenario& sc = TheScenario();
-  s = Settings();
+  s = DiagnosisSettings();
   s.significance = 1.5;
   EXPECT_THROW(Diagnose(sc.f.data.obs, sc.f.model, ContextOf(sc.f.options, sc.f.fit), s),
                std::invalid_argument);

@@ -109,7 +109,7 @@ TEST(DistortionTerms, FittingK3WithoutCornersSuggestsDroppingIt) {
   const InstrumentModel model = Fit(s, {}, &summary, &used);
   ASSERT_TRUE(summary.converged);
 
-  Settings settings;
+  DiagnosisSettings settings;
   const Diagnosis d = Diagnose(s.obs, model, ContextOf(used, summary), settings);
   const DistortionTerm* k3 = nullptr;
   for (const DistortionTerm& t : d.distortion_terms.terms) {
@@ -167,7 +167,7 @@ TEST(DistortionTerms, FittingK1K2RecoversThemWithinThreeSigmas) {
                 (value[k] - s.truth.cams[0].distortion[k]) / sigma[k]);
   }
   // The diagnosis looks at the fitted coefficients only: k3 is not one.
-  const Diagnosis d = Diagnose(s.obs, model, ContextOf(used, summary), Settings());
+  const Diagnosis d = Diagnose(s.obs, model, ContextOf(used, summary), DiagnosisSettings());
   EXPECT_EQ(d.distortion_terms.terms.size(), 2u);
   for (const DistortionTerm& t : d.distortion_terms.terms) EXPECT_NE(t.index, kK3);
 }
@@ -183,7 +183,7 @@ TEST(DistortionTerms, AnUndeterminedCoefficientIsAWildFitNotAnAdviceToDrop) {
   FitSummary summary;
   FitOptions used;
   const InstrumentModel model = Fit(s, {}, &summary, &used);
-  const Diagnosis d = Diagnose(s.obs, model, ContextOf(used, summary), Settings());
+  const Diagnosis d = Diagnose(s.obs, model, ContextOf(used, summary), DiagnosisSettings());
   const DistortionTerm* k3 = nullptr;
   for (const DistortionTerm& t : d.distortion_terms.terms) {
     if (t.zoom == 0 && t.index == kK3) k3 = &t;

@@ -131,7 +131,7 @@ TEST(Focus, HiddenInRecordsAndPixelsIsFoundAndPredictsHeldOutData) {
   // Without focus among the candidates: the image points fit worse than the
   // a-priori sigma allows (said first), and their scale and principal point
   // change with the target distance.
-  Settings without;
+  DiagnosisSettings without;
   without.untested = {Effect::kFocus};
   const Diagnosis d0 = Diagnose(f.data.obs, f.model, ContextOf(f.options, f.summary), without);
   bool pixels_exceed = false;
@@ -152,7 +152,8 @@ TEST(Focus, HiddenInRecordsAndPixelsIsFoundAndPredictsHeldOutData) {
   for (const RankedEffect& r : d0.ranking.entries) EXPECT_NE(r.effect, Effect::kFocus);
 
   // With it: focus ranks first and is significant.
-  const Diagnosis d1 = Diagnose(f.data.obs, f.model, ContextOf(f.options, f.summary), Settings());
+  const Diagnosis d1 =
+      Diagnose(f.data.obs, f.model, ContextOf(f.options, f.summary), DiagnosisSettings());
   ASSERT_FALSE(d1.ranking.entries.empty());
   const RankedEffect& top = d1.ranking.entries.front();
   EXPECT_EQ(top.effect, Effect::kFocus) << Verdict(d1);
@@ -181,7 +182,8 @@ TEST(Focus, HiddenInRecordsAndPixelsIsFoundAndPredictsHeldOutData) {
               HeldOutRecordsRms(f.model, exact.obs.records));
 
   // Nothing else is missing once it is in.
-  const Diagnosis d2 = Diagnose(f.data.obs, with, ContextOf(f.options, f.summary), Settings());
+  const Diagnosis d2 =
+      Diagnose(f.data.obs, with, ContextOf(f.options, f.summary), DiagnosisSettings());
   EXPECT_FALSE(d2.fit_quality.Exceeds()) << Verdict(d2);
   EXPECT_EQ(d2.Next(), nullptr) << Verdict(d2);
 }

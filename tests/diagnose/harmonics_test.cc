@@ -142,7 +142,7 @@ TEST(Control, NoHiddenEffectFlagsNothingIn19Of20Seeds) {
     o.plan = SmallPlan();
     o.noise = PaperNoise();
     const Fitted f = FitBaseline(Simulate(o), o.truth, 2000 + seed);
-    Settings s;
+    DiagnosisSettings s;
     s.outliers = false;
     const Diagnosis d = DiagnoseFitted(f, s);
     const bool any = d.Next() != nullptr || !d.harmonics.unexplained.empty() ||
@@ -177,7 +177,7 @@ TEST(Control, ExactDataFlagNothing) {
   o.truth = PaperTruth(1);
   o.plan = SmallPlan();
   const Fitted f = FitBaseline(Simulate(o), o.truth, 78);
-  Settings s;
+  DiagnosisSettings s;
   s.outliers = false;
   const Diagnosis d = DiagnoseFitted(f, s);
   EXPECT_EQ(d.Next(), nullptr) << d.Next()->name;

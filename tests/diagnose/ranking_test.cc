@@ -117,7 +117,7 @@ TEST(Ranking, LinearEstimateIsTheHiddenValue) {
                                 HiddenEffect{Effect::kEdmScale, {20.0, 0}, {}},
                                 HiddenEffect{Effect::kVScale, {30.0, 0}, {}}}) {
     const Fitted f = SimulateHidden(h, 13);
-    Settings s;
+    DiagnosisSettings s;
     s.refine_top = 0;
     s.harmonics = false;
     s.outliers = false;

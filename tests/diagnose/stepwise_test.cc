@@ -29,7 +29,8 @@ TEST(Stepwise, AddsTheHiddenEffectsOneByOneAndStops) {
   o.plan = SmallPlan();
   o.noise = PaperNoise();
   const Fitted f = FitBaseline(Simulate(o), o.truth, 52);
-  const StepwiseResult s = ForwardStepwise(f.data.obs, f.model, f.fit, f.options, Settings{});
+  const StepwiseResult s =
+      ForwardStepwise(f.data.obs, f.model, f.fit, f.options, DiagnosisSettings{});
   ASSERT_EQ(s.ladder.size(), 3u) << s.stop_reason;
   std::vector<std::string> added = {s.ladder[1].added, s.ladder[2].added};
   std::sort(added.begin(), added.end());
@@ -57,7 +58,8 @@ TEST(Stepwise, StopsAtMaxSteps) {
   o.plan = SmallPlan();
   o.noise = PaperNoise();
   const Fitted f = FitBaseline(Simulate(o), o.truth, 54);
-  const StepwiseResult s = ForwardStepwise(f.data.obs, f.model, f.fit, f.options, Settings{}, 1);
+  const StepwiseResult s =
+      ForwardStepwise(f.data.obs, f.model, f.fit, f.options, DiagnosisSettings{}, 1);
   EXPECT_EQ(s.ladder.size(), 2u);
   EXPECT_NE(s.stop_reason.find("stopped after 1"), std::string::npos) << s.stop_reason;
 }

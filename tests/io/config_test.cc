@@ -61,17 +61,17 @@ TEST(Config, SpecMinimalExampleResolvesPathsAgainstTheConfigFolder) {
   EXPECT_EQ(c.records_path, dir.Path("cfg/records.csv"));
   EXPECT_EQ(c.pixels_path, dir.Path("cfg/pixels.csv"));
   EXPECT_EQ(c.output_dir, dir.Path("cfg/out"));
-  EXPECT_EQ(c.model.kinematics, Kinematics::kDh);
-  EXPECT_EQ(c.model.effects.Names(),
+  EXPECT_EQ(c.calibration.model.kinematics, Kinematics::kDh);
+  EXPECT_EQ(c.calibration.model.effects.Names(),
             (std::vector<std::string>{"hz_eccentricity", "radial_distortion"}));
-  EXPECT_EQ(c.model.edm_cyclic_unit_length, 1.5);
+  EXPECT_EQ(c.calibration.model.edm_cyclic_unit_length, 1.5);
   EXPECT_FALSE(c.simulate.has_value());
   EXPECT_TRUE(c.notes.empty());
   // Untouched sections keep the structs' defaults.
-  EXPECT_EQ(c.fit.max_iterations, FitOptions().max_iterations);
-  EXPECT_EQ(c.model.faces, FaceMode::kJoint);
-  EXPECT_EQ(c.model.intrinsics, IntrinsicsMode::kAuto);
-  EXPECT_TRUE(c.diagnose.enabled);
+  EXPECT_EQ(c.calibration.fit.max_iterations, FitOptions().max_iterations);
+  EXPECT_EQ(c.calibration.model.faces, FaceMode::kJoint);
+  EXPECT_EQ(c.calibration.model.intrinsics, IntrinsicsMode::kAuto);
+  EXPECT_TRUE(c.calibration.diagnose.enabled);
 }
 
 TEST(Config, DocsFullExampleLoadsWithEveryKey) {
@@ -81,21 +81,21 @@ TEST(Config, DocsFullExampleLoadsWithEveryKey) {
   render::RenderSettings render;
   const RunConfig c =
       LoadWithRender(dir.Write("run.yaml", DocsExample("## Full example")), &render);
-  ASSERT_EQ(c.model.cameras.size(), 2u);
-  EXPECT_EQ(c.model.cameras[1].intrinsics[0], 2000);
-  EXPECT_EQ(c.model.cameras[1].distortion[0], -0.05);
-  EXPECT_EQ(c.model.cameras[1].distortion[13], 0.0);
+  ASSERT_EQ(c.calibration.model.cameras.size(), 2u);
+  EXPECT_EQ(c.calibration.model.cameras[1].intrinsics[0], 2000);
+  EXPECT_EQ(c.calibration.model.cameras[1].distortion[0], -0.05);
+  EXPECT_EQ(c.calibration.model.cameras[1].distortion[13], 0.0);
   EXPECT_EQ(c.angle_unit, AngleUnit::kRad);
-  ASSERT_EQ(c.model.distortion_choices.size(), 1u);
-  const DistortionChoice& radial = c.model.distortion_choices[0];
+  ASSERT_EQ(c.calibration.model.distortion_choices.size(), 1u);
+  const DistortionChoice& radial = c.calibration.model.distortion_choices[0];
   EXPECT_EQ(radial.group, Effect::kRadialDistortion);
   EXPECT_EQ(radial.coefficients, (std::vector<int>{kK1, kK2}));
   EXPECT_EQ(radial.At(0), (std::vector<int>{kK1, kK2}));
   EXPECT_EQ(radial.At(1), (std::vector<int>{kK1, kK2, kK3}));
-  EXPECT_EQ(c.fit.loss, RobustLoss::kHuber);
-  EXPECT_DOUBLE_EQ(c.fit.max_zenith_rad, 135 * M_PI / 180);
-  EXPECT_EQ(c.checks.max_sigma0, 100);
-  EXPECT_FALSE(c.fit.fit_intrinsics);  // auto: the pipeline decides
+  EXPECT_EQ(c.calibration.fit.loss, RobustLoss::kHuber);
+  EXPECT_DOUBLE_EQ(c.calibration.fit.max_zenith_rad, 135 * M_PI / 180);
+  EXPECT_EQ(c.calibration.checks.max_sigma0, 100);
+  EXPECT_FALSE(c.calibration.fit.fit_intrinsics);  // auto: the pipeline decides
   ASSERT_TRUE(c.simulate.has_value());
   EXPECT_FALSE(c.truth_from_paper);
   const SimulationOptions& sim = *c.simulate;
@@ -222,7 +222,7 @@ TEST(Config, EffectsAlreadyInDhAreRejected) {
   const RunConfig c = LoadConfig(dir.Write(
       "ok.yaml",
       std::string(kSimulateOnly) + "model: {kinematics: spherical, effects: [collimation]}\n"));
-  EXPECT_TRUE(c.model.effects.Has(Effect::kCollimation));
+  EXPECT_TRUE(c.calibration.model.effects.Has(Effect::kCollimation));
 }
 
 TEST(Config, DuplicateEffect) {
@@ -268,7 +268,7 @@ TEST(Config, MaxSigma0) {
   TempDir dir;
   const RunConfig c =
       LoadConfig(dir.Write("run.yaml", std::string(kSimulateOnly) + "fit:\n  max_sigma0: 30\n"));
-  EXPECT_EQ(CalibrationOptionsOf(c).checks.max_sigma0, 30);
+  EXPECT_EQ(c.calibration.checks.max_sigma0, 30);
   EXPECT_THAT(DumpConfig(c), HasSubstr("max_sigma0: 30"));
   const InputError e = ConfigError(dir, std::string(kSimulateOnly) + "fit:\n  max_sigma0: 1\n");
   EXPECT_EQ(e.key, "fit.max_sigma0");
@@ -381,7 +381,7 @@ TEST(Config, IntrinsicsFitSetsFitOption) {
   TempDir dir;
   const RunConfig c =
       LoadConfig(dir.Write("run.yaml", std::string(kSimulateOnly) + "model: {intrinsics: fit}\n"));
-  EXPECT_TRUE(c.fit.fit_intrinsics);
+  EXPECT_TRUE(c.calibration.fit.fit_intrinsics);
 }
 
 TEST(Config, BadPlanValues) {
@@ -449,10 +449,9 @@ TEST(Config, ScreenSection) {
   const RunConfig c = LoadConfig(dir.Write(
       "run.yaml", std::string(kSimulateOnly) +
                       "screen: {pixel_margin_px: 10, max_extent_m: 500, max_missing_zooms: 2}\n"));
-  EXPECT_EQ(c.screen.pixel_margin_px, 10.0);
-  EXPECT_EQ(c.screen.max_extent_m, 500.0);
-  EXPECT_EQ(c.screen.max_missing_zooms, 2);
-  EXPECT_EQ(CalibrationOptionsOf(c).screen.max_missing_zooms, 2);
+  EXPECT_EQ(c.calibration.screen.pixel_margin_px, 10.0);
+  EXPECT_EQ(c.calibration.screen.max_extent_m, 500.0);
+  EXPECT_EQ(c.calibration.screen.max_missing_zooms, 2);
   EXPECT_EQ(ConfigError(dir, std::string(kSimulateOnly) + "screen: {max_extent_m: 0}\n").key,
             "screen.max_extent_m");
   const InputError many =
@@ -478,12 +477,12 @@ TEST(Config, DumpLoadsBackToTheSameConfig) {
   EXPECT_EQ(b.records_path, a.records_path);
   EXPECT_EQ(b.pixels_path, a.pixels_path);
   EXPECT_EQ(b.output_dir, a.output_dir);
-  EXPECT_EQ(b.model.effects, a.model.effects);
-  EXPECT_EQ(b.model.cameras.size(), a.model.cameras.size());
-  EXPECT_EQ(b.model.cameras[1].distortion, a.model.cameras[1].distortion);
-  EXPECT_EQ(b.fit.sigma_edm_m, a.fit.sigma_edm_m);
-  EXPECT_EQ(b.fit.loss, a.fit.loss);
-  EXPECT_EQ(b.fit.min_zenith_rad, a.fit.min_zenith_rad);
+  EXPECT_EQ(b.calibration.model.effects, a.calibration.model.effects);
+  EXPECT_EQ(b.calibration.model.cameras.size(), a.calibration.model.cameras.size());
+  EXPECT_EQ(b.calibration.model.cameras[1].distortion, a.calibration.model.cameras[1].distortion);
+  EXPECT_EQ(b.calibration.fit.sigma_edm_m, a.calibration.fit.sigma_edm_m);
+  EXPECT_EQ(b.calibration.fit.loss, a.calibration.fit.loss);
+  EXPECT_EQ(b.calibration.fit.min_zenith_rad, a.calibration.fit.min_zenith_rad);
   EXPECT_EQ(b.simulate->noise.angle_rad, a.simulate->noise.angle_rad);
   EXPECT_EQ(b.simulate->plan.grid_edm_distances, a.simulate->plan.grid_edm_distances);
   EXPECT_EQ(b.simulate->truth.effects, a.simulate->truth.effects);
@@ -500,10 +499,10 @@ TEST(Config, DumpLoadsBackToTheSameConfig) {
   EXPECT_EQ(render_b.supersample, render_a.supersample);
   EXPECT_EQ(render_b.blur_sigma, render_a.blur_sigma);
   EXPECT_EQ(render_b.family, render_a.family);
-  EXPECT_EQ(b.diagnose.significance, a.diagnose.significance);
-  EXPECT_EQ(b.screen.pixel_margin_px, a.screen.pixel_margin_px);
-  EXPECT_EQ(b.screen.max_extent_m, a.screen.max_extent_m);
-  EXPECT_EQ(b.screen.max_missing_zooms, a.screen.max_missing_zooms);
+  EXPECT_EQ(b.calibration.diagnose.significance, a.calibration.diagnose.significance);
+  EXPECT_EQ(b.calibration.screen.pixel_margin_px, a.calibration.screen.pixel_margin_px);
+  EXPECT_EQ(b.calibration.screen.max_extent_m, a.calibration.screen.max_extent_m);
+  EXPECT_EQ(b.calibration.screen.max_missing_zooms, a.calibration.screen.max_missing_zooms);
   EXPECT_EQ(b.truth_from_paper, a.truth_from_paper);
   EXPECT_EQ(b.simulate->targets.boards[0].ref_from_board.translation,
             a.simulate->targets.boards[0].ref_from_board.translation);
@@ -655,20 +654,20 @@ TEST(ConfigDistortionChoice, ReadsAndDumpsTheCoefficientsToFit) {
                     "model:\n  effects: [radial_distortion, tangential_distortion]\n"
                     "  radial_distortion: {coefficients: [k2, k1], zooms: {2: [k1], 3: []}}\n"
                     "  tangential_distortion: {zooms: {0: [p2]}}\n"));
-  ASSERT_EQ(c.model.distortion_choices.size(), 2u);
-  const DistortionChoice& radial = c.model.distortion_choices[0];
+  ASSERT_EQ(c.calibration.model.distortion_choices.size(), 2u);
+  const DistortionChoice& radial = c.calibration.model.distortion_choices[0];
   EXPECT_EQ(radial.coefficients, (std::vector<int>{kK1, kK2}));  // sorted
   EXPECT_EQ(radial.At(2), (std::vector<int>{kK1}));
   EXPECT_TRUE(radial.At(3).empty());
-  const DistortionChoice& tangential = c.model.distortion_choices[1];
+  const DistortionChoice& tangential = c.calibration.model.distortion_choices[1];
   EXPECT_EQ(tangential.coefficients, (std::vector<int>{kP1, kP2}));  // default: all
   EXPECT_EQ(tangential.At(0), (std::vector<int>{kP2}));
   // --write-config writes them and reads back the same.
   const RunConfig again = LoadConfig(dir.Write("b.yaml", DumpConfig(c)));
-  ASSERT_EQ(again.model.distortion_choices.size(), 2u);
-  EXPECT_EQ(again.model.distortion_choices[0].zooms, radial.zooms);
-  EXPECT_EQ(again.model.distortion_choices[0].coefficients, radial.coefficients);
-  EXPECT_EQ(again.model.distortion_choices[1].zooms, tangential.zooms);
+  ASSERT_EQ(again.calibration.model.distortion_choices.size(), 2u);
+  EXPECT_EQ(again.calibration.model.distortion_choices[0].zooms, radial.zooms);
+  EXPECT_EQ(again.calibration.model.distortion_choices[0].coefficients, radial.coefficients);
+  EXPECT_EQ(again.calibration.model.distortion_choices[1].zooms, tangential.zooms);
 }
 
 TEST(ConfigDistortionChoice, ErrorsNameTheKeyExpectedAndGot) {
