@@ -308,7 +308,7 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
     const ProbeAnalysis probes =
         AnalyseProbes(lin, red, catalogue, settings.significance, settings.max_unexplained);
     d.harmonics = AnalyseHarmonics(lin, probes);
-    d.structure = AnalyseStructure(lin, probes, model);
+    d.structure = AnalyseStructure(lin, red, probes, model);
     // Structure outside the catalogue is a nuisance for the ranking: an
     // effect is credited only with what it explains beyond it.
     for (const Harmonic& h : d.harmonics.unexplained) {

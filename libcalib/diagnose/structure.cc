@@ -143,7 +143,16 @@ std::vector<SessionVariable> SessionVariables(const Observations& obs,
     if (!repeats) out.push_back(v);
   }
 
-  // Categories: placements, and the boards the points lie on.
+  // Categories: placements, and the boards the points lie on. Only where
+  // every point's position is known: a board whose pose is estimated (per
+  // placement, SPEC 7.1) moves its own image by scale, shift and rotation,
+  // so an image motion per such category is the pose itself to first order
+  // (nearly absorbed: its fitted size is meaningless, and as a nuisance it
+  // would take the catalogue's effects with it, e.g. an eccentricity that
+  // shifts each placement's photos by face).
+  bool all_known = model.boards.empty();
+  for (size_t i = 0; i < np; ++i) all_known = all_known && obs.pixels[i].X_known;
+  if (!all_known) return out;
   SessionVariable placement = make("placement", "");
   placement.categorical = true;
   std::map<std::string, int> placement_index;
@@ -370,7 +379,7 @@ std::string Hint(const ColumnBlock& b, const SessionVariable* v, const Instrumen
   return "";
 }
 
-StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
+StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t, const Reduced& red,
                              const Linearization& lin, const InstrumentModel& model) {
   StructureFinding f;
   f.probe = b.probe;
@@ -446,7 +455,12 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
     size_text = parts;
   } else {
     // Image fields: the largest displacement at the data (the field is a
-    // polynomial: beyond the points it is extrapolation, not structure).
+    // polynomial: beyond the points it is extrapolation, not structure), of
+    // the field's part that the model's own parameters cannot take up (the
+    // columns projected out of them, red.extra): with boards of estimated
+    // pose a degree-2 field is nearly a tilt of each board, and the raw
+    // field's coefficients then grow without bound while what it changes in
+    // the residuals stays small.
     f.quantity = "image displacement field of zoom " + std::to_string(p.zoom) + " (" +
                  (p.field == ImageField::kPosition ? "over the image position" : "along the radius") +
                  ")";
@@ -460,7 +474,7 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
       const ResidualRow& row = lin.rows[i];
       if (row.group != ObsGroup::kPixel) continue;
       double value = 0;
-      for (int j = 0; j < b.size; ++j) value -= lin.extra(i, b.first + j) * t.beta[j];
+      for (int j = 0; j < b.size; ++j) value -= red.extra(i, b.first + j) * t.beta[j];
       if (value == 0) continue;
       auto it = at.emplace(row.index, Eigen::Vector2d::Zero()).first;
       it->second[row.component] = value * sigma;
@@ -484,19 +498,19 @@ bool AboveFloor(const StructureFinding& f) {
 
 }  // namespace
 
-StructureAnalysis AnalyseStructure(const Linearization& lin, const ProbeAnalysis& probes,
-                                   const InstrumentModel& model) {
+StructureAnalysis AnalyseStructure(const Linearization& lin, const Reduced& red,
+                                   const ProbeAnalysis& probes, const InstrumentModel& model) {
   StructureAnalysis out;
   for (int s : probes.selected) {
     const ProbeResult& r = probes.probes[s];
     if (r.block->probe.kind == ProbeKind::kHarmonic) continue;
-    StructureFinding f = MakeFinding(*r.block, r.joint, lin, model);
+    StructureFinding f = MakeFinding(*r.block, r.joint, red, lin, model);
     f.unexplained = true;
     if (AboveFloor(f)) out.unexplained.push_back(f);
   }
   for (const ProbeResult& r : probes.probes) {
     if (r.block->probe.kind == ProbeKind::kHarmonic || !r.raw_significant || r.selected) continue;
-    StructureFinding f = MakeFinding(*r.block, r.raw, lin, model);
+    StructureFinding f = MakeFinding(*r.block, r.raw, red, lin, model);
     f.explained_by = r.explained_by;
     f.same_as = r.same_as;
     if (AboveFloor(f)) out.explained.push_back(f);

@@ -77,7 +77,8 @@ struct StructureAnalysis {
 };
 
 // The reading-trend, image-motion and image-field probes of `probes`.
-StructureAnalysis AnalyseStructure(const Linearization& lin, const ProbeAnalysis& probes,
+StructureAnalysis AnalyseStructure(const Linearization& lin, const Reduced& red,
+                                   const ProbeAnalysis& probes,
                                    const InstrumentModel& model);
 
 }  // namespace rtscalib

@@ -403,7 +403,7 @@ std::vector<ObservationGroup> GroupObservations(const Observations& obs, const U
     if (one_per_observation || it == record_index.end()) {
       record_index[key] = static_cast<int>(groups.size());
       groups.push_back(
-          {edm ? ObsGroup::kEdm : ObsGroup::kCam, zoom, r.phi, r.theta, r.face, {i}, ""});
+          {edm ? ObsGroup::kEdm : ObsGroup::kCam, zoom, r.phi, r.theta, r.face, {i}, "", nullptr});
     } else {
       groups[it->second].indices.push_back(i);
     }

@@ -153,7 +153,9 @@ void ExpectRoundTrip(const InstrumentModel& m) {
     EXPECT_EQ(r.cams[z].flange_from_cam.t, m.cams[z].flange_from_cam.t);
     EXPECT_EQ(r.cams[z].intrinsics, m.cams[z].intrinsics);
     EXPECT_EQ(r.cams[z].distortion, m.cams[z].distortion);
-    if (m.effects.Has(Effect::kFocus)) EXPECT_EQ(r.cams[z].focus, m.cams[z].focus);
+    if (m.effects.Has(Effect::kFocus)) {
+      EXPECT_EQ(r.cams[z].focus, m.cams[z].focus);
+    }
   }
   for (Effect e : m.effects.List()) {
     if (IsKinematic(e)) {
