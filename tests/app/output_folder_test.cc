@@ -430,7 +430,7 @@ TEST_F(OutputFolderTest, AKillAtAnyStepLeavesOneWholeRunAtTheTopAndIsListedAsKil
     // The manifest at the top names the run the top shows, whatever step
     // the kill came at (it switches with `latest`).
     if (fs::exists(root / ".rtscalib-published")) {
-      const nlohmann::json manifest = nlohmann::json::parse(Read(root / ".rtscalib-published"));
+      const nlohmann::json manifest = nlohmann::json::parse(ReadBytes(root / ".rtscalib-published"));
       EXPECT_EQ(manifest["run"], top) << "killed at step " << kill_at;
     }
 

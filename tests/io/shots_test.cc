@@ -205,7 +205,7 @@ TEST(Shots, PlacementsEmptyReadingsAndFocusDistance) {
   EXPECT_EQ(file.shots[1].placement, "");
   EXPECT_EQ(file.shots[1].focus_distance, 0.0);
   // Without the column: one placement.
-  EXPECT_FALSE(ReadShots(dir.Write("one.csv", std::string(kHeader) + "1,0,0.1,1.5,a.png\n"))
+  EXPECT_FALSE(ReadShots(dir.Write("one.csv", std::string(kShotsHeader) + "1,0,0.1,1.5,a.png\n"))
                    .has_placements);
 }
 
