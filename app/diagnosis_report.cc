@@ -121,19 +121,22 @@ json FindingJson(const StructureFinding& f) {
 json FitQualityJson(const FitQuality& q) {
   json cells = json::array();
   for (const FitQualityCell& c : q.cells) {
-    cells.push_back({{"kind", GroupName(c.group)},
-                     {"name", c.name},
-                     {"zoom", c.zoom >= 0 ? json(c.zoom) : json()},
-                     {"face", c.face},
-                     {"observations", c.observations},
-                     {"rms", c.rms},
-                     {"apriori_sigma", c.apriori},
-                     {"unit", c.unit},
-                     {"factor", c.factor},
-                     {"chi_square", c.chi2},
-                     {"dof", c.dof},
-                     {"p_value", c.p_value},
-                     {"exceeds", c.exceeds}});
+    // EDM cells have no zoom: the key is left out (no null for a number,
+    // docs/conventions.md section 6).
+    json cell = {{"kind", GroupName(c.group)},
+                 {"name", c.name},
+                 {"face", c.face},
+                 {"observations", c.observations},
+                 {"rms", c.rms},
+                 {"apriori_sigma", c.apriori},
+                 {"unit", c.unit},
+                 {"factor", c.factor},
+                 {"chi_square", c.chi2},
+                 {"dof", c.dof},
+                 {"p_value", c.p_value},
+                 {"exceeds", c.exceeds}};
+    if (c.zoom >= 0) cell["zoom"] = c.zoom;
+    cells.push_back(cell);
   }
   return {{"exceeds", q.Exceeds()},
           {"min_factor", kMinFactor},

@@ -261,10 +261,15 @@ void ReadEffect(const YamlNode& m, bool with_sigma, InstrumentModel* model) {
     if (items.size() != 4) c.Fail("a list of 4 numbers (a 2 x 2 covariance, row major)");
     for (int i = 0; i < 4; ++i) cov[i] = items[i].AsDoubleOrNan();
     const bool nan = std::isnan(cov[0]) || std::isnan(cov[3]);
-    if (!nan && (cov[0] < 0 || cov[3] < 0 || cov[1] != cov[2] ||
-                 cov[1] * cov[1] > cov[0] * cov[3] * (1 + 1e-9))) {
+    // Symmetric to round-off: a covariance from the solver's inverse may
+    // differ in its last digits between (0, 1) and (1, 0); it is made exactly
+    // symmetric here.
+    const double scale = std::sqrt(std::abs(cov[0] * cov[3]));
+    if (!nan && (cov[0] < 0 || cov[3] < 0 || !(std::abs(cov[1] - cov[2]) <= 1e-9 * scale) ||
+                 cov[1] * cov[2] > cov[0] * cov[3] * (1 + 1e-9))) {
       c.Fail("a covariance: variances >= 0, symmetric, |correlation| <= 1");
     }
+    if (!nan) cov[1] = cov[2] = 0.5 * (cov[1] + cov[2]);
   }
   // The report values are derived; they must still say what si says.
   const YamlNode report = m.Require("report");

@@ -370,6 +370,24 @@ TEST(ModelIo, StructuralErrors) {
       "effects[0].covariance");
 }
 
+// A covariance that the solver's inverse left asymmetric in its last digits
+// (as an independent photo session wrote it: 7.9010951887060517e-13 against
+// ...0487e-13) is read, and made exactly symmetric; a real asymmetry is not.
+TEST(ModelIo, CovarianceAsymmetricByRoundOffIsRead) {
+  TempDir dir;
+  const std::string path = dir.Path("model.yaml");
+  WriteModelYaml(path, RandomModel(Kinematics::kDh, 2, true, 6));
+  YAML::Node n = YAML::LoadFile(path);
+  const double c01 = n["effects"][0]["covariance"][1].as<double>();
+  n["effects"][0]["covariance"][2] = c01 * (1 + 4e-15);
+  std::ofstream(path) << YAML::Dump(n);
+  const InstrumentModel m = ReadModelYaml(path);
+  const Effect e = m.effects.List().front();
+  const auto& cov = m.sigmas.effect_cov[static_cast<int>(e)];
+  EXPECT_EQ(cov[1], cov[2]);
+  EXPECT_NEAR(cov[1], c01, 1e-14 * std::abs(c01));
+}
+
 }  // namespace
 }  // namespace rtscalib
 
