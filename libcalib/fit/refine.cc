@@ -413,8 +413,10 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks,
     Eigen::MatrixXd ec;
     if (!block_cov(model->EffectValue(e).data(), &ec)) continue;
     auto& out = s.effect_cov[static_cast<int>(e)];
-    out = {ec(0, 0), ec.rows() > 1 ? ec(0, 1) : 0.0, ec.rows() > 1 ? ec(1, 0) : 0.0,
-           ec.rows() > 1 ? ec(1, 1) : 0.0};
+    // Ceres's block covariance is symmetric only to round-off; model.yaml
+    // states one covariance, exactly symmetric.
+    const double c01 = ec.rows() > 1 ? 0.5 * (ec(0, 1) + ec(1, 0)) : 0.0;
+    out = {ec(0, 0), c01, c01, ec.rows() > 1 ? ec(1, 1) : 0.0};
   }
 }
 
