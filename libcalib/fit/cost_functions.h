@@ -273,8 +273,8 @@ struct ShotResidual {
   };
   // The photo's points summed for its centroid (SPEC 4.1): known points
   // (board -1, reference frame) or the corners of one board of unknown pose
-  // (its board frame), `count` of them. They are every point of the photo,
-  // also those of other residual blocks when each observation is a block.
+  // (its board frame), `count` of them: every point of the photo (its
+  // residual block).
   struct FocusTerm {
     int board = -1;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();

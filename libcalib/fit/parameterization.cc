@@ -390,8 +390,7 @@ UsedRows SelectRows(const Observations& obs, const FitOptions& options, int num_
   return rows;
 }
 
-std::vector<ObservationGroup> GroupObservations(const Observations& obs, const UsedRows& rows,
-                                                bool one_per_observation) {
+std::vector<ObservationGroup> GroupObservations(const Observations& obs, const UsedRows& rows) {
   std::vector<ObservationGroup> groups;
   std::map<std::tuple<bool, int, double, double>, int> record_index;
   for (int i : rows.records) {
@@ -400,28 +399,22 @@ std::vector<ObservationGroup> GroupObservations(const Observations& obs, const U
     const int zoom = edm ? -1 : r.zoom;
     const auto key = std::make_tuple(edm, zoom, r.phi, r.theta);
     auto it = record_index.find(key);
-    if (one_per_observation || it == record_index.end()) {
+    if (it == record_index.end()) {
       record_index[key] = static_cast<int>(groups.size());
       groups.push_back(
-          {edm ? ObsGroup::kEdm : ObsGroup::kCam, zoom, r.phi, r.theta, r.face, {i}, "", nullptr});
+          {edm ? ObsGroup::kEdm : ObsGroup::kCam, zoom, r.phi, r.theta, r.face, {i}, ""});
     } else {
       groups[it->second].indices.push_back(i);
     }
   }
   std::map<std::tuple<std::string, int, double, double>, int> shot_index;
-  // Every used pixel of each photo (its focus distance, SPEC 4.1, is the
-  // whole photo's, also when each observation is a group of its own).
-  std::map<std::tuple<std::string, int, double, double>, std::shared_ptr<std::vector<int>>> photos;
   for (int i : rows.pixels) {
     const PixelObservation& p = obs.pixels[i];
     const auto key = std::make_tuple(p.shot, p.zoom, p.phi, p.theta);
-    std::shared_ptr<std::vector<int>>& photo = photos[key];
-    if (!photo) photo = std::make_shared<std::vector<int>>();
-    photo->push_back(i);
     auto it = shot_index.find(key);
-    if (one_per_observation || it == shot_index.end()) {
+    if (it == shot_index.end()) {
       shot_index[key] = static_cast<int>(groups.size());
-      groups.push_back({ObsGroup::kPixel, p.zoom, p.phi, p.theta, p.face, {i}, p.shot, photo});
+      groups.push_back({ObsGroup::kPixel, p.zoom, p.phi, p.theta, p.face, {i}, p.shot});
     } else {
       groups[it->second].indices.push_back(i);
     }
@@ -475,12 +468,12 @@ ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGro
     for (int i : g.indices) f->points.push_back(place(obs.pixels[i]));
     if (f->layout.focus >= 0) {
       // SPEC 4.1: the photo's D, given or from the centroid of all its points.
-      for (int i : g.photo ? *g.photo : g.indices) {
+      for (int i : g.indices) {
         if (obs.pixels[i].focus_distance > 0) f->focus_distance = obs.pixels[i].focus_distance;
       }
       if (!(f->focus_distance > 0)) {
         std::map<int, int> term_of;  // layout board (-1: known points) -> focus_terms index
-        for (int i : g.photo ? *g.photo : g.indices) {
+        for (int i : g.indices) {
           const ShotResidual::Point pt = place(obs.pixels[i]);
           auto it = term_of.find(pt.board);
           if (it == term_of.end()) {

@@ -159,9 +159,10 @@ UsedRows SelectRows(const Observations& obs, const FitOptions& options, int num_
 
 // Observations that share a pointing and a tool (records) or a shot (pixels):
 // one residual block each, so that the chain ref_from_tool(phi, theta) is
-// differentiated once per pointing. With `one_per_observation` (robust loss,
-// which acts per block) every observation is its own group. Record groups
-// come first, in order of first appearance, then pixel groups.
+// differentiated once per pointing (a robust loss acts on each observation
+// inside its group: observation_loss.h). Record groups come first, in order
+// of first appearance, then pixel groups; a photo is one group, so its focus
+// distance (SPEC 4.1, the centroid of all its points) is its group's.
 struct ObservationGroup {
   ObsGroup kind = ObsGroup::kEdm;
   int zoom = -1;  // -1 for the EDM
@@ -169,13 +170,8 @@ struct ObservationGroup {
   int face = 1;              // of the group's first observation
   std::vector<int> indices;  // into obs.records (edm, cam) or obs.pixels
   std::string shot;          // pixels: the shot's name
-  // Pixels: every used observation of the group's photo (= indices unless
-  // each observation is a group): the photo's focus distance (SPEC 4.1) is
-  // the centroid of all its points.
-  std::shared_ptr<const std::vector<int>> photo;
 };
-std::vector<ObservationGroup> GroupObservations(const Observations& obs, const UsedRows& rows,
-                                                bool one_per_observation);
+std::vector<ObservationGroup> GroupObservations(const Observations& obs, const UsedRows& rows);
 
 // The residual block of one group (cost_functions.h), whitened by
 // `inv_sigma`, its jets sized to the blocks `param` leaves free; `blocks`

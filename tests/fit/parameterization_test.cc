@@ -154,15 +154,13 @@ TEST(Parameterization, TranslationWindowIsCentredOnTheStart) {
   EXPECT_EQ(p.OutsideBounds(), (std::vector<std::string>{"base.t"}));
 }
 
-TEST(GroupObservations, GroupsByPointingAndToolOrOnePerObservation) {
+TEST(GroupObservations, GroupsByPointingAndTool) {
   const InstrumentModel truth = Truth(Kinematics::kDh);
   const Observations obs = SmallData(truth);
   FitOptions fit;
   const UsedRows rows = SelectRows(obs, fit, truth.NumZooms(), UnknownZoom::kThrow);
-  const auto grouped = GroupObservations(obs, rows, false);
-  const auto single = GroupObservations(obs, rows, true);
-  EXPECT_EQ(single.size(), rows.records.size());
-  EXPECT_LT(grouped.size(), single.size());
+  const auto grouped = GroupObservations(obs, rows);
+  EXPECT_LT(grouped.size(), rows.records.size());
   size_t total = 0;
   for (const ObservationGroup& g : grouped) {
     total += g.indices.size();
