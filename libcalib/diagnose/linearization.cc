@@ -686,7 +686,7 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
       lin.blocks.empty() ? 0 : lin.blocks.back().first + lin.blocks.back().size;
 
   const std::vector<ClusteredGroup> groups =
-      Cluster(obs, GroupObservations(obs, rows, /*one_per_observation=*/false), &lin);
+      Cluster(obs, GroupObservations(obs, rows), &lin);
   ceres::Problem::Options popt;
   popt.manifold_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(popt);
