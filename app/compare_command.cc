@@ -13,9 +13,10 @@
 
 #include "app/commands.h"
 #include "app/figures.h"
-#include "libcalib/io/safe_write.h"
 #include "libcalib/api/compare.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {
 namespace {
@@ -23,13 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), f, v);
-  return buf;
-}
-
-json Num(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+json JsonNumber(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
 
 CalibratedInstrument LoadModel(const std::string& path) {
   std::error_code ec;
@@ -84,13 +79,13 @@ json Json(const CompareArgs& args, const Comparison& c) {
   json zooms = json::array();
   for (const ZoomDifference& z : c.zooms) {
     json cells = json::array();
-    for (double x : z.diff_px) cells.push_back(Num(x));
+    for (double x : z.diff_px) cells.push_back(JsonNumber(x));
     zooms.push_back({{"zoom", z.zoom},
                      {"compared", z.compared},
-                     {"rms_px", Num(z.rms_px)},
-                     {"max_px", Num(z.max_px)},
-                     {"inside_rms_px", Num(z.inside_rms_px)},
-                     {"inside_max_px", Num(z.inside_max_px)},
+                     {"rms_px", JsonNumber(z.rms_px)},
+                     {"max_px", JsonNumber(z.max_px)},
+                     {"inside_rms_px", JsonNumber(z.inside_rms_px)},
+                     {"inside_max_px", JsonNumber(z.inside_max_px)},
                      {"rotation_rad", z.rotation_rad},
                      {"fit_cells", z.fit_cells},
                      {"cells", {z.cols, z.rows}},

@@ -5,16 +5,12 @@
 #include <iomanip>
 #include <sstream>
 
+#include "libcalib/text/number_text.h"
+
 namespace rtscalib::app {
 namespace {
 
 using nlohmann::json;
-
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), f, v);
-  return buf;
-}
 
 json GroupJson(const GroupRms& g) {
   json j = json::object();

@@ -15,9 +15,10 @@
 #include <tuple>
 
 #include "app/report_html.h"
-#include "libcalib/io/safe_write.h"
 #include "app/vega.h"
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/io/safe_write.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {
 namespace {
@@ -34,13 +35,6 @@ constexpr int kImagePanel = 640;
 constexpr int kPanelW = 260, kPanelH = 170;
 // Photos shown per zoom, worst first (rms of their fitted corners).
 constexpr int kWorstPhotosPerZoom = 2;
-
-// Significant digits for titles (the plots format their own numbers).
-std::string Num(double x, int digits = 3) {
-  std::ostringstream o;
-  o << std::setprecision(digits) << x;
-  return o.str();
-}
 
 // 1, 2 or 5 times a power of ten, at least x: the length a reference arrow
 // stands for.
@@ -415,8 +409,9 @@ Figure ImageResiduals(int zoom, const CameraTool& cam,
   json spec = Chart("Image residuals, zoom " + std::to_string(zoom) +
                         ": mean observed - predicted pixel per cell",
                     std::to_string(n - records) + " fitted image points and " +
-                        std::to_string(records) + " camera records, rms " + Num(rms) +
-                        " px; arrow: " + Num(reference_px) + " px residual = " + Num(0.9) +
+                        std::to_string(records) + " camera records, rms " + Significant(rms, 3) +
+                        " px; arrow: " + Significant(reference_px, 3) +
+                        " px residual = " + Significant(0.9, 3) +
                         " cell widths; cell colour and number: points per cell");
   int w = 0, h = 0;
   ImageScales(&spec, cam.width, cam.height, &w, &h);
@@ -469,7 +464,7 @@ Figure ImageResiduals(int zoom, const CameraTool& cam,
                         {"fill", {{"value", "#555"}}},
                         {"text", {{"field", "n"}}}}));
   Arrows(&marks, "arrows", "#c0392b", tip);
-  ScaleBar(&marks, 0.9 * cell_w * w / cam.width, Num(reference_px) + " px", w);
+  ScaleBar(&marks, 0.9 * cell_w * w / cam.width, Significant(reference_px, 3) + " px", w);
   Figure f;
   f.name = "image_residuals_zoom" + std::to_string(zoom);
   f.section = "image";
@@ -575,9 +570,9 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
     corners.push_back(c);
   }
   json spec = Chart("Photo " + shot + " (zoom " + std::to_string(zoom) + "): corners and residuals",
-                    std::to_string(fitted) + " fitted corners, rms " + Num(rms) +
+                    std::to_string(fitted) + " fitted corners, rms " + Significant(rms, 3) +
                         " px; arrows from each observed corner along observed - predicted, " +
-                        Num(reference_px) + " px residual = the red reference arrow" +
+                        Significant(reference_px, 3) + " px residual = the red reference arrow" +
                         (photo.empty() ? "; photo not found, corners only" : ""));
   int w = 0, h = 0;
   ImageScales(&spec, box, &w, &h);
@@ -619,7 +614,7 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
             {"strokeWidth", {{"value", 1.2}}},
             {"tooltip", tip}}));
   Arrows(&marks, "arrows", "#ff3b30", tip);
-  ScaleBar(&marks, 40.0, Num(reference_px) + " px", w);
+  ScaleBar(&marks, 40.0, Significant(reference_px, 3) + " px", w);
   Figure f;
   // A file name and an HTML id: shot ids are free text (shots.csv).
   f.name = "photo_";
@@ -914,8 +909,8 @@ Figure Histograms(const std::vector<ObservationResidual>& rows) {
         {{"type", "group"},
          {"title",
           {{"text", s.title},
-           {"subtitle", "fitted sigma " + Num(s.sigma) + ", rms " + Num(rms) + " " + s.unit +
-                            ", n " + std::to_string(s.values.size()) +
+           {"subtitle", "fitted sigma " + Significant(s.sigma, 3) + ", rms " + Significant(rms, 3) +
+                            " " + s.unit + ", n " + std::to_string(s.values.size()) +
                             ", beyond 4.5 sigma: " + std::to_string(outside)},
            {"fontSize", 12},
            {"subtitleFontSize", 10}}},
@@ -1137,19 +1132,20 @@ Figure UncertaintyFigure(const UncertaintyMap& m, const UncertaintyMapOptions& o
   f.name = "uncertainty_zoom" + std::to_string(m.zoom);
   f.section = "uncertainty";
   f.title = "Projection uncertainty, zoom " + std::to_string(m.zoom) + ", point at " +
-            Num(o.range_m) + " m";
-  f.spec =
-      HeatMapSpec(f.title,
-                  "1 sigma, worst direction [px]: min " + Num(m.min_px) + ", median " +
-                      Num(m.median_px) + ", max " + Num(m.max_px) + "; pointing phi " +
-                      Num(o.phi, 4) + ", theta " + Num(o.theta, 4) + " rad; " +
-                      (full ? "full covariance" : "diagonal approximation (no full covariance)") +
-                      "; faded and struck through: outside the points' hull (white)",
-                  m.width, m.height, m.cols, m.rows, m.sigma_px,
-                  std::vector<unsigned char>(m.inside.begin(), m.inside.end()), "1-sigma [px]",
-                  cam.valid_region);
+            Significant(o.range_m, 3) + " m";
+  f.spec = HeatMapSpec(
+      f.title,
+      "1 sigma, worst direction [px]: min " + Significant(m.min_px, 3) + ", median " +
+          Significant(m.median_px, 3) + ", max " + Significant(m.max_px, 3) + "; pointing phi " +
+          Significant(o.phi, 4) + ", theta " + Significant(o.theta, 4) + " rad; " +
+          (full ? "full covariance" : "diagonal approximation (no full covariance)") +
+          "; faded and struck through: outside the points' hull (white)",
+      m.width, m.height, m.cols, m.rows, m.sigma_px,
+      std::vector<unsigned char>(m.inside.begin(), m.inside.end()), "1-sigma [px]",
+      cam.valid_region);
   f.caption =
-      "How far (1 sigma, worst direction, pixels) the pixel where a point at " + Num(o.range_m) +
+      "How far (1 sigma, worst direction, pixels) the pixel where a point at " +
+      Significant(o.range_m, 3) +
       " m is seen may lie from the model's prediction, from the uncertainty of this zoom's "
       "intrinsics, distortion and camera tool and of the kinematic chain (first order, J P J^T "
       "with the fit's full covariance). Cells outside the convex hull of the calibration's image "
@@ -1167,9 +1163,9 @@ Figure DifferenceFigure(const ZoomDifference& d) {
   f.section = "compare";
   f.title = "Projection difference, zoom " + std::to_string(d.zoom);
   f.spec = HeatMapSpec(f.title,
-                       "RMS " + Num(d.rms_px) + ", max " + Num(d.max_px) +
-                           " px; rotation removed " + Num(d.rotation_rad * kArcsec) + "\"; " +
-                           std::to_string(d.width) + " x " + std::to_string(d.height) +
+                       "RMS " + Significant(d.rms_px, 3) + ", max " + Significant(d.max_px, 3) +
+                           " px; rotation removed " + Significant(d.rotation_rad * kArcsec, 3) +
+                           "\"; " + std::to_string(d.width) + " x " + std::to_string(d.height) +
                            " px (first model's image); faded: outside either model's valid region",
                        d.width, d.height, d.cols, d.rows, d.diff_px,
                        std::vector<unsigned char>(d.inside.begin(), d.inside.end()),

@@ -9,17 +9,12 @@
 
 #include "app/reports.h"
 #include "app/vega.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {
 namespace {
 
 using nlohmann::json;
-
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), f, v);
-  return buf;
-}
 
 std::string Esc(const std::string& s) {
   std::string out;

@@ -10,6 +10,7 @@
 
 #include "app/diagnosis_report.h"
 #include "libcalib/model/kinematics.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {
 namespace {
@@ -17,12 +18,6 @@ namespace {
 using nlohmann::json;
 
 constexpr double kArcsec = 180.0 * 3600.0 / M_PI;
-
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), f, v);
-  return buf;
-}
 
 // `determined` false: the start value, no sigmas (docs/conventions.md section 6).
 json PoseJson(const PoseBlock& p, const PoseSigma* s, bool determined = true) {

@@ -26,7 +26,7 @@ bool SameCamera(const CameraTool& a, const CameraTool& b) {
 }
 
 // Unit ray of pixel (u, v) in the camera frame.
-bool Ray(const CameraTool& cam, double u, double v, Eigen::Vector3d* ray) {
+bool UnitRay(const CameraTool& cam, double u, double v, Eigen::Vector3d* ray) {
   const double pixel[2] = {u, v};
   double r[3];
   if (!PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pixel, r)) return false;
@@ -85,7 +85,7 @@ ZoomDifference CompareZoom(const CameraTool& ca, const CameraTool& cb, int zoom,
       const int k = r * o.cols + c;
       const Eigen::Vector2d q(z.CellU(c), z.CellV(r));
       z.inside[k] = InsideConvexHull(ca.valid_region, q) && InsideConvexHull(cb.valid_region, q);
-      if (!Ray(ca, q.x(), q.y(), &ra[k]) || !Ray(cb, q.x(), q.y(), &rb[k])) continue;
+      if (!UnitRay(ca, q.x(), q.y(), &ra[k]) || !UnitRay(cb, q.x(), q.y(), &rb[k])) continue;
       ok[k] = 1;
       all_a.push_back(ra[k]);
       all_b.push_back(rb[k]);

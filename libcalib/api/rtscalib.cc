@@ -11,19 +11,14 @@
 #include "libcalib/io/covariance_io.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/model/kinematics.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 
 namespace {
 
-std::string Num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
-
 std::string Point(const Eigen::Vector3d& x) {
-  return "(" + Num(x[0]) + ", " + Num(x[1]) + ", " + Num(x[2]) + ")";
+  return "(" + Significant(x[0]) + ", " + Significant(x[1]) + ", " + Significant(x[2]) + ")";
 }
 
 void CheckFinite(std::initializer_list<double> values, const char* what) {
@@ -217,10 +212,10 @@ void CheckInImage(const CameraTool& cam, int zoom, double u, double v, const cha
     throw PredictionError(PredictionFailure::kOutsideImage,
                           std::string(what) + " within zoom " + std::to_string(zoom) + "'s " +
                               std::to_string(cam.width) + "x" + std::to_string(cam.height) +
-                              " image and " + Num(100 * kImageMargin) + "% beyond (u in [" +
-                              Num(u0) + ", " + Num(u1) + "], v in [" + Num(v0) + ", " + Num(v1) +
-                              "])",
-                          "(" + Num(u) + ", " + Num(v) + ")");
+                              " image and " + Significant(100 * kImageMargin) + "% beyond (u in [" +
+                              Significant(u0) + ", " + Significant(u1) + "], v in [" +
+                              Significant(v0) + ", " + Significant(v1) + "])",
+                          "(" + Significant(u) + ", " + Significant(v) + ")");
   }
 }
 
@@ -254,7 +249,7 @@ Ray CalibratedInstrument::CameraRay(int zoom, double phi, double theta, double u
     throw PredictionError(PredictionFailure::kUntrustedPixel,
                           "a pixel zoom " + std::to_string(zoom) +
                               "'s distortion can undistort (inside its trusted region)",
-                          "(" + Num(u) + ", " + Num(v) + ")");
+                          "(" + Significant(u) + ", " + Significant(v) + ")");
   }
   CheckFiniteResult(r, "camera ray");
   return {r.head<3>(), r.tail<3>()};
@@ -307,7 +302,7 @@ Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
   if (!(x_cam.z() > 0)) {
     throw PredictionError(PredictionFailure::kBehindCamera,
                           "a point in front of zoom " + std::to_string(zoom) + "'s camera",
-                          Point(x_ref) + ", at depth " + Num(x_cam.z()) + " m");
+                          Point(x_ref) + ", at depth " + Significant(x_cam.z()) + " m");
   }
   // Beyond the trusted radius the distortion folds the image back: the
   // projection would be a pixel where the point is not seen.
@@ -317,8 +312,8 @@ Eigen::Vector2d CalibratedInstrument::Pixel(int zoom, double phi, double theta,
     throw PredictionError(PredictionFailure::kUntrustedPoint,
                           "a point inside zoom " + std::to_string(zoom) +
                               "'s trusted field of view (tan of the off-axis angle < " +
-                              Num(r_max) + ")",
-                          Point(x_ref) + " at " + Num(r));
+                              Significant(r_max) + ")",
+                          Point(x_ref) + " at " + Significant(r));
   }
   Eigen::Vector2d uv;
   if (!PredictPixel(model_, zoom, phi, theta, x_ref, &uv, focus_distance)) {

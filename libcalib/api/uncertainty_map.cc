@@ -11,11 +11,12 @@
 namespace rtscalib {
 namespace {
 
-constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+// Sigma and extremes where no cell has a value.
+constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 
 // Median of the finite values (sorted copy), NaN when there are none.
 double Median(std::vector<double> v) {
-  if (v.empty()) return kNan;
+  if (v.empty()) return kNoValue;
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
@@ -40,7 +41,7 @@ std::vector<UncertaintyMap> ProjectionUncertaintyMaps(const CalibratedInstrument
     map.rows = o.rows;
     map.width = cam.width;
     map.height = cam.height;
-    map.sigma_px.assign(o.cols * o.rows, kNan);
+    map.sigma_px.assign(o.cols * o.rows, kNoValue);
     map.inside.assign(o.cols * o.rows, 0);
     std::vector<double> all, inside;
     for (int r = 0; r < o.rows; ++r) {
@@ -63,11 +64,11 @@ std::vector<UncertaintyMap> ProjectionUncertaintyMaps(const CalibratedInstrument
         }
       }
     }
-    map.min_px = all.empty() ? kNan : *std::min_element(all.begin(), all.end());
-    map.max_px = all.empty() ? kNan : *std::max_element(all.begin(), all.end());
+    map.min_px = all.empty() ? kNoValue : *std::min_element(all.begin(), all.end());
+    map.max_px = all.empty() ? kNoValue : *std::max_element(all.begin(), all.end());
     map.median_px = Median(all);
     map.inside_median_px = Median(inside);
-    map.inside_max_px = inside.empty() ? kNan : *std::max_element(inside.begin(), inside.end());
+    map.inside_max_px = inside.empty() ? kNoValue : *std::max_element(inside.begin(), inside.end());
     out.push_back(std::move(map));
   }
   return out;

@@ -7,17 +7,9 @@
 
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/model/focus.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
-namespace {
-
-std::string Num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.3g", v);
-  return buf;
-}
-
-}  // namespace
 
 Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
                          const FitOptions& fit) {
@@ -129,10 +121,10 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
                      c.max_zenith_deg > 180.0 - rules.steep_zenith_deg;
   auto need_steep = [&] {
     if (!steep) {
-      out.push_back("steep sights (zenith angle below " + Num(rules.steep_zenith_deg) +
-                    " deg or above " + Num(180.0 - rules.steep_zenith_deg) +
-                    " deg; the data span " + Num(c.min_zenith_deg) + " to " +
-                    Num(c.max_zenith_deg) + " deg)");
+      out.push_back("steep sights (zenith angle below " + Significant(rules.steep_zenith_deg, 3) +
+                    " deg or above " + Significant(180.0 - rules.steep_zenith_deg, 3) +
+                    " deg; the data span " + Significant(c.min_zenith_deg, 3) + " to " +
+                    Significant(c.max_zenith_deg, 3) + " deg)");
     }
   };
   auto need_faces = [&] {
@@ -140,14 +132,16 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
   };
   auto need_turn = [&] {
     if (c.phi_span_deg < rules.full_turn_deg) {
-      out.push_back("pointings all around the horizon (the data span " + Num(c.phi_span_deg) +
+      out.push_back("pointings all around the horizon (the data span " +
+                    Significant(c.phi_span_deg, 3) +
                     " deg of phi; a full turn separates once- and twice-per-turn terms)");
     }
   };
   auto need_wide_zenith = [&] {
     if (c.max_zenith_deg - c.min_zenith_deg < rules.wide_zenith_deg) {
-      out.push_back("a wider range of zenith angles (the data span " + Num(c.min_zenith_deg) +
-                    " to " + Num(c.max_zenith_deg) + " deg)");
+      out.push_back("a wider range of zenith angles (the data span " +
+                    Significant(c.min_zenith_deg, 3) + " to " + Significant(c.max_zenith_deg, 3) +
+                    " deg)");
     }
   };
   auto need_edm = [&] {
@@ -156,19 +150,19 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
   auto need_long_distances = [&] {
     if (c.has_edm &&
         (c.max_edm_m < rules.distance_ratio * c.min_edm_m || c.max_edm_m < rules.long_distance_m)) {
-      out.push_back("longer EDM distances (more than " + Num(rules.distance_ratio) +
-                    " times the shortest and " + Num(rules.long_distance_m) +
-                    " m or more; the data span " + Num(c.min_edm_m) + " to " + Num(c.max_edm_m) +
-                    " m)");
+      out.push_back("longer EDM distances (more than " + Significant(rules.distance_ratio, 3) +
+                    " times the shortest and " + Significant(rules.long_distance_m, 3) +
+                    " m or more; the data span " + Significant(c.min_edm_m, 3) + " to " +
+                    Significant(c.max_edm_m, 3) + " m)");
     }
   };
   auto need_fine_distances = [&] {
     const double u = model.edm_cyclic_unit_length;
     if (c.has_edm &&
         (c.distinct_edm < 6 || c.finest_edm_step_m > u / 4 || c.max_edm_m - c.min_edm_m < u)) {
-      out.push_back("EDM distances spaced finer than U/4 = " + Num(u / 4) +
-                    " m over at least one unit length U = " + Num(u) + " m (the data have " +
-                    std::to_string(c.distinct_edm) + " distinct distances)");
+      out.push_back("EDM distances spaced finer than U/4 = " + Significant(u / 4, 3) +
+                    " m over at least one unit length U = " + Significant(u, 3) +
+                    " m (the data have " + std::to_string(c.distinct_edm) + " distinct distances)");
     }
   };
   auto need_image_corners = [&] {
@@ -180,7 +174,7 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
     for (size_t z = 0; z < c.corner_fraction.size(); ++z) {
       if (c.corner_fraction[z] > 0 && c.corner_fraction[z] < rules.corner_fraction) {
         out.push_back("points near the image corners at zoom " + std::to_string(z) +
-                      " (the farthest reaches " + Num(100 * c.corner_fraction[z]) +
+                      " (the farthest reaches " + Significant(100 * c.corner_fraction[z], 3) +
                       "% of the half-diagonal)");
       }
     }
@@ -193,9 +187,9 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
     for (const auto& [zoom, range] : c.target_distance) {
       if (range.second < rules.focus_distance_ratio * range.first) {
         out.push_back("targets near and far at zoom " + std::to_string(zoom) +
-                      " (the farthest at least " + Num(rules.focus_distance_ratio) +
-                      " times the nearest; the data span " + Num(range.first) + " to " +
-                      Num(range.second) + " m)");
+                      " (the farthest at least " + Significant(rules.focus_distance_ratio, 3) +
+                      " times the nearest; the data span " + Significant(range.first, 3) + " to " +
+                      Significant(range.second, 3) + " m)");
       }
     }
   };

@@ -7,18 +7,14 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "libcalib/text/number_text.h"
+
 namespace rtscalib {
 namespace {
 
 // Below this fraction of its norm outside the model's span, a column is
 // absorbed by the model (RankingOptions::redundant_fraction).
 constexpr double kRedundantFraction = 1e-3;
-
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), f, v);
-  return buf;
-}
 
 std::string Rms(const GroupRms& g) {
   std::vector<std::string> parts;

@@ -10,6 +10,7 @@
 
 #include "libcalib/camera/opencv_model.h"
 #include "libcalib/fit/parameterization.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {
@@ -45,12 +46,6 @@ int RadialPower(int index) {
     default:
       return 0;
   }
-}
-
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
 }
 
 // max over the four image corners of |d pixel / d coefficient `index`| [px],

@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "libcalib/model/focus.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {
@@ -19,12 +20,6 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A focus distance column differs from the target distance when some photo's
 // two differ by more than this fraction: otherwise the two variables are one.
 constexpr double kSameDistance = 1e-3;
-
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
 
 // Distinct finite values of `values` at `rows` (stops counting at `enough`).
 int Distinct(const std::vector<double>& values, const std::vector<int>& rows, int enough) {

@@ -5,14 +5,10 @@
 #include <cmath>
 #include <cstdio>
 
+#include "libcalib/text/number_text.h"
+
 namespace rtscalib {
 namespace {
-
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
 
 std::string ValueText(double value, double sigma, const std::string& unit = "") {
   std::string out = Fmt("%.3g", value);

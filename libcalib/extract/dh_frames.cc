@@ -3,12 +3,6 @@
 #include <cmath>
 
 namespace rtscalib {
-namespace {
-
-// Shorter projections fall back to the other reference axis (header).
-constexpr double kMinProjection = 1e-3;
-
-}  // namespace
 
 Eigen::Matrix3d LinkFrame::Rotation() const {
   Eigen::Matrix3d r;
@@ -24,7 +18,7 @@ LinkFrame FirstFrame(const Line3& axis) {
   f.z = axis.direction.normalized();  // Eq. 43
   const Eigen::Vector3d x0 = Eigen::Vector3d::UnitX();
   const Eigen::Vector3d px = x0 - x0.dot(f.z) * f.z;  // Eq. 45
-  if (px.norm() >= kMinProjection) {
+  if (px.norm() >= kMinReferenceProjection) {
     f.x = px.normalized();
     f.y = f.z.cross(f.x);
   } else {

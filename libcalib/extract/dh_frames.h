@@ -43,6 +43,12 @@
 
 namespace rtscalib {
 
+// A reference axis whose projection onto the plane normal to an axis is
+// shorter than this falls back to the next reference axis (Eq. 45 and the
+// camera tools' Eq. 79 with footnote 8): the axis is then within 0.06 deg of it.
+constexpr double kMinReferenceProjection = 1e-3;
+
+
 struct LinkFrame {
   Eigen::Vector3d o = Eigen::Vector3d::Zero();
   Eigen::Vector3d x = Eigen::Vector3d::UnitX();

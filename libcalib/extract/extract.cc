@@ -5,22 +5,17 @@
 #include <stdexcept>
 
 #include "libcalib/extract/tools.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {
 
-std::string Num(double v, int precision = 6) {
-  std::ostringstream s;
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
-
 std::string NoSweepMessage(int joint, const SweepSearch& search, const ExtractOptions& o) {
   std::ostringstream s;
   s << "no joint-" << joint << " sweep found: need at least " << o.min_sweep_points
-    << " usable rows (face 1, zenith in [" << Num(o.min_zenith_rad * 180 / M_PI, 4) << ", "
-    << Num(o.max_zenith_rad * 180 / M_PI, 4) << "] deg) of one tool, distance and pixel with "
+    << " usable rows (face 1, zenith in [" << Significant(o.min_zenith_rad * 180 / M_PI, 4) << ", "
+    << Significant(o.max_zenith_rad * 180 / M_PI, 4)
+    << "] deg) of one tool, distance and pixel with "
     << (joint == 1 ? "the same theta and different phi" : "the same phi and different theta")
     << " (Klug Sec. 3.1.2: "
     << (joint == 1 ? "theta = pi/2, phi over [0, 2 pi)" : "phi = 0, theta over [0, pi]") << "). "
@@ -32,10 +27,10 @@ std::string NoSweepMessage(int joint, const SweepSearch& search, const ExtractOp
 std::string DescribeFeature(const JointFeature& f) {
   std::ostringstream s;
   s << "joint " << f.joint << ": " << TrajectoryName(f.trajectory) << " through " << f.num_points
-    << " points, centre (" << Num(f.center.x()) << ", " << Num(f.center.y()) << ", "
-    << Num(f.center.z()) << ") m, axis (" << Num(f.axis.x()) << ", " << Num(f.axis.y()) << ", "
-    << Num(f.axis.z()) << "), radius " << Num(f.radius) << " m, circle fit RMS "
-    << Num(f.circle_rms, 3) << " m";
+    << " points, centre (" << Significant(f.center.x()) << ", " << Significant(f.center.y()) << ", "
+    << Significant(f.center.z()) << ") m, axis (" << Significant(f.axis.x()) << ", "
+    << Significant(f.axis.y()) << ", " << Significant(f.axis.z()) << "), radius "
+    << Significant(f.radius) << " m, circle fit RMS " << Significant(f.circle_rms, 3) << " m";
   return s.str();
 }
 
@@ -88,8 +83,8 @@ ExtractionResult ExtractDhModel(const std::vector<Record>& records,
   out.joints[0].next_axis_angle = std::atan2(z1.cross(z2).norm(), z1.dot(z2));
   out.joints[1].constellation = cp23.constellation;
   notes.push_back(std::string("axes 1 and 2: ") + LineConstellationName(cp12.constellation) +
-                  ", closest distance " + Num(cp12.distance, 3) + " m, angle " +
-                  Num(out.joints[0].next_axis_angle * 180 / M_PI, 8) + " deg");
+                  ", closest distance " + Significant(cp12.distance, 3) + " m, angle " +
+                  Significant(out.joints[0].next_axis_angle * 180 / M_PI, 8) + " deg");
 
   // 4. DH parameters.
   InstrumentModel& m = out.model;
@@ -100,12 +95,14 @@ ExtractionResult ExtractDhModel(const std::vector<Record>& records,
   m.links[0].p = link1;
   m.links[0].p[kDhGamma] = WrapAngle(link1[kDhGamma] - phi2);
   m.links[1].p = link2;
-  notes.push_back("link 1 (Eq. 49, a along x_2): d = " + Num(link1[kDhD]) + " m, gamma = phi + " +
-                  Num(m.links[0].p[kDhGamma]) + " rad (gamma_1 = " + Num(link1[kDhGamma]) +
-                  " at phi = " + Num(phi2) + "), alpha = " + Num(link1[kDhAlpha]) +
-                  " rad, a = " + Num(link1[kDhA]) + " m");
-  notes.push_back("link 2: frame 3 = frame 2 (Eq. 50), {d, gamma, alpha, a} = {" + Num(link2[0]) +
-                  ", " + Num(link2[1]) + ", " + Num(link2[2]) + ", " + Num(link2[3]) +
+  notes.push_back("link 1 (Eq. 49, a along x_2): d = " + Significant(link1[kDhD]) +
+                  " m, gamma = phi + " + Significant(m.links[0].p[kDhGamma]) +
+                  " rad (gamma_1 = " + Significant(link1[kDhGamma]) +
+                  " at phi = " + Significant(phi2) + "), alpha = " + Significant(link1[kDhAlpha]) +
+                  " rad, a = " + Significant(link1[kDhA]) + " m");
+  notes.push_back("link 2: frame 3 = frame 2 (Eq. 50), {d, gamma, alpha, a} = {" +
+                  Significant(link2[0]) + ", " + Significant(link2[1]) + ", " +
+                  Significant(link2[2]) + ", " + Significant(link2[3]) +
                   "}; the tool transforms carry the rest");
 
   // 5. Base and tools.
@@ -140,7 +137,8 @@ ExtractionResult ExtractDhModel(const std::vector<Record>& records,
     m.edm = edm->flange_from_edm;
     out.edm_poses = edm->poses;
     notes.push_back("EDM tool: " + std::to_string(edm->poses) + " poses, x axis from " +
-                    edm->x_reference + " (Eq. 79), alignment RMS " + Num(edm->rms, 3) + " m");
+                    edm->x_reference + " (Eq. 79), alignment RMS " + Significant(edm->rms, 3) +
+                    " m");
   } else {
     notes.push_back(
         "EDM tool: no usable pose has EDM rows at two distances (Eq. 78); flange_from_edm left "

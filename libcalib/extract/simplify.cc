@@ -5,18 +5,12 @@
 #include <sstream>
 
 #include "libcalib/model/kinematics.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {
 
 constexpr double kExactForm = 1e-9;
-
-std::string Num(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
 
 std::array<double, kNumTrigTerms> Terms(double phi, double theta) {
   const double cp = std::cos(phi), sp = std::sin(phi), ct = std::cos(theta), st = std::sin(theta);
@@ -49,10 +43,10 @@ PoseBlock SnapPose(const PoseBlock& pose, const std::string& name,
   if (notes) {
     const Eigen::Vector3d t(pose.t[0], pose.t[1], pose.t[2]);
     const double turned = Eigen::AngleAxisd(snapped.transpose() * r).angle();
-    notes->push_back(name + ": euler [a, b, g] (" + Num(e[0]) + ", " + Num(e[1]) + ", " +
-                     Num(e[2]) + ") -> (" + Num(s[0]) + ", " + Num(s[1]) + ", " + Num(s[2]) +
-                     ") rad, rotation changed by " + Num(turned) + " rad; |t| " + Num(t.norm()) +
-                     " m -> 0");
+    notes->push_back(name + ": euler [a, b, g] (" + Significant(e[0]) + ", " + Significant(e[1]) +
+                     ", " + Significant(e[2]) + ") -> (" + Significant(s[0]) + ", " +
+                     Significant(s[1]) + ", " + Significant(s[2]) + ") rad, rotation changed by " +
+                     Significant(turned) + " rad; |t| " + Significant(t.norm()) + " m -> 0");
   }
   return PoseBlock::FromRigid(Rigid3::FromEuler(s, Eigen::Vector3d::Zero()));
 }
@@ -96,10 +90,10 @@ InstrumentModel SnapModel(const InstrumentModel& model, std::vector<std::string>
     p[kDhAlpha] = SnapToQuarterTurn(q[kDhAlpha]);
     p[kDhGamma] = SnapToQuarterTurn(q[kDhGamma]);
     if (notes) {
-      notes->push_back("link " + std::to_string(i + 1) + ": alpha " + Num(q[kDhAlpha]) + " -> " +
-                       Num(p[kDhAlpha]) + ", gamma_offset " + Num(q[kDhGamma]) + " -> " +
-                       Num(p[kDhGamma]) + " rad; d " + Num(q[kDhD]) + ", a " + Num(q[kDhA]) +
-                       " m -> 0");
+      notes->push_back("link " + std::to_string(i + 1) + ": alpha " + Significant(q[kDhAlpha]) +
+                       " -> " + Significant(p[kDhAlpha]) + ", gamma_offset " +
+                       Significant(q[kDhGamma]) + " -> " + Significant(p[kDhGamma]) + " rad; d " +
+                       Significant(q[kDhD]) + ", a " + Significant(q[kDhA]) + " m -> 0");
     }
   }
   out.edm = SnapPose(model.edm, "edm tool", notes);

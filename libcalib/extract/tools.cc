@@ -6,15 +6,13 @@
 #include <sstream>
 
 #include "libcalib/camera/opencv_model.h"
+#include "libcalib/extract/dh_frames.h"
 #include "libcalib/geometry/kabsch.h"
 #include "libcalib/model/kinematics.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {
-
-// A projection of a reference axis shorter than this falls back to the next
-// candidate (footnote 8): the axis is within 0.06 deg of z_EDM.
-constexpr double kMinProjection = 1e-3;
 
 // RobustKabsch's floor: correspondences within 0.1 mm of the robust fit are
 // always kept (exact data leave round-off, which no robust sigma should cut).
@@ -70,13 +68,6 @@ std::vector<std::vector<int>> GroupByPose(const std::vector<Record>& records,
 
 Eigen::Vector3d ToFlange(const InstrumentModel& model, const Record& r, const Eigen::Vector3d& x) {
   return RefFromFlange(model, r.phi, r.theta).Inverse() * x;
-}
-
-std::string Num(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
 }
 
 }  // namespace
@@ -139,8 +130,9 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
   const bool all_rows = triplets.empty() && given && options.exact_camera_rays;
   if (triplets.empty() && !all_rows) {
     std::ostringstream s;
-    s << "cannot extract the camera tool of " << where << ": no pose has rows at the principal point (" << Num(c.x()) << ", "
-      << Num(c.y()) << ")" << (principal_point.detected ? " (detected)" : "")
+    s << "cannot extract the camera tool of " << where
+      << ": no pose has rows at the principal point (" << Significant(c.x()) << ", "
+      << Significant(c.y()) << ")" << (principal_point.detected ? " (detected)" : "")
       << " and at +1 px in u and in v with the same ray length (Klug Sec. 3.1.10, Eq. 67). "
          "Record F_CAM at these three pixels at each pose, or give the camera's intrinsics "
          "(then every camera row is used, with exact_camera_rays).";
@@ -183,7 +175,7 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
     double ray[3];
     if (!PixelToRay(out.camera.intrinsics.data(), out.camera.distortion.data(), pixel, ray)) {
       throw ExtractionError("cannot extract the camera tool of " + where + ": pixel (" +
-                            Num(r.u) + ", " + Num(r.v) + ") of line " +
+                            Significant(r.u) + ", " + Significant(r.v) + ") of line " +
                             std::to_string(r.line) +
                             " cannot be undistorted with the given distortion");
     }
@@ -229,19 +221,19 @@ std::optional<CameraToolEstimate> ExtractCameraTool(const std::vector<Record>& r
   std::ostringstream note;
   note << "camera tool zoom " << zoom << ": " << out.poses << " poses"
        << (all_rows ? " (no pixel triplet: every camera row, exact rays)" : "")
-       << ", principal point (" << Num(c.x()) << ", " << Num(c.y()) << ") "
+       << ", principal point (" << Significant(c.x()) << ", " << Significant(c.y()) << ") "
        << (principal_point.detected ? "detected (most shared triplet centre)"
                                     : "from the intrinsics")
        << (options.exact_camera_rays ? ", exact back-projected rays"
                                      : ", paper's unit axes (Eq. 69/70)")
-       << ", alignment RMS " << Num(k.rms) << " m";
+       << ", alignment RMS " << Significant(k.rms) << " m";
   if (!dropped.empty()) {
     note << "; " << dropped.size() << " of " << a.size()
          << " correspondences left out (off by more than 8 robust sigmas: gross errors)";
   }
   if (out.intrinsics_estimated) {
-    note << "; no intrinsics given: fx = " << Num(out.camera.intrinsics[0])
-         << ", fy = " << Num(out.camera.intrinsics[1])
+    note << "; no intrinsics given: fx = " << Significant(out.camera.intrinsics[0])
+         << ", fy = " << Significant(out.camera.intrinsics[1])
          << " px estimated from the 1 px chords, distortion 0";
   }
   out.note = note.str();
@@ -274,7 +266,7 @@ std::optional<EdmToolEstimate> ExtractEdmTool(const std::vector<Record>& records
     for (int k = 0; k < 2; ++k) {  // Eq. 79 with x, then footnote 8's y
       const Eigen::Vector3d axis = ref.col(k);
       const Eigen::Vector3d p = axis - axis.dot(z) * z;
-      if (p.norm() >= kMinProjection) {
+      if (p.norm() >= kMinReferenceProjection) {
         x = p.normalized();
         ++used[(reference_zoom >= 0 ? 0 : 2) + k];
         break;

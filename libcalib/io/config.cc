@@ -118,10 +118,6 @@ void ReadNumbers(const YamlNode& m, const std::string& key, std::vector<double>*
 
 Eigen::Vector3d ToVector3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
 
-// A hand-written quaternion is taken as it is (so that a dumped config reads
-// back bit for bit), but it must be a rotation.
-constexpr double kUnitQuaternionTolerance = 1e-9;
-
 // The number y, written shortest, for which y * scale == x exactly if one
 // exists next to x / scale: so that dumped degrees and arcseconds give back
 // the same radians.
@@ -146,10 +142,7 @@ void ReadPoseFields(const YamlNode& m, PoseBlock* pose) {
   if (euler && q) q->Fail("either euler or q, not both");
   if (q) {
     const std::vector<double> v = q->AsDoubles(4);
-    const double norm = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
-    if (std::fabs(norm - 1.0) > kUnitQuaternionTolerance) {
-      q->Fail("a unit quaternion [x, y, z, w] (norm " + FormatShortestDouble(norm) + ")");
-    }
+    RequireUnitQuaternion(*q, v.data());
     std::copy(v.begin(), v.end(), pose->q.begin());
   } else if (euler) {
     const Rigid3 rotation{RotationFromEuler<double>(ToVector3(euler->AsDoubles(3))),
@@ -616,17 +609,12 @@ void ReadDiagnose(const YamlNode& m, DiagnoseOptions* out) {
 
 // --- dump ---------------------------------------------------------------------
 
-// Numbers go through Num() rather than the emitter's own double output, which
-// writes 1e-05 as 1.0000000000000001e-05.
+// Numbers go through YamlDouble (shortest) rather than the emitter's own
+// double output, which writes 1e-05 as 1.0000000000000001e-05.
 std::string Num(double x) { return YamlDouble(x, /*shortest=*/true); }
 
-void EmitNumbers(YAML::Emitter& e, const double* x, size_t n) {
-  e << YAML::Flow << YAML::BeginSeq;
-  for (size_t i = 0; i < n; ++i) e << Num(x[i]);
-  e << YAML::EndSeq;
-}
-void EmitNumbers(YAML::Emitter& e, const std::vector<double>& x) {
-  EmitNumbers(e, x.data(), x.size());
+void EmitList(YAML::Emitter& e, const std::vector<double>& x) {
+  EmitNumbers(e, x.data(), x.size(), /*shortest=*/true);
 }
 void EmitInts(YAML::Emitter& e, const std::vector<int>& x) {
   e << YAML::Flow << YAML::BeginSeq;
@@ -636,9 +624,9 @@ void EmitInts(YAML::Emitter& e, const std::vector<int>& x) {
 
 void EmitPose(YAML::Emitter& e, const PoseBlock& pose) {
   e << YAML::Key << "q" << YAML::Value;
-  EmitNumbers(e, pose.q.data(), 4);
+  EmitNumbers(e, pose.q.data(), 4, /*shortest=*/true);
   e << YAML::Key << "t" << YAML::Value;
-  EmitNumbers(e, pose.t.data(), 3);
+  EmitNumbers(e, pose.t.data(), 3, /*shortest=*/true);
 }
 
 void EmitCameraFields(YAML::Emitter& e, const CameraTool& cam) {
@@ -649,7 +637,7 @@ void EmitCameraFields(YAML::Emitter& e, const CameraTool& cam) {
     e << YAML::Key << names[i] << YAML::Value << Num(cam.intrinsics[i]);
   }
   e << YAML::Key << "distortion" << YAML::Value;
-  EmitNumbers(e, cam.distortion.data(), cam.distortion.size());
+  EmitNumbers(e, cam.distortion.data(), cam.distortion.size(), /*shortest=*/true);
   if (cam.focus != std::array<double, kNumFocus>{}) {
     e << YAML::Key << "focus" << YAML::Value << YAML::Flow << YAML::BeginMap;
     for (int i = 0; i < kNumFocus; ++i) {
@@ -668,7 +656,8 @@ void EmitTruth(YAML::Emitter& e, const InstrumentModel& truth) {
   e << YAML::EndMap;
   if (truth.kinematics == Kinematics::kDh) {
     e << YAML::Key << "links" << YAML::Value << YAML::BeginSeq;
-    for (const DhLink& link : truth.links) EmitNumbers(e, link.p.data(), link.p.size());
+    for (const DhLink& link : truth.links)
+      EmitNumbers(e, link.p.data(), link.p.size(), /*shortest=*/true);
     e << YAML::EndSeq;
   }
   e << YAML::Key << "edm" << YAML::Value << YAML::Flow << YAML::BeginMap;
@@ -687,7 +676,7 @@ void EmitTruth(YAML::Emitter& e, const InstrumentModel& truth) {
     if (!IsKinematic(effect)) continue;  // distortion lives in the cameras
     const EffectReportValue report = ToReportUnits(effect, truth.EffectValue(effect), {});
     e << YAML::Key << Info(effect).name << YAML::Value;
-    EmitNumbers(e, report.value.data(), report.num);
+    EmitNumbers(e, report.value.data(), report.num, /*shortest=*/true);
   }
   e << YAML::EndMap;
   e << YAML::Key << "edm_cyclic_unit_length" << YAML::Value << Num(truth.edm_cyclic_unit_length);
@@ -713,7 +702,7 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
   e << YAML::Key << "sweeps" << YAML::Value << p.sweeps;
   e << YAML::Key << "sweep_points" << YAML::Value << p.sweep_points;
   e << YAML::Key << "edm_distances" << YAML::Value;
-  EmitNumbers(e, p.edm_distances);
+  EmitList(e, p.edm_distances);
   e << YAML::Key << "cam_ray_length" << YAML::Value << Num(p.cam_ray_length);
   e << YAML::Key << "pixel_offset" << YAML::Value << Num(p.pixel_offset);
   if (p.grid_phi_steps > 0 && p.grid_theta_steps > 0) {
@@ -721,9 +710,9 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
     e << YAML::Key << "phi_steps" << YAML::Value << p.grid_phi_steps;
     e << YAML::Key << "theta_steps" << YAML::Value << p.grid_theta_steps;
     e << YAML::Key << "edm_distances" << YAML::Value;
-    EmitNumbers(e, p.grid_edm_distances);
+    EmitList(e, p.grid_edm_distances);
     e << YAML::Key << "cam_ray_lengths" << YAML::Value;
-    EmitNumbers(e, p.grid_cam_ray_lengths);
+    EmitList(e, p.grid_cam_ray_lengths);
     e << YAML::Key << "pixels_per_axis" << YAML::Value << p.grid_pixels_per_axis;
     e << YAML::EndMap;
   }

@@ -12,8 +12,8 @@
 namespace rtscalib {
 namespace {
 
-constexpr const char* kFormat = "rtscalib-covariance";
-constexpr int kVersion = 1;
+constexpr const char* kCovarianceFormat = "rtscalib-covariance";
+constexpr int kCovarianceVersion = 1;
 
 // YAML double-quoted text (block names and units hold brackets and commas).
 std::string Quoted(const std::string& s) {
@@ -48,7 +48,8 @@ void WriteCovarianceYaml(const std::string& path, const InstrumentModel& model) 
   f << "# The fit's full parameter covariance of the model.yaml beside this file\n"
        "# (docs/library.md): rows and columns in `blocks` order, tangent coordinates\n"
        "# of libcalib/fit/parameter_layout.h; `at` = the block's values in model.yaml.\n";
-  f << "format: " << kFormat << "\nversion: " << kVersion << "\nparameters: " << n << "\nblocks:\n";
+  f << "format: " << kCovarianceFormat << "\nversion: " << kCovarianceVersion
+    << "\nparameters: " << n << "\nblocks:\n";
   for (const LayoutBlock& b : layout) {
     f << "  - {name: " << Quoted(b.name) << ", offset: " << b.offset << ", size: " << b.size
       << ", unit: " << Quoted(b.unit) << ", at: [";
@@ -69,7 +70,7 @@ void WriteCovarianceYaml(const std::string& path, const InstrumentModel& model) 
 void ReadCovarianceYaml(const std::string& path, InstrumentModel* model) {
   const YamlDocument doc = YamlDocument::Load(path);
   const YamlNode root = doc.Root();
-  root.RequireFormat(kFormat, kVersion);
+  root.RequireFormat(kCovarianceFormat, kCovarianceVersion);
   const std::vector<LayoutBlock> layout = ParameterLayout(*model);
   const int n = LayoutSize(layout);
   const YamlNode count = root.Require("parameters");

@@ -19,31 +19,20 @@
 namespace rtscalib {
 namespace {
 
-constexpr const char* kFormat = "rtscalib-model";
-constexpr int kVersion = 1;
+constexpr const char* kModelFormat = "rtscalib-model";
+constexpr int kModelVersion = 1;
 
 // Derived values (Euler angles, report units) must match their parameter
 // blocks to this relative tolerance; %.17g text and the trigonometry between
 // them lose ~1e-15.
 constexpr double kDerivedTolerance = 1e-9;
-// Quaternions are written normalised; more than this off unit length means a
-// hand edit, which would scale every prediction.
-constexpr double kUnitQuaternionTolerance = 1e-9;
 // The sigma of a distortion coefficient the fit did not estimate.
 constexpr const char* kHeldSigma = "held";
-
-std::string Num(double x) { return YamlDouble(x); }
-
-void EmitNumbers(YAML::Emitter& e, const double* x, int n) {
-  e << YAML::Flow << YAML::BeginSeq;
-  for (int i = 0; i < n; ++i) e << Num(x[i]);
-  e << YAML::EndSeq;
-}
 
 // {name: value, ...} in flow style.
 void EmitNamed(YAML::Emitter& e, const char* const* names, const double* x, int n) {
   e << YAML::Flow << YAML::BeginMap;
-  for (int i = 0; i < n; ++i) e << YAML::Key << names[i] << YAML::Value << Num(x[i]);
+  for (int i = 0; i < n; ++i) e << YAML::Key << names[i] << YAML::Value << YamlDouble(x[i]);
   e << YAML::EndMap;
 }
 
@@ -57,20 +46,20 @@ void EmitPose(YAML::Emitter& e, const PoseBlock& pose, const PoseSigma* sigma,
     sigma = nullptr;
   }
   e << YAML::Key << "q" << YAML::Value;
-  EmitNumbers(e, pose.q.data(), 4);
+  EmitNumbers(e, pose.q.data(), 4, /*shortest=*/false);
   e << YAML::Key << "t" << YAML::Value;
-  EmitNumbers(e, pose.t.data(), 3);
+  EmitNumbers(e, pose.t.data(), 3, /*shortest=*/false);
   const Eigen::Vector3d euler = pose.Euler();
   e << YAML::Key << "euler" << YAML::Value;
-  EmitNumbers(e, euler.data(), 3);
+  EmitNumbers(e, euler.data(), 3, /*shortest=*/false);
   if (sigma) {
     e << YAML::Key << "sigma" << YAML::Value << YAML::Flow << YAML::BeginMap;
     e << YAML::Key << "rotation" << YAML::Value;
-    EmitNumbers(e, sigma->rotation.data(), 3);
+    EmitNumbers(e, sigma->rotation.data(), 3, /*shortest=*/false);
     e << YAML::Key << "euler" << YAML::Value;
-    EmitNumbers(e, sigma->euler.data(), 3);
+    EmitNumbers(e, sigma->euler.data(), 3, /*shortest=*/false);
     e << YAML::Key << "t" << YAML::Value;
-    EmitNumbers(e, sigma->t.data(), 3);
+    EmitNumbers(e, sigma->t.data(), 3, /*shortest=*/false);
     e << YAML::EndMap;
   }
   e << YAML::EndMap;
@@ -83,17 +72,18 @@ void EmitEffect(YAML::Emitter& e, const InstrumentModel& model, Effect effect) {
   if (IsKinematic(effect)) {
     const std::array<double, 4>& cov = model.sigmas.effect_cov[static_cast<int>(effect)];
     e << YAML::Key << "si" << YAML::Value;
-    EmitNumbers(e, model.EffectValue(effect).data(), info.num_params);
+    EmitNumbers(e, model.EffectValue(effect).data(), info.num_params, /*shortest=*/false);
     if (model.sigmas.valid) {
       e << YAML::Key << "covariance" << YAML::Value;
-      EmitNumbers(e, cov.data(), 4);
+      EmitNumbers(e, cov.data(), 4, /*shortest=*/false);
     }
     const EffectReportValue report = ToReportUnits(effect, model.EffectValue(effect), cov);
     e << YAML::Key << "report" << YAML::Value << YAML::BeginMap;
     for (int i = 0; i < info.num_params; ++i) {
       e << YAML::Key << info.param_names[i] << YAML::Value << YAML::Flow << YAML::BeginMap;
-      e << YAML::Key << "value" << YAML::Value << Num(report.value[i]);
-      if (model.sigmas.valid) e << YAML::Key << "sigma" << YAML::Value << Num(report.sigma[i]);
+      e << YAML::Key << "value" << YAML::Value << YamlDouble(report.value[i]);
+      if (model.sigmas.valid)
+        e << YAML::Key << "sigma" << YAML::Value << YamlDouble(report.sigma[i]);
       e << YAML::Key << "unit" << YAML::Value << info.report_units[i];
       e << YAML::EndMap;
     }
@@ -144,7 +134,7 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
     for (int i = 0; i < kNumDistortion; ++i) {
       e << YAML::Key << kDistortionCoefficientNames[i] << YAML::Value;
       if (DistortionIsFree(model, zoom, i)) {
-        e << Num(s.distortion[zoom][i]);
+        e << YamlDouble(s.distortion[zoom][i]);
       } else {
         e << kHeldSigma;
       }
@@ -157,7 +147,8 @@ void EmitCamera(YAML::Emitter& e, const InstrumentModel& model, int zoom) {
   }
   if (!cam.valid_region.empty()) {
     e << YAML::Key << "valid_region" << YAML::Value << YAML::BeginSeq;
-    for (const Eigen::Vector2d& p : cam.valid_region) EmitNumbers(e, p.data(), 2);
+    for (const Eigen::Vector2d& p : cam.valid_region)
+      EmitNumbers(e, p.data(), 2, /*shortest=*/false);
     e << YAML::EndSeq;
   }
   e << YAML::EndMap;
@@ -216,11 +207,7 @@ PoseBlock ReadPose(const YamlNode& m, bool with_sigma, PoseSigma* sigma,
   }
   const YamlNode q = m.Require("q");
   ReadNumbersInto(q, pose.q.data(), 4);
-  const double norm = std::sqrt(pose.q[0] * pose.q[0] + pose.q[1] * pose.q[1] +
-                                pose.q[2] * pose.q[2] + pose.q[3] * pose.q[3]);
-  if (std::fabs(norm - 1.0) > kUnitQuaternionTolerance) {
-    q.Fail("a unit quaternion [x, y, z, w] (norm " + FormatShortestDouble(norm) + ")");
-  }
+  RequireUnitQuaternion(q, pose.q.data());
   ReadNumbersInto(m.Require("t"), pose.t.data(), 3);
   const YamlNode euler_node = m.Require("euler");
   double euler[3];
@@ -303,8 +290,8 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
       "euler = [a, b, g] with R = Rz(g) Ry(b) Rx(a) (derived from q, for reading). "
       "Effects: si = the values predictions use, report = the same in report units.");
   e << YAML::BeginMap;
-  e << YAML::Key << "format" << YAML::Value << kFormat;
-  e << YAML::Key << "version" << YAML::Value << kVersion;
+  e << YAML::Key << "format" << YAML::Value << kModelFormat;
+  e << YAML::Key << "version" << YAML::Value << kModelVersion;
   e << YAML::Key << "metadata" << YAML::Value << YAML::BeginMap;
   for (const auto& [key, value] : metadata) {
     e << YAML::Key;
@@ -314,7 +301,8 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
   }
   e << YAML::EndMap;
   e << YAML::Key << "kinematics" << YAML::Value << KinematicsName(model.kinematics);
-  e << YAML::Key << "edm_cyclic_unit_length" << YAML::Value << Num(model.edm_cyclic_unit_length);
+  e << YAML::Key << "edm_cyclic_unit_length" << YAML::Value
+    << YamlDouble(model.edm_cyclic_unit_length);
   e << YAML::Key << "uncertainties" << YAML::Value << s.valid;
   // A camera-only model (kinematics none, SPEC 7.1) estimated no chain: no
   // base, EDM or camera tool is written as if it had been.
@@ -330,7 +318,7 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
     for (int i = 0; i < 2; ++i) {
       e << YAML::Flow << YAML::BeginMap;
       for (int k = 0; k < 4; ++k) {
-        e << YAML::Key << kDhParamNames[k] << YAML::Value << Num(model.links[i].p[k]);
+        e << YAML::Key << kDhParamNames[k] << YAML::Value << YamlDouble(model.links[i].p[k]);
       }
       if (s.valid) {
         e << YAML::Key << "sigma" << YAML::Value;
@@ -367,13 +355,13 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
       e << YAML::Key << "rows" << YAML::Value << layout.rows;
       e << YAML::Key << "cols" << YAML::Value << layout.cols;
       if (layout.IsPointBoard()) {
-        e << YAML::Key << "square_size" << YAML::Value << Num(layout.square_size);
+        e << YAML::Key << "square_size" << YAML::Value << YamlDouble(layout.square_size);
         if (layout.kind == BoardKind::kCharuco) {
-          e << YAML::Key << "marker_size" << YAML::Value << Num(layout.marker_size);
+          e << YAML::Key << "marker_size" << YAML::Value << YamlDouble(layout.marker_size);
         }
       } else {
-        e << YAML::Key << "tag_size" << YAML::Value << Num(layout.tag_size);
-        e << YAML::Key << "spacing" << YAML::Value << Num(layout.spacing);
+        e << YAML::Key << "tag_size" << YAML::Value << YamlDouble(layout.tag_size);
+        e << YAML::Key << "spacing" << YAML::Value << YamlDouble(layout.spacing);
       }
       // SPEC 7.1: the placement the pose is of, and camera-only its zoom,
       // whose camera frame is then the reference (cam_from_board).
@@ -394,10 +382,10 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
       e << YAML::Flow << YAML::BeginMap;
       e << YAML::Key << "name" << YAML::Value << p.name;
       e << YAML::Key << "x" << YAML::Value;
-      EmitNumbers(e, p.x.data(), 3);
+      EmitNumbers(e, p.x.data(), 3, /*shortest=*/false);
       if (s.valid) {
         e << YAML::Key << "sigma" << YAML::Value;
-        EmitNumbers(e, p.sigma.data(), 3);
+        EmitNumbers(e, p.sigma.data(), 3, /*shortest=*/false);
       }
       e << YAML::EndMap;
     }
@@ -415,7 +403,7 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
 InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) {
   const YamlDocument doc = YamlDocument::Load(path);
   const YamlNode root = doc.Root();
-  root.RequireFormat(kFormat, kVersion);
+  root.RequireFormat(kModelFormat, kModelVersion);
 
   ModelMetadata meta;
   if (const std::optional<YamlNode> m = root.Find("metadata")) {

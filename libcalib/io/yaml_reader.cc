@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -449,6 +450,13 @@ std::vector<InputError> YamlDocument::UnusedKeys() const {
 void YamlDocument::CheckAllKeysUsed() const {
   const std::vector<InputError> unused = UnusedKeys();
   if (!unused.empty()) throw InputError::Combine(unused);
+}
+
+void RequireUnitQuaternion(const YamlNode& node, const double* q) {
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!(std::fabs(norm - 1.0) <= 1e-9)) {
+    node.Fail("a unit quaternion [x, y, z, w] (norm " + FormatShortestDouble(norm) + ")");
+  }
 }
 
 }  // namespace rtscalib

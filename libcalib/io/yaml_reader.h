@@ -156,4 +156,9 @@ class YamlDocument {
   std::shared_ptr<yaml_internal::State> state_;
 };
 
+// Fails naming `node` unless q = [x, y, z, w] has unit length to 1e-9: a
+// quaternion off unit length (a hand edit) would scale every prediction;
+// one taken as it is reads back bit for bit.
+void RequireUnitQuaternion(const YamlNode& node, const double* q);
+
 }  // namespace rtscalib

@@ -26,14 +26,6 @@ constexpr double kMmPerM = 1000.0;
 
 std::string Num(double x) { return FormatShortestDouble(x); }
 
-// Six significant digits, for messages about magnitudes (17 would hide
-// the point).
-std::string Short(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", x);
-  return buf;
-}
-
 std::string JoinInts(const std::vector<int>& v, size_t max_items) {
   std::string out;
   for (size_t i = 0; i < v.size() && i < max_items; ++i)
@@ -306,8 +298,8 @@ void CheckRecordPoints(const std::string& file, const std::vector<Record>& recor
   far.Report(file, "x",
              "a point in metres about d = " + Num(first_d) +
                  " m from the instrument, so within 2 (d + sqrt(3) d_max) + 1 m = " +
-                 Short(bound(first_d)) + " m of the median of the points (SPEC 1; d_max = " +
-                 Num(d_max) + " m); it is " + Short(first_distance) + " m from it" + cause,
+                 Significant(bound(first_d)) + " m of the median of the points (SPEC 1; d_max = " +
+                 Num(d_max) + " m); it is " + Significant(first_distance) + " m from it" + cause,
              out);
 }
 
@@ -325,7 +317,7 @@ void CheckKnownPoints(const std::string& file, const std::vector<PixelObservatio
   }
   far.Report(file, "X",
              "a known point in metres within screen.max_extent_m = " + Num(max_extent_m) +
-                 " m of the origin (SPEC 1); it is " + Short(first) + " m away" +
+                 " m of the origin (SPEC 1); it is " + Significant(first) + " m away" +
                  (millimetres ? "; the coordinates look like millimetres" : ""),
              out);
 }

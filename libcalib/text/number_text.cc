@@ -72,4 +72,16 @@ std::string YamlDouble(double x, bool shortest) {
   return shortest ? FormatShortestDouble(x) : FormatDouble(x);
 }
 
+std::string Fmt(const char* printf_format, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, printf_format, x);
+  return buf;
+}
+
+std::string Significant(double x, int digits) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+  return buf;
+}
+
 }  // namespace rtscalib

@@ -35,5 +35,10 @@ std::string FormatShortestDouble(double x);
 // A YAML scalar for x: FormatDouble or FormatShortestDouble, and YAML's own
 // .nan/.inf/-.inf for the non-finite values.
 std::string YamlDouble(double x, bool shortest = false);
+// One number through a printf format ("%.3g", "%+.2f"): messages and reports.
+std::string Fmt(const char* printf_format, double x);
+// x to `digits` significant digits (%g): magnitudes in messages, where 17
+// digits would hide the point.
+std::string Significant(double x, int digits = 6);
 
 }  // namespace rtscalib
