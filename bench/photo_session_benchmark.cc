@@ -11,7 +11,10 @@
 //   BM_PhotoSessionRun            the whole `rtscalib --config
 //                                 configs/photos.yaml` in process (the
 //                                 shipped config: detection with 2 jobs,
-//                                 calibration, diagnosis, reports).
+//                                 calibration, diagnosis, reports);
+//   BM_OneBoardCalibrate/gross:G  the one-board session's calibration
+//                                 without its diagnosis, gross-error
+//                                 handling off (0) or on (1).
 //
 //   build/bench/photo_session_benchmark --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
@@ -26,6 +29,8 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/pipeline.h"
+#include "app/progress.h"
 #include "detect/photos.h"
 #include "libcalib/io/shots.h"
 #include "libcalib/io/targets_io.h"
@@ -131,6 +136,47 @@ void BM_PhotoSessionRun(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_PhotoSessionRun)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
+// The one-board session (configs/one_board.yaml: 136 photos, 22,888
+// corners, no records), rendered and detected once; then its calibration
+// with the gross-error handling on (gross:1) and off (gross:0). Its renders
+// hold mis-detected corners, so the robust fit from the start runs, and
+// keeps each photo in one residual block (libcalib/fit/observation_loss.h):
+// the difference of the two is what finding them costs.
+struct OneBoardSession {
+  OneBoardSession() {
+    char dir[] = "/tmp/rtscalib-one-board-XXXXXX";
+    if (::mkdtemp(dir) == nullptr) throw std::runtime_error("mkdtemp failed");
+    root = dir;
+    settings = LoadRunSettings(std::string(RTSCALIB_SOURCE_DIR) + "/configs/one_board.yaml");
+    Progress quiet(true);
+    PipelineResult r;
+    obs = LoadObservations(settings, root.string(), &r, &quiet);
+  }
+  ~OneBoardSession() { fs::remove_all(root); }
+  fs::path root;
+  RunSettings settings;
+  Observations obs;
+};
+
+void BM_OneBoardCalibrate(benchmark::State& state) {
+  static const OneBoardSession session;
+  CalibrationOptions options = session.settings.config.calibration;
+  options.diagnose.enabled = false;
+  options.fit.gross_errors.enabled = state.range(0) != 0;
+  size_t gross = 0;
+  for (auto _ : state) gross = Calibrate(session.obs, options).gross_rows.size();
+  state.counters["corners"] = static_cast<double>(session.obs.pixels.size());
+  state.counters["gross_rows"] = static_cast<double>(gross);
+}
+BENCHMARK(BM_OneBoardCalibrate)
+    ->ArgName("gross")
+    ->Arg(0)
+    ->Arg(1)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(3)
     ->MeasureProcessCPUTime()
