@@ -27,8 +27,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "detect/photos.h"
-#include "libcalib/io/safe_write.h"
 #include "detect/point_boards.h"
+#include "libcalib/io/safe_write.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib::render {
 namespace fs = std::filesystem;
@@ -38,12 +39,6 @@ const char kShotsHeader[] = "index,shot,face,zoom,phi,theta,image";
 // Optional columns after kShotsHeader's, in this order.
 const char* const kShotsOptional[] = {"placement", "focus_distance"};
 const char kExactHeader[] = "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v,status";
-
-std::string Num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.17g", v);
-  return buf;
-}
 
 bool ValidId(const std::string& id) {
   if (id.empty() || id[0] == '.') return false;
@@ -352,10 +347,10 @@ RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot
     ex << kExactHeader << "\n";
     for (int i : indices) {
       const Shot& s = shots[i];
-      st << i << "," << s.id << "," << s.face << "," << s.zoom << "," << Num(s.phi) << ","
-         << Num(s.theta) << "," << ImageName(s);
+      st << i << "," << s.id << "," << s.face << "," << s.zoom << "," << FormatDouble(s.phi) << ","
+         << FormatDouble(s.theta) << "," << ImageName(s);
       if (placements) st << "," << s.placement;
-      if (focus) st << "," << (s.focus_distance > 0 ? Num(s.focus_distance) : "");
+      if (focus) st << "," << (s.focus_distance > 0 ? FormatDouble(s.focus_distance) : "");
       st << "\n";
       const TargetScene& scene = scenes.at(s.placement);
       for (const ExpectedTag& t : ExpectTags(scene, s.ref_from_cam, s.cam, options.visibility)) {
@@ -365,10 +360,11 @@ RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot
         }
         for (int c = 0; c < t.corners; ++c) {
           if (!t.in_image[c]) continue;
-          ex << s.face << "," << s.zoom << "," << Num(s.phi) << "," << Num(s.theta) << "," << s.id
-             << "," << t.id << "," << c << "," << Num(t.X[c].x()) << "," << Num(t.X[c].y()) << ","
-             << Num(t.X[c].z()) << "," << Num(t.uv[c].x()) << "," << Num(t.uv[c].y()) << ","
-             << TagStatusName(t.status) << "\n";
+          ex << s.face << "," << s.zoom << "," << FormatDouble(s.phi) << ","
+             << FormatDouble(s.theta) << "," << s.id << "," << t.id << "," << c << ","
+             << FormatDouble(t.X[c].x()) << "," << FormatDouble(t.X[c].y()) << ","
+             << FormatDouble(t.X[c].z()) << "," << FormatDouble(t.uv[c].x()) << ","
+             << FormatDouble(t.uv[c].y()) << "," << TagStatusName(t.status) << "\n";
           ++result.exact_corners;
         }
       }

@@ -122,12 +122,6 @@ bool PropagateDhSigmas(const InstrumentModel& dh, const FitOptions& fit,
   return true;
 }
 
-std::string Short(double x) {
-  std::ostringstream s;
-  s << std::setprecision(2) << x;
-  return s.str();
-}
-
 std::string Fixed(double x, int digits) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(digits) << x;
@@ -154,7 +148,7 @@ SurveyorConstants ComputeSurveyorConstants(const InstrumentModel& model, const F
       out.notes.push_back(
           "c, i, v0 and k0 are the dh model's equivalents: a spherical model with these terms "
           "fitted to the dh model's EDM predictions (both faces) reproduces them to " +
-          Short(eq.fit_rms_m) +
+          Significant(eq.fit_rms_m, 2) +
           " m RMS (what remains is geometry these terms cannot express, such as a DH link "
           "offset).");
       if (model.sigmas.valid) {

@@ -48,7 +48,6 @@ namespace rtscalib {
 // camera tools' Eq. 79 with footnote 8): the axis is then within 0.06 deg of it.
 constexpr double kMinReferenceProjection = 1e-3;
 
-
 struct LinkFrame {
   Eigen::Vector3d o = Eigen::Vector3d::Zero();
   Eigen::Vector3d x = Eigen::Vector3d::UnitX();

@@ -21,13 +21,15 @@ double LossOf(RobustLoss loss, double scale, double s) {
 
 LossScaling ScalingOf(RobustLoss loss, double scale, double s) {
   const double b = scale * scale;
-  // h(s) = rho(s) / s and its derivative; g = sqrt(h), g' = h' / (2 g).
+  // h(s) = rho(s) / s and h' = (rho'(s) s - rho(s)) / s^2; g = sqrt(h),
+  // g' = h' / (2 g).
   double h = 1, dh = 0;
   switch (loss) {
     case RobustLoss::kHuber:
       if (s > b) {
-        h = 2.0 * std::sqrt(b / s) - b / s;
-        dh = -std::sqrt(b) / (s * std::sqrt(s)) + b / (s * s);
+        const double rho = LossOf(loss, scale, s);
+        h = rho / s;
+        dh = (std::sqrt(b / s) * s - rho) / (s * s);  // rho' = sqrt(b / s)
       }
       break;
     case RobustLoss::kCauchy: {
@@ -37,9 +39,9 @@ LossScaling ScalingOf(RobustLoss loss, double scale, double s) {
         h = 1.0 - x / 2.0 + x * x / 3.0 - x * x * x / 4.0;
         dh = (-0.5 + 2.0 * x / 3.0 - 0.75 * x * x) / b;
       } else {
-        const double rho = b * std::log1p(x);
+        const double rho = LossOf(loss, scale, s);
         h = rho / s;
-        dh = (s / (1.0 + x) - rho) / (s * s);
+        dh = (s / (1.0 + x) - rho) / (s * s);  // rho' = 1 / (1 + s / b)
       }
       break;
     }

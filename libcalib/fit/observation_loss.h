@@ -50,7 +50,6 @@ class ObservationLoss : public ceres::CostFunction {
 
   // The block without the loss: the whitened residuals as least squares sees them.
   const ceres::CostFunction& Inner() const { return *inner_; }
-  int Dim() const { return dim_; }
 
  private:
   std::unique_ptr<ceres::CostFunction> inner_;
