@@ -2,6 +2,7 @@
 
 #include "libcalib/api/uncertainty_map.h"
 
+#include <future>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -93,21 +94,36 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
 }
 
 PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_dir,
-                           Progress* progress) {
+                           Progress* progress, const Alongside& alongside) {
   PipelineResult result;
   result.obs = LoadObservations(settings, work_dir, &result, progress);
-  result.calibration = Calibrate(result.obs, settings.config.calibration, progress);
-  result.notes.insert(result.notes.end(), result.calibration.notes.begin(),
-                      result.calibration.notes.end());
+  const CalibrationOptions& options = settings.config.calibration;
+  result.calibration = CalibrateModel(result.obs, options, progress);
+  // The plain diagnosis only reads the calibration: it runs on a second
+  // thread while this one computes the uncertainty maps and runs
+  // `alongside` (the run draws its figures), which need everything but the
+  // diagnosis. The diagnosis prints its progress; `alongside` must not.
+  std::future<CalibrationDiagnosis> diagnosis;
+  if (DiagnosisPending(options)) {
+    diagnosis = std::async(std::launch::async, [&result, &options, progress] {
+      return DiagnoseCalibration(result.obs, options, result.calibration, progress);
+    });
+  }
   // Projection uncertainty per zoom (libcalib/api/uncertainty_map.h), from
   // the fit's full covariance.
   const CalibratedInstrument inst(result.calibration.model);
   result.full_covariance = inst.HasFullParameterCovariance();
   if (inst.HasParameterCovariance() && inst.NumZooms() > 0) {
-    if (progress) progress->Step("projection uncertainty maps");
+    if (progress && !diagnosis.valid()) progress->Step("projection uncertainty maps");
     result.uncertainty_options = settings.config.uncertainty_map;
     result.uncertainty_maps = ProjectionUncertaintyMaps(inst, result.uncertainty_options);
   }
+  if (alongside) alongside(result);
+  // (A future's destructor waits too: an exception from `alongside` leaves
+  // only after the diagnosis thread has stopped reading `result`.)
+  if (diagnosis.valid()) AddDiagnosis(diagnosis.get(), &result.calibration);
+  result.notes.insert(result.notes.end(), result.calibration.notes.begin(),
+                      result.calibration.notes.end());
   return result;
 }
 

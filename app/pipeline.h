@@ -6,6 +6,7 @@
 // into files.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -60,8 +61,16 @@ struct PipelineResult {
 Observations LoadObservations(const RunSettings& settings, const std::string& work_dir,
                               PipelineResult* result, Progress* progress);
 
-// LoadObservations, then Calibrate with the config's options.
+// Work on the calibrated result that does not need its diagnosis (the
+// run's figures): RunPipeline calls it once, with everything but
+// `calibration.diagnosis` (and a failed diagnosis's note) in place.
+using Alongside = std::function<void(const PipelineResult&)>;
+
+// LoadObservations, then Calibrate with the config's options (CalibrateModel,
+// DiagnoseCalibration), then the projection uncertainty maps. `alongside`,
+// when given, runs while the diagnosis does when the diagnosis only reads
+// the calibration (DiagnosisPending); with diagnose.auto, after it.
 PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_dir,
-                           Progress* progress);
+                           Progress* progress, const Alongside& alongside = nullptr);
 
 }  // namespace rtscalib::app

@@ -1,3 +1,5 @@
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -27,7 +29,28 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
 
   if (args.diagnose) config.calibration.diagnose.enabled = true;
   if (args.diagnose_auto) config.calibration.diagnose.auto_add = true;
-  const PipelineResult result = RunPipeline(settings, out.run_dir(), &progress);
+  // The figures need the calibrated model, its residuals and uncertainty
+  // maps but not its diagnosis: they are drawn (node and rsvg-convert
+  // processes) while the diagnosis runs. report.json lists them with their
+  // key numbers.
+  std::vector<Figure> figures;
+  std::vector<std::vector<std::string>> figure_files;
+  std::string figures_note;
+  double figures_seconds = 0;
+  const PipelineResult result =
+      RunPipeline(settings, out.run_dir(), &progress, [&](const PipelineResult& fitted) {
+        const auto start = std::chrono::steady_clock::now();
+        figures = MakeFigures(fitted, HistoryJson(out));
+        figure_files = WriteFigureFiles(figures, out.RunFile("figures"), &figures_note);
+        figures_seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      });
+  char drawn[96];
+  std::snprintf(drawn, sizeof drawn, "drew %zu figures%s (%.2f s)", figures.size(),
+                DiagnosisPending(config.calibration) ? " while the diagnosis ran" : "",
+                figures_seconds);
+  progress.Note(drawn);
+  if (!figures_note.empty()) progress.Note(figures_note);
 
   progress.Step("writing the model and the reports");
   if (result.simulated) {
@@ -77,13 +100,6 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   } else {
     progress.Note("no full parameter covariance (the fit computed none): no covariance.yaml");
   }
-  // The figures first: report.json lists them with their key numbers.
-  progress.Step("drawing the figures");
-  const std::vector<Figure> figures = MakeFigures(result, HistoryJson(out));
-  std::string figures_note;
-  const std::vector<std::vector<std::string>> figure_files =
-      WriteFigureFiles(figures, out.RunFile("figures"), &figures_note);
-  if (!figures_note.empty()) progress.Note(figures_note);
   nlohmann::json report = ReportJson(config, result, out);
   report["figures"] = FiguresJson(figures, figure_files, figures_note);
   out.Write("residuals.csv", ResidualsCsv(result));

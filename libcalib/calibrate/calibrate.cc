@@ -428,42 +428,37 @@ FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResu
   return fc;
 }
 
-// Stage 6: the diagnosis of the refined model; with diagnose.auto the
-// forward stepwise ladder first, whose last rung becomes the run's model.
-// Throws what the diagnosis throws.
-void DiagnoseModel(const Observations& obs, const CalibrationOptions& options,
-                   CalibrationProgress* progress, CalibrationResult* r) {
+// Stage 6 with diagnose.auto: the forward stepwise ladder, whose last rung
+// becomes the run's model, and the diagnosis of that model. Throws what the
+// diagnosis throws.
+void StepwiseDiagnosis(const Observations& obs, const CalibrationOptions& options,
+                       CalibrationProgress* progress, CalibrationResult* r) {
   DiagnosisSettings s;
   s.significance = options.diagnose.significance;
-  if (options.diagnose.auto_add) {
-    progress->Step("forward stepwise: adding significant effects one at a time");
-    StepwiseResult sw = ForwardStepwise(obs, r->refined.model, r->refined.fit, r->fit_options, s);
-    for (size_t i = 1; i < sw.ladder.size(); ++i) {
-      progress->Note("added " + sw.ladder[i].added + ": " + sw.ladder[i].model_description);
-    }
-    progress->Note("stopped: " + sw.stop_reason);
-    r->ladder = sw.ladder;
-    r->ladder_stop = sw.stop_reason;
-    if (r->LadderExtendedModel()) {
-      r->notes.push_back(
-          "diagnose.auto: the stepwise search extended the model to " +
-          sw.ladder.back().model_description +
-          "; model.yaml, Tables 6-7, the final errors and the diagnosis are of that model, "
-          "Tables 4-5 of the configured one");
-    }
-    // The ladder's last rung is a fit of its own and becomes the run's model.
-    if (r->LadderExtendedModel()) {
-      ValidateFit("refinement of the stepwise model " + sw.ladder.back().model_description,
-                  WithEstimates(obs, sw.model), sw.model, sw.fit, r->fit_options, options.checks);
-      MarkUndeterminedTools(obs, r->fit_options, &sw.model);
-    }
-    r->model = sw.model;
-    r->fit = sw.fit;
-    r->diagnosis = std::move(sw.diagnosis);
-  } else {
-    progress->Step("diagnosing the model (ranking the missing effects)");
-    r->diagnosis = Diagnose(obs, r->model, ContextOf(r->fit_options, r->fit), s);
+  progress->Step("forward stepwise: adding significant effects one at a time");
+  StepwiseResult sw = ForwardStepwise(obs, r->refined.model, r->refined.fit, r->fit_options, s);
+  for (size_t i = 1; i < sw.ladder.size(); ++i) {
+    progress->Note("added " + sw.ladder[i].added + ": " + sw.ladder[i].model_description);
   }
+  progress->Note("stopped: " + sw.stop_reason);
+  r->ladder = sw.ladder;
+  r->ladder_stop = sw.stop_reason;
+  if (r->LadderExtendedModel()) {
+    r->notes.push_back(
+        "diagnose.auto: the stepwise search extended the model to " +
+        sw.ladder.back().model_description +
+        "; model.yaml, Tables 6-7, the final errors and the diagnosis are of that model, "
+        "Tables 4-5 of the configured one");
+  }
+  // The ladder's last rung is a fit of its own and becomes the run's model.
+  if (r->LadderExtendedModel()) {
+    ValidateFit("refinement of the stepwise model " + sw.ladder.back().model_description,
+                WithEstimates(obs, sw.model), sw.model, sw.fit, r->fit_options, options.checks);
+    MarkUndeterminedTools(obs, r->fit_options, &sw.model);
+  }
+  r->model = sw.model;
+  r->fit = sw.fit;
+  r->diagnosis = std::move(sw.diagnosis);
   for (const std::string& v : r->diagnosis->verdict) progress->Note(v);
 }
 
@@ -559,8 +554,8 @@ FinalErrors ComputeFinalErrors(const InstrumentModel& model, const Observations&
   return f;
 }
 
-CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& options,
-                            CalibrationProgress* progress) {
+CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptions& options,
+                                 CalibrationProgress* progress) {
   SilentProgress silent;
   if (progress == nullptr) progress = &silent;
   const std::string problem = options.Check();
@@ -647,12 +642,14 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
     }
     result.model.cams[z].valid_region = ConvexHull(std::move(uv));
   }
-  if (options.diagnose.enabled) {
+  // With diagnose.auto the ladder makes the run's model, so it runs here;
+  // a plain diagnosis only reads the result (DiagnoseCalibration).
+  if (options.diagnose.enabled && options.diagnose.auto_add) {
     // The calibration stands without its diagnosis: a failure here becomes
     // a note, not a failed calibration.
     try {
       // The diagnosis sees the estimated boards and points (SPEC 7) fixed at the fit's values.
-      DiagnoseModel(WithEstimates(used, result.model), options, progress, &result);
+      StepwiseDiagnosis(WithEstimates(used, result.model), options, progress, &result);
     } catch (const std::exception& e) {
       result.diagnosis.reset();
       result.notes.push_back(std::string("diagnosis failed: ") + e.what());
@@ -665,6 +662,52 @@ CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& o
   result.coverage = MeasureCoverage(used, result.model, result.fit_options);
   result.coverage_warnings = CoverageWarnings(result.coverage, result.model);
   progress->Done();
+  return result;
+}
+
+bool DiagnosisPending(const CalibrationOptions& options) {
+  return options.diagnose.enabled && !options.diagnose.auto_add;
+}
+
+CalibrationDiagnosis DiagnoseCalibration(const Observations& obs,
+                                         const CalibrationOptions& options,
+                                         const CalibrationResult& result,
+                                         CalibrationProgress* progress) {
+  SilentProgress silent;
+  if (progress == nullptr) progress = &silent;
+  CalibrationDiagnosis out;
+  if (!DiagnosisPending(options)) return out;
+  // The rows the fit used, with the estimated boards and points (SPEC 7)
+  // fixed at the fit's values.
+  std::vector<int> record_from, pixel_from;
+  const Observations used = WithoutRows(obs, result.gross_rows, &record_from, &pixel_from);
+  DiagnosisSettings s;
+  s.significance = options.diagnose.significance;
+  progress->Step("diagnosing the model (ranking the missing effects)");
+  // The calibration stands without its diagnosis: a failure here becomes a
+  // note, not a failed calibration.
+  try {
+    out.diagnosis = Diagnose(WithEstimates(used, result.model), result.model,
+                             ContextOf(result.fit_options, result.fit), s);
+    for (const std::string& v : out.diagnosis->verdict) progress->Note(v);
+  } catch (const std::exception& e) {
+    out.diagnosis.reset();
+    out.notes.push_back(std::string("diagnosis failed: ") + e.what());
+    progress->Note(out.notes.back());
+  }
+  progress->Done();
+  return out;
+}
+
+void AddDiagnosis(CalibrationDiagnosis diagnosis, CalibrationResult* result) {
+  if (diagnosis.diagnosis) result->diagnosis = std::move(diagnosis.diagnosis);
+  for (std::string& n : diagnosis.notes) result->notes.push_back(std::move(n));
+}
+
+CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& options,
+                            CalibrationProgress* progress) {
+  CalibrationResult result = CalibrateModel(obs, options, progress);
+  AddDiagnosis(DiagnoseCalibration(obs, options, result, progress), &result);
   return result;
 }
 

@@ -137,6 +137,27 @@ struct CalibrationResult {
 CalibrationResult Calibrate(const Observations& obs, const CalibrationOptions& options,
                             CalibrationProgress* progress = nullptr);
 
+// Calibrate in two parts, for a caller that uses the fitted model while its
+// diagnosis runs (the run draws its figures meanwhile). CalibrateModel runs
+// every stage but the plain diagnosis of stage 6 and leaves `diagnosis`
+// empty; with diagnose.auto it runs the ladder, which makes the model, and
+// its diagnosis. DiagnoseCalibration then diagnoses `result` without
+// changing it (nothing when DiagnosisPending is false), and AddDiagnosis
+// puts the outcome into the result. Calibrate is exactly these three calls.
+CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptions& options,
+                                 CalibrationProgress* progress = nullptr);
+// Does DiagnoseCalibration have work after CalibrateModel?
+bool DiagnosisPending(const CalibrationOptions& options);
+struct CalibrationDiagnosis {
+  std::optional<Diagnosis> diagnosis;  // absent when off or failed
+  std::vector<std::string> notes;      // "diagnosis failed: ..." when it failed
+};
+CalibrationDiagnosis DiagnoseCalibration(const Observations& obs,
+                                         const CalibrationOptions& options,
+                                         const CalibrationResult& result,
+                                         CalibrationProgress* progress = nullptr);
+void AddDiagnosis(CalibrationDiagnosis diagnosis, CalibrationResult* result);
+
 // Rows of the "reduced" set: set labels starting with "sweep" when the file
 // has labels, otherwise the rows of the extraction's sweeps poses.
 std::vector<Record> ReducedRecords(const std::vector<Record>& records,
