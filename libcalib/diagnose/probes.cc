@@ -62,22 +62,27 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     cat.Add(c);
   }
   const Eigen::VectorXd y = cat.Apply(red.r);
-  std::vector<Eigen::MatrixXd> t_cat(out.probes.size());
+  std::vector<Eigen::MatrixXd> t_cat;
+  {
+    std::vector<Eigen::MatrixXd> raw;
+    for (const ProbeResult& r : out.probes) raw.push_back(Columns(red.extra, *r.block));
+    t_cat = cat.ApplyEach(raw);
+  }
   for (size_t j = 0; j < out.probes.size(); ++j) {
-    const ColumnBlock& b = *out.probes[j].block;
-    t_cat[j] = Prune(cat.Apply(Columns(red.extra, b)), red, b);
+    t_cat[j] = Prune(std::move(t_cat[j]), red, *out.probes[j].block);
   }
   std::vector<int> selected;
   Projector sel(n);
   for (int iter = 0; iter < max_terms; ++iter) {
     const Eigen::VectorXd ys = sel.Apply(y);
+    const std::vector<Eigen::MatrixXd> t_sel = sel.ApplyEach(t_cat);
     int best = -1;
     double best_p = 1.0, best_wald = 0.0;
     for (size_t j = 0; j < out.probes.size(); ++j) {
       if (std::find(selected.begin(), selected.end(), static_cast<int>(j)) != selected.end())
         continue;
       const ColumnTest t =
-          TestColumns(ys, Prune(sel.Apply(t_cat[j]), red, *out.probes[j].block), red.cluster, g,
+          TestColumns(ys, Prune(t_sel[j], red, *out.probes[j].block), red.cluster, g,
                       dof_base + cat.rank() + sel.rank());
       if (t.rank == 0) continue;
       if (t.p_value < best_p || (t.p_value == best_p && t.wald > best_wald)) {
@@ -124,30 +129,29 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     if (r.same_as.empty()) r.same_as = "the structure selected above";
   }
 
-  // 3. What the catalogue explains: per catalogue effect, its projector and
-  // the residual without it, built once.
-  bool any = false;
-  for (const ProbeResult& r : out.probes) {
-    any = any || (r.raw_significant && !r.selected && r.same_as.empty());
-  }
-  if (!any) return out;
-  std::vector<Projector> without;
-  std::vector<Eigen::VectorXd> y_without;
-  for (const ColumnBlock* b : catalogue) {
-    without.emplace_back(n);
-    without.back().Add(Columns(red.extra, *b));
-    y_without.push_back(without.back().Apply(red.r));
-  }
+  // 3. What the catalogue explains, for the structure significant alone and
+  // held by nothing selected: per catalogue effect, its projector, the
+  // residual without it and every such probe's columns through it.
+  std::vector<ProbeResult*> open;
+  std::vector<Eigen::MatrixXd> open_cols;
   for (ProbeResult& r : out.probes) {
     if (!r.raw_significant || r.selected || !r.same_as.empty()) continue;
-    double best = std::numeric_limits<double>::infinity();
-    for (size_t c = 0; c < catalogue.size(); ++c) {
-      const ColumnTest t = TestColumns(
-          y_without[c], Prune(without[c].Apply(Columns(red.extra, *r.block)), red, *r.block),
-          red.cluster, g, dof_base + without[c].rank());
-      if (t.wald < best) {
-        best = t.wald;
-        r.explained_by = catalogue[c]->name;
+    open.push_back(&r);
+    open_cols.push_back(Columns(red.extra, *r.block));
+  }
+  if (open.empty()) return out;
+  std::vector<double> best(open.size(), std::numeric_limits<double>::infinity());
+  for (const ColumnBlock* b : catalogue) {
+    Projector without(n);
+    without.Add(Columns(red.extra, *b));
+    const Eigen::VectorXd y_without = without.Apply(red.r);
+    const std::vector<Eigen::MatrixXd> t = without.ApplyEach(open_cols);
+    for (size_t i = 0; i < open.size(); ++i) {
+      const ColumnTest test = TestColumns(y_without, Prune(t[i], red, *open[i]->block),
+                                          red.cluster, g, dof_base + without.rank());
+      if (test.wald < best[i]) {
+        best[i] = test.wald;
+        open[i]->explained_by = b->name;
       }
     }
   }

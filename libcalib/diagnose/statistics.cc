@@ -165,4 +165,25 @@ Eigen::MatrixXd Projector::Apply(const Eigen::MatrixXd& x) const {
   return x - q_ * (q_.transpose() * x);
 }
 
+std::vector<Eigen::MatrixXd> Projector::ApplyEach(const std::vector<Eigen::MatrixXd>& blocks) const {
+  if (q_.cols() == 0) return blocks;
+  Eigen::Index cols = 0;
+  for (const Eigen::MatrixXd& b : blocks) cols += b.cols();
+  Eigen::MatrixXd all(q_.rows(), cols);
+  Eigen::Index k = 0;
+  for (const Eigen::MatrixXd& b : blocks) {
+    all.middleCols(k, b.cols()) = b;
+    k += b.cols();
+  }
+  all = Apply(all);
+  std::vector<Eigen::MatrixXd> out;
+  out.reserve(blocks.size());
+  k = 0;
+  for (const Eigen::MatrixXd& b : blocks) {
+    out.push_back(all.middleCols(k, b.cols()));
+    k += b.cols();
+  }
+  return out;
+}
+
 }  // namespace rtscalib

@@ -65,6 +65,10 @@ class Projector {
   // Returns how many of `cols` added a new direction.
   int Add(const Eigen::MatrixXd& cols, double rel_tol = 1e-7);
   Eigen::MatrixXd Apply(const Eigen::MatrixXd& x) const;
+  // Apply to each of `blocks` (same number of rows), in one product: one
+  // pass over the n x rank basis instead of one per block, which is what
+  // costs when the blocks are a few columns each.
+  std::vector<Eigen::MatrixXd> ApplyEach(const std::vector<Eigen::MatrixXd>& blocks) const;
   int rank() const { return static_cast<int>(q_.cols()); }
   const Eigen::MatrixXd& basis() const { return q_; }
 

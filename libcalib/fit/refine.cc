@@ -707,4 +707,6 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   return summary;
 }
 
+int RobustSearchIterations(const Observations& obs) { return obs.pixels.empty() ? 8 : 50; }
+
 }  // namespace rtscalib

@@ -41,4 +41,14 @@ struct FitSummary {
 // Refines `model` in place. Throws std::invalid_argument for bad options.
 FitSummary Refine(const Observations& obs, const FitOptions& options, InstrumentModel* model);
 
+// Iterations a robust Refine of `obs` needs before its residuals separate
+// the gross rows, which follows from the residual blocks Refine builds with
+// a robust loss: records alone (a block per record, Ceres's LossFunction
+// and its Triggs steps) 8, as the solution need not converge to round-off
+// (a least-squares fit follows); with photos (ObservationLoss rescales each
+// corner inside its photo's block) 15 to 30 Gauss-Newton steps, so the
+// fit runs to convergence (50). Stopped at 8, the photos' fit leaves clean
+// corners beyond the limit (tests/calibrate/gross_errors_test.cc).
+int RobustSearchIterations(const Observations& obs);
+
 }  // namespace rtscalib

@@ -20,20 +20,11 @@ constexpr double kChi3Median = 1.5382, kChi2Median = 1.1774;
 // Rows per robust sigma along the distance: the median of 40 chi values
 // is good to about 10 %.
 constexpr size_t kRun = 40;
-// Iterations of the least-squares try (it starts from the extraction,
+// Iterations of the least-squares try: it starts from the extraction,
 // whose error is far below a gross error's, and only has to show whether
-// any row is flagged) and of the robust fit. On records alone (one block
-// per row, Ceres's loss) 8 iterations separate the gross rows; the solution
-// need not converge to round-off, the least-squares fit after it does that.
-// With photos, each corner's residual is rescaled inside its photo's block
-// (observation_loss.h); those Gauss-Newton steps need 15 to 30 iterations,
-// each costing a fifth to a tenth of a per-corner one (one chain per photo,
-// not per corner). Stopped at 8 they leave clean corners beyond the limit
-// (tests/calibrate/gross_errors_test.cc, the pixel corruptions): with
-// photos the fit runs to convergence.
+// any row is flagged. The robust fit's own follow from its residual blocks
+// (RobustSearchIterations, refine.h).
 constexpr int kLeastSquaresIterations = 8;
-constexpr int kRecordsRobustIterations = 8;
-constexpr int kRobustIterations = 50;
 // Robust sigmas below this fraction of the a-priori sigma are raised to it.
 constexpr double kSigmaFloor = 0.01;
 const char* const kGroupNames[3] = {"EDM rows", "camera rows", "pixels"};
@@ -245,9 +236,7 @@ RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& 
     o.loss_scale = robust.loss_scale;
     o.reestimate_sigmas = false;
     o.compute_covariance = false;
-    o.max_iterations = std::min(options.max_iterations, usable.pixels.empty()
-                                                            ? kRecordsRobustIterations
-                                                            : kRobustIterations);
+    o.max_iterations = std::min(options.max_iterations, RobustSearchIterations(usable));
     Refine(usable, o, model);
     for (double& s : out.robust_sigma) s = 0;
     flagged = Flag(usable, options, robust, model, &rows, out.robust_sigma);
