@@ -146,14 +146,26 @@ int Projector::Add(const Eigen::MatrixXd& cols, double rel_tol) {
     const double norm = cols.col(j).norm();
     x.col(j) *= norm > 0 ? 1.0 / norm : 0.0;
   }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(x);
+  // A column-pivoted QR of x, in two steps: a blocked Householder QR of
+  // the n rows (x = Q1 R1; matrix-matrix work, where the pivoted QR of x
+  // itself updates all n rows once per column), then the pivoted QR of the
+  // small R1 (R1 P = Q2 R2). x P = Q1 Q2 R2: R2 and the pivots are those of
+  // the pivoted QR of x (the column norms and inner products it pivots on
+  // are R1's), up to rounding.
+  const int k = std::min(n, m);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> outer(x);
+  const Eigen::MatrixXd r1 =
+      outer.matrixQR().topRows(k).triangularView<Eigen::Upper>().toDenseMatrix();
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(r1);
   const auto& r = qr.matrixR();
   int rank = 0;
-  for (int i = 0; i < std::min(n, m); ++i) {
+  for (int i = 0; i < k; ++i) {
     if (std::abs(r(i, i)) > rel_tol) ++rank;
   }
   if (rank == 0) return 0;
-  const Eigen::MatrixXd fresh = qr.householderQ() * Eigen::MatrixXd::Identity(n, rank);
+  Eigen::MatrixXd inner = Eigen::MatrixXd::Zero(n, rank);
+  inner.topRows(k) = qr.householderQ() * Eigen::MatrixXd::Identity(k, rank);
+  const Eigen::MatrixXd fresh = outer.householderQ() * inner;
   const int old = static_cast<int>(q_.cols());
   q_.conservativeResize(n, old + rank);
   q_.rightCols(rank) = fresh;
