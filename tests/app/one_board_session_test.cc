@@ -29,11 +29,11 @@
 #include <iostream>
 #include <set>
 #include <string>
-#include <tuple>
 
 #include "app/pipeline.h"
 #include "libcalib/io/config.h"
 #include "libcalib/model/kinematics.h"
+#include "tests/app/held_out.h"
 
 namespace rtscalib::app {
 namespace {
@@ -57,8 +57,8 @@ TEST(OneBoardSession, MovedBoardCalibratesWithHonestSigmasAndFindsTheHiddenEffec
   const std::filesystem::path work = std::filesystem::temp_directory_path() /
                                      ("rtscalib_one_board_" + std::to_string(::getpid()));
   Sums normalised;
-  double held_sq = 0, detection_rms = 0;
-  int held_n = 0;
+  testing_held_out::HeldOut held;
+  double detection_rms = 0;
   for (const int seed : {3, 4}) {
     RunSettings settings =
         LoadRunSettings(std::string(RTSCALIB_SOURCE_DIR) + "/configs/one_board.yaml");
@@ -119,41 +119,19 @@ TEST(OneBoardSession, MovedBoardCalibratesWithHonestSigmasAndFindsTheHiddenEffec
     }
 
     // Held-out pointings of every placement, every corner the truth sees.
-    std::set<std::tuple<std::string, int, double, double>> pointings;
-    for (const PixelObservation& p : r.obs.pixels) {
-      pointings.insert({p.placement, p.zoom, p.phi, p.theta});
-    }
-    for (const auto& [placement, zoom, phi0, theta0] : pointings) {
-      const double phi = phi0 + 0.01, theta = theta0 + 0.005;
-      const TagBoard& tb = c.simulate->placements.at(placement).boards.at(0);
-      const EstimatedBoard* eb = m.BoardOf(tb.first_id, placement, zoom);
-      ASSERT_NE(eb, nullptr) << "placement " << placement << " not estimated";
-      const CameraTool& cam = truth.cams[zoom];
-      for (int i = 0; i < tb.NumTags(); ++i) {
-        for (const Eigen::Vector3d& corner : tb.CornersInBoard(i)) {
-          Eigen::Vector2d uv_true, uv_model;
-          if (!PredictPixel(truth, zoom, phi, theta, tb.ref_from_board * corner, &uv_true) ||
-              uv_true.x() < 0 || uv_true.y() < 0 || uv_true.x() > cam.width - 1 ||
-              uv_true.y() > cam.height - 1) {
-            continue;
-          }
-          ASSERT_TRUE(PredictPixel(m, zoom, phi, theta, eb->pose.ToRigid() * corner, &uv_model));
-          held_sq += (uv_model - uv_true).squaredNorm();
-          ++held_n;
-        }
-      }
-    }
+    testing_held_out::AddHeldOutPlacements(m, truth, c.simulate->placements, r.obs.pixels,
+                                           &held);
     detection_rms = std::max(detection_rms, r.render.detection_rms_px);
   }
   std::filesystem::remove_all(work);
   // detection_rms_px is over both coordinates (sqrt(mean(du^2 + dv^2))):
   // per coordinate it is that / sqrt(2), as the held-out RMS below.
   const double noise = detection_rms / std::sqrt(2.0);
-  ASSERT_GT(held_n, 1000);
-  const double held_rms = std::sqrt(held_sq / (2.0 * held_n));
+  ASSERT_GT(held.n, 1000);
+  const double held_rms = held.RmsPerCoordinate();
   std::cout << "one board, 6 placements, seeds 3-4: mean square normalised error "
             << normalised.MeanSquare() << " (" << normalised.n << " values); held-out RMS "
-            << held_rms << " px per coordinate over " << held_n
+            << held_rms << " px per coordinate over " << held.n
             << " corners (detection noise " << noise << " px)\n";
   EXPECT_GT(normalised.MeanSquare(), 0.5);
   EXPECT_LT(normalised.MeanSquare(), 2.0);

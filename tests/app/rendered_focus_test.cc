@@ -28,13 +28,13 @@
 #include <iostream>
 #include <set>
 #include <string>
-#include <tuple>
 
 #include "app/pipeline.h"
 #include "libcalib/fit/unknowns.h"
 #include "libcalib/io/config.h"
 #include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
+#include "tests/app/held_out.h"
 
 namespace rtscalib::app {
 namespace {
@@ -150,39 +150,14 @@ TEST(RenderedFocus, RefocusingCameraInRenderedPhotosIsFoundAndCalibrated) {
 
   // Held-out pointings of every placement, every corner the truth sees, the
   // camera focused at the board's distance from it.
-  std::set<std::tuple<std::string, int, double, double>> pointings;
-  for (const PixelObservation& p : r.obs.pixels) pointings.insert({p.placement, p.zoom, p.phi, p.theta});
-  double held_sq = 0;
-  int held_n = 0;
-  for (const auto& [placement, zoom, phi0, theta0] : pointings) {
-    const double phi = phi0 + 0.01, theta = theta0 + 0.005;
-    const TagBoard& tb = c.simulate->placements.at(placement).boards.at(0);
-    const EstimatedBoard* eb = m.BoardOf(tb.first_id, placement, zoom);
-    ASSERT_NE(eb, nullptr) << "placement " << placement << " not estimated";
-    const CameraTool& cam = truth.cams[zoom];
-    const double d =
-        (tb.CentreInRef() - RefFromCam(truth, zoom, phi, theta).translation).norm();
-    for (int i = 0; i < tb.NumTags(); ++i) {
-      for (const Eigen::Vector3d& corner : tb.CornersInBoard(i)) {
-        Eigen::Vector2d uv_true, uv_model;
-        if (!PredictPixel(truth, zoom, phi, theta, tb.ref_from_board * corner, &uv_true, d) ||
-            uv_true.x() < 0 || uv_true.y() < 0 || uv_true.x() > cam.width - 1 ||
-            uv_true.y() > cam.height - 1) {
-          continue;
-        }
-        ASSERT_TRUE(
-            PredictPixel(m, zoom, phi, theta, eb->pose.ToRigid() * corner, &uv_model, d));
-        held_sq += (uv_model - uv_true).squaredNorm();
-        ++held_n;
-      }
-    }
-  }
+  testing_held_out::HeldOut held;
+  testing_held_out::AddHeldOutPlacements(m, truth, c.simulate->placements, r.obs.pixels, &held);
   std::filesystem::remove_all(dir);
-  ASSERT_GT(held_n, 1000);
-  const double held_rms = std::sqrt(held_sq / (2.0 * held_n));
+  ASSERT_GT(held.n, 1000);
+  const double held_rms = held.RmsPerCoordinate();
   std::cout << "rendered focus: focus terms mean square normalised error " << sum_sq / n
             << " over " << n << " values; held-out RMS " << held_rms << " px per coordinate over "
-            << held_n << " corners (detection noise "
+            << held.n << " corners (detection noise "
             << r.render.detection_rms_px / std::sqrt(2.0) << " px); diagnosis "
             << with.seconds << " s\n";
   EXPECT_LT(held_rms, 0.05);
