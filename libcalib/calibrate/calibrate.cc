@@ -428,13 +428,26 @@ FaceComparison FitFacesSeparately(const Observations& obs, const CalibrationResu
   return fc;
 }
 
+DiagnosisSettings SettingsOf(const CalibrationOptions& options) {
+  DiagnosisSettings s;
+  s.significance = options.diagnose.significance;
+  return s;
+}
+
+// The calibration stands without its diagnosis: a failure of it (the
+// stepwise refits included) becomes this note, not a failed calibration.
+std::string DiagnosisFailed(const std::exception& e, CalibrationProgress* progress) {
+  const std::string note = std::string("diagnosis failed: ") + e.what();
+  progress->Note(note);
+  return note;
+}
+
 // Stage 6 with diagnose.auto: the forward stepwise ladder, whose last rung
 // becomes the run's model, and the diagnosis of that model. Throws what the
 // diagnosis throws.
 void StepwiseDiagnosis(const Observations& obs, const CalibrationOptions& options,
                        CalibrationProgress* progress, CalibrationResult* r) {
-  DiagnosisSettings s;
-  s.significance = options.diagnose.significance;
+  const DiagnosisSettings s = SettingsOf(options);
   progress->Step("forward stepwise: adding significant effects one at a time");
   StepwiseResult sw = ForwardStepwise(obs, r->refined.model, r->refined.fit, r->fit_options, s);
   for (size_t i = 1; i < sw.ladder.size(); ++i) {
@@ -644,16 +657,13 @@ CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptio
   }
   // With diagnose.auto the ladder makes the run's model, so it runs here;
   // a plain diagnosis only reads the result (DiagnoseCalibration).
-  if (options.diagnose.enabled && options.diagnose.auto_add) {
-    // The calibration stands without its diagnosis: a failure here becomes
-    // a note, not a failed calibration.
+  if (options.diagnose.enabled && !DiagnosisPending(options)) {
     try {
       // The diagnosis sees the estimated boards and points (SPEC 7) fixed at the fit's values.
       StepwiseDiagnosis(WithEstimates(used, result.model), options, progress, &result);
     } catch (const std::exception& e) {
       result.diagnosis.reset();
-      result.notes.push_back(std::string("diagnosis failed: ") + e.what());
-      progress->Note(result.notes.back());
+      result.notes.push_back(DiagnosisFailed(e, progress));
     }
   }
   result.final_errors = ComputeFinalErrors(result.model, WithEstimates(used, result.model));
@@ -679,21 +689,14 @@ CalibrationDiagnosis DiagnoseCalibration(const Observations& obs,
   if (!DiagnosisPending(options)) return out;
   // The rows the fit used, with the estimated boards and points (SPEC 7)
   // fixed at the fit's values.
-  std::vector<int> record_from, pixel_from;
-  const Observations used = WithoutRows(obs, result.gross_rows, &record_from, &pixel_from);
-  DiagnosisSettings s;
-  s.significance = options.diagnose.significance;
+  const Observations used = WithoutRows(obs, result.gross_rows);
   progress->Step("diagnosing the model (ranking the missing effects)");
-  // The calibration stands without its diagnosis: a failure here becomes a
-  // note, not a failed calibration.
   try {
     out.diagnosis = Diagnose(WithEstimates(used, result.model), result.model,
-                             ContextOf(result.fit_options, result.fit), s);
+                             ContextOf(result.fit_options, result.fit), SettingsOf(options));
     for (const std::string& v : out.diagnosis->verdict) progress->Note(v);
   } catch (const std::exception& e) {
-    out.diagnosis.reset();
-    out.notes.push_back(std::string("diagnosis failed: ") + e.what());
-    progress->Note(out.notes.back());
+    out.notes.push_back(DiagnosisFailed(e, progress));
   }
   progress->Done();
   return out;
