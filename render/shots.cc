@@ -85,7 +85,10 @@ void RenderIndices(const PlacedScenes& scenes, const std::vector<Shot>& shots,
                    const std::function<void(int)>& done) {
   HeadlessDisplay display(options.headless);
   std::map<std::string, std::unique_ptr<SceneRenderer>> renderers;
-  const std::vector<int> params = {cv::IMWRITE_PNG_COMPRESSION, options.png_compression};
+  const std::vector<int> params =
+      options.png_compression < 0 ? std::vector<int>{}
+                                  : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION,
+                                                     options.png_compression};
   for (int i : indices) {
     const Shot& s = shots[i];
     std::unique_ptr<SceneRenderer>& renderer = renderers[s.placement];
@@ -286,7 +289,9 @@ std::string RenderShotsOptions::Check() const {
     return "shard: expected 0.." + std::to_string(num_shards - 1) + ", got " +
            std::to_string(shard);
   }
-  if (png_compression < 0 || png_compression > 9) return "png_compression: expected 0..9";
+  if (png_compression < -1 || png_compression > 9) {
+    return "png_compression: expected -1..9, got " + std::to_string(png_compression);
+  }
   if (const std::string m = render.Check(); !m.empty()) return "render." + m;
   if (const std::string m = visibility.Check(); !m.empty()) return "visibility." + m;
   if (const std::string m = headless.Check(); !m.empty()) return "headless." + m;
