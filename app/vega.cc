@@ -116,8 +116,7 @@ pid_t Start(const std::vector<std::string>& argv, const fs::path& log) {
   args.push_back(nullptr);
   posix_spawn_file_actions_t actions;
   if (::posix_spawn_file_actions_init(&actions) != 0) return -1;
-  ::posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND,
-                                     0644);
+  ::posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
   ::posix_spawn_file_actions_adddup2(&actions, 1, 2);
   pid_t pid = -1;
   // The child's environment is the parent's (PATH, RTSCALIB_VEGA_DIR, ...).

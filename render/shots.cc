@@ -86,9 +86,9 @@ void RenderIndices(const PlacedScenes& scenes, const std::vector<Shot>& shots,
   HeadlessDisplay display(options.headless);
   std::map<std::string, std::unique_ptr<SceneRenderer>> renderers;
   const std::vector<int> params =
-      options.png_compression < 0 ? std::vector<int>{}
-                                  : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION,
-                                                     options.png_compression};
+      options.png_compression < 0
+          ? std::vector<int>{}
+          : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, options.png_compression};
   for (int i : indices) {
     const Shot& s = shots[i];
     std::unique_ptr<SceneRenderer>& renderer = renderers[s.placement];
