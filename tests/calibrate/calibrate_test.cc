@@ -129,6 +129,54 @@ TEST(Calibrate, NoiseFreeRunRecoversTheTruthAndFillsEveryStage) {
   EXPECT_EQ(progress.done, 1);
 }
 
+// The calibration stands without its diagnosis: when the diagnosis throws,
+// DiagnoseCalibration returns no diagnosis and one note saying why, and
+// AddDiagnosis puts that note into the result and leaves its model alone.
+// The throw is a real one of Diagnose: a result whose every row was set
+// aside as gross leaves it nothing to linearize.
+TEST(Calibrate, AFailedDiagnosisIsANoteAndTheModelStands) {
+  SimulationOptions sim;
+  sim.seed = 7;
+  sim.truth = PaperTruth(1);
+  sim.plan = TrainingPlan();
+  const SimulatedData data = Simulate(sim);
+  CalibrationOptions options = ApiOptions(sim.truth);
+  options.diagnose.enabled = true;
+  ASSERT_TRUE(DiagnosisPending(options));
+  CalibrationResult r = CalibrateModel(data.obs, options);
+  ASSERT_FALSE(r.diagnosis.has_value());
+  ASSERT_TRUE(r.refined.fit.converged) << r.refined.fit.message;
+
+  // The same result diagnosed as it is: a diagnosis and no note.
+  const CalibrationDiagnosis fine = DiagnoseCalibration(data.obs, options, r);
+  EXPECT_TRUE(fine.diagnosis.has_value());
+  EXPECT_TRUE(fine.notes.empty());
+
+  for (size_t i = 0; i < data.obs.records.size(); ++i) {
+    ExcludedRow row;
+    row.index = static_cast<int>(i);
+    row.line = static_cast<int>(i) + 2;
+    row.reason = "set aside by the test";
+    r.gross_rows.push_back(row);
+  }
+  ASSERT_TRUE(data.obs.pixels.empty());
+  RecordingProgress progress;
+  const CalibrationDiagnosis failed = DiagnoseCalibration(data.obs, options, r, &progress);
+  EXPECT_FALSE(failed.diagnosis.has_value());
+  ASSERT_EQ(failed.notes.size(), 1u);
+  EXPECT_THAT(failed.notes[0], HasSubstr("diagnosis failed: "));
+  EXPECT_THAT(failed.notes[0], HasSubstr("nothing to diagnose"));
+  EXPECT_EQ(progress.done, 1);  // the step is closed, as after a diagnosis
+
+  const auto intrinsics = r.model.cams[0].intrinsics;
+  const size_t notes_before = r.notes.size();
+  AddDiagnosis(failed, &r);
+  EXPECT_FALSE(r.diagnosis.has_value());
+  ASSERT_EQ(r.notes.size(), notes_before + 1);
+  EXPECT_EQ(r.notes.back(), failed.notes[0]);
+  EXPECT_EQ(r.model.cams[0].intrinsics, intrinsics);
+}
+
 TEST(Calibrate, NoisyRunWithinTenPercentOfTheNoiseFloor) {
   SimulationOptions sim;
   sim.seed = 11;
