@@ -246,7 +246,8 @@ std::string HistoryText(const json& history) {
   return o.str();
 }
 
-json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFolder& out) {
+json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFolder& out,
+                const json& history) {
   json j;
   j["rtscalib"] = {{"version", "0.1.0"}, {"config", config.config_path}, {"run", out.run().name}};
   j["data"] = {{"records", r.obs.records.size()},
@@ -424,7 +425,7 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
   }
   j["residuals"] = ResidualsJson(r);
   j["notes"] = r.notes;
-  j["history"] = HistoryJson(out);
+  j["history"] = history;
   return j;
 }
 

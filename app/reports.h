@@ -12,8 +12,11 @@
 
 namespace rtscalib::app {
 
+// `history`: HistoryJson(out), read once per run (it parses every earlier
+// run's report.json, so its cost grows with the folder's history) and
+// shared with the figures.
 nlohmann::json ReportJson(const RunConfig& config, const PipelineResult& result,
-                          const OutputFolder& out);
+                          const OutputFolder& out, const nlohmann::json& history);
 std::string ReportText(const RunConfig& config, const PipelineResult& result);
 // The rows taken out as gross errors, a line each (the first 50), for
 // report.txt and report.html; empty when there are none.

@@ -37,10 +37,12 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   std::vector<std::vector<std::string>> figure_files;
   std::string figures_note;
   double figures_seconds = 0;
+  nlohmann::json history;  // earlier runs, for the figures and report.json
   const PipelineResult result =
       RunPipeline(settings, out.run_dir(), &progress, [&](const PipelineResult& fitted) {
         const auto start = std::chrono::steady_clock::now();
-        figures = MakeFigures(fitted, HistoryJson(out));
+        history = HistoryJson(out);
+        figures = MakeFigures(fitted, history);
         figure_files = WriteFigureFiles(figures, out.RunFile("figures"), &figures_note);
         figures_seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -100,7 +102,7 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   } else {
     progress.Note("no full parameter covariance (the fit computed none): no covariance.yaml");
   }
-  nlohmann::json report = ReportJson(config, result, out);
+  nlohmann::json report = ReportJson(config, result, out, history);
   report["figures"] = FiguresJson(figures, figure_files, figures_note);
   out.Write("residuals.csv", ResidualsCsv(result));
   out.Write("report.json", report.dump(2) + "\n");

@@ -166,7 +166,7 @@ TEST_F(PhotoSession, ShowDrawsAnyPhotoFromTheRunFiles) {
   RunConfig config;
   config.config_path = (work_ / "photos.yaml").string();
   out.Write("residuals.csv", ResidualsCsv(*result_));
-  out.Write("report.json", ReportJson(config, *result_, out).dump());
+  out.Write("report.json", ReportJson(config, *result_, out, HistoryJson(out)).dump());
   // The last photo with corners (the worst ones are in report.html already).
   std::string shot;
   int corners = 0;
