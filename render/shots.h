@@ -59,11 +59,9 @@ struct RenderShotsOptions {
   int num_shards = 1;
   bool progress = true;     // progress lines on stderr
   // zlib level 0..9, or -1: OpenCV's speed setting (no level given to
-  // cv::imencode: libpng's SUB filter alone, zlib level 1, RLE). Measured on the demo's noisy 1280
-  // x 960 grey photos (cv::imwrite, then cv::imread): -1 encodes in 12.5 ms, decodes in 7.3 ms and
-  // writes 449 kB, against 25.8 ms, 10.0 ms and 526 kB at level 1, where libpng tries every filter
-  // per row and mostly keeps Paeth, the slowest to undo. Decoding is what every later detection of
-  // the folder pays.
+  // cv::imencode: libpng's SUB filter alone at zlib level 1), twice as fast
+  // to write and a quarter faster to read back as level 1 with libpng's
+  // own filter choice (docs/rendering.md, "Shots, workers and shards").
   int png_compression = -1;
   RenderOptions render;
   VisibilityOptions visibility;  // statuses in exact.csv
