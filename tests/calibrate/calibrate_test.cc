@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -30,6 +31,15 @@ AcquisitionPlan TrainingPlan() {
   plan.grid_phi_steps = 10;
   plan.grid_theta_steps = 6;
   return plan;
+}
+
+// Klug's instrument (PaperTruth, one zoom) observed with the training plan.
+SimulationOptions PaperSession(std::uint64_t seed) {
+  SimulationOptions sim;
+  sim.seed = seed;
+  sim.truth = PaperTruth(1);
+  sim.plan = TrainingPlan();
+  return sim;
 }
 
 // Held-out records: other angles, distances up to 47 m and other pixels than
@@ -82,10 +92,7 @@ class RecordingProgress : public CalibrationProgress {
 };
 
 TEST(Calibrate, NoiseFreeRunRecoversTheTruthAndFillsEveryStage) {
-  SimulationOptions sim;
-  sim.seed = 7;
-  sim.truth = PaperTruth(1);
-  sim.plan = TrainingPlan();
+  SimulationOptions sim = PaperSession(7);
   const SimulatedData data = Simulate(sim);
   RecordingProgress progress;
   const CalibrationResult r = Calibrate(data.obs, ApiOptions(sim.truth), &progress);
@@ -135,10 +142,7 @@ TEST(Calibrate, NoiseFreeRunRecoversTheTruthAndFillsEveryStage) {
 // The throw is a real one of Diagnose: a result whose every row was set
 // aside as gross leaves it nothing to linearize.
 TEST(Calibrate, AFailedDiagnosisIsANoteAndTheModelStands) {
-  SimulationOptions sim;
-  sim.seed = 7;
-  sim.truth = PaperTruth(1);
-  sim.plan = TrainingPlan();
+  SimulationOptions sim = PaperSession(7);
   const SimulatedData data = Simulate(sim);
   CalibrationOptions options = ApiOptions(sim.truth);
   options.diagnose.enabled = true;
@@ -178,10 +182,7 @@ TEST(Calibrate, AFailedDiagnosisIsANoteAndTheModelStands) {
 }
 
 TEST(Calibrate, NoisyRunWithinTenPercentOfTheNoiseFloor) {
-  SimulationOptions sim;
-  sim.seed = 11;
-  sim.truth = PaperTruth(1);
-  sim.plan = TrainingPlan();
+  SimulationOptions sim = PaperSession(11);
   sim.noise.point_m = 2e-5;
   sim.noise.angle_rad = 1.0 / 206265.0;  // 1 arcsec
   const SimulatedData data = Simulate(sim);
@@ -404,10 +405,7 @@ TEST(CalibrateUnknownBoards, PixelsOfBoardsWithoutPoseOnly) {
 // Observations::image_sizes those are used; a configured camera of another
 // size than the photos is an error.
 TEST(Calibrate, ImageSizesComeFromTheImagesOrTheConfigOrAreMarkedEstimated) {
-  SimulationOptions sim;
-  sim.seed = 7;
-  sim.truth = PaperTruth(1);
-  sim.plan = TrainingPlan();
+  SimulationOptions sim = PaperSession(7);
   const SimulatedData data = Simulate(sim);
   CalibrationOptions none = ApiOptions(sim.truth);
   none.model.cameras.clear();
