@@ -107,9 +107,8 @@ std::string FindProgram(const std::string& name) {
 // posix_spawn, not fork: glibc spawns with the parent's memory shared until
 // the exec (clone with CLONE_VM | CLONE_VFORK), where fork copies the page
 // tables of the whole process, its heap of observations and matrices
-// included, once per program, and the child frees them again at the exec.
-// With one node and one rsvg-convert per figure, fork cost the photo
-// session ~6 % of its CPU time (perf, configs/photos.yaml).
+// included, once per program, and the child frees them again at the exec;
+// a run starts one node and one rsvg-convert per figure.
 pid_t Start(const std::vector<std::string>& argv, const fs::path& log) {
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));

@@ -12,6 +12,11 @@
 //                                 configs/photos.yaml` in process (the
 //                                 shipped config: detection with 2 jobs,
 //                                 calibration, diagnosis, reports);
+//   BM_PhotoPng/level:L/part:P    one photo of that folder as PNG at
+//                                 RenderShotsOptions::png_compression L
+//                                 (-1: the render stage's speed setting),
+//                                 encoded (P = 0) or decoded (P = 1), per
+//                                 photo, cycling through the folder;
 //   BM_OneBoardCalibrate/gross:G  the one-board session's calibration
 //                                 without its diagnosis, gross-error
 //                                 handling off (0) or on (1).
@@ -25,6 +30,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
 
@@ -34,6 +40,7 @@
 #include "detect/photos.h"
 #include "libcalib/io/shots.h"
 #include "libcalib/io/targets_io.h"
+#include "render/shots.h"
 
 namespace rtscalib::app {
 namespace {
@@ -140,6 +147,47 @@ BENCHMARK(BM_PhotoSessionRun)
     ->Iterations(3)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
+
+void BM_PhotoPng(benchmark::State& state) {
+  const DemoFolder& demo = Demo();
+  const int level = static_cast<int>(state.range(0));
+  const bool decode = state.range(1) != 0;
+  static const std::vector<cv::Mat> photos = [&] {
+    std::vector<cv::Mat> out;
+    for (const PhotoShot& s : ReadShots((demo.photos() / "shots.csv").string()).shots) {
+      out.push_back(cv::imread(s.image_path, cv::IMREAD_UNCHANGED));
+    }
+    return out;
+  }();
+  std::vector<std::vector<unsigned char>> encoded(photos.size());
+  double bytes = 0;
+  for (size_t i = 0; i < photos.size(); ++i) {
+    if (!render::EncodePhotoPng(photos[i], level, &encoded[i])) {
+      state.SkipWithError("OpenCV could not encode a photo");
+      return;
+    }
+    bytes += static_cast<double>(encoded[i].size());
+  }
+  size_t i = 0;
+  std::vector<unsigned char> out;
+  for (auto _ : state) {
+    if (decode) {
+      benchmark::DoNotOptimize(cv::imdecode(encoded[i], cv::IMREAD_UNCHANGED));
+    } else {
+      render::EncodePhotoPng(photos[i], level, &out);
+      benchmark::DoNotOptimize(out.data());
+    }
+    i = (i + 1) % photos.size();
+  }
+  state.counters["kB/photo"] = bytes / static_cast<double>(photos.size()) / 1000.0;
+}
+BENCHMARK(BM_PhotoPng)
+    ->ArgNames({"level", "part"})
+    ->Args({-1, 0})
+    ->Args({1, 0})
+    ->Args({-1, 1})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMillisecond);
 
 // The one-board session (configs/one_board.yaml: 136 photos, 22,888
 // corners, no records), rendered and detected once; then its calibration

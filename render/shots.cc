@@ -85,10 +85,6 @@ void RenderIndices(const PlacedScenes& scenes, const std::vector<Shot>& shots,
                    const std::function<void(int)>& done) {
   HeadlessDisplay display(options.headless);
   std::map<std::string, std::unique_ptr<SceneRenderer>> renderers;
-  const std::vector<int> params =
-      options.png_compression < 0
-          ? std::vector<int>{}
-          : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, options.png_compression};
   for (int i : indices) {
     const Shot& s = shots[i];
     std::unique_ptr<SceneRenderer>& renderer = renderers[s.placement];
@@ -98,7 +94,7 @@ void RenderIndices(const PlacedScenes& scenes, const std::vector<Shot>& shots,
     // Encoded in memory and written through the checked writer: a full disk
     // is a WriteError naming the image, never a photo cut short.
     std::vector<unsigned char> png;
-    if (!cv::imencode(".png", img, png, params)) {
+    if (!EncodePhotoPng(img, options.png_compression, &png)) {
       throw std::runtime_error("RenderShots: OpenCV could not encode " + path);
     }
     WriteFileAtomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
@@ -303,6 +299,14 @@ std::string DetectShotsOptions::Check() const {
   if (const std::string m = match.Check(); !m.empty()) return "match." + m;
   if (const std::string m = visibility.Check(); !m.empty()) return "visibility." + m;
   return "";
+}
+
+bool EncodePhotoPng(const cv::Mat& img, int png_compression, std::vector<unsigned char>* png) {
+  // Without a level OpenCV takes its speed setting (SUB filter, level 1).
+  const std::vector<int> params =
+      png_compression < 0 ? std::vector<int>{}
+                          : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, png_compression};
+  return cv::imencode(".png", img, *png, params);
 }
 
 std::string ShotsTableName(int shard, int num_shards) {

@@ -59,9 +59,9 @@ struct RenderShotsOptions {
   int num_shards = 1;
   bool progress = true;     // progress lines on stderr
   // zlib level 0..9, or -1: OpenCV's speed setting (no level given to
-  // cv::imencode: libpng's SUB filter alone at zlib level 1), twice as fast
-  // to write and a quarter faster to read back as level 1 with libpng's
-  // own filter choice (docs/rendering.md, "Shots, workers and shards").
+  // cv::imencode: libpng's SUB filter alone at zlib level 1), faster to
+  // write and to read back than level 1 with libpng's own filter choice
+  // (docs/rendering.md, "Shots, workers and shards").
   int png_compression = -1;
   RenderOptions render;
   VisibilityOptions visibility;  // statuses in exact.csv
@@ -90,6 +90,11 @@ RenderShotsResult RenderShots(const TargetScene& scene, const std::vector<Shot>&
 // has no scene.
 RenderShotsResult RenderShots(const PlacedScenes& scenes, const std::vector<Shot>& shots,
                               const RenderShotsOptions& options);
+
+// A rendered photo's PNG bytes at `png_compression` (RenderShotsOptions);
+// false when OpenCV cannot encode it. photo_session_benchmark's
+// BM_PhotoPng measures the settings on the demo's photos.
+bool EncodePhotoPng(const cv::Mat& img, int png_compression, std::vector<unsigned char>* png);
 
 // The tables' file names for a shard ("shots.csv" when num_shards == 1).
 std::string ShotsTableName(int shard, int num_shards);
