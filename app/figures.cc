@@ -1035,10 +1035,12 @@ Figure LadderFigure(const std::vector<Rung>& rungs, const std::string& name,
   return f;
 }
 
+// NAN is a float: json::value(key, NAN) would read the number as a float
+// and draw 7 of its digits; std::nan("") keeps the double.
 double JsonRms(const json& final, const char* tool) {
   if (!final.contains("records") || !final["records"].contains(tool)) return NAN;
   const json& t = final["records"][tool];
-  return t.value("n", 0) > 0 ? t.value("rms_m", NAN) * 1e3 : NAN;
+  return t.value("n", 0) > 0 ? t.value("rms_m", std::nan("")) * 1e3 : NAN;
 }
 
 std::string Added(const std::vector<std::string>& before, const std::vector<std::string>& after) {
@@ -1177,6 +1179,52 @@ Figure DifferenceFigure(const ZoomDifference& d) {
   return f;
 }
 
+Figure RunsLadderFigure(const json& history, const std::vector<std::string>& effects,
+                        const json& final) {
+  std::vector<Rung> rungs;
+  std::vector<std::string> prev;
+  auto add = [&](const std::string& run, const std::vector<std::string>& now, const json& f) {
+    // The label names what changed against the run before, shown or not.
+    const std::string added = rungs.empty() ? "" : Added(prev, now);
+    Rung g;
+    g.label = run + (added.empty() ? "" : ": " + added);
+    g.edm_mm = JsonRms(f, "edm");
+    g.cam_mm = JsonRms(f, "cam");
+    if (f.contains("pixels") && f["pixels"].value("n", 0) > 0)
+      g.px = f["pixels"].value("rms_px", std::nan(""));
+    rungs.push_back(g);
+    prev = now;
+  };
+  for (const json& h : history) {
+    if (!h.is_object() || !h.contains("final")) continue;
+    std::vector<std::string> now;
+    if (h.contains("effects")) now = h["effects"].get<std::vector<std::string>>();
+    add("run " + h.value("run", std::string("?")).substr(0, 3), now, h["final"]);
+  }
+  add("this run", effects, final);
+  // A folder that has kept many runs would give a figure wider than any
+  // screen (110 px per rung): the latest runs are the ones a user compares,
+  // and report.html's history table lists every run.
+  std::string title = "The ladder across runs (this output folder's history)";
+  const size_t total = rungs.size();
+  if (total > kLadderRunsShown) {
+    rungs.erase(rungs.begin(), rungs.end() - kLadderRunsShown);
+    title = "The ladder across runs (the latest " + std::to_string(kLadderRunsShown) + " of " +
+            std::to_string(total) + " complete runs in this output folder)";
+  }
+  Figure f = LadderFigure(
+      rungs, "ladder_runs", title,
+      "Final error of every complete run kept in the output folder (all rows, SPEC 6 `final`), "
+      "labelled with the effects added (+) or removed (-) relative to the run before" +
+          std::string(total > kLadderRunsShown
+                          ? "; the latest " + std::to_string(kLadderRunsShown) + " of " +
+                                std::to_string(total) +
+                                " (the table of runs above lists every run)."
+                          : "."));
+  f.summary["runs"] = total;
+  return f;
+}
+
 std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   std::vector<Figure> figs;
   const CalibrationResult& c = r.calibration;
@@ -1199,37 +1247,12 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   }
   // Across runs: earlier complete runs of this output folder, then this one.
   if (history.is_array() && !history.empty()) {
-    std::vector<Rung> rungs;
-    std::vector<std::string> prev;
-    auto add = [&](const std::string& run, const std::vector<std::string>& effects,
-                   const json& final, bool first) {
-      const std::string added = first ? "" : Added(prev, effects);
-      Rung g;
-      g.label = run + (added.empty() ? "" : ": " + added);
-      g.edm_mm = JsonRms(final, "edm");
-      g.cam_mm = JsonRms(final, "cam");
-      if (final.contains("pixels") && final["pixels"].value("n", 0) > 0)
-        g.px = final["pixels"].value("rms_px", NAN);
-      rungs.push_back(g);
-      prev = effects;
-    };
-    for (const json& h : history) {
-      if (!h.contains("final")) continue;
-      std::vector<std::string> effects;
-      if (h.contains("effects")) effects = h["effects"].get<std::vector<std::string>>();
-      add("run " + h.value("run", std::string("?")).substr(0, 3), effects, h["final"],
-          rungs.empty());
-    }
     const FinalErrors& e = c.final_errors;
     const json final = {{"records",
                          {{"edm", {{"rms_m", e.edm.rms_m}, {"n", e.edm.n}}},
                           {"cam", {{"rms_m", e.cam.rms_m}, {"n", e.cam.n}}}}},
                         {"pixels", {{"rms_px", e.pixels.rms_px}, {"n", e.pixels.n}}}};
-    add("this run", c.model.effects.Names(), final, rungs.empty());
-    figs.push_back(LadderFigure(
-        rungs, "ladder_runs", "The ladder across runs (this output folder's history)",
-        "Final error of every complete run kept in the output folder (all rows, SPEC 6 `final`), "
-        "labelled with the effects added (+) or removed (-) relative to the run before."));
+    figs.push_back(RunsLadderFigure(history, c.model.effects.Names(), final));
   }
 
   // Maps per tool.

@@ -43,6 +43,14 @@ struct Figure {
 // `history` = report.json's "history" array (earlier runs, oldest first).
 std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
 
+// The final error of the output folder's earlier complete runs (`history`,
+// report.json's "history", oldest first) and of this run (`effects`,
+// `final` as in report.json), the latest kLadderRunsShown of them; its
+// summary's "runs" counts them all.
+constexpr size_t kLadderRunsShown = 12;
+Figure RunsLadderFigure(const nlohmann::json& history, const std::vector<std::string>& effects,
+                        const nlohmann::json& final);
+
 // One photo with its observed corners and scaled residual arrows. `rows`:
 // the residual table's pixel rows of that shot (any status: only fitted
 // rows get arrows, the others are marked); `image` the photo file ("" or
