@@ -1206,21 +1206,18 @@ Figure RunsLadderFigure(const json& history, const std::vector<std::string>& eff
   // screen (110 px per rung): the latest runs are the ones a user compares,
   // and report.html's history table lists every run.
   std::string title = "The ladder across runs (this output folder's history)";
+  std::string caption =
+      "Final error of every complete run kept in the output folder (all rows, SPEC 6 `final`), "
+      "labelled with the effects added (+) or removed (-) relative to the run before";
   const size_t total = rungs.size();
   if (total > kLadderRunsShown) {
     rungs.erase(rungs.begin(), rungs.end() - kLadderRunsShown);
-    title = "The ladder across runs (the latest " + std::to_string(kLadderRunsShown) + " of " +
-            std::to_string(total) + " complete runs in this output folder)";
+    const std::string latest =
+        "the latest " + std::to_string(kLadderRunsShown) + " of " + std::to_string(total);
+    title = "The ladder across runs (" + latest + " complete runs in this output folder)";
+    caption += "; " + latest + " (the table of runs above lists every run)";
   }
-  Figure f = LadderFigure(
-      rungs, "ladder_runs", title,
-      "Final error of every complete run kept in the output folder (all rows, SPEC 6 `final`), "
-      "labelled with the effects added (+) or removed (-) relative to the run before" +
-          std::string(total > kLadderRunsShown
-                          ? "; the latest " + std::to_string(kLadderRunsShown) + " of " +
-                                std::to_string(total) +
-                                " (the table of runs above lists every run)."
-                          : "."));
+  Figure f = LadderFigure(rungs, "ladder_runs", title, caption + ".");
   f.summary["runs"] = total;
   return f;
 }

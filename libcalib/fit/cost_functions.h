@@ -92,8 +92,11 @@ struct IsJet<ceres::Jet<S, N>> : std::true_type {
 };
 
 // The projection's own variables: camera point (3), intrinsics (4),
-// distortion (14). Its derivatives are taken with these 21-wide jets and
-// chained onto the caller's wide jets (ShotResidual below).
+// distortion (14). The intrinsics and distortion are seeded in these
+// 21-wide jets (LocalCamera) and the tilt matrix is computed in them once
+// per shot; the projection's derivatives are written out in the same
+// variables (ProjectWithTiltLocal) and chained onto the caller's wide jets
+// (ShotResidual below).
 constexpr int kLocalVars = 3 + kNumIntrinsics + kNumDistortion;
 using LocalJet = ceres::Jet<double, kLocalVars>;
 
