@@ -78,6 +78,34 @@ BENCHMARK(BM_Render)
     ->MeasureProcessCPUTime()  // llvmpipe and OpenCV threads included
     ->UseRealTime();
 
+// A camera that refocuses (SPEC 4.1): every photo has its own intrinsics (fx
+// 1 ppm longer each time), so the renderer builds the distortion map of each
+// photo instead of reusing the last one, as the render stage does for a
+// session with focus in its truth.
+void BM_RenderRefocusing(benchmark::State& state) {
+  Display();
+  Fixture f;
+  RenderOptions options;
+  options.supersample = static_cast<int>(state.range(0));
+  SceneRenderer renderer(f.scene, options);
+  renderer.Render(f.pose, f.cam);  // texture upload, once
+  std::uint64_t seed = 0;
+  CameraTool cam = f.cam;
+  for (auto _ : state) {
+    cam.intrinsics[0] *= 1.000001;
+    benchmark::DoNotOptimize(renderer.Render(f.pose, cam, ++seed).data);
+  }
+  state.counters["images/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_RenderRefocusing)
+    ->ArgNames({"supersample"})
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
 void BM_Detect(benchmark::State& state) {
   Display();
   Fixture f;

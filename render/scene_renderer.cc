@@ -63,9 +63,18 @@ struct DistortionMap {
   // (-10: none, its back-projection failed or lies beyond the canvas cap).
   cv::Mat map_x, map_y;
 
+  // Built by solving the distortion (BuildDistortionMap), not derived from
+  // another map (DeriveDistortionMap): only such maps are derived from, so
+  // that interpolation errors do not add up over a refocusing session.
+  bool exact = true;
+
+  // The same lens: distortion, image size and supersampling, any intrinsics.
+  bool SameLens(const CameraTool& cam, int k) const {
+    return cam.distortion == distortion && cam.width == width && cam.height == height &&
+           k == supersample;
+  }
   bool Matches(const CameraTool& cam, int k) const {
-    return cam.intrinsics == intrinsics && cam.distortion == distortion && cam.width == width &&
-           cam.height == height && k == supersample;
+    return cam.intrinsics == intrinsics && SameLens(cam, k);
   }
 };
 
@@ -82,8 +91,7 @@ CameraTool Supersampled(const CameraTool& cam, int k) {
   return fine;
 }
 
-DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
-                                 double max_canvas_factor) {
+DistortionMap EmptyMap(const CameraTool& cam, int supersample) {
   DistortionMap m;
   m.intrinsics = cam.intrinsics;
   m.distortion = cam.distortion;
@@ -92,21 +100,77 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
   m.supersample = supersample;
   m.identity = !HasDistortion(cam);
   m.canvas = {cam.width, cam.height, 0, 0};
-  if (m.identity) return m;
+  return m;
+}
 
-  const double fx = cam.intrinsics[0], fy = cam.intrinsics[1];
-  const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
-  // Ideal pixel of output pixel (u, v); NaN where back-projection fails.
-  auto ideal = [&](double u, double v) {
-    const double pixel[2] = {u, v};
-    double xn, yn;
-    if (UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
-        std::isfinite(xn) && std::isfinite(yn)) {
-      return cv::Vec2d(fx * xn + cx, fy * yn + cy);
+// Ideal pixel of output pixel (u, v) of `cam`, solved; NaN where
+// back-projection fails.
+cv::Vec2d SolvedIdeal(const CameraTool& cam, double u, double v) {
+  const double pixel[2] = {u, v};
+  double xn, yn;
+  if (UndistortPixel(cam.intrinsics.data(), cam.distortion.data(), pixel, &xn, &yn) &&
+      std::isfinite(xn) && std::isfinite(yn)) {
+    return cv::Vec2d(cam.intrinsics[0] * xn + cam.intrinsics[2],
+                     cam.intrinsics[1] * yn + cam.intrinsics[3]);
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  return cv::Vec2d(nan, nan);
+}
+
+// Canvas and sampling maps of `m` from the ideal pixel of every output pixel
+// (CV_64FC1 each, NaN: none).
+void FinishMap(const cv::Mat& ideal_u, const cv::Mat& ideal_v, double max_canvas_factor,
+               DistortionMap* map) {
+  DistortionMap& m = *map;
+  // Canvas: the bounding box of all ideal pixels, clipped to
+  // max_canvas_factor times the image around the image itself, in
+  // supersampled pixels (u_k = k (u + 1/2) - 1/2), plus 2 of them: the
+  // supersamples lie up to 1/2 - 1/(2k) output pixels beyond the pixel
+  // centres, and bilinear sampling needs one more.
+  double umin = 0, umax = m.width - 1, vmin = 0, vmax = m.height - 1;
+  const double lim_u0 = -(max_canvas_factor - 1) / 2 * m.width;
+  const double lim_u1 = m.width - 1 - lim_u0;
+  const double lim_v0 = -(max_canvas_factor - 1) / 2 * m.height;
+  const double lim_v1 = m.height - 1 - lim_v0;
+  for (int v = 0; v < m.height; ++v) {
+    const double* iu_row = ideal_u.ptr<double>(v);
+    const double* iv_row = ideal_v.ptr<double>(v);
+    for (int u = 0; u < m.width; ++u) {
+      const double iu = iu_row[u], iv = iv_row[u];
+      if (!(iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1)) continue;
+      umin = std::min(umin, iu);
+      umax = std::max(umax, iu);
+      vmin = std::min(vmin, iv);
+      vmax = std::max(vmax, iv);
     }
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    return cv::Vec2d(nan, nan);
-  };
+  }
+  const int k = m.supersample;
+  auto fine = [k](double x) { return k * (x + 0.5) - 0.5; };
+  m.canvas.u0 = std::floor(fine(umin - 0.5)) - 2;
+  m.canvas.v0 = std::floor(fine(vmin - 0.5)) - 2;
+  m.canvas.width = static_cast<int>(std::ceil(fine(umax + 0.5)) + 2 - m.canvas.u0) + 1;
+  m.canvas.height = static_cast<int>(std::ceil(fine(vmax + 0.5)) + 2 - m.canvas.v0) + 1;
+
+  m.map_x.create(m.height, m.width, CV_32FC1);
+  m.map_y.create(m.height, m.width, CV_32FC1);
+  for (int v = 0; v < m.height; ++v) {
+    const double* iu_row = ideal_u.ptr<double>(v);
+    const double* iv_row = ideal_v.ptr<double>(v);
+    float* mx = m.map_x.ptr<float>(v);
+    float* my = m.map_y.ptr<float>(v);
+    for (int u = 0; u < m.width; ++u) {
+      const double iu = iu_row[u], iv = iv_row[u];
+      const bool ok = iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1;
+      mx[u] = ok ? static_cast<float>(fine(iu) - m.canvas.u0) : -10.f;
+      my[u] = ok ? static_cast<float>(fine(iv) - m.canvas.v0) : -10.f;
+    }
+  }
+}
+
+DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample, double max_canvas_factor) {
+  DistortionMap m = EmptyMap(cam, supersample);
+  if (m.identity) return m;
+  auto ideal = [&](double u, double v) { return SolvedIdeal(cam, u, v); };
   // Exact back-projection of every pixel costs ~0.5 s at 1280 x 960. The map is
   // smooth, so it is solved on a grid of kStep pixels and interpolated
   // bilinearly; every cell is checked at its centre and solved pixel by pixel
@@ -151,54 +215,124 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample,
         // Each cell fills its pixels [u0, u1) x [v0, v1), the last ones up to the edge.
         const int u_end = i + 2 == gw ? u1 + 1 : u1, v_end = j + 2 == gh ? v1 + 1 : v1;
         for (int v = v0; v < v_end; ++v) {
-          for (int u = u0; u < u_end; ++u) {
-            const cv::Vec2d p = smooth ? interp(u, v) : ideal(u, v);
-            ideal_u.at<double>(v, u) = p[0];
-            ideal_v.at<double>(v, u) = p[1];
+          double* iu_row = ideal_u.ptr<double>(v);
+          double* iv_row = ideal_v.ptr<double>(v);
+          if (!smooth) {
+            for (int u = u0; u < u_end; ++u) {
+              const cv::Vec2d p = ideal(u, v);
+              iu_row[u] = p[0];
+              iv_row[u] = p[1];
+            }
+            continue;
+          }
+          // interp(u, v) per component, its row factors taken once per row.
+          const double t = (v - v0) / static_cast<double>(v1 - v0);
+          for (int c = 0; c < 2; ++c) {
+            double* row = c == 0 ? iu_row : iv_row;
+            const double ac = a[c], bc = b[c], dc = d[c], ec = e[c];
+            for (int u = u0; u < u_end; ++u) {
+              const double sc = (u - u0) / static_cast<double>(u1 - u0);
+              row[u] = (1 - t) * ((1 - sc) * ac + sc * bc) + t * ((1 - sc) * dc + sc * ec);
+            }
           }
         }
       }
     }
   });
 
-  // Canvas: the bounding box of all ideal pixels, clipped to
-  // max_canvas_factor times the image around the image itself, in
-  // supersampled pixels (u_k = k (u + 1/2) - 1/2), plus 2 of them: the
-  // supersamples lie up to 1/2 - 1/(2k) output pixels beyond the pixel
-  // centres, and bilinear sampling needs one more.
-  double umin = 0, umax = cam.width - 1, vmin = 0, vmax = cam.height - 1;
-  const double lim_u0 = -(max_canvas_factor - 1) / 2 * cam.width;
-  const double lim_u1 = cam.width - 1 - lim_u0;
-  const double lim_v0 = -(max_canvas_factor - 1) / 2 * cam.height;
-  const double lim_v1 = cam.height - 1 - lim_v0;
-  for (int v = 0; v < cam.height; ++v) {
-    for (int u = 0; u < cam.width; ++u) {
-      const double iu = ideal_u.at<double>(v, u), iv = ideal_v.at<double>(v, u);
-      if (!(iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1)) continue;
-      umin = std::min(umin, iu);
-      umax = std::max(umax, iu);
-      vmin = std::min(vmin, iv);
-      vmax = std::max(vmax, iv);
-    }
-  }
-  const int k = supersample;
-  auto fine = [k](double x) { return k * (x + 0.5) - 0.5; };
-  m.canvas.u0 = std::floor(fine(umin - 0.5)) - 2;
-  m.canvas.v0 = std::floor(fine(vmin - 0.5)) - 2;
-  m.canvas.width = static_cast<int>(std::ceil(fine(umax + 0.5)) + 2 - m.canvas.u0) + 1;
-  m.canvas.height = static_cast<int>(std::ceil(fine(vmax + 0.5)) + 2 - m.canvas.v0) + 1;
-
-  m.map_x.create(cam.height, cam.width, CV_32FC1);
-  m.map_y.create(cam.height, cam.width, CV_32FC1);
-  for (int v = 0; v < cam.height; ++v) {
-    for (int u = 0; u < cam.width; ++u) {
-      const double iu = ideal_u.at<double>(v, u), iv = ideal_v.at<double>(v, u);
-      const bool ok = iu >= lim_u0 && iu <= lim_u1 && iv >= lim_v0 && iv <= lim_v1;
-      m.map_x.at<float>(v, u) = ok ? static_cast<float>(fine(iu) - m.canvas.u0) : -10.f;
-      m.map_y.at<float>(v, u) = ok ? static_cast<float>(fine(iv) - m.canvas.v0) : -10.f;
-    }
-  }
+  FinishMap(ideal_u, ideal_v, max_canvas_factor, &m);
   return m;
+}
+
+// The map of `cam` from `base`, the solved map (BuildDistortionMap) of the
+// same lens with other intrinsics: a camera that refocuses (SPEC 4.1) changes
+// fx, fy, cx, cy from photo to photo, not its distortion. With K the
+// intrinsics and U the undistortion in normalised coordinates (tilt
+// included), the ideal pixel of output pixel p is K U(K^-1 p), so
+//   ideal(p) = K K_base^-1 ideal_base(K_base K^-1 p):
+// the base's ideal pixels (read back from its float maps, ~1e-4 px) taken
+// bilinearly at p's position in the base image (the ideal map is smooth:
+// its bilinear error over one pixel is ~1e-5 px for the lenses here),
+// scaled and shifted. Pixels whose four base samples are not all there (the
+// image edge, failed back-projections, the canvas cap) are solved. A
+// supersample-2 photo of a refocusing camera took 102-116 CPU-ms with its map
+// solved, 70-71 with it derived (render_benchmark
+// --benchmark_filter=RenderRefocusing; docs/rendering.md). Checked against
+// solved pixels every kCheckStep pixels: false (the caller solves the map)
+// when one of them is off by more than kTolerance, or when only one of the
+// two has an ideal pixel.
+bool DeriveDistortionMap(const DistortionMap& base, const CameraTool& cam, double max_canvas_factor,
+                         DistortionMap* out) {
+  constexpr double kTolerance = 1e-3;  // px, as BuildDistortionMap's cells
+  constexpr int kCheckStep = 16;
+  DistortionMap m = EmptyMap(cam, base.supersample);
+  const double k = base.supersample;
+  // Base ideal pixel from its maps (the inverse of FinishMap's `fine`).
+  const double off_u = base.canvas.u0 + 0.5, off_v = base.canvas.v0 + 0.5;
+  const double bfx = base.intrinsics[0], bfy = base.intrinsics[1];
+  const double bcx = base.intrinsics[2], bcy = base.intrinsics[3];
+  const double fx = cam.intrinsics[0], fy = cam.intrinsics[1];
+  const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
+  const int w = cam.width, h = cam.height;
+  // Both maps are affine per axis: the base position bu = pu + qu u, and the
+  // ideal pixel iu = ru + su mx from the base's map value mx (likewise v).
+  const double qu = bfx / fx, pu = bcx - qu * cx;
+  const double qv = bfy / fy, pv = bcy - qv * cy;
+  const double su = fx / (bfx * k), ru = cx + fx / bfx * (off_u / k - 0.5 - bcx);
+  const double sv = fy / (bfy * k), rv = cy + fy / bfy * (off_v / k - 0.5 - bcy);
+  cv::Mat ideal_u(h, w, CV_64FC1), ideal_v(h, w, CV_64FC1);
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      double* iu_row = ideal_u.ptr<double>(v);
+      double* iv_row = ideal_v.ptr<double>(v);
+      const double bv = pv + qv * v;
+      // Truncation is the floor for bv >= 0, and bv < 0 is solved anyway.
+      const int v0 = bv >= 0 ? static_cast<int>(bv) : -1;
+      const double tv = bv - v0;
+      const bool row_ok = v0 >= 0 && v0 + 1 < h;
+      const float* x0 = row_ok ? base.map_x.ptr<float>(v0) : nullptr;
+      const float* x1 = row_ok ? base.map_x.ptr<float>(v0 + 1) : nullptr;
+      const float* y0 = row_ok ? base.map_y.ptr<float>(v0) : nullptr;
+      const float* y1 = row_ok ? base.map_y.ptr<float>(v0 + 1) : nullptr;
+      for (int u = 0; u < w; ++u) {
+        const double bu = pu + qu * u;
+        const int u0 = bu >= 0 ? static_cast<int>(bu) : -1;
+        if (row_ok && u0 >= 0 && u0 + 1 < w && x0[u0] > -5 && x0[u0 + 1] > -5 && x1[u0] > -5 &&
+            x1[u0 + 1] > -5) {
+          const double tu = bu - u0;
+          const double mx = (1 - tv) * ((1 - tu) * x0[u0] + tu * x0[u0 + 1]) +
+                            tv * ((1 - tu) * x1[u0] + tu * x1[u0 + 1]);
+          const double my = (1 - tv) * ((1 - tu) * y0[u0] + tu * y0[u0 + 1]) +
+                            tv * ((1 - tu) * y1[u0] + tu * y1[u0 + 1]);
+          iu_row[u] = ru + su * mx;
+          iv_row[u] = rv + sv * my;
+        } else {
+          const cv::Vec2d p = SolvedIdeal(cam, u, v);
+          iu_row[u] = p[0];
+          iv_row[u] = p[1];
+        }
+      }
+    }
+  });
+  // The check: solved pixels on a coarse grid, the last row and column too.
+  bool agrees = true;
+  for (int v = 0; v < h && agrees; v = v + kCheckStep < h || v == h - 1 ? v + kCheckStep : h - 1) {
+    for (int u = 0; u < w; u = u + kCheckStep < w || u == w - 1 ? u + kCheckStep : w - 1) {
+      const cv::Vec2d p = SolvedIdeal(cam, u, v);
+      const cv::Vec2d q(ideal_u.at<double>(v, u), ideal_v.at<double>(v, u));
+      if (!(cv::norm(p - q) <= kTolerance) && !(std::isnan(p[0]) && std::isnan(q[0]))) {
+        agrees = false;
+        break;
+      }
+      if (u == w - 1) break;
+    }
+    if (v == h - 1) break;
+  }
+  if (!agrees) return false;
+  m.exact = false;
+  FinishMap(ideal_u, ideal_v, max_canvas_factor, &m);
+  *out = std::move(m);
+  return true;
 }
 
 // The distorted image: every output pixel is the mean of k x k samples of the
@@ -324,6 +458,7 @@ struct SceneRenderer::Impl {
   // recent first: a shot list alternating between zooms must not rebuild them.
   std::list<DistortionMap> maps;
   static constexpr size_t kMaxMaps = 8;
+  MapCounts map_counts;
   cv::Mat canvas;     // CV_32FC1 ideal image (supersampled when distorted)
   cv::Mat box;        // CV_32FC1, the supersampled canvas box-filtered
   cv::Mat distorted;  // CV_32FC1
@@ -561,6 +696,8 @@ SceneRenderer::~SceneRenderer() {
 
 const RenderOptions& SceneRenderer::options() const { return impl_->options; }
 
+SceneRenderer::MapCounts SceneRenderer::map_counts() const { return impl_->map_counts; }
+
 cv::Mat SceneRenderer::RenderPinhole(const Rigid3& ref_from_cam, const CameraTool& cam) {
   cv::Mat out;
   impl_->RenderCanvas(ref_from_cam, cam, Canvas{cam.width, cam.height, 0, 0},
@@ -575,7 +712,20 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
   auto it = std::find_if(im.maps.begin(), im.maps.end(),
                          [&](const DistortionMap& m) { return m.Matches(cam, o.supersample); });
   if (it == im.maps.end()) {
-    im.maps.push_front(BuildDistortionMap(cam, o.supersample, o.max_canvas_factor));
+    // A refocused camera: derived from the solved map of its lens, which
+    // moves to the front so that it stays while the derived maps come and go.
+    const auto base = std::find_if(im.maps.begin(), im.maps.end(), [&](const DistortionMap& m) {
+      return m.exact && !m.identity && m.SameLens(cam, o.supersample);
+    });
+    DistortionMap derived;
+    if (base != im.maps.end() && DeriveDistortionMap(*base, cam, o.max_canvas_factor, &derived)) {
+      im.maps.splice(im.maps.begin(), im.maps, base);
+      im.maps.push_front(std::move(derived));
+      ++im.map_counts.derived;
+    } else {
+      im.maps.push_front(BuildDistortionMap(cam, o.supersample, o.max_canvas_factor));
+      if (!im.maps.front().identity) ++im.map_counts.solved;
+    }
     if (im.maps.size() > Impl::kMaxMaps) im.maps.pop_back();
   } else if (it != im.maps.begin()) {
     im.maps.splice(im.maps.begin(), im.maps, it);

@@ -72,6 +72,13 @@ class SceneRenderer {
   cv::Mat RenderPinhole(const Rigid3& ref_from_cam, const CameraTool& cam);
 
   const RenderOptions& options() const;
+  // Distortion maps made so far: solved pixel by pixel (a new lens), or
+  // derived from the solved map of the same lens (a camera that refocuses
+  // changes its intrinsics only; scene_renderer.cc, DeriveDistortionMap).
+  struct MapCounts {
+    int solved = 0, derived = 0;
+  };
+  MapCounts map_counts() const;
 
  private:
   struct Impl;
