@@ -314,21 +314,22 @@ bool DeriveDistortionMap(const DistortionMap& base, const CameraTool& cam, doubl
       }
     }
   });
-  // The check: solved pixels on a coarse grid, the last row and column too.
-  bool agrees = true;
-  for (int v = 0; v < h && agrees; v = v + kCheckStep < h || v == h - 1 ? v + kCheckStep : h - 1) {
-    for (int u = 0; u < w; u = u + kCheckStep < w || u == w - 1 ? u + kCheckStep : w - 1) {
+  // The check: solved pixels every kCheckStep, the last row and column too.
+  auto checked = [](int size) {
+    std::vector<int> at;
+    for (int i = 0; i < size; i += kCheckStep) at.push_back(i);
+    if (at.back() != size - 1) at.push_back(size - 1);
+    return at;
+  };
+  const std::vector<int> check_u = checked(w), check_v = checked(h);
+  for (const int v : check_v) {
+    for (const int u : check_u) {
       const cv::Vec2d p = SolvedIdeal(cam, u, v);
       const cv::Vec2d q(ideal_u.at<double>(v, u), ideal_v.at<double>(v, u));
-      if (!(cv::norm(p - q) <= kTolerance) && !(std::isnan(p[0]) && std::isnan(q[0]))) {
-        agrees = false;
-        break;
-      }
-      if (u == w - 1) break;
+      const bool neither = std::isnan(p[0]) && std::isnan(q[0]);
+      if (!neither && !(cv::norm(p - q) <= kTolerance)) return false;  // NaN: false too
     }
-    if (v == h - 1) break;
   }
-  if (!agrees) return false;
   m.exact = false;
   FinishMap(ideal_u, ideal_v, max_canvas_factor, &m);
   *out = std::move(m);
