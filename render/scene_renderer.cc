@@ -66,7 +66,7 @@ struct DistortionMap {
   // Built by solving the distortion (BuildDistortionMap), not derived from
   // another map (DeriveDistortionMap): only such maps are derived from, so
   // that interpolation errors do not add up over a refocusing session.
-  bool exact = true;
+  bool solved = true;
 
   // The same lens: distortion, image size and supersampling, any intrinsics.
   bool SameLens(const CameraTool& cam, int k) const {
@@ -260,11 +260,19 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample, double 
 // --benchmark_filter=RenderRefocusing; docs/rendering.md). Checked against
 // solved pixels every kCheckStep pixels: false (the caller solves the map)
 // when one of them is off by more than kTolerance, or when only one of the
-// two has an ideal pixel.
+// two has an ideal pixel. Also false for a scale more than kMaxScaleChange
+// away from the base's (two zooms that happen to share their distortion
+// coefficients): most of the image would then lie outside the base image and
+// be solved pixel by pixel, slower than BuildDistortionMap's grid.
 bool DeriveDistortionMap(const DistortionMap& base, const CameraTool& cam, double max_canvas_factor,
                          DistortionMap* out) {
   constexpr double kTolerance = 1e-3;  // px, as BuildDistortionMap's cells
   constexpr int kCheckStep = 16;
+  constexpr double kMaxScaleChange = 0.02;  // refocusing: ~0.1 % (rendered_focus_test.cc)
+  if (std::abs(cam.intrinsics[0] / base.intrinsics[0] - 1) > kMaxScaleChange ||
+      std::abs(cam.intrinsics[1] / base.intrinsics[1] - 1) > kMaxScaleChange) {
+    return false;
+  }
   DistortionMap m = EmptyMap(cam, base.supersample);
   const double k = base.supersample;
   // Base ideal pixel from its maps (the inverse of FinishMap's `fine`).
@@ -330,7 +338,7 @@ bool DeriveDistortionMap(const DistortionMap& base, const CameraTool& cam, doubl
       if (!neither && !(cv::norm(p - q) <= kTolerance)) return false;  // NaN: false too
     }
   }
-  m.exact = false;
+  m.solved = false;
   FinishMap(ideal_u, ideal_v, max_canvas_factor, &m);
   *out = std::move(m);
   return true;
@@ -716,7 +724,7 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
     // A refocused camera: derived from the solved map of its lens, which
     // moves to the front so that it stays while the derived maps come and go.
     const auto base = std::find_if(im.maps.begin(), im.maps.end(), [&](const DistortionMap& m) {
-      return m.exact && !m.identity && m.SameLens(cam, o.supersample);
+      return m.solved && !m.identity && m.SameLens(cam, o.supersample);
     });
     DistortionMap derived;
     if (base != im.maps.end() && DeriveDistortionMap(*base, cam, o.max_canvas_factor, &derived)) {

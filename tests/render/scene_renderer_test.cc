@@ -156,7 +156,8 @@ TEST(SceneRendererTest, DistortionMovesThePictureLikeProjectToPixel) {
 // rounding boundary (a few dozen of the 1.2 million pixels differ, by one
 // level; the test allows 1,228). Two lenses, one with sensor tilt
 // (the derivation goes through the tilt too); the intrinsics change as from
-// near to far, back to the first set, and beyond.
+// near to far, back to the first set, and beyond; then a 1.5 times longer
+// focal length, which is another zoom's and is solved.
 TEST(SceneRendererTest, RefocusedCameraRendersAsIfItsMapWereSolved) {
   EnsureDisplay();
   TagBoard board = FrontBoard(3, 4, 2.0);
@@ -189,6 +190,13 @@ TEST(SceneRendererTest, RefocusedCameraRendersAsIfItsMapWereSolved) {
     // The first set's map solved once and reused, the two others derived.
     EXPECT_EQ(refocusing.map_counts().solved, 1) << "tilt " << tilt;
     EXPECT_EQ(refocusing.map_counts().derived, 2) << "tilt " << tilt;
+    // Another zoom with the same distortion coefficients is solved: most of
+    // its image lies outside the base image.
+    CameraTool zoomed = first;
+    zoomed.intrinsics[0] *= 1.5;
+    zoomed.intrinsics[1] *= 1.5;
+    refocusing.Render(Rigid3(), zoomed, 7);
+    EXPECT_EQ(refocusing.map_counts().solved, 2) << "tilt " << tilt;
   }
 }
 
