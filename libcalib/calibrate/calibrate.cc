@@ -384,7 +384,7 @@ void RefineConfigured(const Observations& obs, const std::vector<Record>& reduce
   Refinement& full = result->refined;
   full.model = has_more ? result->reduced.model : result->start;
   full.model.sigmas = {};
-  full.fit = Refine(obs, fo, &full.model);
+  full.fit = Refine(obs, fo, &full.model, has_more ? &result->reduced.fit : nullptr);
   progress->Note("converged: " + std::string(full.fit.converged ? "yes" : "no") + ", " +
                  std::to_string(full.fit.iterations) + " iterations");
   ValidateFit("refinement on the full set", WithEstimates(obs, full.model), full.model, full.fit,

@@ -30,6 +30,12 @@ struct FitSummary {
   // The pixels' a-posteriori sigma per zoom (0 where a zoom has no pixels);
   // sigma_pixel_px is their root mean square over the pixels.
   std::vector<double> sigma_pixel_px_zoom;
+  // The variance-component estimate (FitOptions::reestimate_sigmas): rounds
+  // of solve and re-estimate (the first solve with the start sigmas), and
+  // whether the last estimate moved no sigma by more than 5 % (false when
+  // the rounds ran out first, or when the sigmas were held).
+  int sigma_rounds = 0;
+  bool sigmas_converged = false;
   // Clusters of the cluster-robust covariance (0: independent errors).
   int covariance_clusters = 0;
   std::vector<std::string> fixed_gauges;                            // human-readable
@@ -39,7 +45,11 @@ struct FitSummary {
 };
 
 // Refines `model` in place. Throws std::invalid_argument for bad options.
-FitSummary Refine(const Observations& obs, const FitOptions& options, InstrumentModel* model);
+// `earlier` (optional): an earlier fit of the same instrument whose
+// a-posteriori sigmas start the variance-component estimate instead of the
+// a-priori ones (groups it has no sigma for start a priori).
+FitSummary Refine(const Observations& obs, const FitOptions& options, InstrumentModel* model,
+                  const FitSummary* earlier = nullptr);
 
 // Iterations a robust Refine of `obs` needs before its residuals separate
 // the gross rows, which follows from the residual blocks Refine builds with
