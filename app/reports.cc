@@ -166,6 +166,8 @@ json FitJson(const FitSummary& f) {
           {"sigma_cam_m", f.sigma_cam_m},
           {"sigma_pixel_px", f.sigma_pixel_px},
           {"sigma_pixel_px_per_zoom", f.sigma_pixel_px_zoom},
+          {"sigma_rounds", f.sigma_rounds},
+          {"sigmas_converged", f.sigmas_converged},
           {"covariance_clusters", f.covariance_clusters},
           {"fixed_gauges", f.fixed_gauges},
           {"strong_correlations", corr},
@@ -298,6 +300,8 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
   j["model"] = ModelJson(r.calibration.model);
   j["fit"] = FitJson(r.calibration.fit);
   j["fit"]["intrinsics_fitted"] = r.calibration.intrinsics_fitted;
+  // The reduced set's own refinement (Klug Sec. 4.3), where it ran apart.
+  if (r.calibration.table5.has_cross) j["reduced_fit"] = FitJson(r.calibration.reduced.fit);
   if (r.calibration.faces) {
     const FaceComparison& f = *r.calibration.faces;
     j["faces"] = {{"valid", f.valid},
@@ -854,6 +858,10 @@ std::string FitSigmasText(const FitSummary& fit, bool records) {
              Fmt("%.3g", fit.sigma_pixel_px_zoom[z]);
   }
   if (!zooms.empty()) o << " (" << zooms << ")";
+  if (fit.sigma_rounds > 0 && !fit.sigmas_converged) {
+    o << ", still moving by more than 5 % after " << fit.sigma_rounds
+      << " rounds of the variance-component estimate";
+  }
   o << "; covariance: "
     << (fit.covariance_clusters > 0
             ? "cluster-robust over " + std::to_string(fit.covariance_clusters) +

@@ -67,13 +67,13 @@ std::vector<double> AprioriSigmas(const FitOptions& options, int num_zooms) {
   return sigma;
 }
 
-// The a-posteriori sigmas of `start` where it has them, else `apriori`.
-std::vector<double> StartSigmas(const FitSummary& start, std::vector<double> apriori) {
-  if (start.sigma_edm_m > 0) apriori[0] = start.sigma_edm_m;
-  if (start.sigma_cam_m > 0) apriori[1] = start.sigma_cam_m;
-  for (size_t z = 0; z < start.sigma_pixel_px_zoom.size(); ++z) {
-    if (kPixelSlots + z < apriori.size() && start.sigma_pixel_px_zoom[z] > 0) {
-      apriori[kPixelSlots + z] = start.sigma_pixel_px_zoom[z];
+// The a-posteriori sigmas of `earlier` where it has them, else `apriori`.
+std::vector<double> StartSigmas(const FitSummary& earlier, std::vector<double> apriori) {
+  if (earlier.sigma_edm_m > 0) apriori[0] = earlier.sigma_edm_m;
+  if (earlier.sigma_cam_m > 0) apriori[1] = earlier.sigma_cam_m;
+  for (size_t z = 0; z < earlier.sigma_pixel_px_zoom.size(); ++z) {
+    if (kPixelSlots + z < apriori.size() && earlier.sigma_pixel_px_zoom[z] > 0) {
+      apriori[kPixelSlots + z] = earlier.sigma_pixel_px_zoom[z];
     }
   }
   return apriori;
@@ -709,8 +709,8 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
         continue;
       }
     }
-    summary.sigma_rounds = round + 1;
     if (!options.reestimate_sigmas) break;
+    summary.sigma_rounds = round + 1;
     if (!ReestimateSigmas(problem.get(), refs, &sigma)) {
       summary.sigmas_converged = true;
       break;

@@ -31,9 +31,9 @@ struct FitSummary {
   // sigma_pixel_px is their root mean square over the pixels.
   std::vector<double> sigma_pixel_px_zoom;
   // The variance-component estimate (FitOptions::reestimate_sigmas): rounds
-  // of solve and re-estimate (the first solve with the start sigmas), and
-  // whether the last estimate moved no sigma by more than 5 % (false when
-  // the rounds ran out first, or when the sigmas were held).
+  // of solve and re-estimate (the first solve with the start sigmas; 0 when
+  // the sigmas were held), and whether the last estimate moved no sigma by
+  // more than 5 % (false when the rounds ran out first).
   int sigma_rounds = 0;
   bool sigmas_converged = false;
   // Clusters of the cluster-robust covariance (0: independent errors).
