@@ -21,6 +21,7 @@ namespace rtscalib {
 namespace {
 
 using testing_scene::AddDistortion;
+using testing_scene::DhFromPixels;
 using testing_scene::DhTruth;
 using testing_scene::PixelsOnly;
 
@@ -136,14 +137,7 @@ TEST(ClusterCovariance, PixelSigmasAreEstimatedPerZoom) {
   for (PixelObservation& p : data.obs.pixels) {
     p.uv += noise[p.zoom] * Eigen::Vector2d(normal(rng), normal(rng));
   }
-  InitFromPixelsOptions io;
-  io.kinematics = Kinematics::kDh;
-  io.cameras.resize(2);
-  for (int z = 0; z < 2; ++z) {
-    io.cameras[z].width = truth.cams[z].width;
-    io.cameras[z].height = truth.cams[z].height;
-  }
-  InstrumentModel model = InitFromPixels(data.obs.pixels, io).model;
+  InstrumentModel model = InitFromPixels(data.obs.pixels, DhFromPixels(truth)).model;
   FitOptions fo;
   fo.fit_intrinsics = true;
   const FitSummary s = Refine(data.obs, fo, &model);

@@ -7,6 +7,7 @@
 
 #include <random>
 
+#include "libcalib/fit/init_from_pixels.h"
 #include "libcalib/model/kinematics.h"
 #include "libcalib/model/targets.h"
 #include "libcalib/sim/simulator.h"
@@ -61,6 +62,19 @@ inline void AddDistortion(const EffectSet& groups, InstrumentModel* m) {
   for (Effect e : groups.List()) {
     if (IsDistortion(e)) m->effects.Add(e);
   }
+}
+
+// Starting from the pixels alone (InitFromPixels) with a DH chain, every
+// zoom of `truth` at its image size.
+inline InitFromPixelsOptions DhFromPixels(const InstrumentModel& truth) {
+  InitFromPixelsOptions io;
+  io.kinematics = Kinematics::kDh;
+  io.cameras.resize(truth.NumZooms());
+  for (int z = 0; z < truth.NumZooms(); ++z) {
+    io.cameras[z].width = truth.cams[z].width;
+    io.cameras[z].height = truth.cams[z].height;
+  }
+  return io;
 }
 
 // Simulation options: pixels only (no records), both faces.

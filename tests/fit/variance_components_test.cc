@@ -20,6 +20,7 @@
 namespace rtscalib {
 namespace {
 
+using testing_scene::DhFromPixels;
 using testing_scene::DhTruth;
 using testing_scene::PixelsOnly;
 
@@ -41,15 +42,8 @@ Scene MakeScene() {
   for (PixelObservation& p : data.obs.pixels) {
     p.uv += kNoise[p.zoom] * Eigen::Vector2d(normal(rng), normal(rng));
   }
-  InitFromPixelsOptions io;
-  io.kinematics = Kinematics::kDh;
-  io.cameras.resize(2);
-  for (int z = 0; z < 2; ++z) {
-    io.cameras[z].width = truth.cams[z].width;
-    io.cameras[z].height = truth.cams[z].height;
-  }
   Scene s;
-  s.start = InitFromPixels(data.obs.pixels, io).model;
+  s.start = InitFromPixels(data.obs.pixels, DhFromPixels(truth)).model;
   s.obs = std::move(data.obs);
   return s;
 }
