@@ -128,7 +128,7 @@ TEST(FullCovariance, PredictedPixelCovarianceMatchesTheScatterBetterThanTheDiago
   for (const auto& [fu, fv] : std::vector<std::pair<double, double>>{
            {0.5, 0.5}, {0.1, 0.1}, {0.9, 0.1}, {0.1, 0.9}, {0.9, 0.9}}) {
     const double pixel[2] = {fu * (cam.width - 1), fv * (cam.height - 1)};
-    double ray[3];
+    double ray[3] = {0, 0, 0};
     ASSERT_TRUE(PixelToRay(cam.intrinsics.data(), cam.distortion.data(), pixel, ray));
     const Eigen::Vector3d r = Eigen::Vector3d(ray[0], ray[1], ray[2]).normalized();
     points.push_back(ref_from_cam * (10.0 * r));
