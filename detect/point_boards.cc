@@ -114,6 +114,16 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
   // can search for minutes (540 s on 1280 x 960 noise, 9.5 s with its fast
   // check). Either grid is refined below.
   const cv::Size size(nc, nr);
+  // Most photos of a session show no chessboard (another board, or this one
+  // out of view), and there both searches below run to the end. OpenCV's
+  // quick check (the classic detector's CALIB_CB_FAST_CHECK: quads of the
+  // right count at a few thresholds) answers in milliseconds. With it the
+  // 50 rendered photos of three ChArUco boards and a chessboard are
+  // detected in 2.7 s instead of 20.2 s (Release, RenderedPointBoards'
+  // own output), every visible corner still found. It keeps every board of
+  // OpenCV's 26 sample photos of a real camera
+  // (PointBoards.QuickCheckKeepsEveryChessboardOfOpenCvsSamplePhotos).
+  if (!cv::checkChessboard(gray, size)) return out;
   bool found = cv::findChessboardCornersSB(gray, size, grid,
                                            cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
   if (!found) {

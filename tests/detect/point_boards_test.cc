@@ -222,6 +222,36 @@ TEST(PointBoards, ChessboardFoundTwiceIsNotUsed) {
   EXPECT_EQ(static_cast<int>(single.corners.size()), b.NumTags());
 }
 
+// OpenCV's sample photos of a real camera (Debian's opencv-doc): a hand-held
+// 9 x 6 inner-corner chessboard in left01 ... left14 and right01 ... right14
+// (no 10s), blurred and steep in some; left.jpg and right.jpg show another
+// scene without it. DetectChessboard asks OpenCV's quick check before its
+// searches; it must not cost a board: each is found whole, and the photos
+// without one give nothing.
+TEST(PointBoards, QuickCheckKeepsEveryChessboardOfOpenCvsSamplePhotos) {
+  const std::string dir = "/usr/share/doc/opencv-doc/examples/data/";
+  TagBoard b = Chessboard();
+  b.rows = 7;  // squares: 9 x 6 inner corners
+  b.cols = 10;
+  b.pose_known = false;
+  int photos = 0;
+  for (const char* side : {"left", "right"}) {
+    for (int i = 1; i <= 14; ++i) {
+      if (i == 10) continue;
+      const std::string path = dir + side + (i < 10 ? "0" : "") + std::to_string(i) + ".jpg";
+      const cv::Mat gray = cv::imread(path, cv::IMREAD_GRAYSCALE);
+      ASSERT_FALSE(gray.empty()) << path << " missing (Debian package opencv-doc)";
+      EXPECT_EQ(static_cast<int>(DetectPointBoard(gray, b, 1).corners.size()), 54) << path;
+      ++photos;
+    }
+    const std::string without = dir + side + ".jpg";
+    const cv::Mat gray = cv::imread(without, cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(gray.empty()) << without;
+    EXPECT_TRUE(DetectPointBoard(gray, b, 1).corners.empty()) << without;
+  }
+  EXPECT_EQ(photos, 26);
+}
+
 TEST(PointBoards, PhotoFolderGivesOneCornerPerTarget) {
   const std::filesystem::path dir =
       std::filesystem::path(::testing::TempDir()) / ("rtscalib_point_boards_" + std::to_string(::getpid()));
