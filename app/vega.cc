@@ -138,8 +138,12 @@ int Run(const std::vector<std::string>& argv, const fs::path& log) {
   return Wait(Start(argv, log));
 }
 
-// PNG conversions side by side: the machine's cores, at most this many.
-constexpr size_t kParallelConversions = 2;
+// PNG conversions one at a time: the figures are drawn while the diagnosis
+// runs on the other core, and the diagnosis is the longer of the two. A
+// second conversion beside it only takes CPU from the diagnosis: the photo
+// session 5.35-5.39 s with one, 5.54-5.57 s with two
+// (photo_session_benchmark --benchmark_filter=Run, alternating runs).
+constexpr size_t kParallelConversions = 1;
 
 std::string Tail(const fs::path& log) {
   std::string s = ReadText(log);
