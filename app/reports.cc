@@ -859,8 +859,8 @@ std::string FitSigmasText(const FitSummary& fit, bool records) {
   }
   if (!zooms.empty()) o << " (" << zooms << ")";
   if (fit.sigma_rounds > 0 && !fit.sigmas_converged) {
-    o << ", still moving by more than 5 % after " << fit.sigma_rounds
-      << " rounds of the variance-component estimate";
+    o << ", still moving by more than " << Fmt("%g", 100 * kSigmaSettled) << " % after "
+      << fit.sigma_rounds << " rounds of the variance-component estimate";
   }
   o << "; covariance: "
     << (fit.covariance_clusters > 0

@@ -529,7 +529,8 @@ ceres::Solver::Options SolverOptions(const ceres::Problem& problem, const FitOpt
 // only its residuals see (e.g. the points of unknown position for the
 // records, the board poses and intrinsics for pixels-only data) and its
 // share n_g / n of the parameters several groups see. Updates `sigma`;
-// returns whether any sigma moved by more than 5 % (another round is needed).
+// returns whether any sigma moved by more than kSigmaSettled (another round
+// is needed).
 bool ReestimateSigmas(ceres::Problem* problem, const std::vector<ResidualRef>& refs,
                       std::vector<double>* sigmas) {
   std::vector<double>& sigma = *sigmas;
@@ -573,7 +574,7 @@ bool ReestimateSigmas(ceres::Problem* problem, const std::vector<ResidualRef>& r
     // Never shrink below a floor that would make exact data ill-posed.
     const double floor = g >= kPixelSlots ? 1e-9 : 1e-15;
     const double next = std::max(sigma[g] * f, floor);
-    if (std::abs(next / sigma[g] - 1.0) > 0.05) changed = true;
+    if (std::abs(next / sigma[g] - 1.0) > kSigmaSettled) changed = true;
     sigma[g] = next;
   }
   return changed;
@@ -665,8 +666,10 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   // The variance components start a priori, or at an earlier fit's estimate:
   // the fixed-point iteration below moves each group's sigma by the share of
   // the misfit its weight leaves it, which from a start far off can take more
-  // rounds than kSigmaRounds (the demo's full set from its reduced set's
-  // sigmas: 3 rounds, converged; from the a-priori sigmas: 4, still moving).
+  // rounds than kSigmaRounds (the demo's photo session, report.json: the
+  // full set, started at the reduced set's sigmas, fit.sigma_rounds 3 and
+  // settled; the reduced set from the a-priori sigmas, reduced_fit, 4 and
+  // still moving).
   std::vector<double> start_sigma = AprioriSigmas(options, m.NumZooms());
   if (earlier != nullptr && options.reestimate_sigmas)
     start_sigma = StartSigmas(*earlier, start_sigma);

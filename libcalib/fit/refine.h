@@ -18,6 +18,10 @@
 
 namespace rtscalib {
 
+// The variance-component estimate has settled when no group's sigma moves by
+// more than this fraction in a round.
+constexpr double kSigmaSettled = 0.05;
+
 struct FitSummary {
   bool converged = false;
   int iterations = 0;
@@ -33,7 +37,7 @@ struct FitSummary {
   // The variance-component estimate (FitOptions::reestimate_sigmas): rounds
   // of solve and re-estimate (the first solve with the start sigmas; 0 when
   // the sigmas were held), and whether the last estimate moved no sigma by
-  // more than 5 % (false when the rounds ran out first).
+  // more than kSigmaSettled (false when the rounds ran out first).
   int sigma_rounds = 0;
   bool sigmas_converged = false;
   // Clusters of the cluster-robust covariance (0: independent errors).
