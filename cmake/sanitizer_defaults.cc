@@ -12,11 +12,11 @@
 // renderer's OpenGL), and LeakSanitizer's exit-time scan does not walk them.
 // GCC 12's runtime sometimes reads a stale entry of that list there ("DTLS
 // 26 at 0x0000000028cd-...", then "Tracer caught signal 11"), and a test
-// that had passed fails at its exit. ShotsTest.PointBoardsRenderAndDetect,
-// two processes side by side: a crash in 2 of 12 such rounds without the
-// option, in none of 20 with it. What is lost: memory that nothing but a
-// dlopen'ed module's thread-local variables points to could be reported as
-// a leak; those modules are Mesa's, suppressed below.
+// that had passed fails at its exit: now and then, most often with another
+// test beside it (ShotsTest.PointBoardsRenderAndDetect in the CI runs of
+// 2026-11-27; with the option no run crashed). What is lost: memory that
+// nothing but a dlopen'ed module's thread-local variables points to could
+// be reported as a leak; those modules are Mesa's, suppressed below.
 extern "C" const char* __asan_default_options() {
   return "detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1:"
          "intercept_tls_get_addr=0";
