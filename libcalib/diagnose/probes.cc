@@ -6,20 +6,37 @@
 namespace rtscalib {
 namespace {
 
-Eigen::MatrixXd Columns(const Eigen::MatrixXd& m, const ColumnBlock& b) {
+Eigen::MatrixXd::ConstColsBlockXpr Columns(const Eigen::MatrixXd& m, const ColumnBlock& b) {
   return m.middleCols(b.first, b.size);
 }
 
-// `projected` (a probe's columns after some projection) with the columns
-// that kept less than kAbsorbed of their norm before the fit's projection
-// (Reduced::column_norm of the block) set to zero.
+// Column j of block b, after some projection, kept less than kAbsorbed of
+// its norm before the fit's projection (Reduced::column_norm of the block).
+bool Absorbed(const Eigen::Ref<const Eigen::MatrixXd>& projected, int j, const Reduced& red,
+              const ColumnBlock& b) {
+  return !(projected.col(j).norm() >= kAbsorbed * red.column_norm[b.first + j]);
+}
+
+// `projected` (a probe's columns after some projection) with its absorbed
+// columns set to zero.
 Eigen::MatrixXd Prune(Eigen::MatrixXd projected, const Reduced& red, const ColumnBlock& b) {
   for (int j = 0; j < b.size; ++j) {
-    if (!(projected.col(j).norm() >= kAbsorbed * red.column_norm[b.first + j])) {
-      projected.col(j).setZero();
-    }
+    if (Absorbed(projected, j, red, b)) projected.col(j).setZero();
   }
   return projected;
+}
+
+// TestColumns of a probe's columns `t` (after some projection) without its
+// absorbed columns; `t` is copied only when one of them is absorbed.
+ColumnTest TestProbe(const Eigen::Ref<const Eigen::VectorXd>& y,
+                     const Eigen::Ref<const Eigen::MatrixXd>& t, const Reduced& red,
+                     const ColumnBlock& b, int num_clusters, int dof_used) {
+  for (int j = 0; j < b.size; ++j) {
+    if (Absorbed(t, j, red, b)) {
+      return TestColumns(y, Prune(t, red, b), red.cluster, num_clusters, dof_used);
+    }
+  }
+  return TestColumns(y, t, red.cluster, num_clusters, dof_used);
 }
 
 }  // namespace
@@ -43,8 +60,7 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
 
   // 1. Against the fitted model alone.
   for (ProbeResult& r : out.probes) {
-    r.raw = TestColumns(red.r, Prune(Columns(red.extra, *r.block), red, *r.block), red.cluster, g,
-                        dof_base);
+    r.raw = TestProbe(red.r, Columns(red.extra, *r.block), red, *r.block, g, dof_base);
     r.raw_significant = r.raw.rank > 0 && r.raw.p_value < out.level;
   }
 
@@ -62,28 +78,43 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     cat.Add(c);
   }
   const Eigen::VectorXd y = cat.Apply(red.r);
-  std::vector<Eigen::MatrixXd> t_cat;
-  {
-    std::vector<Eigen::MatrixXd> raw;
-    for (const ProbeResult& r : out.probes) raw.push_back(Columns(red.extra, *r.block));
-    t_cat = cat.ApplyEach(raw);
-  }
+  // Every probe's columns through the catalogue's projector, side by side
+  // (one product over the n x rank basis), absorbed columns set to zero.
+  std::vector<Eigen::Index> offset(out.probes.size() + 1, 0);
   for (size_t j = 0; j < out.probes.size(); ++j) {
-    t_cat[j] = Prune(std::move(t_cat[j]), red, *out.probes[j].block);
+    offset[j + 1] = offset[j] + out.probes[j].block->size;
   }
+  Eigen::MatrixXd t_cat_all(n, offset.back());
+  for (size_t j = 0; j < out.probes.size(); ++j) {
+    t_cat_all.middleCols(offset[j], out.probes[j].block->size) =
+        Columns(red.extra, *out.probes[j].block);
+  }
+  cat.Project(t_cat_all);
+  auto t_cat = [&](size_t j) {
+    return t_cat_all.middleCols(offset[j], out.probes[j].block->size);
+  };
+  for (size_t j = 0; j < out.probes.size(); ++j) {
+    const ColumnBlock& b = *out.probes[j].block;
+    for (int k = 0; k < b.size; ++k) {
+      if (Absorbed(t_cat(j), k, red, b)) t_cat(j).col(k).setZero();
+    }
+  }
+  // y and every probe's columns through the selected probes' projector,
+  // brought up to date by each selection's new directions only
+  // (Projector::Project).
+  Eigen::MatrixXd t_sel = t_cat_all;
+  Eigen::VectorXd ys = y;
   std::vector<int> selected;
   Projector sel(n);
   for (int iter = 0; iter < max_terms; ++iter) {
-    const Eigen::VectorXd ys = sel.Apply(y);
-    const std::vector<Eigen::MatrixXd> t_sel = sel.ApplyEach(t_cat);
     int best = -1;
     double best_p = 1.0, best_wald = 0.0;
     for (size_t j = 0; j < out.probes.size(); ++j) {
       if (std::find(selected.begin(), selected.end(), static_cast<int>(j)) != selected.end())
         continue;
       const ColumnTest t =
-          TestColumns(ys, Prune(t_sel[j], red, *out.probes[j].block), red.cluster, g,
-                      dof_base + cat.rank() + sel.rank());
+          TestProbe(ys, t_sel.middleCols(offset[j], out.probes[j].block->size), red,
+                    *out.probes[j].block, g, dof_base + cat.rank() + sel.rank());
       if (t.rank == 0) continue;
       if (t.p_value < best_p || (t.p_value == best_p && t.wald > best_wald)) {
         best = static_cast<int>(j);
@@ -93,18 +124,21 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     }
     if (best < 0 || best_p >= out.level) break;
     selected.push_back(best);
-    sel.Add(t_cat[best]);
+    const int known = sel.rank();
+    sel.Add(t_cat(best));
+    sel.Project(ys, known);
+    sel.Project(t_sel, known);
   }
   // Joint estimates of the selected probes.
   for (int s : selected) {
     Projector others(n);
     for (int o : selected) {
-      if (o != s) others.Add(t_cat[o]);
+      if (o != s) others.Add(t_cat(o));
     }
     ProbeResult& r = out.probes[s];
     r.selected = true;
-    r.joint = TestColumns(others.Apply(y), Prune(others.Apply(t_cat[s]), red, *r.block),
-                          red.cluster, g, dof_base + cat.rank() + others.rank());
+    r.joint = TestProbe(others.Apply(y), others.Apply(t_cat(s)), red, *r.block, g,
+                        dof_base + cat.rank() + others.rank());
   }
   out.selected = selected;
 
@@ -113,14 +147,14 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
   for (size_t j = 0; j < out.probes.size(); ++j) {
     ProbeResult& r = out.probes[j];
     if (!r.raw_significant || r.selected) continue;
-    const ColumnTest on_catalogue = TestColumns(y, t_cat[j], red.cluster, g, dof_base + cat.rank());
+    const ColumnTest on_catalogue = TestColumns(y, t_cat(j), red.cluster, g, dof_base + cat.rank());
     if (!(on_catalogue.rank > 0 && on_catalogue.p_value < out.level)) continue;
     double best = std::numeric_limits<double>::infinity();
     for (int s : selected) {
       Projector ps(n);
-      ps.Add(t_cat[s]);
-      const ColumnTest t = TestColumns(ps.Apply(y), Prune(ps.Apply(t_cat[j]), red, *r.block),
-                                       red.cluster, g, dof_base + cat.rank() + ps.rank());
+      ps.Add(t_cat(s));
+      const ColumnTest t = TestProbe(ps.Apply(y), ps.Apply(t_cat(j)), red, *r.block, g,
+                                     dof_base + cat.rank() + ps.rank());
       if (t.wald < best) {
         best = t.wald;
         r.same_as = out.probes[s].block->name;
@@ -147,8 +181,8 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     const Eigen::VectorXd y_without = without.Apply(red.r);
     const std::vector<Eigen::MatrixXd> t = without.ApplyEach(open_cols);
     for (size_t i = 0; i < open.size(); ++i) {
-      const ColumnTest test = TestColumns(y_without, Prune(t[i], red, *open[i]->block),
-                                          red.cluster, g, dof_base + without.rank());
+      const ColumnTest test =
+          TestProbe(y_without, t[i], red, *open[i]->block, g, dof_base + without.rank());
       if (test.wald < best[i]) {
         best[i] = test.wald;
         open[i]->explained_by = b->name;

@@ -85,7 +85,8 @@ Eigen::MatrixXd PseudoInverseSpd(const Eigen::MatrixXd& a, double rel_tol, int* 
   return d.asDiagonal() * (v * inv.asDiagonal() * v.transpose()) * d.asDiagonal();
 }
 
-ColumnTest TestColumns(const Eigen::VectorXd& y, const Eigen::MatrixXd& t,
+ColumnTest TestColumns(const Eigen::Ref<const Eigen::VectorXd>& y,
+                       const Eigen::Ref<const Eigen::MatrixXd>& t,
                        const std::vector<int>& cluster, int num_clusters, int dof_used) {
   ColumnTest out;
   const int n = static_cast<int>(y.size());
@@ -136,12 +137,14 @@ ColumnTest TestColumns(const Eigen::VectorXd& y, const Eigen::MatrixXd& t,
   return out;
 }
 
-int Projector::Add(const Eigen::MatrixXd& cols, double rel_tol) {
+int Projector::Add(const Eigen::Ref<const Eigen::MatrixXd>& cols, double rel_tol) {
   const int n = static_cast<int>(q_.rows());
   const int m = static_cast<int>(cols.cols());
   if (m == 0) return 0;
   // Projected twice: classical Gram-Schmidt is stable when repeated once.
-  Eigen::MatrixXd x = Apply(Apply(cols));
+  Eigen::MatrixXd x = cols;
+  Project(x);
+  Project(x);
   for (int j = 0; j < m; ++j) {
     const double norm = cols.col(j).norm();
     x.col(j) *= norm > 0 ? 1.0 / norm : 0.0;
@@ -172,9 +175,18 @@ int Projector::Add(const Eigen::MatrixXd& cols, double rel_tol) {
   return rank;
 }
 
-Eigen::MatrixXd Projector::Apply(const Eigen::MatrixXd& x) const {
-  if (q_.cols() == 0) return x;
-  return x - q_ * (q_.transpose() * x);
+Eigen::MatrixXd Projector::Apply(const Eigen::Ref<const Eigen::MatrixXd>& x) const {
+  Eigen::MatrixXd out = x;
+  Project(out);
+  return out;
+}
+
+void Projector::Project(Eigen::Ref<Eigen::MatrixXd> x, int from) const {
+  const Eigen::Index k = q_.cols() - from;
+  if (k <= 0 || x.cols() == 0) return;
+  const auto q = q_.rightCols(k);
+  const Eigen::MatrixXd c = q.transpose() * x;
+  x.noalias() -= q * c;
 }
 
 std::vector<Eigen::MatrixXd> Projector::ApplyEach(const std::vector<Eigen::MatrixXd>& blocks) const {
@@ -187,7 +199,7 @@ std::vector<Eigen::MatrixXd> Projector::ApplyEach(const std::vector<Eigen::Matri
     all.middleCols(k, b.cols()) = b;
     k += b.cols();
   }
-  all = Apply(all);
+  Project(all);
   std::vector<Eigen::MatrixXd> out;
   out.reserve(blocks.size());
   k = 0;

@@ -47,7 +47,8 @@ struct ColumnTest {
 
 // `cluster[i]` in [0, num_clusters) for every row; `dof_used` = parameters
 // already fitted (the model's free parameters plus nuisance columns).
-ColumnTest TestColumns(const Eigen::VectorXd& y, const Eigen::MatrixXd& t,
+ColumnTest TestColumns(const Eigen::Ref<const Eigen::VectorXd>& y,
+                       const Eigen::Ref<const Eigen::MatrixXd>& t,
                        const std::vector<int>& cluster, int num_clusters, int dof_used);
 
 // Pseudo-inverse of a symmetric positive semi-definite matrix after scaling it
@@ -62,9 +63,16 @@ Eigen::MatrixXd PseudoInverseSpd(const Eigen::MatrixXd& a, double rel_tol, int* 
 class Projector {
  public:
   explicit Projector(int rows) : q_(rows, 0) {}
-  // Returns how many of `cols` added a new direction.
-  int Add(const Eigen::MatrixXd& cols, double rel_tol = 1e-7);
-  Eigen::MatrixXd Apply(const Eigen::MatrixXd& x) const;
+  // Returns how many of `cols` added a new direction; they are the last
+  // columns of basis().
+  int Add(const Eigen::Ref<const Eigen::MatrixXd>& cols, double rel_tol = 1e-7);
+  Eigen::MatrixXd Apply(const Eigen::Ref<const Eigen::MatrixXd>& x) const;
+  // x := (I - Q Q') x in place, Q = basis() from column `from` on. The basis
+  // is orthonormal, so projecting an x that the first `from` columns have
+  // already projected by the rest is projecting it by all of them: a
+  // projection kept up to date while the basis grows costs only the new
+  // directions, and n x cols temporaries are not allocated.
+  void Project(Eigen::Ref<Eigen::MatrixXd> x, int from = 0) const;
   // Apply to each of `blocks` (same number of rows), in one product: one
   // pass over the n x rank basis instead of one per block, which is what
   // costs when the blocks are a few columns each.
