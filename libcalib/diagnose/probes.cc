@@ -90,9 +90,7 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
         Columns(red.extra, *out.probes[j].block);
   }
   cat.Project(t_cat_all);
-  auto t_cat = [&](size_t j) {
-    return t_cat_all.middleCols(offset[j], out.probes[j].block->size);
-  };
+  auto t_cat = [&](size_t j) { return t_cat_all.middleCols(offset[j], out.probes[j].block->size); };
   for (size_t j = 0; j < out.probes.size(); ++j) {
     const ColumnBlock& b = *out.probes[j].block;
     for (int k = 0; k < b.size; ++k) {

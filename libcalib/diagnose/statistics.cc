@@ -86,8 +86,8 @@ Eigen::MatrixXd PseudoInverseSpd(const Eigen::MatrixXd& a, double rel_tol, int* 
 }
 
 ColumnTest TestColumns(const Eigen::Ref<const Eigen::VectorXd>& y,
-                       const Eigen::Ref<const Eigen::MatrixXd>& t,
-                       const std::vector<int>& cluster, int num_clusters, int dof_used) {
+                       const Eigen::Ref<const Eigen::MatrixXd>& t, const std::vector<int>& cluster,
+                       int num_clusters, int dof_used) {
   ColumnTest out;
   const int n = static_cast<int>(y.size());
   const int k = static_cast<int>(t.cols());

@@ -48,8 +48,8 @@ struct ColumnTest {
 // `cluster[i]` in [0, num_clusters) for every row; `dof_used` = parameters
 // already fitted (the model's free parameters plus nuisance columns).
 ColumnTest TestColumns(const Eigen::Ref<const Eigen::VectorXd>& y,
-                       const Eigen::Ref<const Eigen::MatrixXd>& t,
-                       const std::vector<int>& cluster, int num_clusters, int dof_used);
+                       const Eigen::Ref<const Eigen::MatrixXd>& t, const std::vector<int>& cluster,
+                       int num_clusters, int dof_used);
 
 // Pseudo-inverse of a symmetric positive semi-definite matrix after scaling it
 // to unit diagonal; eigenvalues below `rel_tol` (of the largest) count as zero.
