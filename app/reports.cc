@@ -1,5 +1,6 @@
 #include "app/reports.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -824,22 +825,36 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
     << " s; excluded (critical region): " << r.calibration.fit.excluded_critical << "\n";
   o << "Gauge freedoms held:\n";
   for (const std::string& g : r.calibration.fit.fixed_gauges) o << "  - " << g << "\n";
-  if (!r.calibration.fit.strong_correlations.empty()) {
-    // Board poses of many placements each correlate with the principal
-    // point (as in any camera calibration): the first ones show the pattern,
-    // report.json lists them all.
-    constexpr size_t kListed = 16;
-    const auto& pairs = r.calibration.fit.strong_correlations;
-    o << "Strongly correlated parameters (|rho| > 0.95):\n";
-    for (size_t i = 0; i < std::min(pairs.size(), kListed); ++i)
-      o << "  " << pairs[i].first << "  rho = " << Fmt("%+.3f", pairs[i].second) << "\n";
-    if (pairs.size() > kListed) {
-      o << "  ... and " << pairs.size() - kListed << " more pairs (report.json fit.strong_correlations)\n";
-    }
-  }
+  o << StrongCorrelationsText(r.calibration.fit);
   o << FitSigmasText(r.calibration.fit, !r.obs.records.empty()) << "\n";
   o << GrossRowsText(r);
   for (const std::string& n : r.notes) o << "note: " << n << "\n";
+  return o.str();
+}
+
+std::string StrongCorrelationsText(const FitSummary& fit) {
+  if (fit.strong_correlations.empty()) return "";
+  // The strongest first: two runs of the same data differ in the last
+  // digits (the fit's threads sum in varying order), so a pair near the
+  // 0.95 threshold may be listed in one run and not in the other; first in
+  // parameter order, such a pair moved every pair after it out of the
+  // list or into it. Ties (|rho| = 1.000 to three decimals, typical of a
+  // camera's rotation against its principal point) in parameter order.
+  // Board poses of many placements each correlate with the principal point
+  // (as in any camera calibration); report.json lists every pair.
+  constexpr size_t kListed = 16;
+  std::vector<std::pair<std::string, double>> pairs = fit.strong_correlations;
+  std::stable_sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
+    return std::round(1e3 * std::abs(a.second)) > std::round(1e3 * std::abs(b.second));
+  });
+  std::ostringstream o;
+  o << "Strongly correlated parameters (|rho| > 0.95), the strongest first:\n";
+  for (size_t i = 0; i < std::min(pairs.size(), kListed); ++i)
+    o << "  " << pairs[i].first << "  rho = " << Fmt("%+.3f", pairs[i].second) << "\n";
+  if (pairs.size() > kListed) {
+    o << "  ... and " << pairs.size() - kListed
+      << " more pairs (report.json fit.strong_correlations)\n";
+  }
   return o.str();
 }
 

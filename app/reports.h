@@ -21,6 +21,10 @@ std::string ReportText(const RunConfig& config, const PipelineResult& result);
 // The rows taken out as gross errors, a line each (the first 50), for
 // report.txt and report.html; empty when there are none.
 std::string GrossRowsText(const PipelineResult& result);
+// The pairs of fitted parameters with |rho| > 0.95 (FitSummary::
+// strong_correlations), the strongest 16 a line each, for report.txt;
+// empty when there are none.
+std::string StrongCorrelationsText(const FitSummary& fit);
 // The refinement's a-posteriori sigmas (pixels per zoom) and how the
 // covariance treats correlated errors, one sentence for report.txt and
 // report.html; `records` false leaves out the EDM and camera-record sigmas.
