@@ -17,13 +17,12 @@ bool Absorbed(const Eigen::Ref<const Eigen::MatrixXd>& projected, int j, const R
   return !(projected.col(j).norm() >= kAbsorbed * red.column_norm[b.first + j]);
 }
 
-// `projected` (a probe's columns after some projection) with its absorbed
-// columns set to zero.
-Eigen::MatrixXd Prune(Eigen::MatrixXd projected, const Reduced& red, const ColumnBlock& b) {
+// Sets the absorbed columns of `projected` (a probe's columns after some
+// projection) to zero.
+void ZeroAbsorbed(Eigen::Ref<Eigen::MatrixXd> projected, const Reduced& red, const ColumnBlock& b) {
   for (int j = 0; j < b.size; ++j) {
     if (Absorbed(projected, j, red, b)) projected.col(j).setZero();
   }
-  return projected;
 }
 
 // TestColumns of a probe's columns `t` (after some projection) without its
@@ -33,7 +32,9 @@ ColumnTest TestProbe(const Eigen::Ref<const Eigen::VectorXd>& y,
                      const ColumnBlock& b, int num_clusters, int dof_used) {
   for (int j = 0; j < b.size; ++j) {
     if (Absorbed(t, j, red, b)) {
-      return TestColumns(y, Prune(t, red, b), red.cluster, num_clusters, dof_used);
+      Eigen::MatrixXd pruned = t;
+      ZeroAbsorbed(pruned, red, b);
+      return TestColumns(y, pruned, red.cluster, num_clusters, dof_used);
     }
   }
   return TestColumns(y, t, red.cluster, num_clusters, dof_used);
@@ -91,12 +92,7 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
   }
   cat.Project(t_cat_all);
   auto t_cat = [&](size_t j) { return t_cat_all.middleCols(offset[j], out.probes[j].block->size); };
-  for (size_t j = 0; j < out.probes.size(); ++j) {
-    const ColumnBlock& b = *out.probes[j].block;
-    for (int k = 0; k < b.size; ++k) {
-      if (Absorbed(t_cat(j), k, red, b)) t_cat(j).col(k).setZero();
-    }
-  }
+  for (size_t j = 0; j < out.probes.size(); ++j) ZeroAbsorbed(t_cat(j), red, *out.probes[j].block);
   // y and every probe's columns through the selected probes' projector,
   // brought up to date by each selection's new directions only
   // (Projector::Project).
