@@ -100,6 +100,8 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
   Eigen::VectorXd ys = y;
   std::vector<int> selected;
   Projector sel(n);
+  // sel after each step: first[i] spans the first i selected probes.
+  std::vector<Projector> first;
   for (int iter = 0; iter < max_terms; ++iter) {
     int best = -1;
     double best_p = 1.0, best_wald = 0.0;
@@ -119,16 +121,19 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     if (best < 0 || best_p >= out.level) break;
     selected.push_back(best);
     const int known = sel.rank();
+    first.push_back(sel);
     sel.Add(t_cat(best));
     sel.Project(ys, known);
     sel.Project(t_sel, known);
   }
   // Joint estimates of the selected probes.
-  for (int s : selected) {
-    Projector others(n);
-    for (int o : selected) {
-      if (o != s) others.Add(t_cat(o));
-    }
+  // The others of selected[i] are added in selection order, as the
+  // selection added them: the first i are first[i], so only the later ones
+  // are added to its copy (half the additions of building each anew).
+  for (size_t i = 0; i < selected.size(); ++i) {
+    const int s = selected[i];
+    Projector others = first[i];
+    for (size_t o = i + 1; o < selected.size(); ++o) others.Add(t_cat(selected[o]));
     ProbeResult& r = out.probes[s];
     r.selected = true;
     r.joint = TestProbe(others.Apply(y), others.Apply(t_cat(s)), red, *r.block, g,
@@ -137,21 +142,31 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
   out.selected = selected;
 
   // 3a. Significant on top of the catalogue but not selected: the selected
-  // probe that removes most of it holds the same structure.
+  // probe that removes most of it holds the same structure. Each selected
+  // probe's projector and y through it are the same for every such probe:
+  // built once, when the first one needs them.
+  std::vector<Projector> alone;
+  std::vector<Eigen::VectorXd> y_alone;
   for (size_t j = 0; j < out.probes.size(); ++j) {
     ProbeResult& r = out.probes[j];
     if (!r.raw_significant || r.selected) continue;
     const ColumnTest on_catalogue = TestColumns(y, t_cat(j), red.cluster, g, dof_base + cat.rank());
     if (!(on_catalogue.rank > 0 && on_catalogue.p_value < out.level)) continue;
     double best = std::numeric_limits<double>::infinity();
-    for (int s : selected) {
-      Projector ps(n);
-      ps.Add(t_cat(s));
-      const ColumnTest t = TestProbe(ps.Apply(y), ps.Apply(t_cat(j)), red, *r.block, g,
+    if (alone.empty()) {
+      for (int s : selected) {
+        alone.emplace_back(n);
+        alone.back().Add(t_cat(s));
+        y_alone.push_back(alone.back().Apply(y));
+      }
+    }
+    for (size_t i = 0; i < selected.size(); ++i) {
+      const Projector& ps = alone[i];
+      const ColumnTest t = TestProbe(y_alone[i], ps.Apply(t_cat(j)), red, *r.block, g,
                                      dof_base + cat.rank() + ps.rank());
       if (t.wald < best) {
         best = t.wald;
-        r.same_as = out.probes[s].block->name;
+        r.same_as = out.probes[selected[i]].block->name;
       }
     }
     if (r.same_as.empty()) r.same_as = "the structure selected above";
