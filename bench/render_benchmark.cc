@@ -223,6 +223,49 @@ BENCHMARK(BM_RenderShots)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
 
+// One board moved to four placements (SPEC 7.1), 16 shots in the
+// simulator's order (the placement changes from shot to shot): one window
+// per worker holds all four scenes.
+void BM_RenderShotsPlacements(benchmark::State& state) {
+  Display();
+  Fixture f;
+  PlacedScenes scenes;
+  std::vector<Shot> shots;
+  for (int p = 0; p < 4; ++p) {
+    TargetScene scene = f.scene;
+    scene.boards[0].ref_from_board.translation.x() += 0.05 * p;
+    scenes["p" + std::to_string(p)] = scene;
+  }
+  for (int i = 0; i < 16; ++i) {
+    Shot s;
+    s.id = "b" + std::to_string(i);
+    s.placement = "p" + std::to_string(i % 4);
+    s.cam = f.cam;
+    s.ref_from_cam = f.pose;
+    s.ref_from_cam.translation.x() += 0.002 * i + 0.05 * (i % 4);
+    shots.push_back(s);
+  }
+  char dir[] = "/tmp/rtscalib-bench-XXXXXX";
+  if (::mkdtemp(dir) == nullptr) {
+    state.SkipWithError("mkdtemp failed");
+    return;
+  }
+  RenderShotsOptions options;
+  options.out_dir = dir;
+  options.jobs = static_cast<int>(state.range(0));
+  options.progress = false;
+  for (auto _ : state) RenderShots(scenes, shots, options);
+  std::filesystem::remove_all(dir);
+  state.counters["images/s"] = benchmark::Counter(
+      static_cast<double>(state.iterations() * shots.size()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_RenderShotsPlacements)
+    ->ArgNames({"jobs"})
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
 }  // namespace
 }  // namespace rtscalib::render
 

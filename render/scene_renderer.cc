@@ -457,11 +457,13 @@ Eigen::Matrix4d OpenGlProjection(double fx, double fy, double cx, double cy, int
 }
 
 struct SceneRenderer::Impl {
-  TargetScene scene;
+  std::vector<TargetScene> scenes;
   RenderOptions options;
   Ptr<vtkRenderWindow> window;
   Ptr<vtkRenderer> renderer;
-  std::vector<BoardActors> boards;
+  // Per scene; the selected one's are visible, and `boards` points to them.
+  std::vector<std::vector<BoardActors>> scene_boards;
+  const std::vector<BoardActors>* boards = nullptr;
   Ptr<vtkUnsignedCharArray> pixels;
   // Maps of the cameras seen last (one per zoom level, typically), most
   // recent first: a shot list alternating between zooms must not rebuild them.
@@ -473,6 +475,9 @@ struct SceneRenderer::Impl {
   cv::Mat distorted;  // CV_32FC1
 
   void Build();
+  // The actors of `scene`'s boards, added to the renderer.
+  std::vector<BoardActors> BuildBoards(const TargetScene& scene, const TagTextureOptions& topt);
+  void Select(int index);
   // Renders the ideal image of `cam`'s intrinsics on `canvas` (in `cam`'s
   // pixels) at `box` times its size and box-averages it back into `out`.
   void RenderCanvas(const Rigid3& ref_from_cam, const CameraTool& cam, const Canvas& canvas,
@@ -505,6 +510,30 @@ void SceneRenderer::Impl::Build() {
   TagTextureOptions topt = options.texture;
   topt.black = options.ink;
   topt.white = options.paper;
+  for (const TargetScene& scene : scenes) {
+    scene_boards.push_back(BuildBoards(scene, topt));
+  }
+  pixels = Ptr<vtkUnsignedCharArray>::New();
+  Select(0);
+}
+
+void SceneRenderer::Impl::Select(int index) {
+  if (index < 0 || index >= static_cast<int>(scene_boards.size())) {
+    throw std::out_of_range("SceneRenderer::SelectScene: scene " + std::to_string(index) + " of " +
+                            std::to_string(scene_boards.size()));
+  }
+  for (size_t i = 0; i < scene_boards.size(); ++i) {
+    for (const BoardActors& b : scene_boards[i]) {
+      b.front->SetVisibility(static_cast<int>(i) == index);
+      b.back->SetVisibility(static_cast<int>(i) == index);
+    }
+  }
+  boards = &scene_boards[index];
+}
+
+std::vector<BoardActors> SceneRenderer::Impl::BuildBoards(const TargetScene& scene,
+                                                          const TagTextureOptions& topt) {
+  std::vector<BoardActors> boards;
   for (const TagBoard& board : scene.boards) {
     const TagTexture tex = MakeTagTexture(board, topt);
     const int nx = static_cast<int>(tex.x_board.size()), ny = static_cast<int>(tex.y_board.size());
@@ -599,7 +628,7 @@ void SceneRenderer::Impl::Build() {
     renderer->AddActor(ba.back);
     boards.push_back(ba);
   }
-  pixels = Ptr<vtkUnsignedCharArray>::New();
+  return boards;
 }
 
 void SceneRenderer::Impl::RenderCanvas(const Rigid3& ref_from_cam, const CameraTool& cam,
@@ -612,7 +641,7 @@ void SceneRenderer::Impl::RenderCanvas(const Rigid3& ref_from_cam, const CameraT
   // board gets view_from_board = diag(1, -1, -1) * cam_from_ref * ref_from_board.
   const Rigid3 cam_from_ref = ref_from_cam.Inverse();
   double z_min = std::numeric_limits<double>::infinity(), z_max = 0;
-  for (const BoardActors& b : boards) {
+  for (const BoardActors& b : *boards) {
     const Rigid3 cam_from_board = cam_from_ref * b.ref_from_board;
     for (const Eigen::Vector3d& p : b.outline) {
       const double z = (cam_from_board * p).z();
@@ -690,11 +719,15 @@ void SceneRenderer::Impl::RenderCanvas(const Rigid3& ref_from_cam, const CameraT
 }
 
 SceneRenderer::SceneRenderer(const TargetScene& scene, const RenderOptions& options)
+    : SceneRenderer(std::vector<TargetScene>{scene}, options) {}
+
+SceneRenderer::SceneRenderer(const std::vector<TargetScene>& scenes, const RenderOptions& options)
     : impl_(std::make_unique<Impl>()) {
   if (const std::string msg = options.Check(); !msg.empty()) {
     throw std::invalid_argument("RenderOptions: " + msg);
   }
-  impl_->scene = scene;
+  if (scenes.empty()) throw std::invalid_argument("SceneRenderer: no scene");
+  impl_->scenes = scenes;
   impl_->options = options;
   impl_->Build();
 }
@@ -702,6 +735,8 @@ SceneRenderer::SceneRenderer(const TargetScene& scene, const RenderOptions& opti
 SceneRenderer::~SceneRenderer() {
   if (impl_ && impl_->window) impl_->window->Finalize();
 }
+
+void SceneRenderer::SelectScene(int index) { impl_->Select(index); }
 
 const RenderOptions& SceneRenderer::options() const { return impl_->options; }
 

@@ -15,13 +15,15 @@
 // (tag_texture.h) with linear, mipmapped texture filtering; only their
 // printed (-z) side is drawn.
 //
-// One SceneRenderer owns one offscreen VTK render window reused across calls;
+// One SceneRenderer owns one offscreen VTK render window reused across calls
+// (and across its scenes);
 // not thread-safe. It needs an X display (headless.h) for its whole lifetime.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -58,7 +60,16 @@ class SceneRenderer {
   // std::invalid_argument for invalid options or boards, std::runtime_error
   // when no OpenGL context can be created.
   SceneRenderer(const TargetScene& scene, const RenderOptions& options = {});
+  // Several scenes in one window, the first one selected: the placements of
+  // one board moved between sets of shots (SPEC 7.1). Each scene's boards
+  // are built once; the window, its framebuffers and the distortion maps
+  // serve them all, so a session of many placements costs one OpenGL
+  // context and one map per lens, not one per placement.
+  SceneRenderer(const std::vector<TargetScene>& scenes, const RenderOptions& options = {});
   ~SceneRenderer();
+  // The scene that Render and RenderPinhole draw from now on (an index into
+  // the constructor's scenes); the others are hidden.
+  void SelectScene(int index);
   SceneRenderer(const SceneRenderer&) = delete;
   SceneRenderer& operator=(const SceneRenderer&) = delete;
 

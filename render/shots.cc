@@ -79,17 +79,25 @@ class Progress {
 };
 
 // Renders `indices` of `shots` into out_dir; calls done(index) after each
-// image. One SceneRenderer per placement, built when first needed.
+// image. One SceneRenderer holds the placements the indices need, each
+// selected in turn.
 void RenderIndices(const PlacedScenes& scenes, const std::vector<Shot>& shots,
                    const std::vector<int>& indices, const RenderShotsOptions& options,
                    const std::function<void(int)>& done) {
   HeadlessDisplay display(options.headless);
-  std::map<std::string, std::unique_ptr<SceneRenderer>> renderers;
+  std::map<std::string, int> scene_of;
+  std::vector<TargetScene> needed;
+  for (int i : indices) {
+    if (scene_of.emplace(shots[i].placement, static_cast<int>(needed.size())).second) {
+      needed.push_back(scenes.at(shots[i].placement));
+    }
+  }
+  if (needed.empty()) return;
+  SceneRenderer renderer(needed, options.render);
   for (int i : indices) {
     const Shot& s = shots[i];
-    std::unique_ptr<SceneRenderer>& renderer = renderers[s.placement];
-    if (!renderer) renderer = std::make_unique<SceneRenderer>(scenes.at(s.placement), options.render);
-    const cv::Mat img = renderer->Render(s.ref_from_cam, s.cam, static_cast<std::uint64_t>(i));
+    renderer.SelectScene(scene_of.at(s.placement));
+    const cv::Mat img = renderer.Render(s.ref_from_cam, s.cam, static_cast<std::uint64_t>(i));
     const std::string path = (fs::path(options.out_dir) / ImageName(s)).string();
     // Encoded in memory and written through the checked writer: a full disk
     // is a WriteError naming the image, never a photo cut short.
