@@ -200,6 +200,31 @@ TEST(SceneRendererTest, RefocusedCameraRendersAsIfItsMapWereSolved) {
   }
 }
 
+// Several scenes in one renderer (the placements of a moved board): each
+// selected scene renders exactly as a renderer of that scene alone, whatever
+// was drawn before it; the distortion map of the lens is solved once for all.
+TEST(SceneRendererTest, SelectedSceneRendersAsItsOwnRenderer) {
+  EnsureDisplay();
+  const TagBoard near = FrontBoard(3, 4, 1.5);
+  TagBoard left = FrontBoard(2, 3, 2.5);
+  left.ref_from_board.translation.x() -= 0.2;
+  const std::vector<TargetScene> scenes = {SceneOf(near), SceneOf(left)};
+  RenderOptions options;
+  options.noise_sigma = 2.0;
+  const CameraTool cam = TestCamera(true);
+  SceneRenderer both(scenes, options);
+  for (const int k : {0, 1, 0}) {
+    both.SelectScene(k);
+    SceneRenderer alone(scenes[k], options);
+    const cv::Mat a = both.Render(Rigid3(), cam, 7 + k);
+    const cv::Mat b = alone.Render(Rigid3(), cam, 7 + k);
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << "scene " << k;
+  }
+  EXPECT_EQ(both.map_counts().solved, 1);
+  EXPECT_THROW(both.SelectScene(2), std::out_of_range);
+  EXPECT_THROW(SceneRenderer(std::vector<TargetScene>{}, options), std::invalid_argument);
+}
+
 TEST(SceneRendererTest, NoiseIsSeededAndSized) {
   EnsureDisplay();
   RenderOptions options;
