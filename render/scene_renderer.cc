@@ -386,20 +386,34 @@ void SampleDistorted(const cv::Mat& canvas, const cv::Mat& map_x, const cv::Mat&
       const float* my = map_y.ptr<float>(v);
       float* dst = out->ptr<float>(v);
       for (int u = 0; u < map_x.cols; ++u) {
-        if (mx[u] < -5) {  // no ideal point
-          dst[u] = background;
-          continue;
-        }
         const double x = mx[u] + shift, y = my[u] + shift;
-        const double fx = std::floor(x), fy = std::floor(y);
-        const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
-        if (x0 < -1 || y0 < -1 || x0 >= w || y0 >= h) {
+        // No ideal point (map < -5), or a cell [x0, x0 + 1] x [y0, y0 + 1]
+        // entirely outside the box image (x0 = floor(x) < -1 or >= w).
+        if (mx[u] < -5 || !(x >= -1 && y >= -1 && x < w && y < h)) {
           dst[u] = background;
           continue;
         }
-        const double a = x - fx, b = y - fy;
-        dst[u] = static_cast<float>((1 - b) * ((1 - a) * at(x0, y0) + a * at(x0 + 1, y0)) +
-                                    b * ((1 - a) * at(x0, y0 + 1) + a * at(x0 + 1, y0 + 1)));
+        // floor by truncation (x, y >= -1 here): no libm call per sample.
+        int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+        if (x < x0) --x0;
+        if (y < y0) --y0;
+        const double a = x - x0, b = y - y0;
+        float p00, p10, p01, p11;
+        if (x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h) {  // all four inside
+          const float* r0 = box.ptr<float>(y0) + x0;
+          const float* r1 = box.ptr<float>(y0 + 1) + x0;
+          p00 = r0[0];
+          p10 = r0[1];
+          p01 = r1[0];
+          p11 = r1[1];
+        } else {
+          p00 = at(x0, y0);
+          p10 = at(x0 + 1, y0);
+          p01 = at(x0, y0 + 1);
+          p11 = at(x0 + 1, y0 + 1);
+        }
+        dst[u] =
+            static_cast<float>((1 - b) * ((1 - a) * p00 + a * p10) + b * ((1 - a) * p01 + a * p11));
       }
     }
   });
@@ -473,6 +487,7 @@ struct SceneRenderer::Impl {
   cv::Mat canvas;     // CV_32FC1 ideal image (supersampled when distorted)
   cv::Mat box;        // CV_32FC1, the supersampled canvas box-filtered
   cv::Mat distorted;  // CV_32FC1
+  cv::Mat red, red_flipped;  // CV_8UC1 scratch of RenderCanvas
 
   void Build();
   // The actors of `scene`'s boards, added to the renderer.
@@ -688,16 +703,17 @@ void SceneRenderer::Impl::RenderCanvas(const Rigid3& ref_from_cam, const CameraT
 
   // k x k box average of the red channel (the scene is grey), flipping GL's
   // bottom-up rows to image rows.
+  if (k == 1) {
+    // No averaging (the distorted path averages after sampling): the red
+    // channel, flipped, as float (OpenCV's vectorised loops).
+    const cv::Mat gl(h, w, CV_8UC4, const_cast<unsigned char*>(rgba));
+    cv::extractChannel(gl, red, 0);
+    cv::flip(red, red_flipped, 0);
+    red_flipped.convertTo(*out, CV_32F);
+    return;
+  }
   const float scale = 1.0f / (k * k);
   cv::parallel_for_(cv::Range(0, cv_canvas.height), [&](const cv::Range& rows) {
-    if (k == 1) {  // no averaging (the distorted path averages after sampling)
-      for (int r = rows.start; r < rows.end; ++r) {
-        const unsigned char* src = rgba + static_cast<size_t>(h - 1 - r) * w * 4;
-        float* dst = out->ptr<float>(r);
-        for (int c = 0; c < cv_canvas.width; ++c) dst[c] = src[4 * c];
-      }
-      return;
-    }
     std::vector<int> acc(cv_canvas.width);
     for (int r = rows.start; r < rows.end; ++r) {
       std::fill(acc.begin(), acc.end(), 0);
