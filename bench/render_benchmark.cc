@@ -187,6 +187,26 @@ BENCHMARK(BM_DetectPhotos)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
 
+// RenderShots of `shots` into a temporary folder, `state.range(0)` jobs;
+// `scenes` is one TargetScene or the PlacedScenes of a moved board.
+template <typename Scenes>
+void TimeRenderShots(benchmark::State& state, const Scenes& scenes,
+                     const std::vector<Shot>& shots) {
+  char dir[] = "/tmp/rtscalib-bench-XXXXXX";
+  if (::mkdtemp(dir) == nullptr) {
+    state.SkipWithError("mkdtemp failed");
+    return;
+  }
+  RenderShotsOptions options;
+  options.out_dir = dir;
+  options.jobs = static_cast<int>(state.range(0));
+  options.progress = false;
+  for (auto _ : state) RenderShots(scenes, shots, options);
+  std::filesystem::remove_all(dir);
+  state.counters["images/s"] = benchmark::Counter(
+      static_cast<double>(state.iterations() * shots.size()), benchmark::Counter::kIsRate);
+}
+
 // The whole shot pipeline: render, encode and write 16 PNGs, in `jobs`
 // worker processes (fork; each worker sets up its own renderer per call).
 void BM_RenderShots(benchmark::State& state) {
@@ -201,19 +221,7 @@ void BM_RenderShots(benchmark::State& state) {
     s.ref_from_cam.translation.x() += 0.002 * i;
     shots.push_back(s);
   }
-  char dir[] = "/tmp/rtscalib-bench-XXXXXX";
-  if (::mkdtemp(dir) == nullptr) {
-    state.SkipWithError("mkdtemp failed");
-    return;
-  }
-  RenderShotsOptions options;
-  options.out_dir = dir;
-  options.jobs = static_cast<int>(state.range(0));
-  options.progress = false;
-  for (auto _ : state) RenderShots(f.scene, shots, options);
-  std::filesystem::remove_all(dir);
-  state.counters["images/s"] = benchmark::Counter(
-      static_cast<double>(state.iterations() * shots.size()), benchmark::Counter::kIsRate);
+  TimeRenderShots(state, f.scene, shots);
 }
 BENCHMARK(BM_RenderShots)
     ->ArgNames({"jobs"})
@@ -245,19 +253,7 @@ void BM_RenderShotsPlacements(benchmark::State& state) {
     s.ref_from_cam.translation.x() += 0.002 * i + 0.05 * (i % 4);
     shots.push_back(s);
   }
-  char dir[] = "/tmp/rtscalib-bench-XXXXXX";
-  if (::mkdtemp(dir) == nullptr) {
-    state.SkipWithError("mkdtemp failed");
-    return;
-  }
-  RenderShotsOptions options;
-  options.out_dir = dir;
-  options.jobs = static_cast<int>(state.range(0));
-  options.progress = false;
-  for (auto _ : state) RenderShots(scenes, shots, options);
-  std::filesystem::remove_all(dir);
-  state.counters["images/s"] = benchmark::Counter(
-      static_cast<double>(state.iterations() * shots.size()), benchmark::Counter::kIsRate);
+  TimeRenderShots(state, scenes, shots);
 }
 BENCHMARK(BM_RenderShotsPlacements)
     ->ArgNames({"jobs"})
