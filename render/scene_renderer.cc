@@ -471,7 +471,6 @@ Eigen::Matrix4d OpenGlProjection(double fx, double fy, double cx, double cy, int
 }
 
 struct SceneRenderer::Impl {
-  std::vector<TargetScene> scenes;
   RenderOptions options;
   Ptr<vtkRenderWindow> window;
   Ptr<vtkRenderer> renderer;
@@ -489,7 +488,8 @@ struct SceneRenderer::Impl {
   cv::Mat distorted;  // CV_32FC1
   cv::Mat red, red_flipped;  // CV_8UC1 scratch of RenderCanvas
 
-  void Build();
+  // The window and renderer, and every scene's boards (the first selected).
+  void Build(const std::vector<TargetScene>& scenes);
   // The actors of `scene`'s boards, added to the renderer.
   std::vector<BoardActors> BuildBoards(const TargetScene& scene, const TagTextureOptions& topt);
   void Select(int index);
@@ -499,7 +499,7 @@ struct SceneRenderer::Impl {
                     int box, cv::Mat* out);
 };
 
-void SceneRenderer::Impl::Build() {
+void SceneRenderer::Impl::Build(const std::vector<TargetScene>& scenes) {
   window = Ptr<vtkRenderWindow>::New();
   window->SetOffScreenRendering(1);
   window->SetMultiSamples(0);
@@ -743,9 +743,8 @@ SceneRenderer::SceneRenderer(const std::vector<TargetScene>& scenes, const Rende
     throw std::invalid_argument("RenderOptions: " + msg);
   }
   if (scenes.empty()) throw std::invalid_argument("SceneRenderer: no scene");
-  impl_->scenes = scenes;
   impl_->options = options;
-  impl_->Build();
+  impl_->Build(scenes);
 }
 
 SceneRenderer::~SceneRenderer() {
