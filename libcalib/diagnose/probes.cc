@@ -40,6 +40,23 @@ ColumnTest TestProbe(const Eigen::Ref<const Eigen::VectorXd>& y,
   return TestColumns(y, t, red.cluster, num_clusters, dof_used);
 }
 
+// Probes' columns side by side in one matrix, so that one product over a
+// projector's n x rank basis projects them all (what costs when each probe
+// has a few columns); probe j holds columns [offset[j], offset[j + 1]).
+struct SideBySide {
+  Eigen::MatrixXd all;
+  std::vector<Eigen::Index> offset{0};
+
+  SideBySide(const Eigen::MatrixXd& extra, const std::vector<const ColumnBlock*>& blocks) {
+    for (const ColumnBlock* b : blocks) offset.push_back(offset.back() + b->size);
+    all.resize(extra.rows(), offset.back());
+    for (size_t j = 0; j < blocks.size(); ++j) Block(j) = Columns(extra, *blocks[j]);
+  }
+  Eigen::MatrixXd::ColsBlockXpr Block(size_t j) {
+    return all.middleCols(offset[j], offset[j + 1] - offset[j]);
+  }
+};
+
 }  // namespace
 
 ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
@@ -79,24 +96,18 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     cat.Add(c);
   }
   const Eigen::VectorXd y = cat.Apply(red.r);
-  // Every probe's columns through the catalogue's projector, side by side
-  // (one product over the n x rank basis), absorbed columns set to zero.
-  std::vector<Eigen::Index> offset(out.probes.size() + 1, 0);
-  for (size_t j = 0; j < out.probes.size(); ++j) {
-    offset[j + 1] = offset[j] + out.probes[j].block->size;
-  }
-  Eigen::MatrixXd t_cat_all(n, offset.back());
-  for (size_t j = 0; j < out.probes.size(); ++j) {
-    t_cat_all.middleCols(offset[j], out.probes[j].block->size) =
-        Columns(red.extra, *out.probes[j].block);
-  }
-  cat.Project(t_cat_all);
-  auto t_cat = [&](size_t j) { return t_cat_all.middleCols(offset[j], out.probes[j].block->size); };
+  // Every probe's columns through the catalogue's projector, absorbed
+  // columns set to zero.
+  std::vector<const ColumnBlock*> probe_blocks;
+  for (const ProbeResult& r : out.probes) probe_blocks.push_back(r.block);
+  SideBySide cat_cols(red.extra, probe_blocks);
+  cat.Project(cat_cols.all);
+  auto t_cat = [&](size_t j) { return cat_cols.Block(j); };
   for (size_t j = 0; j < out.probes.size(); ++j) ZeroAbsorbed(t_cat(j), red, *out.probes[j].block);
   // y and every probe's columns through the selected probes' projector,
   // brought up to date by each selection's new directions only
   // (Projector::Project).
-  Eigen::MatrixXd t_sel = t_cat_all;
+  SideBySide t_sel = cat_cols;
   Eigen::VectorXd ys = y;
   std::vector<int> selected;
   Projector sel(n);
@@ -108,9 +119,8 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     for (size_t j = 0; j < out.probes.size(); ++j) {
       if (std::find(selected.begin(), selected.end(), static_cast<int>(j)) != selected.end())
         continue;
-      const ColumnTest t =
-          TestProbe(ys, t_sel.middleCols(offset[j], out.probes[j].block->size), red,
-                    *out.probes[j].block, g, dof_base + cat.rank() + sel.rank());
+      const ColumnTest t = TestProbe(ys, t_sel.Block(j), red, *out.probes[j].block, g,
+                                     dof_base + cat.rank() + sel.rank());
       if (t.rank == 0) continue;
       if (t.p_value < best_p || (t.p_value == best_p && t.wald > best_wald)) {
         best = static_cast<int>(j);
@@ -124,7 +134,7 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     first.push_back(sel);
     sel.Add(t_cat(best));
     sel.Project(ys, known);
-    sel.Project(t_sel, known);
+    sel.Project(t_sel.all, known);
   }
   // Joint estimates of the selected probes.
   // The others of selected[i] are added in selection order, as the
@@ -176,22 +186,24 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
   // held by nothing selected: per catalogue effect, its projector, the
   // residual without it and every such probe's columns through it.
   std::vector<ProbeResult*> open;
-  std::vector<Eigen::MatrixXd> open_cols;
+  std::vector<const ColumnBlock*> open_blocks;
   for (ProbeResult& r : out.probes) {
     if (!r.raw_significant || r.selected || !r.same_as.empty()) continue;
     open.push_back(&r);
-    open_cols.push_back(Columns(red.extra, *r.block));
+    open_blocks.push_back(r.block);
   }
   if (open.empty()) return out;
+  const SideBySide open_cols(red.extra, open_blocks);
   std::vector<double> best(open.size(), std::numeric_limits<double>::infinity());
   for (const ColumnBlock* b : catalogue) {
     Projector without(n);
     without.Add(Columns(red.extra, *b));
     const Eigen::VectorXd y_without = without.Apply(red.r);
-    const std::vector<Eigen::MatrixXd> t = without.ApplyEach(open_cols);
+    SideBySide t = open_cols;
+    without.Project(t.all);
     for (size_t i = 0; i < open.size(); ++i) {
       const ColumnTest test =
-          TestProbe(y_without, t[i], red, *open[i]->block, g, dof_base + without.rank());
+          TestProbe(y_without, t.Block(i), red, *open[i]->block, g, dof_base + without.rank());
       if (test.wald < best[i]) {
         best[i] = test.wald;
         open[i]->explained_by = b->name;

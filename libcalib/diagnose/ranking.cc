@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 
 #include "libcalib/eval/error_measures.h"
 
@@ -328,21 +329,25 @@ void FindAliases(const std::vector<const ColumnBlock*>& effects, const Context& 
   size_t best = 0;  // the best three significant effects
   while (best < out->entries.size() && best < 3 && out->entries[best].significant) ++best;
   // Effect by effect added first: its projector (the nuisance and its
-  // columns) and the residual through it serve each of the best three.
+  // columns) and the residual through it, built when first needed, serve
+  // each of the best three.
   for (const RankedEffect& o : out->entries) {
-    if (!o.significant || best == 0) continue;
-    if (best == 1 && o.effect == out->entries[0].effect) continue;  // nothing to try it against
-    const ColumnBlock* bo = BlockOf(o.effect, effects);
-    Projector p = cx.nu;
-    p.Add(red.extra.middleCols(bo->first, bo->size));
-    const Eigen::VectorXd y = p.Apply(red.r);
+    if (!o.significant) continue;
+    std::optional<Projector> p;
+    Eigen::VectorXd y;
     for (size_t i = 0; i < best; ++i) {
       RankedEffect& r = out->entries[i];
       if (o.effect == r.effect) continue;
+      if (!p) {
+        const ColumnBlock* bo = BlockOf(o.effect, effects);
+        p = cx.nu;
+        p->Add(red.extra.middleCols(bo->first, bo->size));
+        y = p->Apply(red.r);
+      }
       const ColumnBlock* be = BlockOf(r.effect, effects);
       const ColumnTest t =
-          TestColumns(y, p.Apply(red.extra.middleCols(be->first, be->size)), red.cluster,
-                      cx.lin.num_clusters, red.base.rank() + p.rank());
+          TestColumns(y, p->Apply(red.extra.middleCols(be->first, be->size)), red.cluster,
+                      cx.lin.num_clusters, red.base.rank() + p->rank());
       if (!(t.rank > 0 && t.p_value < out->level)) r.aliases.push_back(o.name);
     }
   }

@@ -189,25 +189,4 @@ void Projector::Project(Eigen::Ref<Eigen::MatrixXd> x, int from) const {
   x.noalias() -= q * c;
 }
 
-std::vector<Eigen::MatrixXd> Projector::ApplyEach(const std::vector<Eigen::MatrixXd>& blocks) const {
-  if (q_.cols() == 0) return blocks;
-  Eigen::Index cols = 0;
-  for (const Eigen::MatrixXd& b : blocks) cols += b.cols();
-  Eigen::MatrixXd all(q_.rows(), cols);
-  Eigen::Index k = 0;
-  for (const Eigen::MatrixXd& b : blocks) {
-    all.middleCols(k, b.cols()) = b;
-    k += b.cols();
-  }
-  Project(all);
-  std::vector<Eigen::MatrixXd> out;
-  out.reserve(blocks.size());
-  k = 0;
-  for (const Eigen::MatrixXd& b : blocks) {
-    out.push_back(all.middleCols(k, b.cols()));
-    k += b.cols();
-  }
-  return out;
-}
-
 }  // namespace rtscalib

@@ -73,10 +73,6 @@ class Projector {
   // projection kept up to date while the basis grows costs only the new
   // directions, and n x cols temporaries are not allocated.
   void Project(Eigen::Ref<Eigen::MatrixXd> x, int from = 0) const;
-  // Apply to each of `blocks` (same number of rows), in one product: one
-  // pass over the n x rank basis instead of one per block, which is what
-  // costs when the blocks are a few columns each.
-  std::vector<Eigen::MatrixXd> ApplyEach(const std::vector<Eigen::MatrixXd>& blocks) const;
   int rank() const { return static_cast<int>(q_.cols()); }
   const Eigen::MatrixXd& basis() const { return q_; }
 
