@@ -487,6 +487,7 @@ struct SceneRenderer::Impl {
   cv::Mat box;        // CV_32FC1, the supersampled canvas box-filtered
   cv::Mat distorted;  // CV_32FC1
   cv::Mat red, red_flipped;  // CV_8UC1 scratch of RenderCanvas
+  cv::Mat noise;             // CV_32FC1 sensor noise, drawn per photo into the same buffer
 
   // The window and renderer, and every scene's boards (the first selected).
   void Build(const std::vector<TargetScene>& scenes);
@@ -804,10 +805,10 @@ cv::Mat SceneRenderer::Render(const Rigid3& ref_from_cam, const CameraTool& cam,
   if (o.blur_sigma > 0) cv::GaussianBlur(*img, *img, cv::Size(), o.blur_sigma, o.blur_sigma);
   if (o.exposure != 1.0) *img *= o.exposure;
   if (o.noise_sigma > 0) {
-    cv::Mat noise(img->size(), CV_32FC1);
+    im.noise.create(img->size(), CV_32FC1);
     cv::RNG rng(Mix(o.seed ^ Mix(image_seed)));
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, o.noise_sigma);
-    *img += noise;
+    rng.fill(im.noise, cv::RNG::NORMAL, 0.0, o.noise_sigma);
+    *img += im.noise;
   }
   cv::Mat out;
   img->convertTo(out, CV_8UC1);  // rounds and saturates

@@ -34,4 +34,7 @@ BlockLayout LayoutFor(InstrumentModel* model, int zoom) {
   return l;
 }
 
+template ceres::CostFunction* MakeCost<RecordGroupResidual>(RecordGroupResidual*, int, int);
+template ceres::CostFunction* MakeCost<ShotResidual>(ShotResidual*, int, int);
+
 }  // namespace rtscalib

@@ -519,4 +519,11 @@ ceres::CostFunction* MakeCost(Functor* functor, int num_residuals, int active) {
   return MakeCostWithStride<56>(functor, num_residuals);
 }
 
+// The two residuals' cost functions at every jet width are compiled once, in
+// cost_functions.cc: the autodiff of a residual is most of a file's compile
+// time, and every other file that makes one (the tests' gradient checks
+// among them) links to these instead of instantiating it again.
+extern template ceres::CostFunction* MakeCost<RecordGroupResidual>(RecordGroupResidual*, int, int);
+extern template ceres::CostFunction* MakeCost<ShotResidual>(ShotResidual*, int, int);
+
 }  // namespace rtscalib
