@@ -6,6 +6,9 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libceres-dev libopencv-dev
+  # Eigen's large products through BLAS (cmake/eigen_blas.cmake): OpenBLAS,
+  # single-threaded (the calibration runs its own threads)
+  libopenblas0-serial
   # detect/ uses OpenCV's aruco module (ChArUco boards); libopencv-dev pulls it in, named here
   libopencv-contrib-dev
   libvtk9-dev libapriltag-dev
@@ -40,6 +43,10 @@ echo "install-deps: installing ${missing[*]}"
 sudo_cmd=()
 if [[ $(id -u) -ne 0 ]]; then sudo_cmd=(sudo); fi
 export DEBIAN_FRONTEND=noninteractive
-"${sudo_cmd[@]}" apt-get update -qq
-"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# The package lists a machine already has are tried first: a package added
+# to this list since the last run installs without refreshing them.
+if ! "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null 2>&1; then
+  "${sudo_cmd[@]}" apt-get update -qq
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
 echo "install-deps: done"

@@ -1,0 +1,50 @@
+// Eigen's large products go through the system's BLAS (cmake/eigen_blas.cmake),
+// and the calibration calls them from two threads at once: the diagnosis on
+// its own thread while the main one computes the uncertainty maps and draws
+// the figures (app/pipeline.cc). A BLAS built without locks for such callers
+// (OpenBLAS's single-threaded build without USE_LOCKING) shares its work
+// buffers between them and returns wrong products now and then; this test
+// fails on such a system instead of a calibration going quietly wrong.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <atomic>
+#include <thread>
+#include <vector>
+
+namespace rtscalib {
+namespace {
+
+TEST(EigenBlas, ProductsFromFourThreadsAtOnceEqualTheSerialOnes) {
+#ifndef EIGEN_USE_BLAS
+  GTEST_SKIP() << "built without EIGEN_USE_BLAS";
+#endif
+  // Sizes of the diagnosis's projections (many rows, a few hundred columns)
+  // scaled down, large enough for the BLAS's blocked kernels and buffers.
+  constexpr int kMatrices = 6, kThreads = 4, kRounds = 40;
+  std::vector<Eigen::MatrixXd> q, x, expected;
+  for (int i = 0; i < kMatrices; ++i) {
+    q.push_back(Eigen::MatrixXd::Random(4000 + 500 * i, 40));
+    x.push_back(Eigen::MatrixXd::Random(q.back().rows(), 60));
+    expected.push_back(q.back().transpose() * x.back());
+  }
+  std::atomic<int> wrong{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      for (int round = 0; round < kRounds; ++round) {
+        const int i = (round + t) % kMatrices;
+        const Eigen::MatrixXd c = q[i].transpose() * x[i];
+        // The same kernels on the same data: equal to the last bit.
+        if (c != expected[i]) ++wrong;
+      }
+    });
+  }
+  for (std::thread& th : threads) th.join();
+  EXPECT_EQ(wrong.load(), 0) << "of " << kThreads * kRounds
+                             << " concurrent products; the system's libblas.so.3 is not "
+                                "safe to call from several threads";
+}
+
+}  // namespace
+}  // namespace rtscalib
