@@ -2,7 +2,7 @@
 # (EIGEN_USE_BLAS). The diagnosis projects a few hundred candidate columns
 # through the fit's Jacobian (tens of thousands of rows), and the refinement
 # and the uncertainty maps multiply matrices of that size: Debian's OpenBLAS
-# (libopenblas0-serial, scripts/install-deps.sh) picks AVX2/AVX-512 kernels
+# (libopenblas0-pthread, scripts/install-deps.sh) picks AVX2/AVX-512 kernels
 # at run time where Eigen, built for the x86-64 baseline, has SSE2 only.
 # Measured on the 62,000 x 100 basis and 231 columns of the photo session:
 # 42 GFLOP/s against Eigen's 17 in Release, and 44 against 3 in the
@@ -23,5 +23,8 @@ if(NOT TARGET rtscalib::eigen_blas)
   add_library(rtscalib::eigen_blas INTERFACE IMPORTED)
   set_target_properties(rtscalib::eigen_blas PROPERTIES
     INTERFACE_COMPILE_DEFINITIONS EIGEN_USE_BLAS
-    INTERFACE_LINK_LIBRARIES BLAS::BLAS)
+    INTERFACE_LINK_LIBRARIES BLAS::BLAS
+    # Every executable asks OpenBLAS for one thread per call (blas_threads.cc).
+    INTERFACE_SOURCES
+      "$<$<STREQUAL:$<TARGET_PROPERTY:TYPE>,EXECUTABLE>:${CMAKE_CURRENT_LIST_DIR}/blas_threads.cc>")
 endif()

@@ -43,6 +43,7 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/rtscalibConfigVersion.cma
 install(FILES ${PROJECT_BINARY_DIR}/rtscalibConfig.cmake
               ${PROJECT_BINARY_DIR}/rtscalibConfigVersion.cmake
               ${CMAKE_CURRENT_LIST_DIR}/eigen_blas.cmake
+              ${CMAKE_CURRENT_LIST_DIR}/blas_threads.cc
         DESTINATION ${rtscalib_cmake_dir})
 
 install(TARGETS rtscalib RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

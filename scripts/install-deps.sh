@@ -6,9 +6,10 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libceres-dev libopencv-dev
-  # Eigen's large products through BLAS (cmake/eigen_blas.cmake): OpenBLAS,
-  # single-threaded (the calibration runs its own threads)
-  libopenblas0-serial
+  # Eigen's large products through BLAS (cmake/eigen_blas.cmake): OpenBLAS's
+  # threaded build, the one safe to call from several threads at once (each
+  # call then runs on its caller's thread: cmake/blas_threads.cc)
+  libopenblas0-pthread
   # detect/ uses OpenCV's aruco module (ChArUco boards); libopencv-dev pulls it in, named here
   libopencv-contrib-dev
   libvtk9-dev libapriltag-dev

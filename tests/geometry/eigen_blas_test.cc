@@ -5,6 +5,7 @@
 // (OpenBLAS's single-threaded build without USE_LOCKING) shares its work
 // buffers between them and returns wrong products now and then; this test
 // fails on such a system instead of a calibration going quietly wrong.
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -44,6 +45,17 @@ TEST(EigenBlas, ProductsFromFourThreadsAtOnceEqualTheSerialOnes) {
   EXPECT_EQ(wrong.load(), 0) << "of " << kThreads * kRounds
                              << " concurrent products; the system's libblas.so.3 is not "
                                 "safe to call from several threads";
+}
+
+// cmake/blas_threads.cc, compiled into every executable, asks OpenBLAS for
+// one thread per call: the calibration's own threads and CI's two test
+// processes keep the cores busy, and a second BLAS thread would spin
+// against them.
+TEST(EigenBlas, OpenBlasRunsEachCallOnItsCallersThread) {
+  using GetThreads = int (*)();
+  const auto get = reinterpret_cast<GetThreads>(::dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  if (get == nullptr) GTEST_SKIP() << "the system's BLAS is not OpenBLAS";
+  EXPECT_EQ(get(), 1);
 }
 
 }  // namespace
