@@ -30,8 +30,8 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   if (args.diagnose) config.calibration.diagnose.enabled = true;
   if (args.diagnose_auto) config.calibration.diagnose.auto_add = true;
   // The figures need the calibrated model, its residuals and uncertainty
-  // maps but not its diagnosis: they are drawn (node and rsvg-convert
-  // processes) while the diagnosis runs. report.json lists them with their
+  // maps but not its diagnosis: they are drawn (a node process, librsvg in
+  // this one) while the diagnosis runs. report.json lists them with their
   // key numbers.
   std::vector<Figure> figures;
   std::vector<std::vector<std::string>> figure_files;

@@ -1,5 +1,7 @@
 #include "app/vega.h"
 
+#include "app/svg_raster.h"
+
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -108,7 +110,7 @@ std::string FindProgram(const std::string& name) {
 // the exec (clone with CLONE_VM | CLONE_VFORK), where fork copies the page
 // tables of the whole process, its heap of observations and matrices
 // included, once per program, and the child frees them again at the exec;
-// a run starts one node and one rsvg-convert per figure.
+// a run starts node once.
 pid_t Start(const std::vector<std::string>& argv, const fs::path& log) {
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
@@ -137,13 +139,6 @@ int Wait(pid_t pid) {
 int Run(const std::vector<std::string>& argv, const fs::path& log) {
   return Wait(Start(argv, log));
 }
-
-// PNG conversions one at a time: the figures are drawn while the diagnosis
-// runs on the other core, and the diagnosis is the longer of the two. A
-// second conversion beside it only takes CPU from the diagnosis: the photo
-// session 5.35-5.39 s with one, 5.54-5.57 s with two
-// (photo_session_benchmark --benchmark_filter=Run, alternating runs).
-constexpr size_t kParallelConversions = 1;
 
 std::string Tail(const fs::path& log) {
   std::string s = ReadText(log);
@@ -174,13 +169,12 @@ std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& spe
   const std::string& runtime = VegaRuntime(&missing);
   const std::string node =
       !FindProgram("node").empty() ? FindProgram("node") : FindProgram("nodejs");
-  const std::string rsvg = FindProgram("rsvg-convert");
-  if (runtime.empty() || node.empty() || rsvg.empty()) {
+  const SvgRasterizer& raster = SvgRasterizer::Get();
+  if (runtime.empty() || node.empty() || !raster.missing().empty()) {
     *note = "figures: no PNG files written (report.html and figures/*.vg.json have them): " +
             (runtime.empty() ? "the Vega modules are missing: " + missing
              : node.empty()  ? std::string("node is not installed (Debian package nodejs)")
-                             : std::string("rsvg-convert is not installed (Debian package "
-                                            "librsvg2-bin)")) +
+                             : raster.missing()) +
             "; scripts/install-deps.sh installs it";
     return {};
   }
@@ -222,33 +216,18 @@ std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& spe
     return {};
   }
   std::vector<RenderedFigure> out(specs.size());
-  std::vector<std::pair<pid_t, size_t>> running;
-  bool failed = false;
-  auto finish = [&](const std::pair<pid_t, size_t>& job) {
-    if (Wait(job.first) != 0) failed = true;
-    const std::string bytes = ReadText(dir / ("fig_" + std::to_string(job.second) + ".png"));
-    out[job.second].png.assign(bytes.begin(), bytes.end());
-  };
   for (size_t i = 0; i < specs.size(); ++i) {
-    const fs::path svg = dir / ("fig_" + std::to_string(i) + ".svg");
-    const fs::path png = dir / ("fig_" + std::to_string(i) + ".png");
-    out[i].svg = ReadText(svg);
+    out[i].svg = ReadText(dir / ("fig_" + std::to_string(i) + ".svg"));
     if (out[i].svg.empty()) {
       out[i].error = ReadText(dir / ("error_" + std::to_string(i) + ".txt"));
       if (out[i].error.empty()) out[i].error = "no SVG written";
       continue;
     }
-    if (running.size() == kParallelConversions) {
-      finish(running.front());
-      running.erase(running.begin());
+    std::string error;
+    if (!raster.ToPng(out[i].svg, &out[i].png, &error)) {
+      *note = "figures: no PNG files written: " + error;
+      return {};
     }
-    running.emplace_back(
-        Start({rsvg, "--background-color=white", "-o", png.string(), svg.string()}, log), i);
-  }
-  for (const auto& job : running) finish(job);
-  if (failed) {
-    *note = "figures: no PNG files written: rsvg-convert failed: " + Tail(log);
-    return {};
   }
   return out;
 }

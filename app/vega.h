@@ -14,8 +14,8 @@
 // the browser (inlined in report.html) and in node (the PNG files).
 //
 // PNG files: node runs the runtime headless (renderer "none", View.toSVG) on
-// every spec of a folder in one process, rsvg-convert (librsvg2-bin) turns
-// each SVG into a PNG. Without node, the Vega modules or rsvg-convert, the
+// every spec of a folder in one process, librsvg draws each SVG in this
+// process (svg_raster.h). Without node, the Vega modules or librsvg, the
 // run still writes the specs and report.html (which draws them in the
 // browser) and says which program is missing; it never fails for it.
 #pragma once

@@ -21,8 +21,9 @@ packages=(
   # headless browser: scripts/render-report.sh checks report.html in it
   chromium
   # figures (app/vega.h): Vega 5's modules, inlined in report.html and run
-  # by node for the PNG files, which rsvg-convert makes from Vega's SVG
-  libjs-vega nodejs librsvg2-bin
+  # by node for the SVG files; librsvg (loaded by rtscalib, app/svg_raster.h)
+  # draws the PNG files from them
+  libjs-vega nodejs librsvg2-2
   # tests/independent: photos from a renderer written from SPEC.md alone
   python3-numpy python3-opencv python3-yaml
   # OpenCV's own sample photos of a real camera (examples/data/left*.jpg):
