@@ -37,15 +37,30 @@ Matrix3X NormalisedCentred(const std::vector<Eigen::Vector3d>& points, Eigen::Ve
   return a;
 }
 
+// The triangular factor R (3 x 3, zero below the rows there are) of the
+// Householder QR of an n x 3 matrix: its singular values and right singular
+// vectors are the matrix's own. This is the QR preconditioning Eigen's
+// JacobiSVD applies to a non-square matrix before its 3 x 3 Jacobi sweeps;
+// written out, only fixed-size SVDs are instantiated (an SVD of a dynamic
+// matrix instantiates Eigen's QR preconditioners for both shapes, a large
+// part of the library's compile time).
+Eigen::Matrix3d TriangularFactor(const Eigen::Ref<const Eigen::MatrixX3d>& m) {
+  const Eigen::HouseholderQR<Eigen::MatrixX3d> qr(m);
+  Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
+  const Eigen::Index rows = std::min<Eigen::Index>(3, m.rows());
+  r.topRows(rows) = qr.matrixQR().topRows(rows).triangularView<Eigen::Upper>();
+  return r;
+}
+
 PlaneFit PlaneFromNormalised(const Matrix3X& a, const Eigen::Vector3d& centroid, double k) {
-  Eigen::JacobiSVD<Matrix3X> svd(a, Eigen::ComputeFullU);
+  // Eq. 15: a = U S V'. With a' = Q R, a = R' Q': U and S are R''s.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(TriangularFactor(a.transpose()).transpose(),
+                                              Eigen::ComputeFullU);
   Eigen::Matrix3d u = svd.matrixU();
   PlaneFit fit;
   fit.centroid = centroid;
   fit.scale = k;
-  fit.singular_values = Eigen::Vector3d::Zero();
-  const auto& s = svd.singularValues();
-  for (int i = 0; i < s.size() && i < 3; ++i) fit.singular_values[i] = s[i];
+  fit.singular_values = svd.singularValues();
   // Eq. 19: flip u_3 if U is a reflection.
   if (u.determinant() < 0) u.col(2) *= -1.0;
   fit.basis = u;
@@ -78,7 +93,7 @@ CircleFit FitCircle(const std::vector<Eigen::Vector3d>& points) {
   // Eq. 21: 2D coordinates in the plane (normalised units).
   const Eigen::Matrix<double, 2, Eigen::Dynamic> ac = fit.plane.basis.leftCols<2>().transpose() * a;
   // Eq. 25/26: [2u 2v 1] [c1 c2 k3]^T = u^2 + v^2.
-  Eigen::MatrixXd m(n, 3);
+  Eigen::MatrixX3d m(n, 3);
   Eigen::VectorXd b(n);
   for (int i = 0; i < n; ++i) {
     m(i, 0) = 2.0 * ac(0, i);
@@ -89,7 +104,12 @@ CircleFit FitCircle(const std::vector<Eigen::Vector3d>& points) {
   // Eq. 27-29: pseudo-inverse with all three singular values. A relative
   // smallest singular value below 1e-12 means collinear (or coincident)
   // points: the system has no unique circle and Eq. 29 would divide by ~0.
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(m, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  // Eq. 27 through the QR of m (n >= 3 rows): m = Q R and R = U_R S V' give
+  // m = (Q U_R) S V', and the pseudo-inverse's U' b is U_R' (Q' b), the
+  // first three entries of Q' b.
+  const Eigen::HouseholderQR<Eigen::MatrixX3d> qr(m);
+  const Eigen::Matrix3d r = qr.matrixQR().topRows<3>().triangularView<Eigen::Upper>();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::Vector3d s = svd.singularValues();
   constexpr double kRankTolerance = 1e-12;
   if (!(s[2] > kRankTolerance * s[0])) {
@@ -100,8 +120,9 @@ CircleFit FitCircle(const std::vector<Eigen::Vector3d>& points) {
     fit.valid = false;
     return fit;
   }
+  const Eigen::VectorXd qtb = qr.householderQ().transpose() * b;
   const Eigen::Vector3d x =
-      svd.matrixV() * s.cwiseInverse().asDiagonal() * svd.matrixU().transpose() * b;
+      svd.matrixV() * s.cwiseInverse().asDiagonal() * svd.matrixU().transpose() * qtb.head<3>();
   const double c1 = x[0], c2 = x[1], k3 = x[2];
   // Eq. 30, scaled back by k.
   fit.center = centroid + k * (fit.plane.basis * Eigen::Vector3d(c1, c2, 0.0));
@@ -122,7 +143,8 @@ LineFit FitLine(const std::vector<Eigen::Vector3d>& points) {
   Eigen::Vector3d centroid;
   double k;
   const Matrix3X a = NormalisedCentred(points, &centroid, &k);
-  Eigen::JacobiSVD<Matrix3X> svd(a, Eigen::ComputeFullU);
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(TriangularFactor(a.transpose()).transpose(),
+                                              Eigen::ComputeFullU);
   LineFit fit;
   fit.point = centroid;
   fit.direction = svd.matrixU().col(0);
