@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <ctime>
@@ -14,7 +15,6 @@
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <regex>
 #include <sstream>
 
 #include "libcalib/io/safe_write.h"
@@ -147,6 +147,19 @@ RunState ReadState(const fs::path& dir, std::string* reason) {
   return RunState::kKilled;
 }
 
+// The number of a history entry's name NNN-YYYYmmdd-HHMMSS (at least three
+// digits, then eight and six), or 0 for any other name.
+int EntryNumber(const std::string& name) {
+  const size_t dash = name.find('-');
+  if (dash == std::string::npos || dash < 3 || name.size() != dash + 16 || name[dash + 9] != '-') {
+    return 0;
+  }
+  for (size_t i = 0; i < name.size(); ++i) {
+    if (i != dash && i != dash + 9 && !std::isdigit(static_cast<unsigned char>(name[i]))) return 0;
+  }
+  return std::atoi(name.substr(0, dash).c_str());
+}
+
 // Entries of history/ (NNN-YYYYmmdd-HHMMSS; hidden `.new-<pid>` folders are
 // entries being created).
 std::vector<HistoryEntry> ScanHistory(const fs::path& history) {
@@ -155,11 +168,8 @@ std::vector<HistoryEntry> ScanHistory(const fs::path& history) {
   for (const auto& e : fs::directory_iterator(history, ec)) {
     const std::string name = e.path().filename().string();
     // Only rtscalib's names: anything else in history/ is not a run.
-    static const std::regex kEntry(R"(([0-9]{3,})-[0-9]{8}-[0-9]{6})");
-    std::smatch m;
-    if (!std::regex_match(name, m, kEntry) || !e.is_directory(ec)) continue;
-    const int n = std::atoi(m[1].str().c_str());
-    if (n <= 0) continue;
+    const int n = EntryNumber(name);
+    if (n <= 0 || !e.is_directory(ec)) continue;
     out.push_back({e.path().string(), name, n, RunState::kComplete, ""});
   }
   std::sort(out.begin(), out.end(), [](const HistoryEntry& a, const HistoryEntry& b) {

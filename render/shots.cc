@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -18,7 +19,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -263,6 +263,27 @@ int BoardIndexOf(const TargetScene& scene, int id) {
   throw std::logic_error("DetectShots: matched target " + std::to_string(id) + " is on no board");
 }
 
+// K and N of a shard's table name "shots.shard-K-of-N.csv" (ShotsTableName);
+// false for any other name.
+bool ParseShardTableName(const std::string& name, int* shard, int* num_shards) {
+  const std::string head = "shots.shard-", mid = "-of-", tail = ".csv";
+  auto number = [&](size_t from, size_t to, int* out) {
+    if (to <= from || to - from > 9) return false;
+    for (size_t i = from; i < to; ++i) {
+      if (!std::isdigit(static_cast<unsigned char>(name[i]))) return false;
+    }
+    *out = std::stoi(name.substr(from, to - from));
+    return true;
+  };
+  if (name.size() <= head.size() + mid.size() + tail.size() || name.rfind(head, 0) != 0 ||
+      name.compare(name.size() - tail.size(), tail.size(), tail) != 0) {
+    return false;
+  }
+  const size_t m = name.find(mid, head.size());
+  return m != std::string::npos && number(head.size(), m, shard) &&
+         number(m + mid.size(), name.size() - tail.size(), num_shards);
+}
+
 }  // namespace
 
 std::string CheckShots(const std::vector<Shot>& shots) {
@@ -425,10 +446,8 @@ void MergeShards(const std::vector<std::string>& shard_dirs, const std::string& 
     if (!fs::is_directory(dir)) throw std::runtime_error("MergeShards: no folder " + dir);
     for (const auto& entry : fs::directory_iterator(dir)) {
       const std::string name = entry.path().filename().string();
-      std::smatch match;
-      static const std::regex kShardTable(R"(shots\.shard-(\d+)-of-(\d+)\.csv)");
-      if (!std::regex_match(name, match, kShardTable)) continue;
-      const int k = std::stoi(match[1]), m = std::stoi(match[2]);
+      int k = 0, m = 0;
+      if (!ParseShardTableName(name, &k, &m)) continue;
       if (n < 0) n = m;
       if (m != n) {
         throw std::runtime_error("MergeShards: " + entry.path().string() + " belongs to a " +
