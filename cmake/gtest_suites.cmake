@@ -5,13 +5,13 @@
 # then share one start per suite.
 #
 #   cmake -D EXE=<test binary> -D FILTER=<gtest filter or empty>
-#         -D OUT=<ctest file to write> -D LABELS=<tier>,<folder>
-#         -D ENV_MOD=<ENVIRONMENT_MODIFICATION value> -D ENV=<ENVIRONMENT value or empty>
-#         -P gtest_suites.cmake
+#         -D OUT=<ctest file to write> -P gtest_suites.cmake
 #
 # Each suite's test runs exactly the tests the binary lists for it under
 # FILTER (its --gtest_filter names them one by one), so a pattern that
-# leaves out part of a suite (a SLOW test run on its own) is honoured.
+# leaves out part of a suite (a SLOW test run on its own) is honoured. OUT
+# adds the tests and lists their names in `suite_tests`; the folder's
+# include (tests/CMakeLists.txt) gives them their labels and environment.
 set(args --gtest_list_tests)
 if(FILTER)
   list(APPEND args "--gtest_filter=${FILTER}")
@@ -21,19 +21,14 @@ execute_process(COMMAND ${EXE} ${args} OUTPUT_VARIABLE listing ERROR_VARIABLE er
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "${EXE} --gtest_list_tests failed (${rc}): ${err}")
 endif()
-string(REPLACE "," ";" labels "${LABELS}")
-set(props "TIMEOUT 600 LABELS [==[${labels}]==] ENVIRONMENT_MODIFICATION [==[${ENV_MOD}]==]")
-if(ENV)
-  string(APPEND props " ENVIRONMENT [==[${ENV}]==]")
-endif()
-set(content "")
+set(content "set(suite_tests \"\")\n")
 set(suite "")
 set(tests "")
 macro(flush_suite)
   if(suite AND tests)
     list(JOIN tests ":" filter)
     string(APPEND content "add_test([==[${suite}.*]==] [==[${EXE}]==] [==[--gtest_filter=${filter}]==])\n"
-                          "set_tests_properties([==[${suite}.*]==] PROPERTIES ${props})\n")
+                          "list(APPEND suite_tests [==[${suite}.*]==])\n")
   endif()
   set(tests "")
 endmacro()
