@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <vector>
 
 namespace rtscalib {
 namespace {
@@ -137,6 +139,66 @@ ColumnTest TestColumns(const Eigen::Ref<const Eigen::VectorXd>& y,
   return out;
 }
 
+namespace {
+
+// Q1 Z for the thin Q1 of a tall n x m matrix x = Q1 R1 (n >= m) and an m x
+// k matrix Z, with R1, by a tall-skinny QR (Demmel et al. 2012, TSQR): x is
+// cut into row blocks small enough to stay in cache, each block factored
+// (x_i = Q_i R_i), the stacked R_i factored once more ([R_1; ...; R_p] =
+// Q_s R1), so that Q1 = diag(Q_i) Q_s. One Householder QR of all n rows
+// sweeps the whole matrix from memory once per column (level-2 work on
+// 57,826 x 58 Jacobians in the diagnosis); the blocks are swept in cache.
+// Same R1 up to the signs of its rows, same span, same stability.
+class TallQr {
+ public:
+  explicit TallQr(const Eigen::MatrixXd& x) {
+    const Eigen::Index n = x.rows(), m = x.cols();
+    // About 256 KiB of doubles per block, and at least 2 m rows.
+    const Eigen::Index rows = std::max<Eigen::Index>(2 * m, 32768 / std::max<Eigen::Index>(m, 1));
+    for (Eigen::Index start = 0; start < n;) {
+      Eigen::Index size = std::min(rows, n - start);
+      if (n - start - size < m) size = n - start;  // no last block shorter than m
+      starts_.push_back(start);
+      blocks_.emplace_back(x.middleRows(start, size));
+      start += size;
+    }
+    Eigen::MatrixXd stacked(static_cast<Eigen::Index>(blocks_.size()) * m, m);
+    for (size_t i = 0; i < blocks_.size(); ++i) {
+      stacked.middleRows(static_cast<Eigen::Index>(i) * m, m) =
+          blocks_[i].matrixQR().topRows(m).triangularView<Eigen::Upper>();
+    }
+    stacked_ = Eigen::HouseholderQR<Eigen::MatrixXd>(stacked);
+    r_ = stacked_.matrixQR().topRows(m).triangularView<Eigen::Upper>();
+  }
+
+  const Eigen::MatrixXd& R() const { return r_; }
+
+  Eigen::MatrixXd QTimes(const Eigen::MatrixXd& z) const {
+    const Eigen::Index m = r_.cols(), k = z.cols();
+    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(stacked_.rows(), k);
+    w.topRows(m) = z;
+    w.applyOnTheLeft(stacked_.householderQ());
+    Eigen::Index n = 0;
+    for (const auto& b : blocks_) n += b.rows();
+    Eigen::MatrixXd out(n, k);
+    for (size_t i = 0; i < blocks_.size(); ++i) {
+      Eigen::MatrixXd part = Eigen::MatrixXd::Zero(blocks_[i].rows(), k);
+      part.topRows(m) = w.middleRows(static_cast<Eigen::Index>(i) * m, m);
+      part.applyOnTheLeft(blocks_[i].householderQ());
+      out.middleRows(starts_[i], part.rows()) = part;
+    }
+    return out;
+  }
+
+ private:
+  std::vector<Eigen::Index> starts_;
+  std::vector<Eigen::HouseholderQR<Eigen::MatrixXd>> blocks_;
+  Eigen::HouseholderQR<Eigen::MatrixXd> stacked_;
+  Eigen::MatrixXd r_;
+};
+
+}  // namespace
+
 int Projector::Add(const Eigen::Ref<const Eigen::MatrixXd>& cols, double rel_tol) {
   const int n = static_cast<int>(q_.rows());
   const int m = static_cast<int>(cols.cols());
@@ -149,16 +211,23 @@ int Projector::Add(const Eigen::Ref<const Eigen::MatrixXd>& cols, double rel_tol
     const double norm = cols.col(j).norm();
     x.col(j) *= norm > 0 ? 1.0 / norm : 0.0;
   }
-  // A column-pivoted QR of x, in two steps: a blocked Householder QR of
-  // the n rows (x = Q1 R1; matrix-matrix work, where the pivoted QR of x
-  // itself updates all n rows once per column), then the pivoted QR of the
-  // small R1 (R1 P = Q2 R2). x P = Q1 Q2 R2: R2 and the pivots are those of
-  // the pivoted QR of x (the column norms and inner products it pivots on
-  // are R1's), up to rounding.
+  // A column-pivoted QR of x, in two steps: a Householder QR of the n rows
+  // (x = Q1 R1; matrix-matrix work, where the pivoted QR of x itself
+  // updates all n rows once per column), then the pivoted QR of the small
+  // R1 (R1 P = Q2 R2). x P = Q1 Q2 R2: R2 and the pivots are those of the
+  // pivoted QR of x (the column norms and inner products it pivots on are
+  // R1's), up to rounding.
   const int k = std::min(n, m);
-  const Eigen::HouseholderQR<Eigen::MatrixXd> outer(x);
-  const Eigen::MatrixXd r1 =
-      outer.matrixQR().topRows(k).triangularView<Eigen::Upper>().toDenseMatrix();
+  Eigen::MatrixXd r1;
+  std::optional<TallQr> tall;
+  std::optional<Eigen::HouseholderQR<Eigen::MatrixXd>> outer;
+  if (n >= 4 * m) {
+    tall.emplace(x);
+    r1 = tall->R();
+  } else {
+    outer.emplace(x);
+    r1 = outer->matrixQR().topRows(k).triangularView<Eigen::Upper>().toDenseMatrix();
+  }
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(r1);
   const auto& r = qr.matrixR();
   int rank = 0;
@@ -166,9 +235,15 @@ int Projector::Add(const Eigen::Ref<const Eigen::MatrixXd>& cols, double rel_tol
     if (std::abs(r(i, i)) > rel_tol) ++rank;
   }
   if (rank == 0) return 0;
-  Eigen::MatrixXd inner = Eigen::MatrixXd::Zero(n, rank);
-  inner.topRows(k) = qr.householderQ() * Eigen::MatrixXd::Identity(k, rank);
-  const Eigen::MatrixXd fresh = outer.householderQ() * inner;
+  const Eigen::MatrixXd q2 = qr.householderQ() * Eigen::MatrixXd::Identity(k, rank);
+  Eigen::MatrixXd fresh;
+  if (tall) {
+    fresh = tall->QTimes(q2);
+  } else {
+    Eigen::MatrixXd inner = Eigen::MatrixXd::Zero(n, rank);
+    inner.topRows(k) = q2;
+    fresh = outer->householderQ() * inner;
+  }
   const int old = static_cast<int>(q_.cols());
   q_.conservativeResize(n, old + rank);
   q_.rightCols(rank) = fresh;
