@@ -79,9 +79,23 @@ std::string Fmt(const char* printf_format, double x) {
 }
 
 std::string Significant(double x, int digits) {
+  std::string out;
+  AppendSignificant(&out, x, digits);
+  return out;
+}
+
+void AppendSignificant(std::string* out, double x, int digits) {
+  // C++17 [utility.to.chars]: chars_format::general with a precision is
+  // printf's %.*g in the "C" locale, "inf" and "nan" as printf spells them.
   char buf[40];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, x);
-  return buf;
+  const auto [ptr, ec] =
+      std::to_chars(buf, buf + sizeof buf, x, std::chars_format::general, digits);
+  if (ec != std::errc()) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+    out->append(buf);
+    return;
+  }
+  out->append(buf, ptr);
 }
 
 }  // namespace rtscalib

@@ -40,5 +40,9 @@ std::string Fmt(const char* printf_format, double x);
 // x to `digits` significant digits (%g): magnitudes in messages, where 17
 // digits would hide the point.
 std::string Significant(double x, int digits = 6);
+// Appends Significant(x, digits) to `out` (1 <= digits <= 17): the same
+// text as printf's %.*g, written by std::to_chars without a format string
+// or a locale, for tables of many thousand numbers.
+void AppendSignificant(std::string* out, double x, int digits);
 
 }  // namespace rtscalib

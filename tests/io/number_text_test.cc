@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <string>
+#include <vector>
 
 namespace rtscalib {
 namespace {
@@ -43,6 +46,32 @@ TEST(NumberText, FormattingRoundTripsBitExactly) {
   EXPECT_EQ(FormatShortestDouble(1e-5), "1e-05");
   EXPECT_EQ(YamlDouble(std::nan("")), ".nan");
   EXPECT_EQ(YamlDouble(-INFINITY), "-.inf");
+}
+
+// Significant digits are printf's %.*g to the character (residuals.csv was
+// written with snprintf, and people diff such tables across versions): random
+// doubles over the whole exponent range, values that round up to the next
+// power of ten, the switch between fixed and exponent form, signed zeros and
+// the non-finite values.
+TEST(NumberText, SignificantIsPrintfG) {
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> mantissa(-1, 1);
+  std::uniform_int_distribution<int> exponent(-1070, 1020);
+  std::vector<double> values = {0.0,       -0.0,        1.0,         9.9999999999,
+                                99999.95,  1e-5,        1.5e-4,      123456,
+                                1234567.0, 0.000123456, 5e-324,      1.7976931348623157e308,
+                                INFINITY,  -INFINITY,   std::nan("")};
+  for (int i = 0; i < 5000; ++i) values.push_back(std::ldexp(mantissa(rng), exponent(rng)));
+  for (const double x : values) {
+    for (const int digits : {1, 3, 6, 8, 10, 17}) {
+      char expected[64];
+      std::snprintf(expected, sizeof expected, "%.*g", digits, x);
+      std::string got = "#";
+      AppendSignificant(&got, x, digits);
+      EXPECT_EQ(got, std::string("#") + expected) << digits;
+      EXPECT_EQ(Significant(x, digits), expected);
+    }
+  }
 }
 
 }  // namespace
