@@ -147,7 +147,7 @@ struct Normals {
     int num_effect_cols = 0;
     for (const ColumnBlock* b : effects)
       num_effect_cols = std::max(num_effect_cols, b->first + b->size);
-    const Eigen::MatrixXd jx = lin.extra.leftCols(num_effect_cols);
+    const auto jx = lin.extra.leftCols(num_effect_cols);  // a view: no copy of n rows
     nbb = lin.base.transpose() * lin.base;
     nbx = lin.base.transpose() * jx;
     nxx = jx.transpose() * jx;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace rtscalib {
@@ -245,6 +246,10 @@ int Projector::Add(const Eigen::Ref<const Eigen::MatrixXd>& cols, double rel_tol
     fresh = outer->householderQ() * inner;
   }
   const int old = static_cast<int>(q_.cols());
+  if (old == 0) {
+    q_ = std::move(fresh);
+    return rank;
+  }
   q_.conservativeResize(n, old + rank);
   q_.rightCols(rank) = fresh;
   return rank;
