@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -360,24 +362,45 @@ bool FitIntrinsics(const Observations& obs, const CalibrationOptions& options,
   return span && !zooms.empty();
 }
 
+// Stage 4's first half: the reduced set's refinement from the start. The
+// sweeps alone never span the image: intrinsics stay as they are there.
+struct ReducedFit {
+  FitOptions options;
+  InstrumentModel model;
+  FitSummary fit;
+};
+
+ReducedFit RefineReduced(const Observations& reduced_obs, const InstrumentModel& start,
+                         const FitOptions& fo) {
+  ReducedFit r;
+  r.options = fo;
+  r.options.fit_intrinsics = fo.fit_intrinsics && CamDataSpanImage(reduced_obs, start, 0);
+  r.model = start;
+  r.fit = Refine(reduced_obs, r.options, &r.model);
+  return r;
+}
+
 // Stage 4: refinement (Sec. 4.3) on the reduced set, then on the full set
-// starting from it; Table 5 of both.
+// starting from it; Table 5 of both. `ahead`: the reduced set's refinement
+// already made from this start (beside the gross-error search).
 void RefineConfigured(const Observations& obs, const std::vector<Record>& reduced,
                       const FitChecks& checks, CalibrationProgress* progress,
-                      CalibrationResult* result) {
+                      CalibrationResult* result, std::optional<ReducedFit> ahead) {
   const FitOptions& fo = result->fit_options;
   const Observations reduced_obs = Subset(obs, reduced);
   const bool has_more = reduced.size() < obs.records.size();
   if (has_more) {
     progress->Step("refining on the reduced set (" + std::to_string(reduced.size()) + " records)");
-    FitOptions ro = fo;
-    // The sweeps alone never span the image: intrinsics stay as they are there.
-    ro.fit_intrinsics = fo.fit_intrinsics && CamDataSpanImage(reduced_obs, result->start, 0);
-    result->reduced.model = result->start;
-    result->reduced.fit = Refine(reduced_obs, ro, &result->reduced.model);
+    if (ahead) {
+      progress->Note("refined beside the gross-error search");
+    } else {
+      ahead = RefineReduced(reduced_obs, result->start, fo);
+    }
+    result->reduced.model = std::move(ahead->model);
+    result->reduced.fit = std::move(ahead->fit);
     ValidateFit("refinement on the reduced set", WithEstimates(reduced_obs, result->reduced.model),
-                result->reduced.model, result->reduced.fit, ro, checks);
-    MarkUndeterminedTools(reduced_obs, ro, &result->reduced.model);
+                result->reduced.model, result->reduced.fit, ahead->options, checks);
+    MarkUndeterminedTools(reduced_obs, ahead->options, &result->reduced.model);
   }
   progress->Step("refining on the full set (" + std::to_string(obs.records.size()) + " records, " +
                  std::to_string(obs.pixels.size()) + " pixels)");
@@ -587,6 +610,21 @@ CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptio
   std::vector<int> record_from, pixel_from;  // `used` row -> `obs` row
   Observations used = WithoutRows(obs, result.gross_rows, &record_from, &pixel_from);
   std::vector<Record> reduced = Prepare(used, options, progress, &result);
+  // The reduced set's refinement starts where the robust search starts and
+  // needs none of its results unless it takes rows out (then the
+  // calibration starts again without them): with fit.threads > 1 it runs
+  // beside the search, on copies, since both leave a core partly idle
+  // (Ceres's linear algebra is serial).
+  std::future<ReducedFit> reduced_ahead;
+  if (options.fit.gross_errors.enabled && result.fit_options.num_threads > 1 &&
+      reduced.size() < used.records.size()) {
+    reduced_ahead = std::async(
+        std::launch::async,
+        [reduced_obs = Subset(used, reduced), start = result.start, fo = result.fit_options] {
+          return RefineReduced(reduced_obs, start, fo);
+        });
+  }
+  bool restarted = false;
   if (options.fit.gross_errors.enabled) {
     progress->Step("looking for gross errors (robust fit from the start)");
     InstrumentModel robust = result.start;
@@ -612,6 +650,7 @@ CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptio
       again.notes = screening;
       again.gross_rows = std::move(result.gross_rows);
       result = std::move(again);
+      restarted = true;
       reduced = Prepare(used, options, progress, &result);
     }
     for (std::string& n : found.notes) result.notes.push_back(std::move(n));
@@ -628,7 +667,16 @@ CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptio
   // Pixels of boards of unknown pose are checked at the start's board poses.
   ValidateStart("start of the refinement", WithEstimates(used, result.start), result.start,
                 result.fit_options, options.checks);
-  RefineConfigured(used, reduced, options.checks, progress, &result);
+  std::optional<ReducedFit> ahead;
+  if (reduced_ahead.valid()) {
+    try {
+      ReducedFit r = reduced_ahead.get();
+      if (!restarted) ahead = std::move(r);
+    } catch (const std::exception&) {
+      // Refined again below, in order, where its failure is reported.
+    }
+  }
+  RefineConfigured(used, reduced, options.checks, progress, &result, std::move(ahead));
 
   if (options.model.faces == FaceMode::kSeparate &&
       options.model.kinematics == Kinematics::kNone) {
