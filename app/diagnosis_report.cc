@@ -38,6 +38,9 @@ json RankedJson(const RankedEffect& r) {
             {"rms_unit", r.rms_unit},
             {"delta_bic", r.delta_bic},
             {"significant", r.significant},
+            {"gain", r.gain},
+            {"worth_adding", r.worthwhile},
+            {"recommended", r.recommended},
             {"identifiable", r.identifiable},
             {"redundant", r.redundant},
             {"observable", r.observable},
@@ -47,6 +50,8 @@ json RankedJson(const RankedEffect& r) {
             {"num_params", r.num_params},
             {"groups", {{"before", GroupJson(r.before)}, {"after", GroupJson(r.after)}}},
             {"after_from", r.after_source},
+            {"refitted", r.after_source == "refined"},
+            {"rms_after_linear", r.linear_after.Main()},
             {"needs", r.needs},
             {"aliases", r.aliases},
             {"note", r.note}};
@@ -91,27 +96,36 @@ json HarmonicJson(const Harmonic& h) {
           {"phase_unit", "deg"},
           {"amplitude_sigma", h.amplitude_sigma},
           {"p_value", h.p_value},
+          {"gain", h.gain},
+          {"material", h.material},
           {"explained_by", h.explained_by.empty() ? json() : json(h.explained_by)},
           {"description", h.description}};
 }
 
 json FindingJson(const StructureFinding& f) {
   const char* kinds[] = {"harmonic", "reading_trend", "image_motion", "image_field"};
-  return {{"variable", f.variable},
+  const bool image = f.probe.kind == ProbeKind::kImageMotion ||
+                     f.probe.kind == ProbeKind::kImageField;
+  json j = {{"variable", f.variable},
           {"kind", kinds[static_cast<int>(f.probe.kind)]},
           {"quantity", f.quantity},
           {"form", f.form},
           {"size", f.size},
+          {"size_at", image ? "observed points" : "variable range"},
           {"unit", f.unit},
           {"range", {f.lo, f.hi}},
           {"zoom", f.probe.zoom >= 0 ? json(f.probe.zoom) : json()},
           {"p_value", f.p_value},
           {"wald", f.wald},
+          {"gain", f.gain},
+          {"material", f.material},
           {"unexplained", f.unexplained},
           {"explained_by", f.explained_by.empty() ? json() : json(f.explained_by)},
           {"same_as", f.same_as.empty() ? json() : json(f.same_as)},
           {"points_to", f.points_to},
           {"description", f.description}};
+  if (image) j["reach"] = f.reach;
+  return j;
 }
 
 json FitQualityJson(const FitQuality& q) {
@@ -197,10 +211,16 @@ json DiagnosisJson(const CalibrationResult& r) {
     }
     distortion.push_back(e);
   }
-  json structure_unexplained = json::array(), structure_explained = json::array();
+  json structure_unexplained = json::array(), structure_explained = json::array(),
+       structure_negligible = json::array();
   for (const StructureFinding& f : d.structure.unexplained) {
     structure_unexplained.push_back(FindingJson(f));
   }
+  for (const StructureFinding& f : d.structure.negligible) {
+    structure_negligible.push_back(FindingJson(f));
+  }
+  json negligible_harmonics = json::array();
+  for (const Harmonic& h : d.harmonics.negligible) negligible_harmonics.push_back(HarmonicJson(h));
   for (const StructureFinding& f : d.structure.explained) {
     structure_explained.push_back(FindingJson(f));
   }
@@ -218,7 +238,11 @@ json DiagnosisJson(const CalibrationResult& r) {
             {"fit_quality", FitQualityJson(d.fit_quality)},
             {"wild", wild},
             {"structure",
-             {{"unexplained", structure_unexplained}, {"explained", structure_explained}}},
+             {{"unexplained", structure_unexplained},
+              {"explained", structure_explained},
+              {"negligible", structure_negligible}}},
+            {"negligible_harmonics", negligible_harmonics},
+            {"min_gain", d.min_gain},
             {"next", next ? json(next->name) : json()},
             {"ranking", ranking},
             {"unexplained", unexplained},
@@ -279,17 +303,22 @@ std::string DiagnosisText(const CalibrationResult& r) {
         << std::setw(6) << Fmt("%.2f", c.factor) << "  " << (c.exceeds ? "yes" : "no") << "\n";
     }
   }
-  o << "\nRanking of the effects not in the model (best first; rms over the fitted rows)\n";
-  o << "  effect                  rms before -> after          delta BIC   p        signif  "
-       "identif\n";
+  o << "\nRanking of the effects not in the model (best first; rms over the fitted rows; "
+       "after: refit = a refinement with the effect added, linear = a first-order prediction; "
+       "gain: the rms's relative fall, worth adding from "
+    << Fmt("%g", 100 * d.min_gain) << " %)\n";
+  o << "  effect                  rms before -> after          from     gain    delta BIC   p    "
+       "    signif  worth  identif\n";
   for (const RankedEffect& e : d.ranking.entries) {
     const double scale = e.rms_unit == "m" ? 1e3 : 1.0;
     const char* unit = e.rms_unit == "m" ? "mm" : "px";
     o << "  " << std::left << std::setw(22) << e.name << std::right << "  " << std::setw(9)
       << Fmt("%.4g", e.rms_before * scale) << " -> " << std::setw(9)
-      << Fmt("%.4g", e.rms_after * scale) << " " << unit << "  " << std::setw(10)
-      << Fmt("%.1f", e.delta_bic) << "  " << std::setw(7) << Fmt("%.1e", e.p_value) << "  "
-      << (e.significant ? "yes" : "no ") << "     "
+      << Fmt("%.4g", e.rms_after * scale) << " " << unit << "  " << std::left << std::setw(7)
+      << (e.after_source == "refined" ? "refit" : "linear") << std::right << std::setw(6)
+      << Fmt("%.2g", 100 * e.gain) << " %  " << std::setw(10) << Fmt("%.1f", e.delta_bic) << "  "
+      << std::setw(7) << Fmt("%.1e", e.p_value) << "  " << (e.significant ? "yes" : "no ")
+      << "     " << (e.worthwhile ? "yes" : "no ") << "    "
       << (e.redundant      ? "redundant"
           : e.identifiable ? "yes"
                            : "no")
@@ -313,6 +342,17 @@ std::string DiagnosisText(const CalibrationResult& r) {
     for (const StructureFinding& f : d.structure.unexplained) {
       o << "  " << f.description << (f.points_to.empty() ? "" : "; points to " + f.points_to)
         << "\n";
+    }
+  }
+  if (!d.harmonics.negligible.empty() || !d.structure.negligible.empty()) {
+    o << "\nStructure outside the catalogue that is significant but within the scatter (each "
+         "buys less than "
+      << Fmt("%g", 100 * d.min_gain) << " % of the rms)\n";
+    for (const Harmonic& h : d.harmonics.negligible) {
+      o << "  " << h.description << " (" << Fmt("%.2g", 100 * h.gain) << " %)\n";
+    }
+    for (const StructureFinding& f : d.structure.negligible) {
+      o << "  " << f.description << " (" << Fmt("%.2g", 100 * f.gain) << " %)\n";
     }
   }
   if (!d.structure.explained.empty()) {

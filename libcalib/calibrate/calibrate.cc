@@ -707,8 +707,8 @@ CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptio
   // a plain diagnosis only reads the result (DiagnoseCalibration).
   if (options.diagnose.enabled && !DiagnosisPending(options)) {
     try {
-      // The diagnosis sees the estimated boards and points (SPEC 7) fixed at the fit's values.
-      StepwiseDiagnosis(WithEstimates(used, result.model), options, progress, &result);
+      // The ladder refits the estimated boards and points (SPEC 7) with every rung.
+      StepwiseDiagnosis(used, options, progress, &result);
     } catch (const std::exception& e) {
       result.diagnosis.reset();
       result.notes.push_back(DiagnosisFailed(e, progress));
@@ -735,12 +735,12 @@ CalibrationDiagnosis DiagnoseCalibration(const Observations& obs,
   if (progress == nullptr) progress = &silent;
   CalibrationDiagnosis out;
   if (!DiagnosisPending(options)) return out;
-  // The rows the fit used, with the estimated boards and points (SPEC 7)
-  // fixed at the fit's values.
+  // The rows the fit used; the estimated boards and points (SPEC 7) are
+  // free in the diagnosis as in the fit.
   const Observations used = WithoutRows(obs, result.gross_rows);
   progress->Step("diagnosing the model (ranking the missing effects)");
   try {
-    out.diagnosis = Diagnose(WithEstimates(used, result.model), result.model,
+    out.diagnosis = Diagnose(used, result.model,
                              ContextOf(result.fit_options, result.fit), SettingsOf(options));
     for (const std::string& v : out.diagnosis->verdict) progress->Note(v);
   } catch (const std::exception& e) {

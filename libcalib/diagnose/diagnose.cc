@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "libcalib/fit/unknowns.h"
 #include "libcalib/text/number_text.h"
 
 namespace rtscalib {
@@ -37,6 +38,23 @@ std::string Change(const GroupRms& a, const GroupRms& b) {
                     Fmt("%.3g", b.cam_m * 1e3) + " mm");
   if (a.pixels_n > 0)
     parts.push_back("image points " + Fmt("%.3g", a.pixels_px) + " -> " + Fmt("%.3g", b.pixels_px) +
+                    " px");
+  std::string out;
+  for (size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
+  return out + " rms";
+}
+
+// Change with the digits a small gain needs: "image points 0.08133 -> 0.08121 px rms".
+std::string ChangeFine(const GroupRms& a, const GroupRms& b) {
+  std::vector<std::string> parts;
+  if (a.edm_n > 0)
+    parts.push_back("EDM points " + Fmt("%.4g", a.edm_m * 1e3) + " -> " +
+                    Fmt("%.4g", b.edm_m * 1e3) + " mm");
+  if (a.cam_n > 0)
+    parts.push_back("camera points " + Fmt("%.4g", a.cam_m * 1e3) + " -> " +
+                    Fmt("%.4g", b.cam_m * 1e3) + " mm");
+  if (a.pixels_n > 0)
+    parts.push_back("image points " + Fmt("%.4g", a.pixels_px) + " -> " + Fmt("%.4g", b.pixels_px) +
                     " px");
   std::string out;
   for (size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
@@ -146,62 +164,96 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
     }
     v.push_back("Warning: the fit went wild: " + list + ". Likely cause: " + cause + ".");
   }
-  std::vector<const RankedEffect*> significant;
+  std::vector<const RankedEffect*> recommended, detectable;
   for (const RankedEffect& r : d.ranking.entries) {
-    if (r.significant) significant.push_back(&r);
+    if (r.recommended) {
+      recommended.push_back(&r);
+    } else if (r.significant && !r.redundant) {
+      detectable.push_back(&r);
+    }
   }
-  if (significant.empty()) {
+  const std::string level = Fmt("%g", 100 * d.ranking.level * d.ranking.tested);
+  const std::string min_gain = Fmt("%g", 100 * d.min_gain);
+  if (recommended.empty()) {
     if (incomplete) {
       v.push_back("None of the " + std::to_string(d.ranking.tested) +
-                  " catalogue effects tested is significant at the " +
-                  Fmt("%g", 100 * d.ranking.level * d.ranking.tested) +
-                  "% level: what the model lacks is outside the catalogue (see the structure "
-                  "below), or the a-priori sigmas are too small.");
+                  " catalogue effects tested is both significant at the " + level +
+                  "% level and worth " + min_gain +
+                  " % of the rms: what the model lacks is outside the catalogue (see the "
+                  "structure below), or the a-priori sigmas are too small.");
     } else {
       v.push_back("No catalogue effect is missing: none of the " +
-                  std::to_string(d.ranking.tested) + " effects tested is significant at the " +
-                  Fmt("%g", 100 * d.ranking.level * d.ranking.tested) + "% level.");
+                  std::to_string(d.ranking.tested) + " effects tested is both significant at the " +
+                  level + "% level and worth " + min_gain + " % of the rms.");
     }
   } else {
-    const RankedEffect& r = *significant.front();
-    std::string s = "Add " + r.name + " next: " + Change(r.before, r.after) + " (delta BIC " +
-                    Fmt("%.0f", r.delta_bic) + ")";
+    const RankedEffect& r = *recommended.front();
+    std::string s = "Add " + r.name + " next: " + Change(r.before, r.after) +
+                    (r.after_source == "refined" ? " (refitted with it" : " (predicted to first order") +
+                    ", delta BIC " + Fmt("%.0f", r.delta_bic) + ")";
     const std::string value = ValueText(r);
     if (!value.empty()) s += "; " + value;
     s += ". Config: " + r.config_line;
     if (!r.identifiable) s += " (note: " + r.note + ")";
     v.push_back(s);
     if (!d.ranking.also_after_best.empty()) {
-      std::string also = "Still significant once " + r.name + " is in:";
+      std::string also = "Still significant and worth adding once " + r.name + " is in:";
       for (size_t i = 0; i < d.ranking.also_after_best.size(); ++i) {
         also += (i ? ", " : " ") + d.ranking.also_after_best[i];
       }
       v.push_back(also + " (add one at a time; `rtscalib diagnose --auto` does it).");
-    } else if (significant.size() > 1) {
+    } else if (recommended.size() > 1) {
       std::string also;
-      for (size_t i = 1; i < significant.size(); ++i)
-        also += (i > 1 ? ", " : "") + significant[i]->name;
-      v.push_back("Also significant alone, but not once " + r.name + " is in: " + also + ".");
+      for (size_t i = 1; i < recommended.size(); ++i)
+        also += (i > 1 ? ", " : "") + recommended[i]->name;
+      v.push_back("Also worth adding alone: " + also + "; diagnose again once " + r.name +
+                  " is in (`rtscalib diagnose --auto` does it).");
     }
+  }
+  if (!detectable.empty()) {
+    std::string list;
+    for (size_t i = 0; i < detectable.size(); ++i) {
+      const RankedEffect& r = *detectable[i];
+      list += std::string(i ? "; " : "") + r.name + " (" + ChangeFine(r.before, r.after) + ", " +
+              Fmt("%.2g", 100 * r.gain) + " %" +
+              (r.after_source == "refined" ? ", refitted" : "") + ")";
+    }
+    v.push_back("Statistically detectable but not worth adding (less than " + min_gain +
+                " % of the rms): " + list + ".");
   }
   for (const DistortionTerm* t : d.distortion_terms.Drops()) {
     v.push_back("Drop " + t->name + " of zoom " + std::to_string(t->zoom) +
                 " (hold it at 0): " + t->reason + ". Config: " + t->config_line);
   }
-  for (const Harmonic& h : d.harmonics.unexplained) {
-    v.push_back("Structure outside the catalogue: " + h.description + ".");
-  }
+  // Structure is found on top of the catalogue to first order; beside an
+  // effect worth adding (which moves the model more than a first-order step
+  // may describe) it is to be confirmed once that effect is in.
+  const std::string outside =
+      recommended.empty()
+          ? "Structure outside the catalogue: "
+          : "Structure outside the catalogue (to first order; check again once " +
+                recommended.front()->name + " is in): ";
+  for (const Harmonic& h : d.harmonics.unexplained) v.push_back(outside + h.description + ".");
   for (const StructureFinding& f : d.structure.unexplained) {
-    v.push_back("Structure outside the catalogue: " + f.description +
+    v.push_back(outside + f.description +
                 (f.points_to.empty() ? "" : "; points to " + f.points_to) + ".");
   }
   // Structure a catalogue effect explains, for the few most significant
-  // (what the surveyor would see in the residuals without that effect).
-  for (size_t i = 0; i < d.structure.explained.size() && i < 3; ++i) {
-    const StructureFinding& f = d.structure.explained[i];
-    if (f.explained_by.empty()) continue;
+  // that matter (what the surveyor would see in the residuals without that
+  // effect). It supports the ranking, never contradicts it: said only of an
+  // effect the verdict recommends (one that is not recommended does not pay
+  // its way in these data, whatever a probe of similar shape finds).
+  int said = 0;
+  for (const StructureFinding& f : d.structure.explained) {
+    if (said >= 3) break;
+    if (f.explained_by.empty() || !f.material) continue;
+    const auto e = std::find_if(recommended.begin(), recommended.end(),
+                                [&](const RankedEffect* r) { return r->name == f.explained_by; });
+    if (e == recommended.end()) continue;
     v.push_back("Structure against " + f.variable + " (" + f.description + ") is what " +
-                f.explained_by + " explains.");
+                f.explained_by + " explains" +
+                (e == recommended.begin() ? "" : " (also worth adding, see the ranking)") + ".");
+    ++said;
   }
   if (d.outliers.flagged > 0) {
     v.push_back(std::to_string(d.outliers.flagged) + " of " + std::to_string(d.outliers.tested) +
@@ -217,6 +269,7 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
 std::string DiagnosisSettings::Check() const {
   if (!(significance > 0 && significance < 1)) return "diagnose.significance must be in (0, 1)";
   if (refine_top < 0) return "diagnose: refine_top must be >= 0";
+  if (!(min_gain >= 0 && min_gain < 1)) return "diagnose: min_gain must be in [0, 1)";
   if (max_harmonic < 1 || max_harmonic > 12) return "diagnose: max_harmonic must be in 1..12";
   if (max_unexplained < 0) return "diagnose: max_unexplained must be >= 0";
   return "";
@@ -233,7 +286,7 @@ FitContext ContextOf(const FitOptions& used, const FitSummary& summary) {
 
 const RankedEffect* Diagnosis::Next() const {
   for (const RankedEffect& r : ranking.entries) {
-    if (r.significant && !r.redundant) return &r;
+    if (r.recommended) return &r;
   }
   return nullptr;
 }
@@ -251,7 +304,12 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
     d.model_description += (i ? ", " : "") + d.effects[i];
   d.model_description += "]";
   for (int g = 0; g < 3; ++g) d.sigma[g] = fit.sigma[g];
-  d.coverage = MeasureCoverage(obs, model, fit.options);
+  d.min_gain = settings.min_gain;
+  // Every point's position (the estimated boards' corners where the pixels
+  // leave them empty) for what needs it; the linearisation and the refits
+  // see `obs` as the fit did, the boards' poses free.
+  const Observations known = WithEstimates(obs, model);
+  d.coverage = MeasureCoverage(known, model, fit.options);
 
   // A camera-only model (SPEC 7.1) has no axes and no EDM: only the camera's
   // own effects are candidates, and there is no phi or theta to find
@@ -279,18 +337,18 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   if (harmonics)
     lo.probes = DefaultProbes(d.coverage.faces, d.coverage.has_edm, settings.max_harmonic);
   if (settings.structure) {
-    lo.variables = SessionVariables(obs, model);
-    for (const Probe& p : StructureProbes(lo.variables, obs, model, !camera_only)) {
+    lo.variables = SessionVariables(known, model);
+    for (const Probe& p : StructureProbes(lo.variables, known, model, !camera_only)) {
       lo.probes.push_back(p);
     }
   }
   const Linearization lin = Linearize(obs, model, lo);
   const Reduced red = Reduce(lin);
   d.num_rows = lin.NumRows();
-  d.num_parameters = red.base.rank();
+  d.num_parameters = red.Rank();
   d.excluded_critical = lin.excluded_critical;
   d.fit_quality =
-      AssessFitQuality(lin, obs, fit.options, d.num_parameters, settings.significance);
+      AssessFitQuality(lin, known, fit.options, d.num_parameters, settings.significance);
 
   std::vector<const ColumnBlock*> catalogue;
   for (const ColumnBlock& b : lin.blocks) {
@@ -299,12 +357,16 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
     for (int j = b.first; j < b.first + b.size; ++j) kept = std::max(kept, red.kept_fraction[j]);
     if (kept >= kRedundantFraction) catalogue.push_back(&b);
   }
+  Materiality scale;
+  scale.current = RmsOfWhitened(lin, lin.r);
+  scale.min_gain = settings.min_gain;
+  scale.reach = d.coverage.corner_fraction;
   Projector nuisance(lin.NumRows());
   if (!lo.probes.empty()) {
     const ProbeAnalysis probes =
         AnalyseProbes(lin, red, catalogue, settings.significance, settings.max_unexplained);
-    d.harmonics = AnalyseHarmonics(lin, probes);
-    d.structure = AnalyseStructure(lin, red, probes, model);
+    d.harmonics = AnalyseHarmonics(lin, probes, scale);
+    d.structure = AnalyseStructure(lin, red, probes, model, scale);
     // Structure outside the catalogue is a nuisance for the ranking: an
     // effect is credited only with what it explains beyond it.
     for (const Harmonic& h : d.harmonics.unexplained) {
@@ -334,10 +396,11 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   ro.significance = settings.significance;
   ro.redundant_fraction = kRedundantFraction;
   ro.refine_top = settings.refine_top;
+  ro.min_gain = settings.min_gain;
   d.ranking = RankEffects(in, ro);
   d.current = d.ranking.current;
 
-  d.distortion_terms = AssessDistortionTerms(lin, model);
+  d.distortion_terms = AssessDistortionTerms(lin, model, d.coverage.corner_fraction);
   {
     // The nearest target of each zoom (photos' D, camera records' d).
     std::map<int, double> nearest;
@@ -348,15 +411,15 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
         auto [it, fresh] = nearest.emplace(zoom, x);
         if (!fresh) it->second = std::min(it->second, x);
       };
-      for (size_t i = 0; i < obs.pixels.size(); ++i) keep(obs.pixels[i].zoom, v.pixel[i]);
-      for (size_t i = 0; i < obs.records.size(); ++i) {
-        if (obs.records[i].tool == Tool::kCam) keep(obs.records[i].zoom, v.record[i]);
+      for (size_t i = 0; i < known.pixels.size(); ++i) keep(known.pixels[i].zoom, v.pixel[i]);
+      for (size_t i = 0; i < known.records.size(); ++i) {
+        if (known.records[i].tool == Tool::kCam) keep(known.records[i].zoom, v.record[i]);
       }
     }
     d.wild = FindWildParameters(lin, model, d.distortion_terms, nearest);
   }
   if (settings.outliers) {
-    d.outliers = TestOutliers(obs, lin, red, ObservationResiduals(obs, model, fit.options),
+    d.outliers = TestOutliers(known, lin, red, ObservationResiduals(known, model, fit.options),
                               settings.significance, settings.outliers_listed);
   }
   d.verdict = Verdict(d);

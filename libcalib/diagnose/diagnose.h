@@ -38,7 +38,12 @@ namespace rtscalib {
 // section's significance on and leaves the rest at these defaults.
 struct DiagnosisSettings {
   double significance = 0.01;  // family-wise level of each of: ranking, harmonics, outliers
-  int refine_top = 2;          // best significant effects confirmed by a refinement
+  int refine_top = 3;          // leading significant effects refitted (their "after" is the refit's)
+  // The smallest relative fall of the fit's rms (of any observation group)
+  // that an effect must buy to be recommended, and a structure outside the
+  // catalogue to be reported: below it a term is within the scatter, however
+  // significant (Materiality, ranking.h).
+  double min_gain = 0.02;
   bool harmonics = true;
   int max_harmonic = 4;
   int max_unexplained = 6;
@@ -80,15 +85,20 @@ struct Diagnosis {
   Coverage coverage;
   EquivalentTerms equivalents;
   double sigma[3] = {0, 0, 0};                 // whitening sigmas (fitted noise per group)
+  double min_gain = 0;                         // DiagnosisSettings::min_gain, as used
   int num_rows = 0, num_parameters = 0;
   int excluded_critical = 0;
   std::vector<std::string> verdict;  // most important first
   double seconds = 0;
 
-  // The first significant effect, if any (what to add next).
+  // The first recommended effect (significant, worth adding, not
+  // redundant), if any: what to add next.
   const RankedEffect* Next() const;
 };
 
+// `obs` as the fit saw them (the rows it used): pixels on boards of unknown
+// pose and records of points of unknown position (SPEC 7) are fitted with
+// the model's estimated boards and points free, as in the refinement.
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
                    const DiagnosisSettings& settings);
 

@@ -20,6 +20,11 @@ namespace {
 // error of ~1e-12, far below the rule's factor of 1.
 constexpr double kStep = 1e-6;
 
+// Data that reach this fraction of the half-diagonal cover the image: the
+// corners themselves are never observed (a board's corner points sit inside
+// its border).
+constexpr double kWholeImage = 0.95;
+
 // The power of the normalised radius r that coefficient `index` multiplies
 // in the distortion (k1 r^2, k2 r^4, k3 r^6, ...; the tilt: none). Among the
 // coefficients of a zoom and group that qualify, the highest power is
@@ -49,10 +54,24 @@ int RadialPower(int index) {
 }
 
 // max over the four image corners of |d pixel / d coefficient `index`| [px],
-// at the rays that the camera now maps to the corners.
-double CornerDerivative(const CameraTool& cam, int index) {
+// at the rays that the camera now maps to the corners; with `fraction` < 1,
+// at the points that far from the principal point towards each corner (the
+// edge of data that reach that fraction of the half-diagonal).
+double CornerDerivative(const CameraTool& cam, int index, double fraction = 1.0) {
   const double w = cam.width, h = cam.height;
-  const double corners[4][2] = {{-0.5, -0.5}, {w - 0.5, -0.5}, {-0.5, h - 0.5}, {w - 0.5, h - 0.5}};
+  const double cx = cam.intrinsics[2], cy = cam.intrinsics[3];
+  const double half = 0.5 * std::hypot(w, h);
+  double corners[4][2] = {{-0.5, -0.5}, {w - 0.5, -0.5}, {-0.5, h - 0.5}, {w - 0.5, h - 0.5}};
+  if (fraction < 1.0) {
+    // Along the diagonals, at `fraction` of the half-diagonal from the
+    // principal point (the reach Coverage::corner_fraction measures).
+    for (auto& corner : corners) {
+      const double du = corner[0] - cx, dv = corner[1] - cy, norm = std::hypot(du, dv);
+      if (!(norm > 0)) continue;
+      corner[0] = cx + du / norm * fraction * half;
+      corner[1] = cy + dv / norm * fraction * half;
+    }
+  }
   double best = 0;
   for (const auto& corner : corners) {
     double x = 0, y = 0;
@@ -129,6 +148,7 @@ std::string DistortionConfigLine(const InstrumentModel& model, Effect group, int
 }
 
 DistortionTerms AssessDistortionTerms(const Linearization& lin, const InstrumentModel& model,
+                                      const std::vector<double>& reach,
                                       const DistortionTermRules& rules) {
   DistortionTerms out;
   out.pixel_sigma = lin.sigma[static_cast<int>(ObsGroup::kPixel)];
@@ -168,6 +188,10 @@ DistortionTerms AssessDistortionTerms(const Linearization& lin, const Instrument
     const double derivative = CornerDerivative(cam, col.index);
     t.corner_px = t.sigma * derivative;
     t.corner_value_px = std::fabs(t.value) * derivative;
+    t.reach = col.zoom < static_cast<int>(reach.size()) && reach[col.zoom] > 0
+                  ? std::min(reach[col.zoom], 1.0)
+                  : 1.0;
+    t.data_px = t.sigma * CornerDerivative(cam, col.index, t.reach);
     const double size = std::max(cam.width, cam.height);
     t.wild = t.corner_px > size || t.corner_value_px > size;
     for (size_t b = 0; b < columns.size(); ++b) {
@@ -188,14 +212,18 @@ DistortionTerms AssessDistortionTerms(const Linearization& lin, const Instrument
   for (DistortionTerm& t : out.terms) {
     const double tvalue = t.sigma > 0 ? std::fabs(t.value) / t.sigma : 0.0;
     const bool zero = tvalue < rules.max_t;
-    const bool corner = t.corner_px > rules.max_corner_sigmas * out.pixel_sigma;
+    const bool corner = t.data_px > rules.max_corner_sigmas * out.pixel_sigma;
     const bool collinear = std::fabs(t.rho) > rules.max_rho;
     if (t.wild || !zero || !(corner || collinear)) continue;
     t.reason = t.name + " = " + Fmt("%.3g", t.value) + " +- " + Fmt("%.2g", t.sigma) +
                " is not distinguishable from 0 (|value| < " + Fmt("%g", rules.max_t) + " sigma)";
     if (corner) {
-      t.reason += "; its sigma alone moves the image corners by " + Fmt("%.3g", t.corner_px) +
-                  " px (pixel sigma " + Fmt("%.2g", out.pixel_sigma) + " px)";
+      t.reason += "; its sigma alone moves the points at the edge of the data by " +
+                  Fmt("%.3g", t.data_px) + " px (pixel sigma " + Fmt("%.2g", out.pixel_sigma) +
+                  " px; the observed points reach " + Fmt("%.0f", 100 * t.reach) +
+                  " % of the image's half-diagonal" +
+                  (t.reach < kWholeImage ? ", beyond which the distortion is extrapolated)"
+                                         : ")");
     }
     if (collinear) t.reason += "; correlation with " + t.partner + " " + Fmt("%+.4f", t.rho);
     // The highest power first, then the smallest |v| / s.

@@ -9,14 +9,18 @@
 //   corner_px  = s * max over the four image corners of |d pixel / d k|: how
 //                far the coefficient's uncertainty alone moves the image's
 //                corners (the distortion is extrapolated where no point was);
+//   data_px    = the same at the edge of the data: along the diagonals at
+//                the farthest observed point's distance from the principal
+//                point (Coverage::corner_fraction, `reach`);
 //   rho        = the largest |C_kl| / (s_k s_l) over the other fitted
 //                coefficients l of the same zoom.
 //   corner_value_px = |v| * the same derivative: how far the coefficient's
 //                value moves the corners.
 // Rule: k is suggested for dropping when it is not distinguishable from the
 // held value 0, |v| < 2 s (so that dropping it costs nothing significant),
-// AND it is badly determined: corner_px > the fit's pixel sigma, or
-// |rho| > 0.99. A coefficient whose sigma or value moves the corners by more
+// AND it is badly determined where the data are: data_px > the fit's pixel
+// sigma, or |rho| > 0.99. The advice states its size there, and where the
+// data end, never at image corners that no photo reached. A coefficient whose sigma or value moves the corners by more
 // than the image's size is never suggested for dropping: the fit went wild
 // there (`wild`), which wild_fit.h reports with its likely cause (a missing
 // effect the coefficient tries to absorb, or a coefficient the data cannot
@@ -51,6 +55,8 @@ struct DistortionTerm {
   double value = 0, sigma = 0;
   double corner_px = 0;     // sigma's effect at the farthest image corner [px]
   double corner_value_px = 0;  // the value's effect there [px]
+  double data_px = 0;          // sigma's effect at the edge of the data [px]
+  double reach = 1;            // the data's farthest point / half-diagonal (1: unknown)
   bool wild = false;        // corner_px or corner_value_px beyond the image's size
   double rho = 0;           // largest |correlation| with another fitted coefficient of the zoom
   std::string partner;      // that coefficient's name ("" when there is none)
@@ -69,7 +75,10 @@ struct DistortionTerms {
 // `lin` must be the linearisation of `model` (base columns = the fit's free
 // parameters). Empty when no distortion coefficient was fitted or the normal
 // matrix is singular.
+// `reach`: per zoom, the farthest observed point from the principal point
+// over the half-diagonal (Coverage::corner_fraction; missing zooms: 1).
 DistortionTerms AssessDistortionTerms(const Linearization& lin, const InstrumentModel& model,
+                                      const std::vector<double>& reach = {},
                                       const DistortionTermRules& rules = {});
 
 // The config line that fits, per zoom, the coefficients of `group` that

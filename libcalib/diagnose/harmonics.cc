@@ -11,8 +11,10 @@ namespace {
 constexpr double kArcsecPerRad = 180.0 * 3600.0 / M_PI;
 
 Harmonic MakeHarmonic(const ColumnBlock& block, const ColumnTest& t, double level,
-                      double unit_length) {
+                      double unit_length, const Linearization& lin, const Materiality& material) {
   Harmonic h;
+  h.gain = RelativeGain(material.current, RmsLess(lin, material.current, t.fitted));
+  h.material = material.Material(h.gain);
   h.probe = block.probe;
   h.block = block.name;
   const bool distance = block.probe.reading == Reading::kDistance;
@@ -84,21 +86,23 @@ std::vector<Probe> DefaultProbes(const std::set<int>& faces, bool has_edm, int m
   return out;
 }
 
-HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const ProbeAnalysis& probes) {
+HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const ProbeAnalysis& probes,
+                                  const Materiality& scale) {
   HarmonicAnalysis out;
   out.level = probes.level;
   out.tests = probes.tests;
   for (int s : probes.selected) {
     const ProbeResult& r = probes.probes[s];
     if (r.block->probe.kind != ProbeKind::kHarmonic) continue;
-    Harmonic h = MakeHarmonic(*r.block, r.joint, out.level, lin.edm_cyclic_unit_length);
+    Harmonic h = MakeHarmonic(*r.block, r.joint, out.level, lin.edm_cyclic_unit_length, lin, scale);
     // Below the resolution floor a statistically significant term is
-    // round-off of exact data, not structure.
-    if (h.significant) out.unexplained.push_back(h);
+    // round-off of exact data, not structure; within the scatter it is real
+    // but buys nothing.
+    if (h.significant) (h.material ? out.unexplained : out.negligible).push_back(h);
   }
   for (const ProbeResult& r : probes.probes) {
     if (r.block->probe.kind != ProbeKind::kHarmonic || !r.raw_significant) continue;
-    Harmonic h = MakeHarmonic(*r.block, r.raw, out.level, lin.edm_cyclic_unit_length);
+    Harmonic h = MakeHarmonic(*r.block, r.raw, out.level, lin.edm_cyclic_unit_length, lin, scale);
     h.explained_by = r.explained_by;
     out.before_catalogue.push_back(h);
   }

@@ -24,6 +24,7 @@
 
 #include "libcalib/diagnose/linearization.h"
 #include "libcalib/diagnose/probes.h"
+#include "libcalib/diagnose/ranking.h"
 
 namespace rtscalib {
 
@@ -35,6 +36,10 @@ struct Harmonic {
   std::string unit;
   double wald = 0, p_value = 1;
   bool significant = false;
+  // The relative fall of the fit's rms if it were modelled (RelativeGain),
+  // and whether that is worth a sentence (Materiality).
+  double gain = 0;
+  bool material = false;
   std::string explained_by;  // catalogue effect that removes it; "" if none does
   std::string description;   // "twice per turn in phi: phi reading error 3.1 arcsec (face 1)"
   std::string block;         // the probe's column block name
@@ -42,7 +47,8 @@ struct Harmonic {
 
 struct HarmonicAnalysis {
   std::vector<Harmonic> before_catalogue;  // significant against the fitted model alone
-  std::vector<Harmonic> unexplained;       // significant on top of the whole catalogue
+  std::vector<Harmonic> unexplained;       // significant on top of the whole catalogue, material
+  std::vector<Harmonic> negligible;        // significant on top of the catalogue, within the scatter
   double level = 0;                        // per-test level
   int tests = 0;
 };
@@ -51,7 +57,8 @@ struct HarmonicAnalysis {
 std::vector<Probe> DefaultProbes(const std::set<int>& faces, bool has_edm, int max_harmonic = 4);
 
 // The harmonic probes of `probes` (AnalyseProbes over `lin`).
-HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const ProbeAnalysis& probes);
+HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const ProbeAnalysis& probes,
+                                  const Materiality& scale);
 
 // "twice per turn in phi", "harmonic 2 of the EDM unit length (period 0.75 m)".
 std::string HarmonicName(const Probe& p, double unit_length_m);

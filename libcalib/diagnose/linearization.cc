@@ -3,6 +3,8 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Geometry>
+#include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <initializer_list>
@@ -15,6 +17,7 @@
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/cost_functions.h"
 #include "libcalib/fit/parameterization.h"
+#include "libcalib/fit/unknowns.h"
 #include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
 
@@ -229,34 +232,62 @@ std::vector<ceres::ResidualBlockId> AddResiduals(const Observations& obs,
   return residual_ids;
 }
 
-// One Jacobian evaluation: r, the base columns (the fit's free parameters,
-// in the parameterisation's order) and the candidates' columns of `extra`
+// The local parameters' columns of the Jacobian (LocalColumns: boards of
+// unknown pose, points of unknown position), sparse until projected out.
+struct LocalJacobian {
+  std::vector<int> unit;  // per local column: its board or point
+  std::vector<std::vector<std::pair<int, double>>> entries;  // per local column: (row, value)
+};
+
+// The parameter blocks of the model's boards and points, each with the
+// board or point it belongs to (a board's rotation and translation are one).
+std::map<const double*, int> LocalUnits(InstrumentModel* work) {
+  std::map<const double*, int> units;
+  int next = 0;
+  for (EstimatedBoard& b : work->boards) {
+    units[b.pose.q.data()] = next;
+    units[b.pose.t.data()] = next++;
+  }
+  for (EstimatedPoint& p : work->points) units[p.x.data()] = next++;
+  return units;
+}
+
+// One Jacobian evaluation: r, the base columns (the fit's free global
+// parameters, in the parameterisation's order), the local ones (`local`,
+// blocks in `local_units`) and the candidates' columns of `extra`
 // (`extra_col`); `num_extra_cols` sizes `extra` (candidates and probes).
 void EvaluateColumns(ceres::Problem* problem, const std::vector<ceres::ResidualBlockId>& ids,
                      const std::vector<const BlockDecision*>& free_blocks,
                      const std::map<std::pair<const double*, int>, int>& extra_col,
-                     int num_extra_cols, int num_threads, Linearization* lin) {
+                     const std::map<const double*, int>& local_units, int num_extra_cols,
+                     int num_threads, Linearization* lin, LocalJacobian* local) {
   ceres::Problem::EvaluateOptions eopt;
   eopt.residual_blocks = ids;
   eopt.apply_loss_function = false;
   eopt.num_threads = num_threads;
-  // Per Jacobian column: its base column or its extra column.
-  std::vector<int> base_col, to_extra;
+  // Per Jacobian column: its base column, its extra column or its local column.
+  std::vector<int> base_col, to_extra, to_local;
   for (const BlockDecision* d : free_blocks) {
     eopt.parameter_blocks.push_back(d->block);
+    const auto unit = local_units.find(d->block);
     for (size_t k = 0; k < d->columns.size(); ++k) {
       auto it = extra_col.find({d->block, static_cast<int>(k)});
+      base_col.push_back(-1);
+      to_extra.push_back(-1);
+      to_local.push_back(-1);
       if (it != extra_col.end()) {
-        base_col.push_back(-1);
-        to_extra.push_back(it->second);
+        to_extra.back() = it->second;
+      } else if (unit != local_units.end()) {
+        to_local.back() = static_cast<int>(local->unit.size());
+        local->unit.push_back(unit->second);
       } else {
-        base_col.push_back(static_cast<int>(lin->base_names.size()));
-        to_extra.push_back(-1);
+        base_col.back() = static_cast<int>(lin->base_names.size());
         lin->base_names.push_back(d->columns[k].name);
         lin->base_columns.push_back(d->columns[k]);
       }
     }
   }
+  local->entries.assign(local->unit.size(), {});
   double cost = 0;
   std::vector<double> residuals;
   ceres::CRSMatrix jac;
@@ -276,8 +307,10 @@ void EvaluateColumns(ceres::Problem* problem, const std::vector<ceres::ResidualB
       const int c = jac.cols[k];
       if (base_col[c] >= 0) {
         lin->base(i, base_col[c]) = jac.values[k];
-      } else {
+      } else if (to_extra[c] >= 0) {
         lin->extra(i, to_extra[c]) = jac.values[k];
+      } else if (jac.values[k] != 0.0) {
+        local->entries[to_local[c]].push_back({i, jac.values[k]});
       }
     }
   }
@@ -638,6 +671,73 @@ void AddProbeColumns(const Observations& obs, const InstrumentModel& model,
   }
 }
 
+// Projects the local parameters' columns out of r, base and extra, block by
+// block (LocalColumns): the boards and points whose rows overlap are one
+// block, whose columns (scaled to unit norm) are orthonormalised by a
+// pivoted QR; every row of the block then loses its part along them.
+void ProjectLocal(const LocalJacobian& local, Linearization* lin) {
+  const int n = lin->NumRows();
+  lin->local.columns = static_cast<int>(local.unit.size());
+  lin->local.leverage = Eigen::VectorXd::Zero(n);
+  if (local.unit.empty()) return;
+  // Units that share a row are one block (union-find over the units).
+  const int units = 1 + *std::max_element(local.unit.begin(), local.unit.end());
+  std::vector<int> parent(units);
+  for (int u = 0; u < units; ++u) parent[u] = u;
+  auto find = [&](int u) {
+    while (parent[u] != u) u = parent[u] = parent[parent[u]];
+    return u;
+  };
+  std::vector<int> unit_of_row(n, -1);
+  for (size_t c = 0; c < local.unit.size(); ++c) {
+    for (const auto& [row, value] : local.entries[c]) {
+      int& u = unit_of_row[row];
+      if (u < 0) {
+        u = local.unit[c];
+      } else {
+        parent[find(u)] = find(local.unit[c]);
+      }
+    }
+  }
+  std::map<int, std::vector<int>> rows_of, cols_of;  // per block root
+  for (int i = 0; i < n; ++i) {
+    if (unit_of_row[i] >= 0) rows_of[find(unit_of_row[i])].push_back(i);
+  }
+  for (size_t c = 0; c < local.unit.size(); ++c) {
+    if (!local.entries[c].empty()) cols_of[find(local.unit[c])].push_back(static_cast<int>(c));
+  }
+  for (const auto& [root, rows] : rows_of) {
+    const std::vector<int>& cols = cols_of[root];
+    std::map<int, int> at;  // row -> index within the block
+    for (size_t k = 0; k < rows.size(); ++k) at[rows[k]] = static_cast<int>(k);
+    Eigen::MatrixXd l = Eigen::MatrixXd::Zero(rows.size(), cols.size());
+    for (size_t k = 0; k < cols.size(); ++k) {
+      for (const auto& [row, value] : local.entries[cols[k]]) l(at[row], k) = value;
+      const double norm = l.col(k).norm();
+      if (norm > 0) l.col(k) /= norm;
+    }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(l);
+    qr.setThreshold(1e-10);
+    const int rank = static_cast<int>(qr.rank());
+    if (rank == 0) continue;
+    const Eigen::MatrixXd q =
+        qr.householderQ() * Eigen::MatrixXd::Identity(l.rows(), rank);
+    auto project = [&](auto& m) {
+      Eigen::MatrixXd part = m(rows, Eigen::all);
+      part -= q * (q.transpose() * part);
+      m(rows, Eigen::all) = part;
+    };
+    project(lin->base);
+    project(lin->extra);
+    Eigen::VectorXd r = lin->r(rows);
+    r -= q * (q.transpose() * r);
+    lin->r(rows) = r;
+    lin->local.leverage(rows) += q.rowwise().squaredNorm();
+    lin->local.rank += rank;
+    ++lin->local.blocks;
+  }
+}
+
 }  // namespace
 
 void TrendBasis::Evaluate(double x, double* f) const {
@@ -699,10 +799,16 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   const std::vector<const BlockDecision*> free_blocks = param.Apply(&problem, false);
   int num_probe_cols = 0;
   for (const Probe& p : options.probes) num_probe_cols += ProbeSize(p, options.variables);
-  EvaluateColumns(&problem, residual_ids, free_blocks, extra_col,
-                  num_candidate_cols + num_probe_cols, options.fit.num_threads, &lin);
-  if (!options.probes.empty())
-    AddProbeColumns(obs, model, options.probes, num_candidate_cols, &lin);
+  LocalJacobian local;
+  EvaluateColumns(&problem, residual_ids, free_blocks, extra_col, LocalUnits(&work),
+                  num_candidate_cols + num_probe_cols, options.fit.num_threads, &lin, &local);
+  // The probes' derivatives need every point's position: the estimated
+  // boards' corners where the pixels leave them empty.
+  if (!options.probes.empty()) {
+    AddProbeColumns(WithEstimates(obs, model), model, options.probes, num_candidate_cols, &lin);
+  }
+  lin.extra_norm = lin.extra.colwise().norm().transpose();
+  ProjectLocal(local, &lin);
   return lin;
 }
 
@@ -710,6 +816,7 @@ Reduced Reduce(const Linearization& lin) {
   const int n = lin.NumRows();
   Reduced red(n);
   red.base.Add(lin.base, 1e-9);
+  red.local_rank = lin.local.rank;
   red.r = red.base.Apply(lin.r);
   red.extra = red.base.Apply(lin.extra);
   red.cluster.resize(n);
@@ -718,7 +825,7 @@ Reduced Reduce(const Linearization& lin) {
   red.kept_fraction = Eigen::VectorXd::Zero(m);
   red.column_norm = Eigen::VectorXd::Zero(m);
   for (int j = 0; j < m; ++j) {
-    red.column_norm[j] = lin.extra.col(j).norm();
+    red.column_norm[j] = j < lin.extra_norm.size() ? lin.extra_norm[j] : lin.extra.col(j).norm();
     if (red.column_norm[j] > 0) red.kept_fraction[j] = red.extra.col(j).norm() / red.column_norm[j];
   }
   return red;

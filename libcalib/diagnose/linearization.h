@@ -150,12 +150,38 @@ struct LinearizeOptions {
   std::vector<SessionVariable> variables;  // what trend probes refer to
 };
 
+// The fit's parameters split in two (Linearization): the global ones that
+// many observations share (the chain, cameras, effects) are `base`; the
+// local ones that only a few observations see, each board of unknown pose
+// (6 tangent columns per placement, SPEC 7) and each point of unknown
+// position (3), are projected out of every other column on their own rows
+// (Frisch-Waugh-Lovell, block by block): a camera-only session of 186
+// photos has 1,116 of them, which as dense base columns would cost a QR of
+// n x 1,125 instead of 186 small ones. Boards whose rows overlap (a photo's
+// focus distance from the centroid of all its boards, SPEC 4.1) are one
+// block.
+struct LocalColumns {
+  int blocks = 0;   // blocks of overlapping rows projected out
+  int columns = 0;  // tangent columns of the boards and points
+  int rank = 0;     // directions they span in these data
+  // Per row: |Q_L row|^2, the local parameters' share of its leverage.
+  Eigen::VectorXd leverage;
+};
+
 struct Linearization {
+  // r, base and extra are projected off the local parameters (LocalColumns):
+  // base' base is then the normal matrix of the global parameters with the
+  // local ones estimated alongside (the Schur complement), and every test
+  // below sees exactly the freedom the fit had.
   Eigen::VectorXd r;
   Eigen::MatrixXd base;
   std::vector<std::string> base_names;
   std::vector<FreeColumn> base_columns;  // per base column: its name, effect, zoom, index
   Eigen::MatrixXd extra;
+  // |column of extra| before the local projection: what an absorbed column
+  // is measured against (Reduced::column_norm).
+  Eigen::VectorXd extra_norm;
+  LocalColumns local;
   std::vector<ColumnBlock> blocks;
   std::vector<ResidualRow> rows;
   int num_clusters = 0;
@@ -172,7 +198,9 @@ struct Linearization {
   int NumRows() const { return static_cast<int>(r.size()); }
 };
 
-// Throws std::invalid_argument for bad options, like Refine.
+// `obs` as the fit saw it: pixels on boards of unknown pose (SPEC 7) leave
+// X, Y, Z empty and the model's estimated boards hold them, free here as in
+// the fit. Throws std::invalid_argument for bad options, like Refine.
 Linearization Linearize(const Observations& obs, const InstrumentModel& model,
                         const LinearizeOptions& options);
 
@@ -190,7 +218,11 @@ struct Reduced {
   // the column is zero: the data do not see that parameter at all).
   Eigen::VectorXd kept_fraction;
   Eigen::VectorXd column_norm;
+  int local_rank = 0;  // Linearization::local.rank
   explicit Reduced(int rows) : base(rows) {}
+  // Directions of the fit's parameters in these data, global and local:
+  // the degrees of freedom every test subtracts.
+  int Rank() const { return base.rank() + local_rank; }
 };
 Reduced Reduce(const Linearization& lin);
 

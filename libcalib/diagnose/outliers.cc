@@ -45,7 +45,8 @@ OutlierReport TestOutliers(const Observations& obs, const Linearization& lin, co
     Item& it = items[{row.group == ObsGroup::kPixel ? 1 : 0, row.index}];
     it.group = row.group;
     it.index = row.index;
-    it.h += q.cols() > 0 ? q.row(i).squaredNorm() : 0.0;
+    it.h += (q.cols() > 0 ? q.row(i).squaredNorm() : 0.0) +
+            (lin.local.leverage.size() > i ? lin.local.leverage[i] : 0.0);
     ++it.rows;
   }
   const int num_records = static_cast<int>(obs.records.size());

@@ -74,7 +74,7 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
   out.level = significance / out.tests;
   const int n = lin.NumRows();
   const int g = lin.num_clusters;
-  const int dof_base = red.base.rank();
+  const int dof_base = red.Rank();
 
   // 1. Against the fitted model alone.
   for (ProbeResult& r : out.probes) {
@@ -146,7 +146,8 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     for (size_t o = i + 1; o < selected.size(); ++o) others.Add(t_cat(selected[o]));
     ProbeResult& r = out.probes[s];
     r.selected = true;
-    r.joint = TestProbe(others.Apply(y), others.Apply(t_cat(s)), red, *r.block, g,
+    r.joint_columns = others.Apply(t_cat(s));
+    r.joint = TestProbe(others.Apply(y), r.joint_columns, red, *r.block, g,
                         dof_base + cat.rank() + others.rank());
   }
   out.selected = selected;

@@ -38,6 +38,9 @@ struct ProbeResult {
   bool raw_significant = false;
   bool selected = false;     // (2) significant on top of the whole catalogue
   ColumnTest joint;          // (2) with the other selected probes (selected only)
+  // (2) the probe's columns that `joint` regressed on: what neither the
+  // model, the catalogue nor the other selected probes can take up.
+  Eigen::MatrixXd joint_columns;
   std::string explained_by;  // (3) raw significant, not significant on top of the catalogue
   std::string same_as;       // (3) significant on top of the catalogue, but a selected probe holds it
 };

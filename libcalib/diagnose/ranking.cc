@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/fit/unknowns.h"
 
 namespace rtscalib {
 namespace {
@@ -80,7 +81,9 @@ GroupRms RmsOfWhitened(const Linearization& lin, const Eigen::VectorXd& r) {
   return g;
 }
 
-GroupRms RmsOfModel(const Observations& obs, const InstrumentModel& model, const FitOptions& fit) {
+GroupRms RmsOfModel(const Observations& observed, const InstrumentModel& model,
+                    const FitOptions& fit) {
+  const Observations obs = WithEstimates(observed, model);
   GroupRms g;
   for (const RecordResidual& r : RecordResiduals(model, obs.records)) {
     const Record& rec = obs.records[r.index];
@@ -102,6 +105,32 @@ GroupRms RmsOfModel(const Observations& obs, const InstrumentModel& model, const
   }
   Finish(&g);
   return g;
+}
+
+GroupRms RmsLess(const Linearization& lin, const GroupRms& before,
+                 const Eigen::VectorXd& explained) {
+  GroupRms g = before;
+  for (int i = 0; i < lin.NumRows(); ++i) {
+    const int k = static_cast<int>(lin.rows[i].group);
+    const double v = explained[i] * lin.sigma[k];
+    (k == 0 ? g.edm_ss : k == 1 ? g.cam_ss : g.pixels_ss) -= v * v;
+  }
+  g.edm_ss = std::max(g.edm_ss, 0.0);
+  g.cam_ss = std::max(g.cam_ss, 0.0);
+  g.pixels_ss = std::max(g.pixels_ss, 0.0);
+  Finish(&g);
+  return g;
+}
+
+double RelativeGain(const GroupRms& before, const GroupRms& after) {
+  double gain = 0;
+  auto fall = [&gain](int n, double b, double a) {
+    if (n > 0 && b > 0) gain = std::max(gain, (b - a) / b);
+  };
+  fall(before.edm_n, before.edm_m, after.edm_m);
+  fall(before.cam_n, before.cam_m, after.cam_m);
+  fall(before.pixels_n, before.pixels_px, after.pixels_px);
+  return gain;
 }
 
 std::string ConfigLine(const InstrumentModel& model, Effect e) {
@@ -250,8 +279,9 @@ RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
   r.delta_bic = GroupLogRatio(lin, cx.y, cx.y - t.fitted) + t.rank * cx.log_n;
   r.wald = t.wald;
   r.p_value = t.p_value;
-  const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.base.rank());
+  const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.Rank());
   r.after = RmsOfWhitened(lin, red.r - plain.fitted);
+  r.linear_after = r.after;
 
   // r regressed on its own derivative gives minus the Gauss-Newton step.
   if (IsKinematic(b.effect)) {
@@ -282,6 +312,7 @@ RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
   const double floor = r.before.MainUnit() == std::string("px") ? kPixelFloor : kPointFloorM;
   r.significant = t.rank > 0 && t.p_value < cx.level && r.delta_bic < 0 &&
                   r.before.Main() - r.after.Main() > floor;
+  r.gain = RelativeGain(r.before, r.after);
   if (!r.identifiable) {
     char buf[160];
     std::snprintf(buf, sizeof(buf), "strongly correlated with %s (rho %+.3f)",
@@ -347,7 +378,7 @@ void FindAliases(const std::vector<const ColumnBlock*>& effects, const Context& 
       const ColumnBlock* be = BlockOf(r.effect, effects);
       const ColumnTest t =
           TestColumns(y, p->Apply(red.extra.middleCols(be->first, be->size)), red.cluster,
-                      cx.lin.num_clusters, red.base.rank() + p->rank());
+                      cx.lin.num_clusters, red.Rank() + p->rank());
       if (!(t.rank > 0 && t.p_value < out->level)) r.aliases.push_back(o.name);
     }
   }
@@ -357,76 +388,109 @@ void FindAliases(const std::vector<const ColumnBlock*>& effects, const Context& 
 // (what the next rungs of the ladder will likely add).
 void AlsoAfterBest(const std::vector<const ColumnBlock*>& effects, const Context& cx,
                    Ranking* out) {
-  if (out->entries.empty() || !out->entries.front().significant) return;
+  if (out->entries.empty() || !out->entries.front().recommended) return;
+  // After a refit far from the first order (a fall the linear step did not
+  // predict to within a tenth), the linear residual is not where the next
+  // rung starts: a new diagnosis of the refitted model tells.
+  const RankedEffect& first = out->entries.front();
+  if (first.after_source == "refined" &&
+      std::abs(first.after.Main() - first.linear_after.Main()) >
+          0.1 * std::abs(first.before.Main() - first.after.Main())) {
+    return;
+  }
   const Reduced& red = cx.red;
   const ColumnBlock* best = BlockOf(out->entries.front().effect, effects);
   Projector p = cx.nu;
   p.Add(red.extra.middleCols(best->first, best->size));
   const Eigen::VectorXd yb = p.Apply(red.r);
+  const GroupRms after_best = RmsOfWhitened(cx.lin, yb);
   for (size_t i = 1; i < out->entries.size(); ++i) {
     const RankedEffect& o = out->entries[i];
     if (!o.significant) continue;
     const ColumnBlock* bo = BlockOf(o.effect, effects);
     const ColumnTest t = TestColumns(yb, p.Apply(red.extra.middleCols(bo->first, bo->size)),
-                                     red.cluster, cx.lin.num_clusters, red.base.rank() + p.rank());
-    if (t.rank > 0 && t.p_value < out->level) out->also_after_best.push_back(o.name);
+                                     red.cluster, cx.lin.num_clusters, red.Rank() + p.rank());
+    const double gain = RelativeGain(after_best, RmsLess(cx.lin, after_best, t.fitted));
+    if (t.rank > 0 && t.p_value < out->level && gain >= cx.o.min_gain) {
+      out->also_after_best.push_back(o.name);
+    }
   }
 }
 
-// The linear prediction is first order: the best `refine_top` significant
-// effects are confirmed by a real refinement (warm start at the linear
-// estimate, the linearisation's weights held), whose rms and values replace
-// the linear ones when it does at least as well.
+// The linear prediction is first order: the leading `refine_top`
+// significant effects are refitted, and the refit's rms, values, delta BIC
+// and gain replace the linear ones: the fall the user will see when adding
+// the effect. The refit is the calibration's Refine from the fitted model
+// with the effect added at zero (every effect is linear in its parameters
+// there, effects.h, so its first step is the linear estimate with every
+// other parameter moved with it; the linear estimate alone, without those
+// compensating moves, can start a strongly correlated effect far off), the
+// estimated boards and points free, the linearisation's weights held. An
+// effect whose linear gain is below a quarter of min_gain is not refitted:
+// a step that small is first order to within its own square. A refit that
+// fails keeps the linear prediction (after_source).
 void ConfirmByRefinement(const Context& cx, Ranking* out) {
   const RankingInput& in = cx.in;
   const Linearization& lin = cx.lin;
-  int refined = 0;
+  // The fitted model's own rms over the same rows as a refit's, so that a
+  // refit's delta BIC compares like with like.
+  std::optional<GroupRms> before;
+  int leading = 0;
   for (RankedEffect& r : out->entries) {
-    if (refined >= cx.o.refine_top || !r.significant) break;
-    ++refined;
+    if (leading >= cx.o.refine_top || !r.significant) break;
+    ++leading;
+    if (r.gain < 0.25 * cx.o.min_gain) continue;
     InstrumentModel m = *in.model;
-    AddAtEstimate(r, &m);
+    m.effects.Add(r.effect);
+    m.sigmas = {};
     FitOptions fo = in.fit;
     fo.reestimate_sigmas = false;  // the same weights as the linearisation
     fo.sigma_edm_m = lin.sigma[0];
     fo.sigma_cam_m = lin.sigma[1];
     fo.sigma_pixel_px = lin.sigma[2];
-    fo.compute_covariance = true;
-    fo.max_iterations = std::min(fo.max_iterations, 50);
+    // The values' sigmas stay the linear test's (robust) ones: the refit's
+    // covariance would cost more than the refit.
+    fo.compute_covariance = false;
+    fo.max_iterations = std::min(fo.max_iterations, kRefitIterations);
     fo.verbose = false;
+    FitSummary fit;
     try {
-      Refine(*in.obs, fo, &m);
+      fit = Refine(*in.obs, fo, &m);
     } catch (const std::exception&) {
       continue;
     }
+    if (!before) before = RmsOfModel(*in.obs, *in.model, in.fit);
     const GroupRms after = RmsOfModel(*in.obs, m, in.fit);
-    if (!(after.WhitenedRss(lin.sigma) <= r.after.WhitenedRss(lin.sigma) * 1.05)) continue;
     r.after = after;
     r.after_source = "refined";
+    if (!fit.converged) {
+      r.note += std::string(r.note.empty() ? "" : "; ") + "the refit stopped after " +
+                std::to_string(fit.iterations) +
+                " iterations before converging: the fall is at least this";
+    }
+    r.delta_bic = after.Bic(r.num_params) - before->Bic(0);
+    r.significant = r.delta_bic < 0;  // the Wald test held; the refit must still pay its way
+    r.gain = RelativeGain(*before, after);
     if (IsKinematic(r.effect)) {
       r.si = m.EffectValue(r.effect);
-      if (m.sigmas.valid) {
-        const auto& c = m.sigmas.effect_cov[static_cast<int>(r.effect)];
-        // Keep the larger (more honest) of the refinement's and the robust covariance.
-        if (c[0] + c[3] > r.si_cov[0] + r.si_cov[3]) r.si_cov = c;
-      }
       r.value = ToReportUnits(r.effect, r.si, r.si_cov);
     } else if (r.effect == Effect::kFocus) {
-      for (FocusValue& f : r.focus) {
-        f.value = m.cams[f.zoom].focus[f.index];
-        if (m.sigmas.valid && f.zoom < static_cast<int>(m.sigmas.focus.size())) {
-          f.sigma = std::max(f.sigma, m.sigmas.focus[f.zoom][f.index]);
-        }
-      }
+      for (FocusValue& f : r.focus) f.value = m.cams[f.zoom].focus[f.index];
     } else {
-      for (DistortionValue& d : r.distortion) {
-        d.value = m.cams[d.zoom].distortion[d.index];
-        if (m.sigmas.valid && d.zoom < static_cast<int>(m.sigmas.distortion.size())) {
-          d.sigma = std::max(d.sigma, m.sigmas.distortion[d.zoom][d.index]);
-        }
-      }
+      for (DistortionValue& d : r.distortion) d.value = m.cams[d.zoom].distortion[d.index];
     }
   }
+}
+
+// Recommended effects first (significant, worth adding, not redundant),
+// then the other significant ones, then the rest; within each by delta BIC.
+void Order(Ranking* out) {
+  std::stable_sort(out->entries.begin(), out->entries.end(),
+                   [](const RankedEffect& a, const RankedEffect& b) {
+                     if (a.recommended != b.recommended) return a.recommended;
+                     if (a.significant != b.significant) return a.significant;
+                     return a.delta_bic < b.delta_bic;
+                   });
 }
 
 }  // namespace
@@ -466,21 +530,25 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
                    *in.nuisance,
                    Normals(lin, effects),
                    in.nuisance->Apply(red.r),
-                   red.base.rank() + in.nuisance->rank(),
+                   red.Rank() + in.nuisance->rank(),
                    std::log(std::max(n, 2)),
                    out.level,
                    out.current};
   for (const ColumnBlock* b : effects) out.entries.push_back(ScoreEffect(*b, cx));
   for (Effect e : in.contained) out.entries.push_back(ContainedEntry(e, cx));
 
-  std::stable_sort(out.entries.begin(), out.entries.end(),
-                   [](const RankedEffect& a, const RankedEffect& b) {
-                     if (a.significant != b.significant) return a.significant;
-                     return a.delta_bic < b.delta_bic;
-                   });
+  // The linear order picks the effects to refit; the refits' numbers make
+  // the final order.
+  Order(&out);
+  ConfirmByRefinement(cx, &out);
+  for (RankedEffect& r : out.entries) {
+    if (r.after_source != "refined") r.linear_after = r.after;
+    r.worthwhile = r.gain >= o.min_gain;
+    r.recommended = r.significant && r.worthwhile && !r.redundant;
+  }
+  Order(&out);
   FindAliases(effects, cx, &out);
   AlsoAfterBest(effects, cx, &out);
-  ConfirmByRefinement(cx, &out);
   for (RankedEffect& r : out.entries) {
     r.rms_before = r.before.Main();
     r.rms_after = r.after.Main();

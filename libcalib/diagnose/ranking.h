@@ -14,9 +14,16 @@
 //   significant   p(Wald) < significance / (number of effects tested) and delta_bic < 0
 //                 and the rms falls by more than the numerical floor (kPointFloorM,
 //                 kPixelFloor): exact data must not make round-off significant
-//   rms after     from a refinement with the effect added (Refine, warm start at the
-//                 linear estimate, the fit's weights held) for the best `refine_top`
-//                 significant effects; from the linear prediction for the others
+//   rms after     from a refinement with the effect added (Refine from the fitted model,
+//                 the effect at its linear estimate, the estimated boards and points free,
+//                 the fit's weights held) for the best `refine_top` significant effects:
+//                 the fall the user will see; delta_bic, gain and the order follow the
+//                 refit. From the linear prediction (one Gauss-Newton step) for the others.
+//   gain          the largest relative fall of a group's rms, (before - after) / before;
+//                 worthwhile when >= min_gain (2 %): with thousands of corners a term
+//                 that buys a thousandth of the rms is significant and changes nothing
+//   recommended   significant, worthwhile and not redundant: what the verdict says to
+//                 add; a significant effect that is not worthwhile is said as such
 //   redundant     the model's parameters absorb T_e entirely (|P T_e| < redundant_fraction |T_e|),
 //                 or SPEC 4 says the kinematics contain it (dh: collimation, tilting_axis,
 //                 vertical_index, edm_offset); then `equivalent` holds the value read off
@@ -66,13 +73,41 @@ struct GroupRms {
 };
 
 GroupRms RmsOfWhitened(const Linearization& lin, const Eigen::VectorXd& r);
+// `obs` as the fit saw them (pixels on boards of unknown pose are placed on
+// the model's estimated boards).
 GroupRms RmsOfModel(const Observations& obs, const InstrumentModel& model, const FitOptions& fit);
+// `before` less the part `explained` takes out of each group's sum of
+// squares (whitened rows of `lin`, e.g. a regression's fitted values: the
+// fall of the residual sum of squares when its columns are added).
+GroupRms RmsLess(const Linearization& lin, const GroupRms& before, const Eigen::VectorXd& explained);
+// The largest relative fall of a group's rms, (before - after) / before,
+// over the observation groups present: what adding a term buys the user,
+// on the scale the fit's own residuals set.
+double RelativeGain(const GroupRms& before, const GroupRms& after);
+
+// What makes a finding (an effect to add, a structure outside the
+// catalogue) worth the user's attention besides its statistical test: with
+// thousands of corners a term that moves them by a hundredth of the scatter
+// is significant, and adding it changes nothing a user would see.
+struct Materiality {
+  GroupRms current;     // the fit's rms per group: the scale of every gain
+  double min_gain = 0.02;  // smallest relative fall of a group's rms worth a recommendation
+  // Per zoom: the farthest observed image point from the image centre over
+  // the half-diagonal (Coverage::corner_fraction): where the data end.
+  std::vector<double> reach;
+  bool Material(double gain) const { return gain >= min_gain; }
+};
+
+// Iterations of a refit (RankingOptions::refine_top): a wide lens's
+// rational group from k1..k3 converges in ~30 (the mrcal tour's corners).
+constexpr int kRefitIterations = 50;
 
 struct RankingOptions {
   double significance = 0.01;  // family-wise level over the effects tested
   double identifiable_rho = 0.95;
   double redundant_fraction = 1e-3;
-  int refine_top = 2;
+  int refine_top = 3;     // leading significant effects refitted (RankedEffect::after_source)
+  double min_gain = 0.02;  // Materiality::min_gain: smallest gain worth a recommendation
 };
 
 struct DistortionValue {
@@ -96,10 +131,16 @@ struct RankedEffect {
   std::string name;
   int num_params = 0;  // rank of its columns in these data
   GroupRms before, after;
+  GroupRms linear_after;  // the linear prediction, kept when a refit replaced it
   double rms_before = 0, rms_after = 0;
   std::string rms_unit;
   double delta_rss = 0, delta_bic = 0, wald = 0, p_value = 1;
   bool observable = true, redundant = false, identifiable = true, significant = false;
+  // The relative fall of the rms it buys (RelativeGain of before and after),
+  // whether that is worth a model term (>= RankingOptions::min_gain), and
+  // whether the diagnosis recommends it: significant, worth it, not redundant.
+  double gain = 0;
+  bool worthwhile = false, recommended = false;
   std::string correlated_with;  // the model parameter with the largest |rho|
   double rho = 0;
   std::array<double, 2> si{};  // estimate in SI (kinematic effects)
@@ -115,7 +156,11 @@ struct RankedEffect {
   // such as radial/rational distortion.
   std::vector<std::string> aliases;
   std::string config_line;
-  std::string after_source;  // "refined" or "linearised"
+  // Where `after` comes from: "refined" (a refinement with the effect
+  // added, as the calibration would run it: what the user will see) or
+  // "linearised" (one Gauss-Newton step from the fitted model: a prediction,
+  // first order in the effect).
+  std::string after_source;
   std::string note;
 };
 
@@ -123,8 +168,10 @@ struct Ranking {
   std::vector<RankedEffect> entries;  // best first
   double level = 0;                   // per-effect test level
   int tested = 0;
-  // Significant effects that stay significant once the best one is added
-  // (what the next rungs of the ladder will likely add).
+  // Significant effects worth adding that stay so once the best one is
+  // added (what the next rungs of the ladder will likely add), judged to
+  // first order; empty when the best one's refit moved the residuals far
+  // from that first order (then only a new diagnosis tells).
   std::vector<std::string> also_after_best;
   int num_rows = 0;
   GroupRms current;
@@ -145,8 +192,8 @@ struct RankingInput {
 Ranking RankEffects(const RankingInput& in, const RankingOptions& options);
 
 // `model` with effect r.effect added at r's estimate (kinematic value,
-// distortion coefficients or focus terms): the warm start of a refinement
-// that adds it (the confirmation here, the stepwise ladder).
+// distortion coefficients or focus terms), the model's other parameters as
+// they are.
 void AddAtEstimate(const RankedEffect& r, InstrumentModel* model);
 
 // "model.effects: [hz_eccentricity, edm_scale]": the model's effects plus `e`.

@@ -23,15 +23,19 @@ StepwiseResult ForwardStepwise(const Observations& obs, const InstrumentModel& m
 
     const RankedEffect* next = out.diagnosis.Next();
     if (!next) {
-      out.stop_reason = "no catalogue effect is significant";
+      out.stop_reason = "no catalogue effect is significant and worth adding";
       break;
     }
     if (step >= max_steps) {
       out.stop_reason = "stopped after " + std::to_string(max_steps) + " added effects";
       break;
     }
+    // From the current model with the effect at zero, as the ranking's
+    // refit starts (ranking.h): its first step is the linear estimate with
+    // every other parameter moved along.
     InstrumentModel m = out.model;
-    AddAtEstimate(*next, &m);
+    m.effects.Add(next->effect);
+    m.sigmas = {};
     added = next->name;
     out.fit = Refine(obs, fit_options, &m);
     out.model = m;

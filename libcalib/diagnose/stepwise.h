@@ -1,7 +1,8 @@
 // Forward stepwise model building (`rtscalib diagnose --auto`): diagnose, add
-// the best significant effect, refine (warm start from the current model, the
-// new effect at its linear estimate), repeat until no effect is significant
-// or `max_steps` effects have been added. The ladder records every rung: the
+// the recommended effect (Diagnosis::Next: significant and worth adding),
+// refine (from the current model, the new effect at zero, as the ranking's
+// refit), repeat until no effect is recommended or `max_steps` effects have
+// been added. The ladder records every rung: the
 // model, its error per observation group, the effect added and its BIC with
 // one free variance per group (GroupRms::Bic), so rungs compare.
 #pragma once

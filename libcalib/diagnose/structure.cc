@@ -350,8 +350,12 @@ std::string Range(const ColumnBlock& b, const SessionVariable& v) {
 std::string Hint(const ColumnBlock& b, const SessionVariable* v, const InstrumentModel& model) {
   const Probe& p = b.probe;
   if (p.kind == ProbeKind::kImageField) {
-    return "lens distortion that the model's distortion groups do not hold (try the other "
-           "groups of the catalogue, or a zoom whose field is too narrow for its coefficients)";
+    // Found on top of every distortion group of the catalogue: a lens
+    // beyond them, or what a board's own shape (not flat, not printed to
+    // scale) does to the corners it shows.
+    return std::string("lens distortion beyond the catalogue's distortion groups") +
+           (model.boards.empty() ? "" : ", or boards that are not flat") +
+           " (a zoom whose photos cover little of the image cannot tell these apart)";
   }
   if (p.kind == ProbeKind::kImageMotion && v && IsDistance(*v)) {
     return model.effects.Has(Effect::kFocus)
@@ -374,13 +378,63 @@ std::string Hint(const ColumnBlock& b, const SessionVariable* v, const Instrumen
   return "";
 }
 
-StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t, const Reduced& red,
-                             const Linearization& lin, const InstrumentModel& model) {
+// The largest displacement the whitened rows `v` make at one observation,
+// in its unit: px at image points, mm at camera or EDM records (image
+// points first: a probe of a zoom with photos is said in pixels).
+struct AtData {
+  double size = 0;
+  std::string unit = "px";
+};
+AtData LargestAtData(const Linearization& lin, const Eigen::VectorXd& v) {
+  std::map<std::pair<int, int>, double> squares;  // (group, observation) -> |displacement|^2
+  for (int i = 0; i < lin.NumRows(); ++i) {
+    if (v[i] == 0) continue;
+    const ResidualRow& row = lin.rows[i];
+    const int g = static_cast<int>(row.group);
+    const double x = v[i] * lin.sigma[g] * (row.group == ObsGroup::kPixel ? 1.0 : 1e3);
+    squares[{g, row.index}] += x * x;
+  }
+  double px = 0, mm = 0;
+  for (const auto& [key, sq] : squares) {
+    (key.first == static_cast<int>(ObsGroup::kPixel) ? px : mm) =
+        std::max(key.first == static_cast<int>(ObsGroup::kPixel) ? px : mm, sq);
+  }
+  AtData out;
+  if (px > 0 || mm == 0) {
+    out.size = std::sqrt(px);
+  } else {
+    out.size = std::sqrt(mm);
+    out.unit = "mm";
+  }
+  return out;
+}
+
+// "; the points reach 83 % of the half-diagonal": where the data of a zoom end.
+std::string ReachText(const Probe& p, const Materiality& scale) {
+  if (p.zoom < 0 || p.zoom >= static_cast<int>(scale.reach.size()) || !(scale.reach[p.zoom] > 0))
+    return "";
+  return "; the observed points reach " + Fmt("%.0f", 100 * scale.reach[p.zoom]) +
+         " % of the image's half-diagonal";
+}
+
+// `t` is the test of the probe's columns `columns` (after whatever was
+// projected out of them): its fitted values are what the probe changes in
+// the residuals beyond everything else fitted, which is what a size states.
+// Regression coefficients of a probe nearly absorbed by the model or the
+// catalogue are large while the columns left are small, so the coefficients
+// alone (a motion evaluated at the image corner, a field where no photo
+// reached) are never the size.
+StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
+                             const Eigen::Ref<const Eigen::MatrixXd>& columns, const Reduced& red,
+                             const Linearization& lin, const InstrumentModel& model,
+                             const Materiality& scale) {
   StructureFinding f;
   f.probe = b.probe;
   f.block = b.name;
   f.wald = t.wald;
   f.p_value = t.p_value;
+  f.gain = RelativeGain(scale.current, RmsLess(lin, scale.current, t.fitted));
+  f.material = scale.Material(f.gain);
   const Probe& p = b.probe;
   const SessionVariable* v =
       p.session_variable >= 0 ? &lin.variables.at(p.session_variable) : nullptr;
@@ -390,6 +444,7 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t, const Re
     f.lo = b.basis.lo;
     f.hi = b.basis.hi;
   }
+  if (p.zoom >= 0 && p.zoom < static_cast<int>(scale.reach.size())) f.reach = scale.reach[p.zoom];
   std::string size_text;
   if (p.kind == ProbeKind::kReadingTrend) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -405,12 +460,13 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t, const Re
     f.quantity = p.per_metre ? "EDM scale" : ReadingWords(p.reading);
     size_text = Fmt("%.3g", f.size) + " " + f.unit;
   } else if (p.kind == ProbeKind::kImageMotion) {
-    // Range of each motion, in pixels at the image corner (scale and
-    // rotation times the half-diagonal) and in its own unit.
-    const CameraTool& cam = model.cams.at(p.zoom);
-    const double corner = std::hypot(0.5 * cam.width, 0.5 * cam.height);
-    double lo[kNumImageMotions], hi[kNumImageMotions], first[kNumImageMotions],
-        last[kNumImageMotions];
+    // Each motion's own displacement at the observed points, and beside it
+    // its parameter (ppm, arcsec) and direction where the motion is its own:
+    // what is left of it beyond everything else fitted is at least half of
+    // what it does alone.
+    const int per = b.basis.size;
+    double first[kNumImageMotions], last[kNumImageMotions], lo[kNumImageMotions],
+        hi[kNumImageMotions];
     std::fill(lo, lo + kNumImageMotions, std::numeric_limits<double>::infinity());
     std::fill(hi, hi + kNumImageMotions, -std::numeric_limits<double>::infinity());
     const std::vector<double> xs = Samples(b);
@@ -424,61 +480,53 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t, const Re
         last[k] = m[k];
       }
     }
-    double px[kNumImageMotions];
+    AtData net[kNumImageMotions];
+    bool own[kNumImageMotions];
     for (int k = 0; k < kNumImageMotions; ++k) {
-      px[k] = (hi[k] - lo[k]) * (k == 0 || k == 3 ? corner : 1.0);
+      const Eigen::VectorXd beta = t.beta.segment(k * per, per);
+      net[k] = LargestAtData(lin, columns.middleCols(k * per, per) * beta);
+      const AtData alone = LargestAtData(lin, red.extra.middleCols(b.first + k * per, per) * beta);
+      own[k] = net[k].size >= 0.5 * alone.size;
     }
-    const int main = static_cast<int>(std::max_element(px, px + kNumImageMotions) - px);
+    int main = 0;
+    for (int k = 1; k < kNumImageMotions; ++k) {
+      if (net[k].size > net[main].size) main = k;
+    }
     const char* kWhat[kNumImageMotions] = {"image scale", "principal point u", "principal point v",
                                            "image rotation"};
     f.quantity = std::string(kWhat[main]) + " of zoom " + std::to_string(p.zoom);
-    f.unit = "px";
-    f.size = px[main];
+    f.unit = net[main].unit;
+    f.size = net[main].size;
     std::string parts;
     for (int k = 0; k < kNumImageMotions; ++k) {
-      if (px[k] < 0.3 * px[main]) continue;
-      std::string part = std::string(kWhat[k]) + " ";
-      if (k == 0) part += Fmt("%.3g", (hi[k] - lo[k]) * 1e6) + " ppm, ";
-      if (k == 3) part += Fmt("%.3g", (hi[k] - lo[k]) * kArcsecPerRad) + " arcsec, ";
-      part += Fmt("%.3g", px[k]) + " px" + (k == 0 || k == 3 ? " at the image corner" : "");
-      if (b.basis.form != TrendForm::kCategories) {
-        part += last[k] > first[k] ? " (growing with " : " (shrinking with ";
-        part += v ? v->name + ")" : "x)";
+      if (net[k].size < 0.3 * net[main].size || !(net[k].size > 0)) continue;
+      std::string part = std::string(kWhat[k]) + " " + Fmt("%.3g", net[k].size) + " " + net[k].unit;
+      if (own[k]) {
+        if (k == 0) part += ", " + Fmt("%.3g", (hi[k] - lo[k]) * 1e6) + " ppm";
+        if (k == 3) part += ", " + Fmt("%.3g", (hi[k] - lo[k]) * kArcsecPerRad) + " arcsec";
+        if (b.basis.form != TrendForm::kCategories && v) {
+          part += std::string(last[k] > first[k] ? ", growing with " : ", shrinking with ") +
+                  v->name;
+        }
       }
       parts += (parts.empty() ? "" : "; ") + part;
     }
-    size_text = parts;
+    size_text = "up to " + Fmt("%.3g", f.size) + " " + f.unit + " at the observed points (" +
+                parts + ")";
   } else {
-    // Image fields: the largest displacement at the data (the field is a
-    // polynomial: beyond the points it is extrapolation, not structure), of
-    // the field's part that the model's own parameters cannot take up (the
-    // columns projected out of them, red.extra): with boards of estimated
-    // pose a degree-2 field is nearly a tilt of each board, and the raw
-    // field's coefficients then grow without bound while what it changes in
-    // the residuals stays small.
     f.quantity = "image displacement field of zoom " + std::to_string(p.zoom) + " (" +
                  (p.field == ImageField::kPosition ? "over the image position" : "along the radius") +
                  ")";
     f.form = p.field == ImageField::kPosition ? "degree 2 and 3 in the image position"
                                               : "odd powers of the radius";
     f.variable = p.field == ImageField::kPosition ? "image position" : "image radius";
-    f.unit = "px";
-    const double sigma = lin.sigma[static_cast<int>(ObsGroup::kPixel)];
-    std::map<int, Eigen::Vector2d> at;  // per image observation: the fitted displacement
-    for (int i = 0; i < lin.NumRows(); ++i) {
-      const ResidualRow& row = lin.rows[i];
-      if (row.group != ObsGroup::kPixel) continue;
-      double value = 0;
-      for (int j = 0; j < b.size; ++j) value -= red.extra(i, b.first + j) * t.beta[j];
-      if (value == 0) continue;
-      auto it = at.emplace(row.index, Eigen::Vector2d::Zero()).first;
-      it->second[row.component] = value * sigma;
-    }
-    for (const auto& [index, d] : at) f.size = std::max(f.size, d.norm());
-    size_text = "up to " + Fmt("%.3g", f.size) + " px";
+    const AtData at = LargestAtData(lin, t.fitted);
+    f.unit = at.unit;
+    f.size = at.size;
+    size_text = "up to " + Fmt("%.3g", f.size) + " " + f.unit + " at the observed points";
   }
   f.description = f.quantity + " " + (v ? f.form : "has structure of " + f.form) + ": " +
-                  size_text + (v ? " " + Range(b, *v) : "");
+                  size_text + (v ? " " + Range(b, *v) : "") + ReachText(p, scale);
   f.points_to = Hint(b, v, model);
   return f;
 }
@@ -498,19 +546,23 @@ bool AboveFloor(const StructureFinding& f, double pixel_sigma) {
 }  // namespace
 
 StructureAnalysis AnalyseStructure(const Linearization& lin, const Reduced& red,
-                                   const ProbeAnalysis& probes, const InstrumentModel& model) {
+                                   const ProbeAnalysis& probes, const InstrumentModel& model,
+                                   const Materiality& scale) {
   StructureAnalysis out;
   const double pixel_sigma = lin.sigma[static_cast<int>(ObsGroup::kPixel)];
   for (int s : probes.selected) {
     const ProbeResult& r = probes.probes[s];
     if (r.block->probe.kind == ProbeKind::kHarmonic) continue;
-    StructureFinding f = MakeFinding(*r.block, r.joint, red, lin, model);
+    StructureFinding f =
+        MakeFinding(*r.block, r.joint, r.joint_columns, red, lin, model, scale);
     f.unexplained = true;
-    if (AboveFloor(f, pixel_sigma)) out.unexplained.push_back(f);
+    if (!AboveFloor(f, pixel_sigma)) continue;
+    (f.material ? out.unexplained : out.negligible).push_back(f);
   }
   for (const ProbeResult& r : probes.probes) {
     if (r.block->probe.kind == ProbeKind::kHarmonic || !r.raw_significant || r.selected) continue;
-    StructureFinding f = MakeFinding(*r.block, r.raw, red, lin, model);
+    StructureFinding f = MakeFinding(*r.block, r.raw, red.extra.middleCols(r.block->first, r.block->size),
+                                     red, lin, model, scale);
     f.explained_by = r.explained_by;
     f.same_as = r.same_as;
     if (AboveFloor(f, pixel_sigma)) out.explained.push_back(f);

@@ -37,6 +37,7 @@
 
 #include "libcalib/diagnose/linearization.h"
 #include "libcalib/diagnose/probes.h"
+#include "libcalib/diagnose/ranking.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 
@@ -58,10 +59,21 @@ struct StructureFinding {
   std::string variable;  // "target distance"
   std::string quantity;  // "image scale of zoom 1", "phi (horizontal angle) error"
   std::string form;      // "1/target distance", "a drift", "linear", "per placement"
-  double size = 0;       // the largest change over the variable's range, in `unit`
+  // Reading trends: the largest change of the fitted trend over the
+  // variable's range (arcsec, mm, ppm). Image motions and fields: the
+  // largest displacement it makes at the observed points [px] (camera
+  // records: [mm]), of the part that nothing else fitted can take up; never
+  // a field evaluated where no photo reached.
+  double size = 0;
   std::string unit;      // "arcsec", "mm", "ppm", "px"
   double lo = 0, hi = 0;  // the variable's range
+  double reach = 0;       // image findings: the data's farthest point / half-diagonal
   double wald = 0, p_value = 1;
+  // The relative fall of the fit's rms (the largest over the observation
+  // groups) if the structure were modelled (RelativeGain), and whether that
+  // is worth a sentence (Materiality): structure within the scatter is not.
+  double gain = 0;
+  bool material = false;
   bool unexplained = false;   // significant on top of the whole catalogue
   std::string explained_by;   // the catalogue effect that removes it (explained ones)
   std::string same_as;        // the unexplained probe that holds the same structure
@@ -70,7 +82,11 @@ struct StructureFinding {
 };
 
 struct StructureAnalysis {
-  std::vector<StructureFinding> unexplained;  // most significant first
+  // Significant on top of the catalogue and material, most significant first.
+  std::vector<StructureFinding> unexplained;
+  // Significant on top of the catalogue but within the scatter (gain below
+  // Materiality::min_gain): statistically real, not worth a model term.
+  std::vector<StructureFinding> negligible;
   // Significant alone, but removed by a catalogue effect (explained_by) or
   // held by an unexplained finding (same_as).
   std::vector<StructureFinding> explained;
@@ -78,7 +94,7 @@ struct StructureAnalysis {
 
 // The reading-trend, image-motion and image-field probes of `probes`.
 StructureAnalysis AnalyseStructure(const Linearization& lin, const Reduced& red,
-                                   const ProbeAnalysis& probes,
-                                   const InstrumentModel& model);
+                                   const ProbeAnalysis& probes, const InstrumentModel& model,
+                                   const Materiality& scale);
 
 }  // namespace rtscalib
