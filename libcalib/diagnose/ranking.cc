@@ -483,13 +483,16 @@ void ConfirmByRefinement(const Context& cx, Ranking* out) {
 }
 
 // Recommended effects first (significant, worth adding, not redundant),
-// then the other significant ones, then the rest; within each by delta BIC.
+// then the other significant ones, then the rest; within each by delta BIC
+// to a hundredth (aliases such as radial and rational distortion refit to
+// the same minimum, and round-off must not reorder them: they keep the
+// order before).
 void Order(Ranking* out) {
   std::stable_sort(out->entries.begin(), out->entries.end(),
                    [](const RankedEffect& a, const RankedEffect& b) {
                      if (a.recommended != b.recommended) return a.recommended;
                      if (a.significant != b.significant) return a.significant;
-                     return a.delta_bic < b.delta_bic;
+                     return std::round(100 * a.delta_bic) < std::round(100 * b.delta_bic);
                    });
 }
 

@@ -40,7 +40,7 @@ TEST(Stepwise, AddsTheHiddenEffectsOneByOneAndStops) {
     EXPECT_LT(s.ladder[i].rms.records_m, s.ladder[i - 1].rms.records_m) << "rung " << i;
     EXPECT_LT(s.ladder[i].bic, s.ladder[i - 1].bic) << "rung " << i;
   }
-  EXPECT_EQ(s.stop_reason, "no catalogue effect is significant");
+  EXPECT_EQ(s.stop_reason, "no catalogue effect is significant and worth adding");
   EXPECT_EQ(s.diagnosis.Next(), nullptr);
   EXPECT_LE(RecordsRms(s.model, f), 1.1 * RecordsRms(f.truth, f));
 }

@@ -10,6 +10,7 @@
 #include <map>
 #include <random>
 #include <tuple>
+#include <vector>
 
 #include "tests/diagnose/diagnose_fixture.h"
 
@@ -72,13 +73,18 @@ SimulatedData DriftingSession(double drift_arcsec, std::uint64_t seed) {
 
 // A drift of the horizontal index is structure against the order of the
 // photos and of the records, of about its size, and no catalogue effect
-// (hz_scale, hz_eccentricity) takes its name.
+// (hz_scale, hz_eccentricity) takes its name. The records see it far above
+// their scatter (it is said); in the photos 20 arcsec is a few hundredths of
+// a pixel beside 0.1 px of noise, so there it is significant but within the
+// scatter (StructureAnalysis::negligible: not said, still measured).
 TEST(Structure, DriftOfTheHorizontalIndexIsStructureAgainstOrder) {
   const InstrumentModel truth = PaperTruth(1);
   const Fitted f = FitBaseline(DriftingSession(20.0, 51), truth, 52);
   const Diagnosis d = testing_diagnose::DiagnoseFitted(f);
   bool photos = false, records = false;
-  for (const StructureFinding& s : d.structure.unexplained) {
+  std::vector<StructureFinding> found = d.structure.unexplained;
+  found.insert(found.end(), d.structure.negligible.begin(), d.structure.negligible.end());
+  for (const StructureFinding& s : found) {
     if (s.probe.kind != ProbeKind::kReadingTrend || s.probe.reading != Reading::kPhi) continue;
     // The size is the trend's range over the session; the catalogue's
     // terms (a constant index, hz_scale along the phi order of the
@@ -90,6 +96,7 @@ TEST(Structure, DriftOfTheHorizontalIndexIsStructureAgainstOrder) {
     if (s.variable == "record order") {
       records = true;
       EXPECT_NEAR(s.size, 20.0, 10.0) << s.description;
+      EXPECT_TRUE(s.material) << s.description << ": gain " << s.gain;
     }
     EXPECT_NE(s.points_to.find("drift"), std::string::npos) << s.points_to;
   }
