@@ -191,14 +191,17 @@ std::string RankingTable(const Diagnosis& d) {
   for (const RankedEffect& r : d.ranking.entries) {
     const bool mm = r.rms_unit == "m";
     o << "<tr class=\""
-      << (r.significant                  ? "sig"
+      << (r.recommended                  ? "sig"
           : r.redundant || !r.observable ? "red"
                                          : "")
       << "\"><td class=num>" << ++i << "</td><td><b>" << Esc(r.name) << "</b><br><span class=small>"
       << Esc(Info(r.effect).signature) << "</span></td><td class=num>"
       << Fmt("%.4g", r.rms_before * (mm ? 1e3 : 1)) << " &rarr; "
       << Fmt("%.4g", r.rms_after * (mm ? 1e3 : 1)) << (mm ? " mm" : " px")
-      << "<br><span class=small>" << Esc(r.after_source) << "</span></td><td class=num>"
+      << "<br><span class=small>" << (r.after_source == "refined" ? "refit" : Esc(r.after_source))
+      << ", gain " << Fmt("%.2g", 100 * r.gain) << " %"
+      << (r.significant && !r.worthwhile ? " (not worth adding)" : "")
+      << "</span></td><td class=num>"
       << Fmt("%.1f", r.delta_bic) << "</td><td class=num>"
       << (r.p_value > 0 ? Fmt("%.2g", r.p_value) : std::string("&lt;1e-300")) << "</td><td>"
       << (r.significant ? "<b>yes</b>" : "no") << "</td><td>"
@@ -222,17 +225,21 @@ std::string RankingTable(const Diagnosis& d) {
     for (size_t k = 0; k < notes.size(); ++k) o << (k ? "<br>" : "") << notes[k];
     o << "</td><td><code>" << Esc(r.config_line) << "</code></td></tr>\n";
   }
-  o << "</table><p class=small>Sorted best first: significant effects by &Delta;BIC, then the "
-       "rest. "
+  o << "</table><p class=small>Sorted best first: the effects worth adding (significant and "
+       "buying at least "
+    << Fmt("%g", 100 * d.min_gain)
+    << " % of the rms: highlighted), then the other significant ones, then the rest, each by "
+       "&Delta;BIC. "
     << "&Delta;BIC = &sum;<sub>g</sub> n<sub>g</sub> "
        "log(RSS<sub>g,after</sub>/RSS<sub>g,before</sub>) + k log n "
     << "over the observation groups; p from a cluster-robust Wald test, significant below "
     << Fmt("%.2g", d.ranking.level) << " ("
     << Fmt("%g", 100 * d.ranking.level * std::max(d.ranking.tested, 1)) << "% over the "
     << d.ranking.tested << " effects tested). rms over the rows the fit uses; "
-    << "&ldquo;refined&rdquo;: after a refinement with the effect added, &ldquo;linearised&rdquo;: "
-       "predicted "
-    << "from the Jacobian at the fitted model. docs/diagnostics.md explains every column.</p>\n";
+    << "&ldquo;refit&rdquo;: after a refinement with the effect added (what the next run "
+       "shows), &ldquo;linearised&rdquo;: predicted "
+    << "from the Jacobian at the fitted model; gain: the rms's relative fall. "
+       "docs/diagnostics.md explains every column.</p>\n";
   return o.str();
 }
 

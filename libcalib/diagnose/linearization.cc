@@ -729,16 +729,21 @@ void ProjectLocal(const LocalJacobian& local, Linearization* lin) {
     };
     project(lin->base);
     project(lin->extra);
-    Eigen::VectorXd r = lin->r(rows);
-    r -= q * (q.transpose() * r);
-    lin->r(rows) = r;
     lin->local.leverage(rows) += q.rowwise().squaredNorm();
     lin->local.rank += rank;
-    ++lin->local.blocks;
+    lin->local.blocks.push_back({rows, q});
   }
 }
 
 }  // namespace
+
+void LocalColumns::Project(Eigen::Ref<Eigen::VectorXd> v) const {
+  for (const Block& b : blocks) {
+    Eigen::VectorXd part = v(b.rows);
+    part -= b.q * (b.q.transpose() * part);
+    v(b.rows) = part;
+  }
+}
 
 void TrendBasis::Evaluate(double x, double* f) const {
   switch (form) {
@@ -817,7 +822,9 @@ Reduced Reduce(const Linearization& lin) {
   Reduced red(n);
   red.base.Add(lin.base, 1e-9);
   red.local_rank = lin.local.rank;
-  red.r = red.base.Apply(lin.r);
+  Eigen::VectorXd r = lin.r;
+  lin.local.Project(r);
+  red.r = red.base.Apply(r);
   red.extra = red.base.Apply(lin.extra);
   red.cluster.resize(n);
   for (int i = 0; i < n; ++i) red.cluster[i] = lin.rows[i].cluster;

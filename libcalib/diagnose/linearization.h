@@ -161,19 +161,28 @@ struct LinearizeOptions {
 // focus distance from the centroid of all its boards, SPEC 4.1) are one
 // block.
 struct LocalColumns {
-  int blocks = 0;   // blocks of overlapping rows projected out
+  // One block of rows and the orthonormal basis of its local columns there.
+  struct Block {
+    std::vector<int> rows;
+    Eigen::MatrixXd q;  // rows.size() x rank
+  };
+  std::vector<Block> blocks;
   int columns = 0;  // tangent columns of the boards and points
   int rank = 0;     // directions they span in these data
   // Per row: |Q_L row|^2, the local parameters' share of its leverage.
   Eigen::VectorXd leverage;
+  // v := (I - Q_L Q_L') v, block by block.
+  void Project(Eigen::Ref<Eigen::VectorXd> v) const;
 };
 
 struct Linearization {
-  // r, base and extra are projected off the local parameters (LocalColumns):
+  // The residual at the fitted model, as it is (the fit quality and the
+  // current rms read it).
+  Eigen::VectorXd r;
+  // base and extra are projected off the local parameters (LocalColumns):
   // base' base is then the normal matrix of the global parameters with the
   // local ones estimated alongside (the Schur complement), and every test
-  // below sees exactly the freedom the fit had.
-  Eigen::VectorXd r;
+  // below sees exactly the freedom the fit had (Reduce projects r too).
   Eigen::MatrixXd base;
   std::vector<std::string> base_names;
   std::vector<FreeColumn> base_columns;  // per base column: its name, effect, zoom, index

@@ -7,12 +7,14 @@
 // distance into shots.csv, as an instrument would report it; the photos are
 // detected and calibrated through the user's photo path (RunPipeline). One
 // rendering, shared by every check:
-//   - the run's diagnosis (model without focus) names focus first and
-//     significant;
+//   - the run's diagnosis (model without focus) names focus first,
+//     significant and worth adding, with the fall a refit gives, and
+//     recommends nothing else (no thin_prism for a gain within the scatter);
 //   - the same fit diagnosed without focus among the candidates says first
 //     that the image points fit worse than their a-priori sigma, and reports
 //     structure against the target (or focus) distance that points to focus;
-//   - with focus in the model (Calibrate on the same detected corners): kf,
+//   - with focus in the model (Calibrate on the same detected corners): no
+//     structure against the target or focus distance is left to report; kf,
 //     au, av of every zoom within 3 of their sigmas of the truth, and
 //     held-out corners at other pointings (each pointing turned by (0.01,
 //     0.005) rad, the camera focused at the board's distance) predicted
@@ -30,7 +32,6 @@
 #include <string>
 
 #include "app/pipeline.h"
-#include "libcalib/fit/unknowns.h"
 #include "libcalib/io/config.h"
 #include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
@@ -100,13 +101,19 @@ TEST(RenderedFocus, RefocusingCameraInRenderedPhotosIsFoundAndCalibrated) {
   ASSERT_FALSE(with.ranking.entries.empty());
   EXPECT_EQ(with.ranking.entries.front().effect, Effect::kFocus) << Verdict(with);
   EXPECT_TRUE(with.ranking.entries.front().significant) << Verdict(with);
+  EXPECT_TRUE(with.ranking.entries.front().recommended) << Verdict(with);
+  EXPECT_EQ(with.ranking.entries.front().after_source, "refined") << Verdict(with);
+  for (const RankedEffect& e : with.ranking.entries) {
+    if (e.effect != Effect::kFocus) EXPECT_FALSE(e.recommended) << e.name << "\n" << Verdict(with);
+  }
+  std::cout << "rendered focus, without focus in the model:\n" << Verdict(with);
 
   // The same fit without focus among the candidates.
   const InstrumentModel& fitted = r.calibration.model;
   DiagnosisSettings untested;
   untested.untested = {Effect::kFocus};
   const Diagnosis without =
-      Diagnose(WithEstimates(r.obs, fitted), fitted,
+      Diagnose(r.obs, fitted,
                ContextOf(r.calibration.fit_options, r.calibration.fit), untested);
   bool pixels_exceed = false;
   for (const FitQualityCell& q : without.fit_quality.cells) {
@@ -128,9 +135,15 @@ TEST(RenderedFocus, RefocusingCameraInRenderedPhotosIsFoundAndCalibrated) {
   // Focus in the model, on the same detected corners.
   CalibrationOptions options = c.calibration;
   options.model.effects.Add(Effect::kFocus);
-  options.diagnose.enabled = false;
   const CalibrationResult fit = Calibrate(r.obs, options);
   const InstrumentModel& m = fit.model;
+  ASSERT_TRUE(fit.diagnosis.has_value());
+  std::cout << "rendered focus, focus in the model:\n" << Verdict(*fit.diagnosis);
+  for (const StructureFinding& s : fit.diagnosis->structure.unexplained) {
+    EXPECT_FALSE(s.probe.kind == ProbeKind::kImageMotion &&
+                 (s.variable == "target distance" || s.variable == "focus distance"))
+        << s.description;
+  }
   ASSERT_TRUE(m.sigmas.valid);
   ASSERT_EQ(m.sigmas.focus.size(), 3u);
   double sum_sq = 0;
