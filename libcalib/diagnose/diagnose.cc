@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <optional>
+#include <set>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -242,18 +244,25 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
   // that matter (what the surveyor would see in the residuals without that
   // effect). It supports the ranking, never contradicts it: said only of an
   // effect the verdict recommends (one that is not recommended does not pay
-  // its way in these data, whatever a probe of similar shape finds).
-  int said = 0;
+  // its way in these data, whatever a probe of similar shape finds), and of
+  // a field over the image only when a distortion group explains it (what
+  // another effect takes of a field is a side effect, not its signature).
+  // One sentence per effect and zoom: the most significant of the probes
+  // that show the same structure (1/D and D, target and focus distance).
+  std::set<std::pair<std::string, int>> said;
   for (const StructureFinding& f : d.structure.explained) {
-    if (said >= 3) break;
+    if (said.size() >= 3) break;
     if (f.explained_by.empty() || !f.material) continue;
+    if (said.count({f.explained_by, f.probe.zoom})) continue;
+    const std::optional<Effect> by = EffectFromName(f.explained_by);
+    if (f.probe.kind == ProbeKind::kImageField && !(by && IsDistortion(*by))) continue;
     const auto e = std::find_if(recommended.begin(), recommended.end(),
                                 [&](const RankedEffect* r) { return r->name == f.explained_by; });
     if (e == recommended.end()) continue;
     v.push_back("Structure against " + f.variable + " (" + f.description + ") is what " +
                 f.explained_by + " explains" +
                 (e == recommended.begin() ? "" : " (also worth adding, see the ranking)") + ".");
-    ++said;
+    said.insert({f.explained_by, f.probe.zoom});
   }
   if (d.outliers.flagged > 0) {
     v.push_back(std::to_string(d.outliers.flagged) + " of " + std::to_string(d.outliers.tested) +

@@ -545,6 +545,23 @@ void AddProbeColumns(const Observations& obs, const InstrumentModel& model,
     lin->blocks[lin->blocks.size() - probes.size() + k].basis = b;
   }
 
+  // Where the model puts each image point (observed + sigma r, r = (model -
+  // observed) / sigma): image motions and fields are evaluated there, not
+  // at the observed pixel. At the observed one a column would carry the
+  // point's own noise (a field's slope times the noise), which correlates
+  // with the residual it is tested against; for a probe the fit nearly
+  // absorbs (a radial field beside k1, k2, k3 keeps a few thousandths of
+  // its norm) that part is all that is left, and pure noise would test as
+  // structure.
+  std::vector<Eigen::Vector2d> predicted(obs.pixels.size(), Eigen::Vector2d::Zero());
+  for (int i = 0; i < lin->NumRows(); ++i) {
+    const ResidualRow& row = lin->rows[i];
+    if (row.group != ObsGroup::kPixel) continue;
+    predicted[row.index][row.component] =
+        obs.pixels[row.index].uv[row.component] +
+        lin->r[i] * lin->sigma[static_cast<int>(ObsGroup::kPixel)];
+  }
+
   // Per observation: reading derivatives and image motions (whitened).
   std::map<std::pair<int, int>, ReadingDerivatives> cache;  // (group kind != pixel, index)
   std::map<std::pair<int, int>, MotionDerivatives> motion_cache;
@@ -576,7 +593,7 @@ void AddProbeColumns(const Observations& obs, const InstrumentModel& model,
         if (pixel) {
           const CameraTool& cam = model.cams[zoom];
           const Eigen::Vector2d c(cam.intrinsics[2], cam.intrinsics[3]);
-          const Eigen::Vector2d x = obs.pixels[row.index].uv - c;
+          const Eigen::Vector2d x = predicted[row.index] - c;
           m.block<2, 1>(0, 0) = x;
           m.block<2, 1>(0, 1) = Eigen::Vector2d(1, 0);
           m.block<2, 1>(0, 2) = Eigen::Vector2d(0, 1);
@@ -662,7 +679,7 @@ void AddProbeColumns(const Observations& obs, const InstrumentModel& model,
           const int size = p.field == ImageField::kPosition ? 14 : 6;
           for (int j = 0; j < size; ++j) {
             lin->extra(i, c + j) =
-                s * FieldColumn(p, j, cam, obs.pixels[row.index].uv)[row.component];
+                s * FieldColumn(p, j, cam, predicted[row.index])[row.component];
           }
           break;
         }

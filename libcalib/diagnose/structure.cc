@@ -462,8 +462,9 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
   } else if (p.kind == ProbeKind::kImageMotion) {
     // Each motion's own displacement at the observed points, and beside it
     // its parameter (ppm, arcsec) and direction where the motion is its own:
-    // what is left of it beyond everything else fitted is at least half of
-    // what it does alone.
+    // the model's parameters leave at least half of its columns (a camera
+    // on a bench turns every image scale into board distances), and what is
+    // left of it beyond everything else fitted is at least half of that.
     const int per = b.basis.size;
     double first[kNumImageMotions], last[kNumImageMotions], lo[kNumImageMotions],
         hi[kNumImageMotions];
@@ -486,7 +487,8 @@ StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
       const Eigen::VectorXd beta = t.beta.segment(k * per, per);
       net[k] = LargestAtData(lin, columns.middleCols(k * per, per) * beta);
       const AtData alone = LargestAtData(lin, red.extra.middleCols(b.first + k * per, per) * beta);
-      own[k] = net[k].size >= 0.5 * alone.size;
+      const double kept = red.kept_fraction.segment(b.first + k * per, per).maxCoeff();
+      own[k] = kept >= 0.5 && net[k].size >= 0.5 * alone.size;
     }
     int main = 0;
     for (int k = 1; k < kNumImageMotions; ++k) {
