@@ -198,6 +198,8 @@ json DiagnosisJson(const CalibrationResult& r) {
               {"value", t.value},
               {"sigma", t.sigma},
               {"corner_sigma_px", t.corner_px},
+              {"data_sigma_px", t.data_px},
+              {"reach", t.reach},
               {"max_abs_correlation", std::fabs(t.rho)},
               {"correlated_with", t.partner},
               {"drop", t.drop}};
@@ -325,13 +327,15 @@ std::string DiagnosisText(const CalibrationResult& r) {
       << "\n";
   }
   if (!d.distortion_terms.terms.empty()) {
-    o << "\nFitted distortion coefficients (corner: px the sigma moves the image corners; "
+    o << "\nFitted distortion coefficients (edge: px the sigma moves the points at the edge of "
+         "the data; corner: the same at the image corners, extrapolated where no point was; "
          "rho: largest |correlation| in the zoom)\n";
-    o << "  zoom  coef   value         sigma      corner [px]  rho    drop\n";
+    o << "  zoom  coef   value         sigma      edge [px]  corner [px]  rho    drop\n";
     for (const DistortionTerm& t : d.distortion_terms.terms) {
       o << "  " << std::setw(4) << t.zoom << "  " << std::left << std::setw(5) << t.name
         << std::right << "  " << std::setw(12) << Fmt("%+.4e", t.value) << "  " << std::setw(9)
-        << Fmt("%.2e", t.sigma) << "  " << std::setw(11) << Fmt("%.3g", t.corner_px) << "  "
+        << Fmt("%.2e", t.sigma) << "  " << std::setw(9) << Fmt("%.3g", t.data_px) << "  "
+        << std::setw(11) << Fmt("%.3g", t.corner_px) << "  "
         << Fmt("%.3f", std::fabs(t.rho)) << "  " << (t.drop ? "yes: " + t.config_line : "no")
         << "\n";
     }

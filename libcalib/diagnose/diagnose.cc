@@ -208,8 +208,10 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
       std::string also;
       for (size_t i = 1; i < recommended.size(); ++i)
         also += (i > 1 ? ", " : "") + recommended[i]->name;
-      v.push_back("Also worth adding alone: " + also + "; diagnose again once " + r.name +
-                  " is in (`rtscalib diagnose --auto` does it).");
+      v.push_back(d.ranking.after_best_tested
+                      ? "Also worth adding alone, but not once " + r.name + " is in: " + also + "."
+                      : "Also worth adding alone: " + also + "; diagnose again once " + r.name +
+                            " is in (`rtscalib diagnose --auto` does it).");
     }
   }
   if (!detectable.empty()) {

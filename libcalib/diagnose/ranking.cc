@@ -404,6 +404,7 @@ void AlsoAfterBest(const std::vector<const ColumnBlock*>& effects, const Context
   p.Add(red.extra.middleCols(best->first, best->size));
   const Eigen::VectorXd yb = p.Apply(red.r);
   const GroupRms after_best = RmsOfWhitened(cx.lin, yb);
+  out->after_best_tested = true;
   for (size_t i = 1; i < out->entries.size(); ++i) {
     const RankedEffect& o = out->entries[i];
     if (!o.significant) continue;

@@ -173,6 +173,7 @@ struct Ranking {
   // first order; empty when the best one's refit moved the residuals far
   // from that first order (then only a new diagnosis tells).
   std::vector<std::string> also_after_best;
+  bool after_best_tested = false;  // whether also_after_best was worked out
   int num_rows = 0;
   GroupRms current;
 };
