@@ -29,35 +29,17 @@ std::string Rms(const GroupRms& g) {
   return out + " rms";
 }
 
-// "EDM points 0.323 -> 0.0908 mm, camera points 0.0326 -> 0.0221 mm rms"
-std::string Change(const GroupRms& a, const GroupRms& b) {
+// "EDM points 0.323 -> 0.0908 mm, camera points 0.0326 -> 0.0221 mm rms";
+// `format` the number's (a small gain needs "%.4g": 0.08133 -> 0.08121).
+std::string Change(const GroupRms& a, const GroupRms& b, const char* format = "%.3g") {
   std::vector<std::string> parts;
-  if (a.edm_n > 0)
-    parts.push_back("EDM points " + Fmt("%.3g", a.edm_m * 1e3) + " -> " +
-                    Fmt("%.3g", b.edm_m * 1e3) + " mm");
-  if (a.cam_n > 0)
-    parts.push_back("camera points " + Fmt("%.3g", a.cam_m * 1e3) + " -> " +
-                    Fmt("%.3g", b.cam_m * 1e3) + " mm");
-  if (a.pixels_n > 0)
-    parts.push_back("image points " + Fmt("%.3g", a.pixels_px) + " -> " + Fmt("%.3g", b.pixels_px) +
-                    " px");
-  std::string out;
-  for (size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
-  return out + " rms";
-}
-
-// Change with the digits a small gain needs: "image points 0.08133 -> 0.08121 px rms".
-std::string ChangeFine(const GroupRms& a, const GroupRms& b) {
-  std::vector<std::string> parts;
-  if (a.edm_n > 0)
-    parts.push_back("EDM points " + Fmt("%.4g", a.edm_m * 1e3) + " -> " +
-                    Fmt("%.4g", b.edm_m * 1e3) + " mm");
-  if (a.cam_n > 0)
-    parts.push_back("camera points " + Fmt("%.4g", a.cam_m * 1e3) + " -> " +
-                    Fmt("%.4g", b.cam_m * 1e3) + " mm");
-  if (a.pixels_n > 0)
-    parts.push_back("image points " + Fmt("%.4g", a.pixels_px) + " -> " + Fmt("%.4g", b.pixels_px) +
-                    " px");
+  auto part = [&](const char* what, double before, double after, const char* unit) {
+    parts.push_back(std::string(what) + " " + Fmt(format, before) + " -> " + Fmt(format, after) +
+                    " " + unit);
+  };
+  if (a.edm_n > 0) part("EDM points", a.edm_m * 1e3, b.edm_m * 1e3, "mm");
+  if (a.cam_n > 0) part("camera points", a.cam_m * 1e3, b.cam_m * 1e3, "mm");
+  if (a.pixels_n > 0) part("image points", a.pixels_px, b.pixels_px, "px");
   std::string out;
   for (size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
   return out + " rms";
@@ -218,7 +200,7 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
     std::string list;
     for (size_t i = 0; i < detectable.size(); ++i) {
       const RankedEffect& r = *detectable[i];
-      list += std::string(i ? "; " : "") + r.name + " (" + ChangeFine(r.before, r.after) + ", " +
+      list += std::string(i ? "; " : "") + r.name + " (" + Change(r.before, r.after, "%.4g") + ", " +
               Fmt("%.2g", 100 * r.gain) + " %" +
               (r.after_source == "refined" ? ", refitted" : "") + ")";
     }

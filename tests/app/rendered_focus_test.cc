@@ -104,7 +104,9 @@ TEST(RenderedFocus, RefocusingCameraInRenderedPhotosIsFoundAndCalibrated) {
   EXPECT_TRUE(with.ranking.entries.front().recommended) << Verdict(with);
   EXPECT_EQ(with.ranking.entries.front().after_source, "refined") << Verdict(with);
   for (const RankedEffect& e : with.ranking.entries) {
-    if (e.effect != Effect::kFocus) EXPECT_FALSE(e.recommended) << e.name << "\n" << Verdict(with);
+    if (e.effect != Effect::kFocus) {
+      EXPECT_FALSE(e.recommended) << e.name << "\n" << Verdict(with);
+    }
   }
   std::cout << "rendered focus, without focus in the model:\n" << Verdict(with);
 

@@ -109,7 +109,9 @@ void ExpectTruthfulDiagnosis(const std::string& name, const app::PipelineResult&
   // times the residuals would be the extrapolation this size must never be).
   for (const StructureFinding& f : d.structure.unexplained) {
     EXPECT_TRUE(f.material) << f.description;
-    if (f.unit == "px") EXPECT_LE(f.size, 3 * rms) << name << ": " << f.description;
+    if (f.unit == "px") {
+      EXPECT_LE(f.size, 3 * rms) << name << ": " << f.description;
+    }
   }
   EXPECT_TRUE(d.harmonics.unexplained.empty()) << name;  // camera-only: no phi, theta
 }
