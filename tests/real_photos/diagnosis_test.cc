@@ -200,6 +200,14 @@ TEST(RealDiagnosis, MrcalTourNamesRationalDistortionWithTheFallARefitGives) {
               next->rms_before, next->rms_after, next->linear_after.Main(), calibrated,
               d.current.pixels_n, with.final_errors.pixels.rms_px, with.final_errors.pixels.n);
   EXPECT_NEAR(next->rms_after, calibrated, 0.05 * calibrated);
+  // Beside mrcal's own solution of these corners (OPENCV8 with board warp
+  // and outlier rejection, PROVENANCE.md): for the record, not a test
+  // (rtscalib has no board warp here, and screens other corners).
+  const CameraTool& cam = with.model.cams[0];
+  std::printf("with rational_distortion: fx %.2f fy %.2f cx %.2f cy %.2f, k1 %.4f k4 %.4f k5 %.4f "
+              "(mrcal OPENCV8: 2073.87 2077.45 3004.69 1997.38, 0.4792 0.7667 0.09634)\n",
+              cam.intrinsics[0], cam.intrinsics[1], cam.intrinsics[2], cam.intrinsics[3],
+              cam.distortion[kK1], cam.distortion[kK4], cam.distortion[kK5]);
 }
 
 }  // namespace
