@@ -47,7 +47,7 @@ double g_max_error_px = 0;
 void ExpectExactCorners(const cv::Mat& photo, const std::string& family, int id,
                         const std::array<Eigen::Vector2d, 4>& exact, const std::string& what) {
   DetectorOptions options;
-  options.families = {family};
+  options.families = {PrintedFamily{family}};
   TagDetector detector(options);
   const std::vector<TagDetection> found = detector.Detect(ToGray8(photo));
   ASSERT_EQ(found.size(), 1u) << what;
@@ -209,7 +209,7 @@ TEST(DetectorTest, TinyTagsAreNotRefined) {
 TEST(DetectorTest, OptionsAreChecked) {
   DetectorOptions o;
   EXPECT_EQ(o.Check(), "");
-  o.families = {"tag42h42"};
+  o.families = {PrintedFamily{"tag42h42"}};
   EXPECT_NE(o.Check(), "");
   EXPECT_THROW(TagDetector{o}, std::invalid_argument);
   o = DetectorOptions();
