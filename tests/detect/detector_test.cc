@@ -219,22 +219,5 @@ TEST(DetectorTest, OptionsAreChecked) {
   EXPECT_THROW(detector.Detect(cv::Mat(10, 10, CV_8UC3)), std::invalid_argument);
 }
 
-TEST(PhotoImageTest, SixteenBitIsStretchedByItsOwnRangeWithoutClipping) {
-  cv::Mat img(2, 3, CV_16UC1);
-  img.at<uint16_t>(0, 0) = 1000;
-  img.at<uint16_t>(0, 1) = 1255;
-  img.at<uint16_t>(0, 2) = 1510;
-  img.at<uint16_t>(1, 0) = 1000;
-  img.at<uint16_t>(1, 1) = 1000;
-  img.at<uint16_t>(1, 2) = 1510;
-  const cv::Mat g = ToGray8(img);
-  ASSERT_EQ(g.type(), CV_8UC1);
-  EXPECT_EQ(g.at<uint8_t>(0, 0), 0);
-  EXPECT_EQ(g.at<uint8_t>(0, 1), 128);  // (1255 - 1000) * 255 / 510 = 127.5 -> 128
-  EXPECT_EQ(g.at<uint8_t>(0, 2), 255);
-  EXPECT_THROW(ToGray8(cv::Mat(2, 2, CV_8UC2)), std::invalid_argument);
-  EXPECT_THROW(ToGray8(cv::Mat(2, 2, CV_16SC1)), std::invalid_argument);
-}
-
 }  // namespace
 }  // namespace rtscalib::detect
