@@ -173,9 +173,10 @@ TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>*
             known += (known.empty() ? "" : ", ") + entry.first.substr(kWideBorderPrefix.size());
           }
         }
-        border->Fail("1 for family " + b.family +
-                     " (its quad is not the outer edge of a black border; a wider border is "
-                     "printed only on " + known + ")");
+        border->Fail("1 for family " + b.family + " (" +
+                     (known.empty() ? std::string("no family detected here takes a wider border")
+                                    : "a wider border is printed only on " + known) +
+                     ")");
       }
     }
     item.ReadEnum("ids_from", kIdOrigins, &b.ids_from);
@@ -264,8 +265,7 @@ TargetScene ReadKalibrTarget(const YamlDocument& doc, const YamlNode& type,
   } else {
     b.kind = BoardKind::kChessboard;
     b.family = "chessboard";
-    const std::string corners =
-        " >= 3 (inner corners: OpenCV's chessboard detector takes no fewer)";
+    const std::string corners = " >= 3 (OpenCV's chessboard detector takes no fewer)";
     b.cols = 1 + ReadCount(root, "targetCols", kMinChessboardSquares - 1,
                            "a number of inner corners along a row" + corners);
     b.rows = 1 + ReadCount(root, "targetRows", kMinChessboardSquares - 1,
