@@ -246,6 +246,9 @@ TargetScene ReadKalibrTarget(const YamlDocument& doc, const YamlNode& type,
     b.family = "tag36h11";
     b.border_bits = 2;
     b.ids_from = IdOrigin::kBottomLeft;
+    if (family_codes != nullptr && family_codes->count(WideBorderKey(b.family)) == 0) {
+      type.Fail("a target this program detects (no tag36h11 tags of a 2-bit border here)");
+    }
     b.cols = ReadCount(root, "tagCols", 1, "a number of tag columns >= 1");
     b.rows = ReadCount(root, "tagRows", 1, "a number of tag rows >= 1");
     b.tag_size = ReadPositive(root, "tagSize", "a tag size > 0 [m] (the black border's outer edge)");
