@@ -42,6 +42,40 @@ double Median(std::vector<double>& v) {
   return v[v.size() / 2];
 }
 
+// A slowly changing level along `values` (one per strip, in strip order):
+// the median of each block of `block` consecutive values (the last block
+// takes the remainder), and out[i] linear between the blocks' centres,
+// constant beyond the first and the last. Each block's median ignores a
+// strip or two that graze another feature; the whole costs one pass of
+// nth_element, as one median of all the values would. Reorders `work`.
+void BlockLevels(const std::vector<double>& values, int block, std::vector<double>* work,
+                 std::vector<double>* centres, std::vector<double>* levels,
+                 std::vector<double>* out) {
+  const int n = static_cast<int>(values.size());
+  const int blocks = std::max(1, n / block);
+  *work = values;
+  centres->clear();
+  levels->clear();
+  for (int k = 0; k < blocks; ++k) {
+    const int i0 = k * block, i1 = k + 1 == blocks ? n : i0 + block;
+    const auto mid = work->begin() + (i0 + i1) / 2;
+    std::nth_element(work->begin() + i0, mid, work->begin() + i1);
+    centres->push_back(0.5 * (i0 + i1 - 1));
+    levels->push_back(*mid);
+  }
+  out->resize(n);
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    while (k + 1 < blocks && (*centres)[k + 1] <= i) ++k;
+    if (k + 1 == blocks || i <= (*centres)[0]) {
+      (*out)[i] = (*levels)[i <= (*centres)[0] ? 0 : k];
+    } else {
+      const double f = (i - (*centres)[k]) / ((*centres)[k + 1] - (*centres)[k]);
+      (*out)[i] = (*levels)[k] + f * ((*levels)[k + 1] - (*levels)[k]);
+    }
+  }
+}
+
 // The buffers of one tag's refinement, reused from edge to edge and
 // iteration to iteration: some 4,400 tags of a photo session take twelve
 // edge samplings each, and the allocations were a good part of the time
@@ -52,7 +86,7 @@ struct EdgeScratch {
     double first, last, sum;
   };
   std::vector<Strip> strips;
-  std::vector<double> firsts, lasts, ts, ss, window_a, window_b;
+  std::vector<double> firsts, lasts, ts, ss, work, centres, medians, levels_a, levels_b;
   std::vector<Eigen::Vector2d> points;
 };
 
@@ -118,24 +152,26 @@ bool EdgePoints(const cv::Mat& img, const EdgeCurve& e, double half_width, doubl
   // changes by d along the edge, taken as constant, moves the strips' edge
   // points by up to d / (lb - la) strip lengths and tilts the fitted edge
   // (on swat_tags_hallway, a tag of 8.6 px bits lit from one side: its
-  // corners 2.5 px off). So each strip takes the median levels of the
-  // strips within kLevelWindow of it: they follow a slow change of the
-  // light, and a strip that grazes another feature does not move them.
-  constexpr int kLevelWindow = 5;
+  // corners 2.5 px off). So the levels are the medians of blocks of
+  // kLevelBlock strips, linear in between (BlockLevels): they follow a slow
+  // change of the light, and a strip that grazes another feature does not
+  // move them.
+  constexpr int kLevelBlock = 8;
   const double la0 = Median(firsts), lb0 = Median(lasts);
   if (std::abs(lb0 - la0) < 10.0) return false;
-  std::vector<double>& window_a = scratch->window_a;
-  std::vector<double>& window_b = scratch->window_b;
+  // firsts and lasts are in strip order again (Median reorders them).
+  for (size_t i = 0; i < strips.size(); ++i) {
+    firsts[i] = strips[i].first;
+    lasts[i] = strips[i].last;
+  }
+  BlockLevels(firsts, kLevelBlock, &scratch->work, &scratch->centres, &scratch->medians,
+              &scratch->levels_a);
+  BlockLevels(lasts, kLevelBlock, &scratch->work, &scratch->centres, &scratch->medians,
+              &scratch->levels_b);
   const int count = static_cast<int>(strips.size());
   for (int i = 0; i < count; ++i) {
     const Strip& s = strips[i];
-    window_a.clear();
-    window_b.clear();
-    for (int j = std::max(0, i - kLevelWindow); j <= std::min(count - 1, i + kLevelWindow); ++j) {
-      window_a.push_back(strips[j].first);
-      window_b.push_back(strips[j].last);
-    }
-    const double la = Median(window_a), lb = Median(window_b);
+    const double la = scratch->levels_a[i], lb = scratch->levels_b[i];
     if (std::abs(lb - la) < 10.0) continue;
     const int n = s.i1 - s.i0 + 1;
     const double edge = s.i1 + 0.5 - (s.sum - n * la) / (lb - la);

@@ -83,7 +83,7 @@ TEST(SwatTagsHallway, FindsTheListedTagsAndNoOther) {
 // estimate: libapriltag's unrefined corners are the quad fitted to the
 // boundary pixels of the thresholded tag, a few tenths of a pixel off on
 // tags of 1.5-5 px bits with blur; our refined corners differ from them by
-// 0.57 px rms, (0.00, +0.18) px on average (measured). So: every tag of
+// 0.59 px rms, (0.00, +0.17) px on average (measured). So: every tag of
 // the reference that we refine within 1 px rms and 0.3 px of bias per axis,
 // and most of the reference's tags refined: 40 of 47 (measured 42; of the
 // other 5, 2 are not found (our segmentation threshold follows the image's

@@ -176,7 +176,7 @@ CameraFit CalibrateWithOpenCv(const std::vector<std::vector<cv::Point3f>>& objec
 //     of OpenCV's sigma (rtscalib takes out one gross error, a row of 2.7 px
 //     at 11 robust sigmas, which OpenCV keeps);
 //   - on yac's corners the detectors differ (0.33 px rms, above): within 3
-//     of OpenCV's sigmas (measured 0.6-1.7);
+//     of OpenCV's sigmas (measured 0.8-1.2);
 //   - OpenCV here on yac's corners reproduces ref.json within a tenth of a
 //     sigma (a check that the CSVs are read as ref.json read them).
 TEST(YacAprilGridCalibration, CameraOnlyAgreesWithOpenCvOnYacsAndOnItsOwnCorners) {
