@@ -6,7 +6,6 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <stdexcept>
 #include <vector>
 
@@ -160,11 +159,14 @@ cv::Mat ToGray8(const cv::Mat& image) {
 }
 
 Photo LoadPhoto(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw PhotoError("cannot open image " + path + ": " + std::strerror(errno));
-  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
-  if (in.bad()) throw PhotoError("cannot read image " + path + ": " + std::strerror(errno));
+  const std::streamoff size = in.tellg();
+  std::vector<uint8_t> bytes(size > 0 ? static_cast<size_t>(size) : 0);
+  in.seekg(0);
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()))) {
+    throw PhotoError("cannot read image " + path + ": " + std::strerror(errno));
+  }
   const FileCheck check = CheckImageFile(bytes);
   if (!check.complete) {
     throw PhotoError("image " + path + " is damaged: " + check.problem +
