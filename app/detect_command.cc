@@ -51,14 +51,24 @@ int RunDetect(const DetectArgs& args) {
   int tags = 0, points = 0, corners = 0, unrefined = 0, not_on_boards = 0, duplicates = 0;
   int empty = 0, refined_corners = 0, pattern_refined = 0, from_neighbours = 0;
   double shift_sq = 0, shift_max = 0;
-  std::printf("%-24s %11s %9s %8s %10s\n", "shot", "size", "found", "corners", "shift_rms");
+  bool tag_boards = false;
+  TargetScene point_boards;
+  for (const TagBoard& b : targets.boards) {
+    if (b.IsPointBoard()) point_boards.boards.push_back(b);
+    tag_boards |= !b.IsPointBoard();
+  }
+  // The shift against libapriltag's corners only where it can find tags.
+  std::printf("%-24s %11s %9s %8s%s\n", "shot", "size", "found", "corners",
+              tag_boards ? "  shift_rms" : "");
   for (size_t i = 0; i < shots.shots.size(); ++i) {
     const detect::PhotoDetection& p = result.photos[i];
     char size[32], found[32];
     std::snprintf(size, sizeof size, "%dx%d", p.width, p.height);
     std::snprintf(found, sizeof found, "%zu/%d", p.tags.size(), p.tags_of_boards);
-    std::printf("%-24s %11s %9s %8zu %9.3f\n", shots.shots[i].shot.c_str(), size, found,
-                static_cast<size_t>(p.corners), p.shift_rms_px);
+    std::printf("%-24s %11s %9s %8zu", shots.shots[i].shot.c_str(), size, found,
+                static_cast<size_t>(p.corners));
+    if (tag_boards) std::printf(" %10.3f", p.shift_rms_px);
+    std::printf("\n");
     for (const detect::DetectedTag& t : p.tags) {
       ++(targets.boards[t.board].IsPointBoard() ? points : tags);
     }
@@ -74,12 +84,6 @@ int RunDetect(const DetectArgs& args) {
     from_neighbours += p.from_neighbours;
   }
   const int n = static_cast<int>(shots.shots.size());
-  bool tag_boards = false;
-  TargetScene point_boards;
-  for (const TagBoard& b : targets.boards) {
-    if (b.IsPointBoard()) point_boards.boards.push_back(b);
-    tag_boards |= !b.IsPointBoard();
-  }
   std::printf("detect: %d photos (%s), %d corners", n, detect::TargetsInWords(targets).c_str(),
               corners);
   if (tag_boards) {

@@ -794,13 +794,17 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
         << " not on a board, " << p.duplicates << " duplicated";
     }
     o << "; " << p.jobs << " job(s)\n";
-    o << "  line  shot                      zoom face  size         found    shift_rms\n";
+    // The shift against libapriltag's corners only where it found tags.
+    o << "  line  shot                      zoom face  size         found"
+      << (p.tag_boards ? "    shift_rms" : "") << "\n";
     for (const PhotoSessionSummary::Photo& ph : p.photos) {
       char row[256];
-      std::snprintf(row, sizeof row, "  %4d  %-24s  %4d %4d  %5dx%-5d  %3d/%-3d  %.3f px\n",
-                    ph.line, ph.shot.c_str(), ph.zoom, ph.face, ph.width, ph.height, ph.tags,
-                    ph.tags_of_boards, ph.shift_rms_px);
+      std::snprintf(row, sizeof row, "  %4d  %-24s  %4d %4d  %5dx%-5d  %3d/%-3d", ph.line,
+                    ph.shot.c_str(), ph.zoom, ph.face, ph.width, ph.height, ph.tags,
+                    ph.tags_of_boards);
       o << row;
+      if (p.tag_boards) o << Fmt("  %.3f px", ph.shift_rms_px);
+      o << "\n";
     }
     for (const std::string& w : p.warnings) o << "  WARNING: " << w << "\n";
     o << "\n";
