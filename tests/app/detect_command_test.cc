@@ -112,21 +112,7 @@ TEST(DetectCommandTest, BadPhotosAndBoardsNameTheirFileAndLine) {
       .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(jpeg.size() / 2));
   std::vector<uint8_t> png;
   cv::imencode(".png", img, png);
-  // IHDR's width and height (bytes 16..23) claim 100000 x 100000; the CRC
-  // of the chunk (bytes 29..32) is made right, so that libpng reads it.
-  for (const int offset : {16, 20}) {
-    png[offset] = 0x00;
-    png[offset + 1] = 0x01;
-    png[offset + 2] = 0x86;
-    png[offset + 3] = 0xA0;
-  }
-  uint32_t crc = 0xFFFFFFFFu;
-  for (int i = 12; i < 29; ++i) {
-    crc ^= png[i];
-    for (int b = 0; b < 8; ++b) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  crc ^= 0xFFFFFFFFu;
-  for (int i = 0; i < 4; ++i) png[29 + i] = static_cast<uint8_t>(crc >> (24 - 8 * i));
+  png = detect::testing::PngClaimingSize(png, 100000, 100000);
   std::ofstream(dir / "huge.png", std::ios::binary)
       .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
   std::ofstream(dir / "targets.yaml") << "boards:\n"

@@ -16,6 +16,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tests/detect/synthetic_photo.h"
+
 namespace rtscalib::detect {
 namespace {
 
@@ -144,23 +146,7 @@ TEST(PhotoImageTest, FilesCutShortAreDamaged) {
 // (CV_IO_MAX_IMAGE_PIXELS); the message names the file and the size claimed.
 TEST(PhotoImageTest, AHeaderClaimingTooManyPixelsNamesTheFile) {
   const PhotoFiles files;
-  std::vector<uint8_t> bytes = Encoded(".png");
-  // IHDR's width and height, big-endian, right after the signature and the
-  // chunk's length and type (bytes 16..23), and its CRC over type and data
-  // (bytes 12..28) after them, as libpng checks it.
-  for (const int offset : {16, 20}) {
-    bytes[offset] = 0x00;
-    bytes[offset + 1] = 0x01;
-    bytes[offset + 2] = 0x86;
-    bytes[offset + 3] = 0xA0;  // 100000
-  }
-  uint32_t crc = 0xFFFFFFFFu;  // PNG's CRC-32 (ISO 3309), bit by bit
-  for (int i = 12; i < 29; ++i) {
-    crc ^= bytes[i];
-    for (int b = 0; b < 8; ++b) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  crc ^= 0xFFFFFFFFu;
-  for (int i = 0; i < 4; ++i) bytes[29 + i] = static_cast<uint8_t>(crc >> (24 - 8 * i));
+  const std::vector<uint8_t> bytes = testing::PngClaimingSize(Encoded(".png"), 100000, 100000);
   const std::string path = files.Write("huge.png", bytes);
   const std::string error = LoadError(path);
   EXPECT_THAT(error, HasSubstr(path));

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -265,6 +266,27 @@ inline Eigen::Matrix3d MakeHomography(double size, const Eigen::Vector2d& centre
   to_centre(0, 2) = centre.x();
   to_centre(1, 2) = centre.y();
   return to_centre * rotate * perspective * to_origin;
+}
+
+// A PNG file's bytes (as cv::imencode writes them) whose header claims
+// `width` x `height` pixels: IHDR's width and height, big-endian, at bytes
+// 16..23 (after the signature and the chunk's length and type), and its
+// CRC over type and data (bytes 12..28) at 29..32, made right so that
+// libpng reads the header (PNG spec 5.3, CRC-32 of ISO 3309).
+inline std::vector<uint8_t> PngClaimingSize(std::vector<uint8_t> png, uint32_t width,
+                                            uint32_t height) {
+  for (int i = 0; i < 4; ++i) {
+    png[16 + i] = static_cast<uint8_t>(width >> (24 - 8 * i));
+    png[20 + i] = static_cast<uint8_t>(height >> (24 - 8 * i));
+  }
+  uint32_t crc = 0xFFFFFFFFu;
+  for (int i = 12; i < 29; ++i) {
+    crc ^= png[i];
+    for (int b = 0; b < 8; ++b) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  crc ^= 0xFFFFFFFFu;
+  for (int i = 0; i < 4; ++i) png[29 + i] = static_cast<uint8_t>(crc >> (24 - 8 * i));
+  return png;
 }
 
 }  // namespace rtscalib::detect::testing

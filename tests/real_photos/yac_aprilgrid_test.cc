@@ -18,9 +18,8 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/calib3d.hpp>
-
 #include "app/pipeline.h"
+#include "tests/real_photos/opencv_calibration.h"
 #include "tests/real_photos/photo_sets.h"
 #include "tests/real_photos/real_photos.h"
 
@@ -145,29 +144,6 @@ TEST(YacAprilGrid, FindsTheTagsOfYacsDetectionsWithTheirIdsAndCorners) {
   EXPECT_NEAR(size_ratio, 1.0, 0.02);
 }
 
-struct CameraFit {
-  double k[4] = {0, 0, 0, 0};      // fx, fy, cx, cy
-  double sigma[4] = {0, 0, 0, 0};  // OpenCV's stdDeviationsIntrinsics
-  double rms = 0;
-};
-
-// OpenCV's calibrateCameraExtended (its C++ name is this overload of
-// calibrateCamera), flags 0: k1 k2 p1 p2 k3, as ref.json.
-CameraFit CalibrateWithOpenCv(const std::vector<std::vector<cv::Point3f>>& object,
-                              const std::vector<std::vector<cv::Point2f>>& image) {
-  cv::Mat k, d, sd_intrinsics, sd_extrinsics, per_view;
-  std::vector<cv::Mat> rvecs, tvecs;
-  CameraFit out;
-  out.rms = cv::calibrateCamera(object, image, cv::Size(640, 480), k, d, rvecs, tvecs,
-                                sd_intrinsics, sd_extrinsics, per_view, 0);
-  out.k[0] = k.at<double>(0, 0);
-  out.k[1] = k.at<double>(1, 1);
-  out.k[2] = k.at<double>(0, 2);
-  out.k[3] = k.at<double>(1, 2);
-  for (int i = 0; i < 4; ++i) out.sigma[i] = sd_intrinsics.at<double>(i);
-  return out;
-}
-
 // The camera-only calibration of the 30 photos through the user's path
 // (shots.csv, Kalibr's target file, model.kinematics: none, k1 k2 p1 p2 k3)
 // against OpenCV's calibrateCamera, run here on yac's CSV corners (ref.json
@@ -217,7 +193,7 @@ TEST(YacAprilGridCalibration, CameraOnlyAgreesWithOpenCvOnYacsAndOnItsOwnCorners
     object.push_back(v.first);
     image.push_back(v.second);
   }
-  const CameraFit same = CalibrateWithOpenCv(object, image);
+  const OpenCvCalibration same = CalibrateWithOpenCv(object, image, cv::Size(640, 480));
 
   // OpenCV on yac's corners, in Kalibr's target frame (planar, z = 0).
   object.clear();
@@ -232,7 +208,7 @@ TEST(YacAprilGridCalibration, CameraOnlyAgreesWithOpenCvOnYacsAndOnItsOwnCorners
       }
     }
   }
-  const CameraFit yac = CalibrateWithOpenCv(object, image);
+  const OpenCvCalibration yac = CalibrateWithOpenCv(object, image, cv::Size(640, 480));
   // ref.json: OpenCV 5.0.0 on the same corners.
   const double ref[4] = {606.5683553340094, 609.9581791228969, 324.4442418214721,
                          245.65284931044044};
