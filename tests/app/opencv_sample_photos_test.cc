@@ -74,20 +74,10 @@ TEST(OpenCvSamplePhotos, CameraOnlyCalibrationAgreesWithCalibrateCamera) {
 
   // OpenCV on rtscalib's corners: per photo, the board-frame corners
   // (TagBoard::CornersInBoard) and the detected pixels, in pixels.csv order.
-  std::map<std::string, std::pair<std::vector<cv::Point3f>, std::vector<cv::Point2f>>> views;
-  for (const PixelObservation& p : r.obs.pixels) {
-    const TagBoard& b = r.obs.targets.boards.at(0);
-    const Eigen::Vector3d x = b.CornersInBoard(p.target - b.first_id)[0];
-    views[p.shot].first.emplace_back(x.x(), x.y(), x.z());
-    views[p.shot].second.emplace_back(p.uv.x(), p.uv.y());
-  }
-  std::vector<std::vector<cv::Point3f>> object;
-  std::vector<std::vector<cv::Point2f>> image;
-  for (const auto& [shot, v] : views) {
-    object.push_back(v.first);
-    image.push_back(v.second);
-  }
-  const OpenCvCalibration same = CalibrateWithOpenCv(object, image, cv::Size(640, 480));
+  const testing_real_photos::OpenCvViews views =
+      testing_real_photos::ViewsOf(r.obs.pixels, r.obs.targets);
+  const OpenCvCalibration same =
+      CalibrateWithOpenCv(views.object, views.image, cv::Size(640, 480));
 
   // OpenCV's own detection, as its calibration tutorial does it.
   std::vector<std::vector<cv::Point3f>> own_object;

@@ -180,24 +180,13 @@ TEST(YacAprilGridCalibration, CameraOnlyAgreesWithOpenCvOnYacsAndOnItsOwnCorners
   EXPECT_EQ(r.photos.photos_without_tags, 0);
 
   // OpenCV on rtscalib's corners (pixels.csv order, per photo).
-  std::map<std::string, std::pair<std::vector<cv::Point3f>, std::vector<cv::Point2f>>> views;
-  const TagBoard& board = r.obs.targets.boards.at(0);
-  for (const PixelObservation& p : r.obs.pixels) {
-    const Eigen::Vector3d x = board.CornersInBoard(p.target - board.first_id)[p.corner];
-    views[p.shot].first.emplace_back(x.x(), x.y(), x.z());
-    views[p.shot].second.emplace_back(p.uv.x(), p.uv.y());
-  }
-  std::vector<std::vector<cv::Point3f>> object;
-  std::vector<std::vector<cv::Point2f>> image;
-  for (const auto& [shot, v] : views) {
-    object.push_back(v.first);
-    image.push_back(v.second);
-  }
-  const OpenCvCalibration same = CalibrateWithOpenCv(object, image, cv::Size(640, 480));
+  const OpenCvViews views = ViewsOf(r.obs.pixels, r.obs.targets);
+  const OpenCvCalibration same =
+      CalibrateWithOpenCv(views.object, views.image, cv::Size(640, 480));
 
   // OpenCV on yac's corners, in Kalibr's target frame (planar, z = 0).
-  object.clear();
-  image.clear();
+  std::vector<std::vector<cv::Point3f>> object;
+  std::vector<std::vector<cv::Point2f>> image;
   for (const auto& [ts, tags] : ReadYacCsvs(set)) {
     object.emplace_back();
     image.emplace_back();
