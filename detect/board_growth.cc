@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <map>
 #include <optional>
 
@@ -284,52 +285,73 @@ void GrowBoardTags(const cv::Mat& gray, const TagBoard& board, TagDetector* dete
 
   std::vector<TagDetection> grown;
   std::map<int, std::vector<int>> tried_with;  // index -> the neighbours of its last try
-  bool added = true;
-  while (added) {
-    added = false;
-    for (int index = 0; index < n; ++index) {
-      // A tag libapriltag found twice (two printed copies) stays out.
-      if (found.count(index) > 0 || count[board.first_id + index] >= 2) continue;
-      std::vector<int> near = neighbours(index, 1);
-      if (near.empty()) continue;
-      if (near.size() < 2) near = neighbours(index, 2);
-      auto& last = tried_with[index];
-      if (last == near) continue;  // nothing new to predict from
-      last = near;
+  // The cells to try: those within two cells of a found tag, queued again
+  // when a tag is found near them. A cell is tried again only when its
+  // neighbours have changed, and they only grow: at most 24 times.
+  std::deque<int> queue;
+  std::vector<char> queued(n, 0);
+  auto enqueue_around = [&](int index) {
+    const GridCell cell = board.GridOf(index);
+    for (int dr = -2; dr <= 2; ++dr) {
+      for (int dc = -2; dc <= 2; ++dc) {
+        const GridCell other{cell.row + dr, cell.col + dc};
+        if (other.row < 0 || other.col < 0 || other.row >= board.rows || other.col >= board.cols) {
+          continue;
+        }
+        const int j = board.IndexOf(other);
+        if (found.count(j) == 0 && !queued[j]) {
+          queued[j] = 1;
+          queue.push_back(j);
+        }
+      }
+    }
+  };
+  for (const auto& [index, corners] : found) enqueue_around(index);
+  while (!queue.empty()) {
+    const int index = queue.front();
+    queue.pop_front();
+    queued[index] = 0;
+    // A tag libapriltag found twice (two printed copies) stays out.
+    if (found.count(index) > 0 || count[board.first_id + index] >= 2) continue;
+    std::vector<int> near = neighbours(index, 1);
+    if (near.empty()) continue;
+    if (near.size() < 2) near = neighbours(index, 2);
+    auto& last = tried_with[index];
+    if (last == near) continue;  // nothing new to predict from
+    last = near;
 
-      // Step 2: the predictions, each tried in turn until one holds.
-      const Corners target = board_corners(index);
-      std::vector<Corners> predictions;
-      {
-        std::vector<Eigen::Vector2d> src, dst;
-        for (const int j : near) {
-          const Corners b = board_corners(j);
-          for (int k = 0; k < 4; ++k) {
-            src.push_back(b[k]);
-            dst.push_back(found[j][k]);
-          }
-        }
-        if (const std::optional<Eigen::Matrix3d> h = FitHomography(src, dst)) {
-          Corners p;
-          for (int k = 0; k < 4; ++k) p[k] = Apply(*h, target[k]);
-          predictions.push_back(p);
+    // Step 2: the predictions, each tried in turn until one holds.
+    const Corners target = board_corners(index);
+    std::vector<Corners> predictions;
+    {
+      std::vector<Eigen::Vector2d> src, dst;
+      for (const int j : near) {
+        const Corners b = board_corners(j);
+        for (int k = 0; k < 4; ++k) {
+          src.push_back(b[k]);
+          dst.push_back(found[j][k]);
         }
       }
-      if (const std::optional<Corners> p = PredictFromJunctions(board, near, found, target)) {
-        predictions.push_back(*p);
+      if (const std::optional<Eigen::Matrix3d> h = FitHomography(src, dst)) {
+        Corners p;
+        for (int k = 0; k < 4; ++k) p[k] = Apply(*h, target[k]);
+        predictions.push_back(p);
       }
-      const cv::Mat code = TagCodeImage(family.get(), board.first_id + index);
-      for (const Corners& prediction : predictions) {
-        TagDetection d;
-        d.family = board.family;
-        d.border_bits = board.border_bits;
-        d.id = board.first_id + index;
-        if (!TryTag(gray, board, info, code, prediction, detector, options, &d)) continue;
-        found[index] = d.corners;
-        grown.push_back(d);
-        added = true;
-        break;
-      }
+    }
+    if (const std::optional<Corners> p = PredictFromJunctions(board, near, found, target)) {
+      predictions.push_back(*p);
+    }
+    const cv::Mat code = TagCodeImage(family.get(), board.first_id + index);
+    for (const Corners& prediction : predictions) {
+      TagDetection d;
+      d.family = board.family;
+      d.border_bits = board.border_bits;
+      d.id = board.first_id + index;
+      if (!TryTag(gray, board, info, code, prediction, detector, options, &d)) continue;
+      found[index] = d.corners;
+      grown.push_back(d);
+      enqueue_around(index);
+      break;
     }
   }
   if (grown.empty()) return;
