@@ -354,6 +354,9 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                    {"photos", static_cast<int>(p.photos.size())},
                    {"photos_without_tags", p.photos_without_tags},
                    {"tags", p.tags},
+                   {"apriltags", p.apriltags},
+                   {"point_corners", p.point_corners},
+                   {"from_neighbours", p.from_neighbours},
                    {"corners", p.corners},
                    {"dropped",
                     {{"unrefined", p.unrefined},
@@ -785,20 +788,23 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   if (r.photos.ran) {
     const PhotoSessionSummary& p = r.photos;
     o << "Photos (" << p.shots_path << ", boards " << p.targets_path << ": " << p.boards_with_pose
-      << " with pose, " << p.boards_without_pose << " without): " << p.photos.size() << " photos, "
-      << p.tags << " tags, " << p.corners << " corners, " << p.photos_without_tags
-      << " photos without tags; dropped " << p.unrefined << " unrefined, " << p.not_on_boards
-      << " not on a board, " << p.duplicates << " duplicated; detection check (refined vs "
-      << "libapriltag corners) RMS " << Fmt("%.3f", p.shift_rms_px) << " px, max "
-      << Fmt("%.3f", p.shift_max_px) << " px; " << Fmt("%.1f", p.images_per_second)
-      << " images/s with " << p.jobs << " job(s)\n";
-    o << "  line  shot                      zoom face  size         tags     shift_rms\n";
+      << " with pose, " << p.boards_without_pose << " without): " << PhotoSessionLine(p);
+    if (p.tag_boards) {
+      o << "; tags dropped: " << p.unrefined << " unrefined, " << p.not_on_boards
+        << " not on a board, " << p.duplicates << " duplicated";
+    }
+    o << "; " << p.jobs << " job(s)\n";
+    // The shift against libapriltag's corners only where it found tags.
+    o << "  line  shot                      zoom face  size         found"
+      << (p.tag_boards ? "    shift_rms" : "") << "\n";
     for (const PhotoSessionSummary::Photo& ph : p.photos) {
       char row[256];
-      std::snprintf(row, sizeof row, "  %4d  %-24s  %4d %4d  %5dx%-5d  %3d/%-3d  %.3f px\n",
-                    ph.line, ph.shot.c_str(), ph.zoom, ph.face, ph.width, ph.height, ph.tags,
-                    ph.tags_of_boards, ph.shift_rms_px);
+      std::snprintf(row, sizeof row, "  %4d  %-24s  %4d %4d  %5dx%-5d  %3d/%-3d", ph.line,
+                    ph.shot.c_str(), ph.zoom, ph.face, ph.width, ph.height, ph.tags,
+                    ph.tags_of_boards);
       o << row;
+      if (p.tag_boards) o << Fmt("  %.3f px", ph.shift_rms_px);
+      o << "\n";
     }
     for (const std::string& w : p.warnings) o << "  WARNING: " << w << "\n";
     o << "\n";
