@@ -99,23 +99,94 @@ PointBoardDetection DetectCharuco(const cv::Mat& gray, const TagBoard& board) {
   return out;
 }
 
+// The smallest distance between neighbouring corners of a row of a grid of
+// `nc` corners per row: one square in pixels (1e9 for a grid of one column).
+double SmallestRowStep(const std::vector<cv::Point2f>& grid, int nc) {
+  double step = 1e9;
+  for (size_t k = 0; k + 1 < grid.size(); ++k) {
+    if (static_cast<int>(k) % nc != nc - 1) {
+      step = std::min(step, static_cast<double>(cv::norm(grid[k + 1] - grid[k])));
+    }
+  }
+  return step;
+}
+
+// The chessboard search's levels of a photo: level 0 the photo itself, each
+// next one half its width and height (means of 2 x 2 pixels, so that pixel
+// (i, j) of level l + 1 is centred at (2 i + 0.5, 2 j + 0.5) of level l),
+// down to the last whose shorter side is at least kCoarsestSide pixels.
+// OpenCV's saddle-point search (findChessboardCornersSB) costs time in
+// proportion to the pixels it is given (125 ns a pixel, 3 s on a 6000 x
+// 4000 photo), and it finds boards whose squares are 6 px or more: a board
+// that fills a good part of a photo is found in a small copy of it, for a
+// sixteenth of the time at 1/4 size. Every board of the real photos of
+// tests/detect/point_boards_test.cc and tests/real_photos is found at its
+// search's first level.
+constexpr int kCoarsestSide = 240;
+
+std::vector<cv::Mat> SearchLevels(const cv::Mat& gray) {
+  std::vector<cv::Mat> levels = {gray};
+  while (std::min(levels.back().cols, levels.back().rows) / 2 >= kCoarsestSide) {
+    cv::Mat half;
+    cv::resize(levels.back(), half, cv::Size(levels.back().cols / 2, levels.back().rows / 2), 0, 0,
+               cv::INTER_AREA);
+    levels.push_back(half);
+  }
+  return levels;
+}
+
+// One level: the exhaustive search first; on real photos it misses a few
+// boards that the plain search finds (OpenCV's left11.jpg at full size:
+// blur and a steep view), so that one is tried next. Not the classic quad
+// detector: on a photo without a board it can search for minutes (540 s on
+// 1280 x 960 noise, 9.5 s with its fast check). Without CALIB_CB_ACCURACY:
+// its corners were 0.13 px RMS off on rendered photos and it cost 0.3 s more
+// per 1280 x 960 image; cornerSubPix from either start converges to the same
+// saddles, 0.06 px RMS (tests/render/point_boards_test.cc, docs/photos.md).
+bool FindGridAt(const cv::Mat& level, cv::Size size, std::vector<cv::Point2f>* grid) {
+  grid->clear();
+  if (cv::findChessboardCornersSB(level, size, *grid,
+                                  cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE)) {
+    return true;
+  }
+  grid->clear();
+  return cv::findChessboardCornersSB(level, size, *grid, cv::CALIB_CB_NORMALIZE_IMAGE);
+}
+
+// The grid of a whole chessboard of `size` inner corners, searched from the
+// coarsest level to the finest (the first level that holds it wins), then
+// taken down level by level to the photo, refined to the saddles at each
+// (RefineSaddles, its window a quarter of that level's square): the search's
+// corners are up to 1.5 px of their level off the saddles, so a start from
+// level l is within the window of level l - 1 once refined at level l. The
+// saddles of the photo are those a search at full size and cornerSubPix
+// give: cornerSubPix converges to the same point from either start with the
+// same window. False when no level holds the board.
+bool FindChessboardGrid(const std::vector<cv::Mat>& levels, cv::Size size,
+                        std::vector<cv::Point2f>* grid) {
+  for (int l = static_cast<int>(levels.size()) - 1; l >= 0; --l) {
+    if (!FindGridAt(levels[l], size, grid) ||
+        static_cast<int>(grid->size()) != size.width * size.height) {
+      continue;
+    }
+    for (int k = l; k >= 0; --k) {
+      if (k < l) {
+        for (cv::Point2f& p : *grid) p = p * 2.0f + cv::Point2f(0.5f, 0.5f);
+      }
+      RefineSaddles(levels[k], SmallestRowStep(*grid, size.width), 1.0, grid);
+    }
+    return true;
+  }
+  grid->clear();
+  return false;
+}
+
 PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board, int face) {
   const int nc = board.cols - 1, nr = board.rows - 1;
-  std::vector<cv::Point2f> grid;
   PointBoardDetection out;
-  // Without CALIB_CB_ACCURACY: its corners were 0.13 px RMS off on rendered
-  // photos and it cost 0.3 s more per 1280 x 960 image; cornerSubPix from
-  // either start converges to the same saddles, 0.06 px RMS
-  // (tests/render/point_boards_test.cc, docs/photos.md).
-  // The exhaustive search first; on real photos it misses a few boards that
-  // the plain search finds (OpenCV's left11.jpg: blur and a steep view), so
-  // that one is tried next (~0.5 s more on a 1280 x 960 photo without a
-  // board). Not the classic quad detector: on a photo without a board it
-  // can search for minutes (540 s on 1280 x 960 noise, 9.5 s with its fast
-  // check). Either grid is refined below.
   const cv::Size size(nc, nr);
   // Most photos of a session show no chessboard (another board, or this one
-  // out of view), and there both searches below run to the end. OpenCV's
+  // out of view), and there the search runs through every level. OpenCV's
   // quick check (the classic detector's CALIB_CB_FAST_CHECK: quads of the
   // right count at a few thresholds) answers in milliseconds. With it the
   // 50 rendered photos of three ChArUco boards and a chessboard are
@@ -124,25 +195,20 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
   // OpenCV's 26 sample photos of a real camera
   // (PointBoards.QuickCheckKeepsEveryChessboardOfOpenCvsSamplePhotos).
   if (!cv::checkChessboard(gray, size)) return out;
-  bool found = cv::findChessboardCornersSB(gray, size, grid,
-                                           cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
-  if (!found) {
-    grid.clear();
-    found = cv::findChessboardCornersSB(gray, size, grid, cv::CALIB_CB_NORMALIZE_IMAGE);
-  }
-  if (!found || static_cast<int>(grid.size()) != nc * nr) return out;
-  // A second copy: the found board masked out (its hull, grown by one
-  // square, filled with the photo's mean grey) and the photo searched again
-  // (the fast non-exhaustive search: a second whole board would be as clear).
+  std::vector<cv::Point2f> grid;
+  if (!FindChessboardGrid(SearchLevels(gray), size, &grid)) return out;
+  // A second copy: the found board masked out (its hull, grown by one and a
+  // half squares, filled with the photo's mean grey) and the photo searched
+  // again. The quick check comes first, as for the first board: a second
+  // whole board passes it as the first did, and a photo with one board
+  // passes it no more once the board is masked (none of the 61 real photos
+  // of the tests), so the second search costs only the check.
   {
     std::vector<cv::Point2f> hull_f;
     cv::convexHull(grid, hull_f);
     const cv::Point2f centre = std::accumulate(hull_f.begin(), hull_f.end(), cv::Point2f(0, 0)) *
                                (1.0f / static_cast<float>(hull_f.size()));
-    double step = 1e9;
-    for (int k = 0; k + 1 < nc * nr; ++k) {
-      if (k % nc != nc - 1) step = std::min(step, static_cast<double>(cv::norm(grid[k + 1] - grid[k])));
-    }
+    const double step = SmallestRowStep(grid, nc);
     std::vector<cv::Point> hull;
     for (const cv::Point2f& p : hull_f) {
       const cv::Point2f out_dir = p - centre;
@@ -152,18 +218,12 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
     cv::Mat masked = gray.clone();
     cv::fillConvexPoly(masked, hull, cv::Scalar(cv::mean(gray)[0]));
     std::vector<cv::Point2f> second;
-    if (cv::findChessboardCornersSB(masked, size, second, cv::CALIB_CB_NORMALIZE_IMAGE)) {
+    if (cv::checkChessboard(masked, size) &&
+        FindChessboardGrid(SearchLevels(masked), size, &second)) {
       out.duplicated = true;
       return out;
     }
   }
-  double square_px = 1e9;
-  for (int k = 0; k + 1 < nc * nr; ++k) {
-    if (k % nc != nc - 1) {
-      square_px = std::min(square_px, static_cast<double>(cv::norm(grid[k + 1] - grid[k])));
-    }
-  }
-  RefineSaddles(gray, square_px, 1.0, &grid);
   // Directions of the grid's rows (along k) and columns in the image.
   auto at = [&](int r, int c) { return Eigen::Vector2d(grid[r * nc + c].x, grid[r * nc + c].y); };
   const Eigen::Vector2d along_row = at(0, nc - 1) - at(0, 0);
