@@ -1331,7 +1331,8 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
 }
 
 std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>& figures,
-                                                       const std::string& dir, std::string* note) {
+                                                       const std::string& dir, std::string* note,
+                                                       VegaRenderer* renderer) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw WriteError(dir, ec.message() + " (creating the folder)");
@@ -1344,7 +1345,8 @@ std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>
     specs.push_back(figures[i].spec);
   }
   note->clear();
-  const std::vector<RenderedFigure> drawn = RenderFigures(specs, note);
+  const std::vector<RenderedFigure> drawn =
+      renderer != nullptr ? renderer->Draw(specs, note) : RenderFigures(specs, note);
   for (size_t i = 0; i < drawn.size(); ++i) {
     if (drawn[i].svg.empty()) {
       *note += std::string(note->empty() ? "figures: " : "; ") + figures[i].name +
