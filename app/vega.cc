@@ -209,7 +209,7 @@ struct VegaRenderer::State {
   fs::path dir;         // the temporary folder: vega.js, render.js, specs, SVG files
   pid_t pid = -1;
   int socket = -1;      // our end of node's stdin and stdout
-  bool no_opt = true;   // node started with --no-opt
+  bool no_opt = true;   // node started with --no-opt --single-threaded
   std::future<void> started;
 
   // Node started in `dir` (--no-opt: see Spawn); false when it could not be.
@@ -220,8 +220,11 @@ struct VegaRenderer::State {
     // specs is too short for its compiled code to pay back: node takes about
     // a third less CPU time for the photo session's figures (which share the
     // machine with the diagnosis), and writes the same SVG bytes.
+    // --single-threaded: no helper threads for V8's garbage collector and
+    // compiler, which on a machine whose cores are busy cost more than they
+    // save (the bench's figures: 0.24 instead of 0.27 s of CPU).
     std::vector<std::string> argv = {node};
-    if (no_opt) argv.push_back("--no-opt");
+    if (no_opt) argv.insert(argv.end(), {"--no-opt", "--single-threaded"});
     argv.insert(argv.end(), {(dir / "render.js").string(), dir.string()});
     pid = Start(argv, fds[1], dir / "log.txt");
     ::close(fds[1]);
@@ -327,8 +330,8 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
   for (size_t i = 0; i < specs.size(); ++i) requests += std::to_string(i) + "\n";
   size_t answered = 0;
   for (int attempt = 0; attempt < 2 && answered == 0; ++attempt) {
-    // A node that does not know --no-opt ends at once: it is asked again
-    // without it.
+    // A node that does not know the flags ends at once: it is asked again
+    // without them.
     if (attempt == 1) {
       s.Stop();
       if (s.no_opt) {

@@ -116,13 +116,21 @@ double SmallestRowStep(const std::vector<cv::Point2f>& grid, int nc) {
 // (i, j) of level l + 1 is centred at (2 i + 0.5, 2 j + 0.5) of level l),
 // down to the last whose shorter side is at least kCoarsestSide pixels.
 // OpenCV's saddle-point search (findChessboardCornersSB) costs time in
-// proportion to the pixels it is given (125 ns a pixel, 3 s on a 6000 x
-// 4000 photo), and it finds boards whose squares are 6 px or more: a board
-// that fills a good part of a photo is found in a small copy of it, for a
-// sixteenth of the time at 1/4 size. Every board of the real photos of
-// tests/detect/point_boards_test.cc and tests/real_photos is found at its
-// search's first level.
-constexpr int kCoarsestSide = 240;
+// proportion to the pixels it is given (about 100 ns a pixel: 3 s on a 6000
+// x 4000 photo) and finds boards whose squares are 5 px or more, so a board
+// that fills a good part of the photo is found in a small copy of it: a
+// quarter of the time at half the size. The 61 real photos of OpenCV's,
+// BoofCV's and ValidationBoof's chessboard sets (640 x 480, squares of 28
+// to 62 px) are all found in their copies of 160 x 120, and give the same
+// corners as a search of the photo itself (below).
+constexpr int kCoarsestSide = 120;
+
+// OpenCV's quick check (checkChessboard: the classic detector's
+// CALIB_CB_FAST_CHECK, quads of the right count at a few thresholds) sees
+// boards whose squares are about kCheckSquarePx or more (its quads are at
+// least 5 px across after an erosion; measured on boards turned by 7
+// degrees, blurred by 0.7 px: found at 14 px, not at 12 px).
+constexpr double kCheckSquarePx = 14;
 
 std::vector<cv::Mat> SearchLevels(const cv::Mat& gray) {
   std::vector<cv::Mat> levels = {gray};
@@ -133,6 +141,27 @@ std::vector<cv::Mat> SearchLevels(const cv::Mat& gray) {
     levels.push_back(half);
   }
   return levels;
+}
+
+// The coarsest level from the coarsest down to `finest` at which the quick
+// check sees a board, or -1. Most photos of a session show no chessboard
+// (another board, or this one out of view), and there it answers in
+// milliseconds where the search would run through every level. With it the
+// 50 rendered photos of three ChArUco boards and a chessboard are detected
+// in 2.7 s instead of 20.2 s (Release, RenderedPointBoards' own output),
+// every visible corner still found. It keeps every board of OpenCV's 26
+// sample photos of a real camera
+// (PointBoards.QuickCheckKeepsEveryChessboardOfOpenCvsSamplePhotos). A
+// board whose squares are too small for it at a coarse level is seen at a
+// finer one; level 0, the photo itself, is the check of the whole photo.
+// At coarse levels it costs a fraction of the photo's check: on a noisy
+// 6000 x 4000 photo the check of the photo itself took 100 ms, of its half
+// size 5 ms (fewer specks of noise cross its thresholds).
+int QuickCheck(const std::vector<cv::Mat>& levels, cv::Size size, int finest) {
+  for (int l = static_cast<int>(levels.size()) - 1; l >= finest; --l) {
+    if (cv::checkChessboard(levels[l], size)) return l;
+  }
+  return -1;
 }
 
 // One level: the exhaustive search first; on real photos it misses a few
@@ -153,18 +182,23 @@ bool FindGridAt(const cv::Mat& level, cv::Size size, std::vector<cv::Point2f>* g
   return cv::findChessboardCornersSB(level, size, *grid, cv::CALIB_CB_NORMALIZE_IMAGE);
 }
 
-// The grid of a whole chessboard of `size` inner corners, searched from the
-// coarsest level to the finest (the first level that holds it wins), then
-// taken down level by level to the photo, refined to the saddles at each
-// (RefineSaddles, its window a quarter of that level's square): the search's
-// corners are up to 1.5 px of their level off the saddles, so a start from
-// level l is within the window of level l - 1 once refined at level l. The
-// saddles of the photo are those a search at full size and cornerSubPix
-// give: cornerSubPix converges to the same point from either start with the
-// same window. False when no level holds the board.
-bool FindChessboardGrid(const std::vector<cv::Mat>& levels, cv::Size size,
+// The grid of a whole chessboard of `size` inner corners when the quick
+// check saw one down to level `finest`: searched from level `checked` + 1
+// (the search sees squares of a third of the size the check needs; coarser
+// levels hold none it could find) down to the photo (the first level that
+// holds it wins), then taken down level by level, refined to the saddles at
+// each (RefineSaddles, its window a quarter of that level's square): the
+// search's corners are up to 1.5 px of their level off the saddles, so a
+// start from level l is within the window of level l - 1 once refined at
+// level l. At the photo they are the saddles a search of the photo itself
+// and cornerSubPix give, cornerSubPix converging to the same point from
+// either start. False when no level holds the board.
+bool FindChessboardGrid(const std::vector<cv::Mat>& levels, cv::Size size, int finest,
                         std::vector<cv::Point2f>* grid) {
-  for (int l = static_cast<int>(levels.size()) - 1; l >= 0; --l) {
+  grid->clear();
+  const int checked = QuickCheck(levels, size, finest);
+  if (checked < 0) return false;
+  for (int l = std::min(checked + 1, static_cast<int>(levels.size()) - 1); l >= 0; --l) {
     if (!FindGridAt(levels[l], size, grid) ||
         static_cast<int>(grid->size()) != size.width * size.height) {
       continue;
@@ -185,30 +219,23 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
   const int nc = board.cols - 1, nr = board.rows - 1;
   PointBoardDetection out;
   const cv::Size size(nc, nr);
-  // Most photos of a session show no chessboard (another board, or this one
-  // out of view), and there the search runs through every level. OpenCV's
-  // quick check (the classic detector's CALIB_CB_FAST_CHECK: quads of the
-  // right count at a few thresholds) answers in milliseconds. With it the
-  // 50 rendered photos of three ChArUco boards and a chessboard are
-  // detected in 2.7 s instead of 20.2 s (Release, RenderedPointBoards'
-  // own output), every visible corner still found. It keeps every board of
-  // OpenCV's 26 sample photos of a real camera
-  // (PointBoards.QuickCheckKeepsEveryChessboardOfOpenCvsSamplePhotos).
-  if (!cv::checkChessboard(gray, size)) return out;
   std::vector<cv::Point2f> grid;
-  if (!FindChessboardGrid(SearchLevels(gray), size, &grid)) return out;
+  if (!FindChessboardGrid(SearchLevels(gray), size, 0, &grid)) return out;
   // A second copy: the found board masked out (its hull, grown by one and a
   // half squares, filled with the photo's mean grey) and the photo searched
-  // again. The quick check comes first, as for the first board: a second
-  // whole board passes it as the first did, and a photo with one board
-  // passes it no more once the board is masked (none of the 61 real photos
-  // of the tests), so the second search costs only the check.
+  // again, as for the first board, for copies whose squares are at least a
+  // quarter of the found one's (printed alike and up to 4 times as far
+  // away, or a reflection): the quick check runs down to the level where
+  // such squares are kCheckSquarePx. A photo with one board passes no check
+  // once it is masked (none of the 61 real photos above), so the second
+  // search costs only the checks, a fraction of the photo's own where the
+  // board is large in a large photo.
+  const double step = SmallestRowStep(grid, nc);
   {
     std::vector<cv::Point2f> hull_f;
     cv::convexHull(grid, hull_f);
     const cv::Point2f centre = std::accumulate(hull_f.begin(), hull_f.end(), cv::Point2f(0, 0)) *
                                (1.0f / static_cast<float>(hull_f.size()));
-    const double step = SmallestRowStep(grid, nc);
     std::vector<cv::Point> hull;
     for (const cv::Point2f& p : hull_f) {
       const cv::Point2f out_dir = p - centre;
@@ -217,9 +244,9 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
     }
     cv::Mat masked = gray.clone();
     cv::fillConvexPoly(masked, hull, cv::Scalar(cv::mean(gray)[0]));
+    const int finest = std::max(0, static_cast<int>(std::floor(std::log2(step / 4 / kCheckSquarePx))));
     std::vector<cv::Point2f> second;
-    if (cv::checkChessboard(masked, size) &&
-        FindChessboardGrid(SearchLevels(masked), size, &second)) {
+    if (FindChessboardGrid(SearchLevels(masked), size, finest, &second)) {
       out.duplicated = true;
       return out;
     }
