@@ -1130,7 +1130,10 @@ json HeatMapSpec(const std::string& title, const std::string& subtitle, int widt
        {"y", Field("v", "v0")},
        {"y2", Field("v", "v1")},
        {"fill", {{"signal", "datum.value === null ? '#bbbbbb' : scale('colour', datum.value)"}}},
-       {"opacity", {{"signal", "datum.inside ? 1 : 0.55"}}},
+       // fillOpacity, not opacity (the same picture: the cells have no
+       // stroke): an element's opacity makes librsvg draw it on a layer of
+       // its own, a third of the PNG's time with a few hundred cells.
+       {"fillOpacity", {{"signal", "datum.inside ? 1 : 0.55"}}},
        {"tooltip", tip}}));
   spec["data"].push_back({{"name", "outside"},
                           {"source", "cells"},
