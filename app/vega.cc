@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <future>
@@ -319,15 +320,21 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
     *note = "figures: no PNG files written: " + s.failure;
     return {};
   }
+  std::vector<std::pair<size_t, size_t>> by_size;  // spec's bytes, index
   for (size_t i = 0; i < specs.size(); ++i) {
-    std::ofstream(s.dir / ("spec_" + std::to_string(i) + ".json"), std::ios::binary)
-        << specs[i].dump();
+    const std::string text = specs[i].dump();
+    std::ofstream(s.dir / ("spec_" + std::to_string(i) + ".json"), std::ios::binary) << text;
+    by_size.emplace_back(text.size(), i);
   }
+  // The largest specs first: their SVG files are the largest too, and the
+  // PNG of the last SVG, drawn after node is done, is then a small one.
+  std::stable_sort(by_size.begin(), by_size.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
   const SvgRasterizer& raster = SvgRasterizer::Get();
   std::vector<RenderedFigure> out(specs.size());
   std::vector<std::future<std::string>> png(specs.size());  // each PNG's error, "" when drawn
   std::string requests;
-  for (size_t i = 0; i < specs.size(); ++i) requests += std::to_string(i) + "\n";
+  for (const auto& [bytes, i] : by_size) requests += std::to_string(i) + "\n";
   size_t answered = 0;
   for (int attempt = 0; attempt < 2 && answered == 0; ++attempt) {
     // A node that does not know the flags ends at once: it is asked again
