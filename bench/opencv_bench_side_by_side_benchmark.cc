@@ -105,14 +105,12 @@ const BenchPhotos& Photos() {
   return photos;
 }
 
-// Sets OpenCV's thread count for the lifetime of the object.
-class CvThreads {
- public:
-  explicit CvThreads(int n) : previous_(cv::getNumThreads()) { cv::setNumThreads(n); }
-  ~CvThreads() { cv::setNumThreads(previous_); }
-
- private:
-  int previous_;
+// OpenCV's thread count for one benchmark: set at its start, the
+// previous one back at its end.
+struct CvThreadCount {
+  explicit CvThreadCount(int n) : previous(cv::getNumThreads()) { cv::setNumThreads(n); }
+  ~CvThreadCount() { cv::setNumThreads(previous); }
+  int previous;
 };
 
 struct OpenCvRun {
@@ -172,7 +170,7 @@ OpenCvRun OpenCvSide(const BenchPhotos& p, bool parallel) {
 void BM_BenchConfigSideBySide(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
   const BenchPhotos& photos = Photos();
-  const CvThreads cv_threads(threads);
+  const CvThreadCount cv_threads(threads);
   const TempDir tmp("rtscalib-bench-side-by-side");
   app::RunArgs args;
   args.config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/bench.yaml";
@@ -343,6 +341,12 @@ void SetPixelCounters(benchmark::State& state, int w, double seconds) {
   state.counters["ns/px"] = 1e9 * seconds / static_cast<double>(state.iterations()) / pixels;
 }
 
+// The widths of the scene's photos, 750 to 6000 px.
+void LargePhotoWidths(benchmark::internal::Benchmark* b) {
+  b->ArgName("width")->Unit(benchmark::kMillisecond)->UseRealTime();
+  for (int w = 750; w <= kLargestWidth; w *= 2) b->Arg(w);
+}
+
 void BM_LargePhotoDetect(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0));
   const LargePhotos& large = Large();
@@ -353,7 +357,7 @@ void BM_LargePhotoDetect(benchmark::State& state) {
   detect::PhotoDetectionOptions options;
   options.jobs = 1;
   options.progress = false;
-  const CvThreads cv_threads(1);
+  const CvThreadCount cv_threads(1);
   size_t corners = 0;
   const auto start = Clock::now();
   for (auto _ : state) {
@@ -363,19 +367,12 @@ void BM_LargePhotoDetect(benchmark::State& state) {
   SetPixelCounters(state, w, Seconds(start));
   state.counters["corners"] = static_cast<double>(corners);
 }
-BENCHMARK(BM_LargePhotoDetect)
-    ->ArgName("width")
-    ->Arg(750)
-    ->Arg(1500)
-    ->Arg(3000)
-    ->Arg(6000)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+BENCHMARK(BM_LargePhotoDetect)->Apply(LargePhotoWidths);
 
 void BM_LargePhotoOpenCv(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0));
   const std::string photo = Large().photo(w);
-  const CvThreads cv_threads(1);
+  const CvThreadCount cv_threads(1);
   size_t corners = 0;
   const auto start = Clock::now();
   for (auto _ : state) {
@@ -393,14 +390,7 @@ void BM_LargePhotoOpenCv(benchmark::State& state) {
   SetPixelCounters(state, w, Seconds(start));
   state.counters["corners"] = static_cast<double>(corners);
 }
-BENCHMARK(BM_LargePhotoOpenCv)
-    ->ArgName("width")
-    ->Arg(750)
-    ->Arg(1500)
-    ->Arg(3000)
-    ->Arg(6000)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+BENCHMARK(BM_LargePhotoOpenCv)->Apply(LargePhotoWidths);
 
 }  // namespace
 }  // namespace rtscalib::bench
