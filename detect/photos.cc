@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -180,6 +181,10 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
   const auto start = std::chrono::steady_clock::now();
 
   std::atomic<int> next{0}, finished{0};
+  // Wakes the waiting thread when a photo is done (a timed wait would end
+  // the detection up to its period late).
+  std::mutex progress_mutex;
+  std::condition_variable progress_cv;
   std::atomic<bool> stop{false};
   std::mutex mutex;  // guards size_of_zoom, first_error*
   std::map<int, std::pair<int, int>> size_of_zoom;
@@ -239,7 +244,11 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
         }
         stop = true;
       }
-      ++finished;
+      {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        ++finished;
+      }
+      progress_cv.notify_one();
     }
   };
   {
@@ -249,7 +258,10 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
     // Progress on long runs: a line every 5 s once a run has lasted 5 s.
     auto last = start;
     while (finished < n && !stop) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      {
+        std::unique_lock<std::mutex> lock(progress_mutex);
+        progress_cv.wait_for(lock, std::chrono::seconds(1), [&] { return finished >= n || stop; });
+      }
       const auto now = std::chrono::steady_clock::now();
       if (options.progress && now - last >= std::chrono::seconds(5)) {
         last = now;
