@@ -48,18 +48,30 @@ int RunDetect(const DetectArgs& args) {
       summary_path,
       [&](const std::string& tmp) { detect::WriteDetectionSummary(tmp, shots, result); }, existing);
 
-  int tags = 0, corners = 0, unrefined = 0, not_on_boards = 0, duplicates = 0, empty = 0;
+  int tags = 0, points = 0, corners = 0, unrefined = 0, not_on_boards = 0, duplicates = 0;
+  int empty = 0, refined_corners = 0, pattern_refined = 0, from_neighbours = 0;
   double shift_sq = 0, shift_max = 0;
-  int refined_corners = 0, pattern_refined = 0;
-  std::printf("%-24s %11s %9s %8s %10s\n", "shot", "size", "tags", "corners", "shift_rms");
+  bool tag_boards = false;
+  TargetScene point_boards;
+  for (const TagBoard& b : targets.boards) {
+    if (b.IsPointBoard()) point_boards.boards.push_back(b);
+    tag_boards |= !b.IsPointBoard();
+  }
+  // The shift against libapriltag's corners only where it can find tags.
+  std::printf("%-24s %11s %9s %8s%s\n", "shot", "size", "found", "corners",
+              tag_boards ? "  shift_rms" : "");
   for (size_t i = 0; i < shots.shots.size(); ++i) {
     const detect::PhotoDetection& p = result.photos[i];
     char size[32], found[32];
     std::snprintf(size, sizeof size, "%dx%d", p.width, p.height);
     std::snprintf(found, sizeof found, "%zu/%d", p.tags.size(), p.tags_of_boards);
-    std::printf("%-24s %11s %9s %8zu %9.3f\n", shots.shots[i].shot.c_str(), size, found,
-                static_cast<size_t>(p.corners), p.shift_rms_px);
-    tags += static_cast<int>(p.tags.size());
+    std::printf("%-24s %11s %9s %8zu", shots.shots[i].shot.c_str(), size, found,
+                static_cast<size_t>(p.corners));
+    if (tag_boards) std::printf(" %10.3f", p.shift_rms_px);
+    std::printf("\n");
+    for (const detect::DetectedTag& t : p.tags) {
+      ++(targets.boards[t.board].IsPointBoard() ? points : tags);
+    }
     corners += p.corners;
     unrefined += p.unrefined;
     not_on_boards += p.not_on_boards;
@@ -69,15 +81,24 @@ int RunDetect(const DetectArgs& args) {
     shift_max = std::max(shift_max, p.shift_max_px);
     refined_corners += p.refined_corners;
     pattern_refined += p.pattern_refined;
+    from_neighbours += p.from_neighbours;
   }
   const int n = static_cast<int>(shots.shots.size());
-  std::printf(
-      "detect: %d photos, %d tags, %d corners (%d refined; %d tags by the pattern fit of small "
-      "tags); dropped: %d unrefined, %d not on a board, %d duplicated; %d photos without tags\n",
-      n, tags, corners, refined_corners, pattern_refined, unrefined, not_on_boards, duplicates,
-      empty);
-  std::printf("detect: refined vs libapriltag corners: RMS %.3f px, max %.3f px\n",
-              refined_corners > 0 ? std::sqrt(shift_sq / refined_corners) : 0.0, shift_max);
+  std::printf("detect: %d photos (%s), %d corners", n, detect::TargetsInWords(targets).c_str(),
+              corners);
+  if (tag_boards) {
+    std::printf("; %d tags (%d by the pattern fit of small tags, %d grown from their neighbours); "
+                "dropped: %d unrefined, %d not on a board, %d duplicated",
+                tags, pattern_refined, from_neighbours, unrefined, not_on_boards, duplicates);
+  }
+  if (!point_boards.boards.empty()) {
+    std::printf("; %d %s", points, detect::TargetsInWords(point_boards).c_str());
+  }
+  std::printf("; %d photos without a target\n", empty);
+  if (refined_corners > 0) {
+    std::printf("detect: refined vs libapriltag corners: RMS %.3f px, max %.3f px\n",
+                std::sqrt(shift_sq / refined_corners), shift_max);
+  }
   std::printf("detect: %.2f s, %.1f images/s with %d job(s)\n", result.seconds,
               result.seconds > 0 ? n / result.seconds : 0.0, args.jobs);
   for (const std::string& w : result.warnings) std::cerr << "detect: warning: " << w << "\n";

@@ -26,6 +26,8 @@ struct PhotoSessionSummary {
   bool ran = false;
   std::string shots_path, targets_path;
   int boards_with_pose = 0, boards_without_pose = 0;
+  bool tag_boards = false;  // any AprilTag board
+  std::string point_words;  // the ChArUco and chessboards' targets in words ("chessboard corners"), or ""
   struct Photo {
     int line = 0;
     std::string shot, image;
@@ -35,15 +37,27 @@ struct PhotoSessionSummary {
     double shift_rms_px = 0;  // refined vs libapriltag corners (the detection's own check)
   };
   std::vector<Photo> photos;  // shots.csv order
+  // Targets found: tags and the inner corners of ChArUco and chessboards
+  // (`apriltags` + `point_corners`); `corners`: the points they give (4 per tag).
   int tags = 0, corners = 0;
-  int photos_without_tags = 0;
+  int apriltags = 0, point_corners = 0;
+  int from_neighbours = 0;  // tags grown from their neighbours (detect/board_growth.h)
+  std::string targets_in_words;  // "AprilTags", "chessboard corners", ... (detect/photos.h)
+  int photos_without_tags = 0;  // photos without any target
   int unrefined = 0, not_on_boards = 0, duplicates = 0;  // dropped detections
-  // The detection's own check over all photos: refined vs libapriltag corners [px].
+  // The detection's own check over the tags libapriltag found: refined vs
+  // libapriltag corners [px]; `refined_corners` counts them (0: no such check).
   double shift_rms_px = 0, shift_max_px = 0;
+  int refined_corners = 0;
   double seconds = 0, images_per_second = 0;
   int jobs = 1;
   std::vector<std::string> warnings;  // e.g. "shots.csv:7: image a.png: no target of the boards found ..."
 };
+
+// The detection's summary line for the log: what was found, in the words of
+// the boards (tags, inner corners), and the check of the refined corners
+// against libapriltag's only where libapriltag found tags.
+std::string PhotoSessionLine(const PhotoSessionSummary& summary);
 
 // Reads shots.csv and targets.yaml, detects every photo with `jobs` threads
 // and appends the corners to obs->pixels (obs->pixels_source = the shots

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <iomanip>
 #include <map>
 #include <sstream>
@@ -183,9 +185,55 @@ json StatsJson(const ErrorStats& s) {
       {"mean_m", s.mean_m}, {"std_m", s.std_m}, {"rms_m", s.rms_m}, {"max_m", s.max_m}, {"n", s.n}};
 }
 
+namespace {
+
+namespace fs = std::filesystem;
+
+// A complete run's report.json, or throws. `keep_history`: with its
+// "history" (the runs before it, as HistoryJson listed them); else only
+// "model" and "final".
+json ReadRunReport(const HistoryEntry& h, bool keep_history) {
+  std::ifstream in(h.dir + "/report.json", std::ios::binary);
+  if (!in) throw std::runtime_error("no report.json");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return json::parse(text, [keep_history](int depth, json::parse_event_t event, const json& parsed) {
+    return depth != 1 || event != json::parse_event_t::key || parsed == "model" ||
+           parsed == "final" || (keep_history && parsed == "history");
+  });
+}
+
+}  // namespace
+
 json HistoryJson(const OutputFolder& out) {
+  const std::vector<HistoryEntry>& earlier = out.earlier();
+  // The numbers of complete runs as the latest complete run's report.json
+  // lists them: each report.json holds the history of the runs before it,
+  // so reading every run's report would read the square of the folder's
+  // runs (a folder of 150 runs: 12 MB of JSON for each new run). A run
+  // that list does not hold (or holds as not complete), or whose report.json
+  // is gone, is read itself.
+  std::map<std::string, json> listed;
+  for (auto h = earlier.rbegin(); h != earlier.rend(); ++h) {
+    if (h->state != RunState::kComplete) continue;
+    try {
+      const json r = ReadRunReport(*h, true);
+      json& own = listed[h->name];
+      if (r.contains("model")) own["kinematics"] = r["model"].value("kinematics", "");
+      if (r.contains("model")) own["effects"] = r["model"].value("effects", json::array());
+      if (r.contains("final")) own["final"] = r["final"];
+      for (const json& e : r.value("history", json::array())) {
+        if (e.is_object() && e.value("status", "") == RunStateName(RunState::kComplete) &&
+            e.contains("run") && e["run"].is_string()) {
+          listed[e["run"].get<std::string>()] = e;
+        }
+      }
+    } catch (const std::exception&) {
+      // Read run by run below.
+    }
+    break;
+  }
   json runs = json::array();
-  for (const HistoryEntry& h : out.earlier()) {
+  for (const HistoryEntry& h : earlier) {
     json entry = {{"run", h.name}, {"status", RunStateName(h.state)}};
     if (!h.reason.empty()) entry["reason"] = h.reason;
     // Only a complete run's numbers are results; a killed or failed run's
@@ -194,11 +242,18 @@ json HistoryJson(const OutputFolder& out) {
       runs.push_back(entry);
       continue;
     }
-    std::ifstream in(h.dir + "/report.json");
+    const auto it = listed.find(h.name);
+    std::error_code ec;
+    if (it != listed.end() && fs::exists(h.dir + "/report.json", ec)) {
+      for (const char* key : {"kinematics", "effects", "final"}) {
+        if (it->second.contains(key)) entry[key] = it->second[key];
+      }
+      runs.push_back(entry);
+      continue;
+    }
     json r;
     try {
-      if (!in) throw std::runtime_error("no report.json");
-      in >> r;
+      r = ReadRunReport(h, false);
     } catch (const std::exception&) {
       entry["status"] = RunStateName(RunState::kIncomplete);
       entry["reason"] = "report.json missing or unreadable";
@@ -354,6 +409,9 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
                    {"photos", static_cast<int>(p.photos.size())},
                    {"photos_without_tags", p.photos_without_tags},
                    {"tags", p.tags},
+                   {"apriltags", p.apriltags},
+                   {"point_corners", p.point_corners},
+                   {"from_neighbours", p.from_neighbours},
                    {"corners", p.corners},
                    {"dropped",
                     {{"unrefined", p.unrefined},
@@ -785,20 +843,23 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   if (r.photos.ran) {
     const PhotoSessionSummary& p = r.photos;
     o << "Photos (" << p.shots_path << ", boards " << p.targets_path << ": " << p.boards_with_pose
-      << " with pose, " << p.boards_without_pose << " without): " << p.photos.size() << " photos, "
-      << p.tags << " tags, " << p.corners << " corners, " << p.photos_without_tags
-      << " photos without tags; dropped " << p.unrefined << " unrefined, " << p.not_on_boards
-      << " not on a board, " << p.duplicates << " duplicated; detection check (refined vs "
-      << "libapriltag corners) RMS " << Fmt("%.3f", p.shift_rms_px) << " px, max "
-      << Fmt("%.3f", p.shift_max_px) << " px; " << Fmt("%.1f", p.images_per_second)
-      << " images/s with " << p.jobs << " job(s)\n";
-    o << "  line  shot                      zoom face  size         tags     shift_rms\n";
+      << " with pose, " << p.boards_without_pose << " without): " << PhotoSessionLine(p);
+    if (p.tag_boards) {
+      o << "; tags dropped: " << p.unrefined << " unrefined, " << p.not_on_boards
+        << " not on a board, " << p.duplicates << " duplicated";
+    }
+    o << "; " << p.jobs << " job(s)\n";
+    // The shift against libapriltag's corners only where it found tags.
+    o << "  line  shot                      zoom face  size         found"
+      << (p.tag_boards ? "    shift_rms" : "") << "\n";
     for (const PhotoSessionSummary::Photo& ph : p.photos) {
       char row[256];
-      std::snprintf(row, sizeof row, "  %4d  %-24s  %4d %4d  %5dx%-5d  %3d/%-3d  %.3f px\n",
-                    ph.line, ph.shot.c_str(), ph.zoom, ph.face, ph.width, ph.height, ph.tags,
-                    ph.tags_of_boards, ph.shift_rms_px);
+      std::snprintf(row, sizeof row, "  %4d  %-24s  %4d %4d  %5dx%-5d  %3d/%-3d", ph.line,
+                    ph.shot.c_str(), ph.zoom, ph.face, ph.width, ph.height, ph.tags,
+                    ph.tags_of_boards);
       o << row;
+      if (p.tag_boards) o << Fmt("  %.3f px", ph.shift_rms_px);
+      o << "\n";
     }
     for (const std::string& w : p.warnings) o << "  WARNING: " << w << "\n";
     o << "\n";

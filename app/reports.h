@@ -12,9 +12,8 @@
 
 namespace rtscalib::app {
 
-// `history`: HistoryJson(out), read once per run (it parses every earlier
-// run's report.json, so its cost grows with the folder's history) and
-// shared with the figures.
+// `history`: HistoryJson(out), read once per run and shared with the
+// figures.
 nlohmann::json ReportJson(const RunConfig& config, const PipelineResult& result,
                           const OutputFolder& out, const nlohmann::json& history);
 std::string ReportText(const RunConfig& config, const PipelineResult& result);
@@ -34,7 +33,9 @@ std::string FitSigmasText(const FitSummary& fit, bool records = true);
 std::string BoardsText(const InstrumentModel& model);
 
 // Key figures of earlier runs, read back from their report.json (for the
-// ladder of errors across runs).
+// ladder of errors across runs): the latest complete run's report.json
+// lists the runs before it, so only the runs it does not list are read
+// one by one.
 // Every earlier entry has "run" and "status" (RunStateName; "reason" when not
 // complete); only complete runs carry "kinematics", "effects" and "final".
 nlohmann::json HistoryJson(const OutputFolder& out);

@@ -1,8 +1,11 @@
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <iostream>
+#include <optional>
 
 #include "app/commands.h"
 #include "app/diagnosis_report.h"
@@ -12,6 +15,7 @@
 #include "app/progress.h"
 #include "app/report_html.h"
 #include "app/reports.h"
+#include "app/vega.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/fit/parameter_layout.h"
 #include "libcalib/io/config.h"
@@ -30,29 +34,35 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   if (args.diagnose) config.calibration.diagnose.enabled = true;
   if (args.diagnose_auto) config.calibration.diagnose.auto_add = true;
   // The figures need the calibrated model, its residuals and uncertainty
-  // maps but not its diagnosis: they are drawn (a node process, librsvg in
-  // this one) while the diagnosis runs. report.json lists them with their
-  // key numbers.
+  // maps but not its diagnosis. Their renderer (node, librsvg: app/vega.h)
+  // starts with the calibration; the specs are made as soon as the model is
+  // fitted and drawn on threads of their own while the diagnosis runs and
+  // the model and the reports are written. report.json and report.html,
+  // which list the figure files, come last: the run ends once its figures
+  // are drawn, and says how long it waited for them.
+  using Clock = std::chrono::steady_clock;
   std::vector<Figure> figures;
   std::vector<std::vector<std::string>> figure_files;
   std::string figures_note;
-  double figures_seconds = 0;
+  Clock::time_point figures_start, figures_end;
   nlohmann::json history;  // earlier runs, for the figures and report.json
-  const PipelineResult result =
-      RunPipeline(settings, out.run_dir(), &progress, [&](const PipelineResult& fitted) {
-        const auto start = std::chrono::steady_clock::now();
+  std::optional<VegaRenderer> renderer;
+  // Declared after everything the drawing thread uses: destroyed (joined)
+  // before them, also when an exception leaves this function.
+  std::future<void> drawing;
+  const PipelineResult result = RunPipeline(
+      settings, out.run_dir(), &progress,
+      [&](const PipelineResult& fitted) {
+        figures_start = Clock::now();
         history = HistoryJson(out);
         figures = MakeFigures(fitted, history);
-        figure_files = WriteFigureFiles(figures, out.RunFile("figures"), &figures_note);
-        figures_seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      });
-  char drawn[96];
-  std::snprintf(drawn, sizeof drawn, "drew %zu figures%s (%.2f s)", figures.size(),
-                DiagnosisPending(config.calibration) ? " while the diagnosis ran" : "",
-                figures_seconds);
-  progress.Note(drawn);
-  if (!figures_note.empty()) progress.Note(figures_note);
+        drawing = std::async(std::launch::async, [&] {
+          figure_files = WriteFigureFiles(figures, out.RunFile("figures"), &figures_note,
+                                          renderer ? &*renderer : nullptr);
+          figures_end = Clock::now();
+        });
+      },
+      [&] { renderer.emplace(); });
 
   progress.Step("writing the model and the reports");
   if (result.simulated) {
@@ -103,14 +113,27 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
     progress.Note("no full parameter covariance (the fit computed none): no covariance.yaml");
   }
   nlohmann::json report = ReportJson(config, result, out, history);
-  report["figures"] = FiguresJson(figures, figure_files, figures_note);
   out.Write("residuals.csv", ResidualsCsv(result));
-  out.Write("report.json", report.dump(2) + "\n");
-  out.Write("report.html", ReportHtml(config, result, report, figures));
   const std::string text = ReportText(config, result) +
                            HistoryText(report.value("history", nlohmann::json::array())) + "\n" +
                            DiagnosisText(result.calibration);
   out.Write("report.txt", text);
+  if (drawing.valid()) {
+    const Clock::time_point waited = Clock::now();
+    drawing.get();
+    char drawn[160];
+    std::snprintf(drawn, sizeof drawn,
+                  "drew %zu figures in %.2f s, beside the diagnosis and the reports; waited "
+                  "%.2f s for them",
+                  figures.size(),
+                  std::chrono::duration<double>(figures_end - figures_start).count(),
+                  std::chrono::duration<double>(std::max(waited, figures_end) - waited).count());
+    progress.Note(drawn);
+    if (!figures_note.empty()) progress.Note(figures_note);
+  }
+  report["figures"] = FiguresJson(figures, figure_files, figures_note);
+  out.Write("report.json", report.dump(2) + "\n");
+  out.Write("report.html", ReportHtml(config, result, report, figures));
   out.MarkComplete();
   const std::vector<std::string> kept = out.Publish();
   progress.Done();

@@ -144,11 +144,14 @@ bool SvgRasterizer::ToPng(const std::string& svg, std::vector<unsigned char>* pn
                      static_cast<size_t>(a.image_surface_get_stride(owned.surface)));
   cv::Mat bgr;
   cv::cvtColor(bgrx, bgr, cv::COLOR_BGRA2BGR);
-  // zlib's fastest level: files about as large as rsvg-convert's (zlib's
-  // default level), written in less time. OpenCV's own default (level 1
-  // with run-length matching only) is faster still; the photo session's
-  // figures then took 1.7 times the bytes.
-  if (!cv::imencode(".png", bgr, *png, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+  // OpenCV's fast PNG path (no compression level given: every row filtered
+  // with "Sub", zlib's fastest level) with zlib's default matching instead of
+  // OpenCV's run-length only: the bench's 7 figures in 35 ms and 1.06 MB,
+  // against 76 ms and 0.89 MB at level 1 with libpng choosing each row's
+  // filter (most of that time), and 34 ms and 1.52 MB with run-length
+  // matching.
+  if (!cv::imencode(".png", bgr, *png,
+                    {cv::IMWRITE_PNG_STRATEGY, cv::IMWRITE_PNG_STRATEGY_DEFAULT})) {
     *error = "OpenCV cannot encode the PNG";
     return false;
   }

@@ -14,12 +14,14 @@
 // the browser (inlined in report.html) and in node (the PNG files).
 //
 // PNG files: node runs the runtime headless (renderer "none", View.toSVG) on
-// every spec of a folder in one process, librsvg draws each SVG in this
-// process (svg_raster.h). Without node, the Vega modules or librsvg, the
-// run still writes the specs and report.html (which draws them in the
-// browser) and says which program is missing; it never fails for it.
+// every spec in one process, librsvg draws each SVG in this process
+// (svg_raster.h) while node draws the next. Without node, the Vega modules
+// or librsvg, the run still writes the specs and report.html (which draws
+// them in the browser) and says which program is missing; it never fails
+// for it.
 #pragma once
 
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -40,8 +42,34 @@ struct RenderedFigure {
   std::string error;
 };
 
-// SVG and PNG of each spec (in order), or an empty vector and *note saying
-// why not (a missing program, or the renderer's own error message).
+// The SVG and PNG drawing of figures, started before the figures exist.
+// Node's start and its reading of the Vega runtime (about 75 ms of CPU,
+// whatever the figures), and the opening of librsvg, happen on a thread of
+// their own from the constructor on: a run starts its renderer when the
+// calibration starts, which keeps one core busy, and Draw() finds node
+// waiting for specs. Node then draws one SVG after the other (its start is
+// paid once per run) and this process draws each one's PNG on a thread of
+// its own as soon as node has written it, while node draws the next.
+class VegaRenderer {
+ public:
+  VegaRenderer();
+  // Ends node (if Draw did not) and removes its temporary folder.
+  ~VegaRenderer();
+  VegaRenderer(const VegaRenderer&) = delete;
+  VegaRenderer& operator=(const VegaRenderer&) = delete;
+
+  // SVG and PNG of each spec (in order), or an empty vector and *note saying
+  // why not (a missing program, or the renderer's own error message). Once
+  // per renderer.
+  std::vector<RenderedFigure> Draw(const std::vector<nlohmann::json>& specs, std::string* note);
+
+  struct State;  // vega.cc: node's process, its folder, what is missing
+
+ private:
+  std::unique_ptr<State> state_;
+};
+
+// One VegaRenderer's Draw (node started now).
 std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& specs,
                                           std::string* note);
 

@@ -24,10 +24,8 @@
 //   build/bench/photo_session_benchmark --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
-#include <fcntl.h>
 #include <unistd.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
@@ -37,6 +35,7 @@
 #include "app/commands.h"
 #include "app/pipeline.h"
 #include "app/progress.h"
+#include "bench/quiet_stdout.h"
 #include "detect/photos.h"
 #include "libcalib/io/shots.h"
 #include "libcalib/io/targets_io.h"
@@ -47,25 +46,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// stdout to /dev/null for the lifetime of the object: the run prints its
-// report there, and the benchmark's own table should stay readable.
-class QuietStdout {
- public:
-  QuietStdout() : saved_(::dup(STDOUT_FILENO)) {
-    std::fflush(stdout);
-    const int null = ::open("/dev/null", O_WRONLY);
-    ::dup2(null, STDOUT_FILENO);
-    ::close(null);
-  }
-  ~QuietStdout() {
-    std::fflush(stdout);
-    ::dup2(saved_, STDOUT_FILENO);
-    ::close(saved_);
-  }
-
- private:
-  int saved_;
-};
+using bench::QuietStdout;
 
 // <tmp>/configs/{zoom3,photos}.yaml copied from the source tree, and the
 // demo's output in <tmp>/out/zoom3 (the configs' relative paths hold).

@@ -42,6 +42,40 @@ double Median(std::vector<double>& v) {
   return v[v.size() / 2];
 }
 
+// A slowly changing level along `values` (one per strip, in strip order):
+// the median of each block of `block` consecutive values (the last block
+// takes the remainder), and out[i] linear between the blocks' centres,
+// constant beyond the first and the last. Each block's median ignores a
+// strip or two that graze another feature; the whole costs one pass of
+// nth_element, as one median of all the values would. Reorders `work`.
+void BlockLevels(const std::vector<double>& values, int block, std::vector<double>* work,
+                 std::vector<double>* centres, std::vector<double>* levels,
+                 std::vector<double>* out) {
+  const int n = static_cast<int>(values.size());
+  const int blocks = std::max(1, n / block);
+  *work = values;
+  centres->clear();
+  levels->clear();
+  for (int k = 0; k < blocks; ++k) {
+    const int i0 = k * block, i1 = k + 1 == blocks ? n : i0 + block;
+    const auto mid = work->begin() + (i0 + i1) / 2;
+    std::nth_element(work->begin() + i0, mid, work->begin() + i1);
+    centres->push_back(0.5 * (i0 + i1 - 1));
+    levels->push_back(*mid);
+  }
+  out->resize(n);
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    while (k + 1 < blocks && (*centres)[k + 1] <= i) ++k;
+    if (k + 1 == blocks || i <= (*centres)[0]) {
+      (*out)[i] = (*levels)[i <= (*centres)[0] ? 0 : k];
+    } else {
+      const double f = (i - (*centres)[k]) / ((*centres)[k + 1] - (*centres)[k]);
+      (*out)[i] = (*levels)[k] + f * ((*levels)[k + 1] - (*levels)[k]);
+    }
+  }
+}
+
 // The buffers of one tag's refinement, reused from edge to edge and
 // iteration to iteration: some 4,400 tags of a photo session take twelve
 // edge samplings each, and the allocations were a good part of the time
@@ -52,7 +86,7 @@ struct EdgeScratch {
     double first, last, sum;
   };
   std::vector<Strip> strips;
-  std::vector<double> firsts, lasts, ts, ss;
+  std::vector<double> firsts, lasts, ts, ss, work, centres, medians, levels_a, levels_b;
   std::vector<Eigen::Vector2d> points;
 };
 
@@ -113,11 +147,32 @@ bool EdgePoints(const cv::Mat& img, const EdgeCurve& e, double half_width, doubl
     lasts.push_back(s.last);
   }
   if (strips.size() < 4) return false;
-  // One pair of levels per edge: the ink and the paper are uniform along it,
-  // and medians are not fooled by a strip that grazes another feature.
-  const double la = Median(firsts), lb = Median(lasts);
-  if (std::abs(lb - la) < 10.0) return false;
-  for (const Strip& s : strips) {
+  // The two levels along the edge: ink and paper are uniform, but the light
+  // on them need not be (a lamp to one side, vignetting): a level that
+  // changes by d along the edge, taken as constant, moves the strips' edge
+  // points by up to d / (lb - la) strip lengths and tilts the fitted edge
+  // (on swat_tags_hallway, a tag of 8.6 px bits lit from one side: its
+  // corners 2.5 px off). So the levels are the medians of blocks of
+  // kLevelBlock strips, linear in between (BlockLevels): they follow a slow
+  // change of the light, and a strip that grazes another feature does not
+  // move them.
+  constexpr int kLevelBlock = 8;
+  const double la0 = Median(firsts), lb0 = Median(lasts);
+  if (std::abs(lb0 - la0) < 10.0) return false;
+  // firsts and lasts are in strip order again (Median reorders them).
+  for (size_t i = 0; i < strips.size(); ++i) {
+    firsts[i] = strips[i].first;
+    lasts[i] = strips[i].last;
+  }
+  BlockLevels(firsts, kLevelBlock, &scratch->work, &scratch->centres, &scratch->medians,
+              &scratch->levels_a);
+  BlockLevels(lasts, kLevelBlock, &scratch->work, &scratch->centres, &scratch->medians,
+              &scratch->levels_b);
+  const int count = static_cast<int>(strips.size());
+  for (int i = 0; i < count; ++i) {
+    const Strip& s = strips[i];
+    const double la = scratch->levels_a[i], lb = scratch->levels_b[i];
+    if (std::abs(lb - la) < 10.0) continue;
     const int n = s.i1 - s.i0 + 1;
     const double edge = s.i1 + 0.5 - (s.sum - n * la) / (lb - la);
     if (edge < s.i0 - 0.5 || edge > s.i1 + 0.5) continue;  // not a step here
@@ -220,10 +275,14 @@ double EstimateNoiseSigma(const cv::Mat& gray) {
 
 std::string DetectorOptions::Check() const {
   if (families.empty()) return "families: expected at least one tag family";
-  for (const std::string& f : families) {
-    if (std::find(KnownTagFamilies().begin(), KnownTagFamilies().end(), f) ==
+  for (const PrintedFamily& f : families) {
+    if (std::find(KnownTagFamilies().begin(), KnownTagFamilies().end(), f.name) ==
         KnownTagFamilies().end()) {
-      return "families: unknown tag family '" + f + "'";
+      return "families: unknown tag family '" + f.name + "'";
+    }
+    if (f.border_bits != 1 && (f.border_bits < 1 || !TakesWideBorder(f.name))) {
+      return "families: " + f.name + " cannot have a black border of " +
+             std::to_string(f.border_bits) + " bits";
     }
   }
   if (threads < 1) return "threads: expected >= 1, got " + std::to_string(threads);
@@ -238,6 +297,9 @@ std::string DetectorOptions::Check() const {
   if (const std::string msg = pattern.Check(); !msg.empty()) return "pattern." + msg;
   if (!(segmentation_noise_multiple >= 0)) return "segmentation_noise_multiple: expected >= 0";
   if (!(max_segmentation_contrast >= 5)) return "max_segmentation_contrast: expected >= 5";
+  if (!(wide_border_gamma > 0 && wide_border_gamma <= 1)) {
+    return "wide_border_gamma: expected in (0, 1]";
+  }
   return "";
 }
 
@@ -312,24 +374,88 @@ const char* CornerRefinementName(CornerRefinement refinement) {
 
 struct TagDetector::Impl {
   struct Family {
+    PrintedFamily printed;
     TagFamilyPtr family;
     int width_at_border = 0, border_offset = 0;
     std::map<int, cv::Mat> codes;  // code images by id, made on first use
 
+    // The code image the pattern fit matches. A wider border is Kalibr's
+    // AprilGrid, whose black squares between the tags cover the corner bits
+    // of each tag's quiet zone; other prints leave them white. Those four
+    // bits are marked unknown (tag_pattern_fit.h), so that the fit holds for
+    // both.
     const cv::Mat& Code(int id) {
       auto it = codes.find(id);
-      if (it == codes.end()) it = codes.emplace(id, TagCodeImage(family.get(), id)).first;
+      if (it == codes.end()) {
+        cv::Mat code = TagCodeImage(family.get(), id);
+        if (printed.border_bits > 1) {
+          const int last = code.cols - 1;
+          for (const auto& [x, y] : {std::pair{0, 0}, {last, 0}, {0, last}, {last, last}}) {
+            code.at<uint8_t>(y, x) = kUnknownCodeBit;
+          }
+        }
+        it = codes.emplace(id, code).first;
+      }
       return it->second;
     }
   };
   DetectorOptions options;
-  std::map<std::string, Family> families;
-  apriltag_detector_t* detector = nullptr;
+  std::map<PrintedFamily, Family> families;
+  std::map<const apriltag_family*, const Family*> by_family;
+  // One libapriltag pass for the families of a 1-bit border, on the photo;
+  // one for those of a wider border, on the photo's levels seen through
+  // wide_border_gamma (detector.h). Either is null when no family needs it.
+  apriltag_detector_t* narrow = nullptr;
+  apriltag_detector_t* wide = nullptr;
+  cv::Mat wide_levels;  // the 256-entry lookup table of the wide pass
+
+  apriltag_detector_t* NewPass() const {
+    apriltag_detector_t* td = apriltag_detector_create();
+    td->nthreads = options.threads;
+    td->quad_decimate = 1.0f;
+    td->quad_sigma = options.quad_sigma;
+    td->refine_edges = true;
+    td->decode_sharpening = options.decode_sharpening;
+    return td;
+  }
+
+  // One pass of libapriltag on `seen` (the photo or its remapped levels),
+  // its detections refined on the photo itself (`img`) and appended.
+  void Pass(apriltag_detector_t* td, const cv::Mat& seen, const cv::Mat& img,
+            std::vector<TagDetection>* out) {
+    image_u8_t im{seen.cols, seen.rows, static_cast<int32_t>(seen.step[0]), seen.data};
+    const double contrast =
+        std::clamp(options.segmentation_noise_multiple * EstimateNoiseSigma(seen), 5.0,
+                   options.max_segmentation_contrast);
+    td->qtp.min_white_black_diff = static_cast<int>(std::lround(contrast));
+    zarray_t* found = apriltag_detector_detect(td, &im);
+    for (int i = 0; i < zarray_size(found); ++i) {
+      apriltag_detection_t* det;
+      zarray_get(found, i, &det);
+      if (det->hamming > options.max_hamming) continue;
+      TagDetection d;
+      d.family = det->family->name;
+      d.border_bits = by_family.at(det->family)->printed.border_bits;
+      d.id = det->id;
+      d.hamming = det->hamming;
+      d.decision_margin = det->decision_margin;
+      // libapriltag's pixel (x, y) spans [x, x+1): its coordinates are OpenCV's + 0.5.
+      for (int k = 0; k < 4; ++k) {
+        d.apriltag_corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
+      }
+      d.corners = d.apriltag_corners;
+      if (options.refine_corners) Refine(img, &d);
+      out->push_back(d);
+    }
+    apriltag_detections_destroy(found);
+  }
 
   // Refines d's corners in place: edges when the bits are big enough and the
   // edges hold, else the whole pattern; sets d->refinement.
   void Refine(const cv::Mat& img, TagDetection* d) {
-    Family& f = families.at(d->family);
+    d->corners = d->apriltag_corners;
+    d->refinement = CornerRefinement::kNone;
+    Family& f = families.at(PrintedFamily{d->family, d->border_bits});
     if (RefineTagCorners(img, f.width_at_border, options, &d->corners)) {
       d->refinement = CornerRefinement::kEdges;
       return;
@@ -347,7 +473,8 @@ struct TagDetector::Impl {
   }
 
   ~Impl() {
-    if (detector != nullptr) apriltag_detector_destroy(detector);
+    if (narrow != nullptr) apriltag_detector_destroy(narrow);
+    if (wide != nullptr) apriltag_detector_destroy(wide);
   }
 };
 
@@ -356,21 +483,22 @@ TagDetector::TagDetector(const DetectorOptions& options) : impl_(std::make_uniqu
     throw std::invalid_argument("DetectorOptions: " + msg);
   }
   impl_->options = options;
-  impl_->detector = apriltag_detector_create();
-  apriltag_detector_t* td = impl_->detector;
-  td->nthreads = options.threads;
-  td->quad_decimate = 1.0f;
-  td->quad_sigma = options.quad_sigma;
-  td->refine_edges = true;
-  td->decode_sharpening = options.decode_sharpening;
-  for (const std::string& name : options.families) {
-    Impl::Family& f = impl_->families[name];
+  for (const PrintedFamily& printed : options.families) {
+    Impl::Family& f = impl_->families[printed];
     if (f.family) continue;  // listed twice
-    f.family = CreateTagFamily(name);
-    const TagFamilyInfo info = GetTagFamilyInfo(name);
-    f.width_at_border = info.width_at_border;
-    f.border_offset = info.border_offset();
-    apriltag_detector_add_family_bits(td, f.family.get(), std::max(2, options.max_hamming));
+    f.printed = printed;
+    f.family = CreateTagFamily(printed);
+    f.width_at_border = f.family->width_at_border;
+    f.border_offset = (f.family->total_width - f.family->width_at_border) / 2;
+    impl_->by_family[f.family.get()] = &f;
+    apriltag_detector_t*& pass = printed.border_bits > 1 ? impl_->wide : impl_->narrow;
+    if (pass == nullptr) pass = impl_->NewPass();
+    apriltag_detector_add_family_bits(pass, f.family.get(), std::max(2, options.max_hamming));
+  }
+  impl_->wide_levels = cv::Mat(1, 256, CV_8UC1);
+  for (int v = 0; v < 256; ++v) {
+    impl_->wide_levels.at<uint8_t>(v) =
+        cv::saturate_cast<uint8_t>(255.0 * std::pow(v / 255.0, options.wide_border_gamma));
   }
 }
 
@@ -378,35 +506,23 @@ TagDetector::~TagDetector() = default;
 
 const DetectorOptions& TagDetector::options() const { return impl_->options; }
 
+void TagDetector::Refine(const cv::Mat& gray, TagDetection* d) {
+  if (gray.type() != CV_8UC1)
+    throw std::invalid_argument("TagDetector::Refine: expected a CV_8UC1 image");
+  impl_->Refine(gray, d);
+}
+
 std::vector<TagDetection> TagDetector::Detect(const cv::Mat& gray) {
   if (gray.type() != CV_8UC1)
     throw std::invalid_argument("TagDetector::Detect: expected a CV_8UC1 image");
-  cv::Mat img = gray.isContinuous() ? gray : gray.clone();
-  image_u8_t im{img.cols, img.rows, static_cast<int32_t>(img.step[0]), img.data};
-  const double contrast =
-      std::clamp(impl_->options.segmentation_noise_multiple * EstimateNoiseSigma(img), 5.0,
-                 impl_->options.max_segmentation_contrast);
-  impl_->detector->qtp.min_white_black_diff = static_cast<int>(std::lround(contrast));
-  zarray_t* found = apriltag_detector_detect(impl_->detector, &im);
+  const cv::Mat img = gray.isContinuous() ? gray : gray.clone();
   std::vector<TagDetection> out;
-  out.reserve(zarray_size(found));
-  for (int i = 0; i < zarray_size(found); ++i) {
-    apriltag_detection_t* det;
-    zarray_get(found, i, &det);
-    if (det->hamming > impl_->options.max_hamming) continue;
-    TagDetection d;
-    d.family = det->family->name;
-    d.id = det->id;
-    d.hamming = det->hamming;
-    d.decision_margin = det->decision_margin;
-    // libapriltag's pixel (x, y) spans [x, x+1): its coordinates are OpenCV's + 0.5.
-    for (int k = 0; k < 4; ++k)
-      d.apriltag_corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
-    d.corners = d.apriltag_corners;
-    if (impl_->options.refine_corners) impl_->Refine(img, &d);
-    out.push_back(d);
+  if (impl_->narrow != nullptr) impl_->Pass(impl_->narrow, img, img, &out);
+  if (impl_->wide != nullptr) {
+    cv::Mat seen;
+    cv::LUT(img, impl_->wide_levels, seen);
+    impl_->Pass(impl_->wide, seen, img, &out);
   }
-  apriltag_detections_destroy(found);
   return out;
 }
 

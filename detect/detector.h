@@ -42,12 +42,13 @@
 
 #include <opencv2/core.hpp>
 
+#include "detect/tag_family.h"
 #include "detect/tag_pattern_fit.h"
 
 namespace rtscalib::detect {
 
 struct DetectorOptions {
-  std::vector<std::string> families = {"tag36h11"};
+  std::vector<PrintedFamily> families = {PrintedFamily{}};  // tag36h11, 1-bit border
   int threads = 1;          // libapriltag worker threads
   float quad_sigma = 0.0f;  // Gaussian blur before segmentation [px]
   double decode_sharpening = 0.25;
@@ -77,6 +78,23 @@ struct DetectorOptions {
   // more contrast than this [grey levels] stays detectable however textured
   // the scene.
   double max_segmentation_contrast = 40.0;
+  // Families of a wider black border (Kalibr's AprilGrid, SPEC 7.2) get a
+  // libapriltag pass of their own, on the photo's levels v seen as
+  // 255 (v / 255)^wide_border_gamma. libapriltag calls a pixel black when it
+  // is darker than the middle of its neighbourhood's range; where an
+  // AprilGrid's square touches a tag's corner, a blurred photo is exactly at
+  // that middle level (a saddle point), and on some prints the squares even
+  // overlap the corners, so squares and tags merge into one black region
+  // without a quad of the tag's own. Seen through the gamma, the middle
+  // level falls to a tenth of the range (0.5^(1 / 0.3), ink near black):
+  // the black regions come apart at the saddles, and a 2-bit border is wide
+  // enough to stay whole (libapriltag alone, hamming <= 1: on
+  // yac_d435i_aprilgrid 906 tags on the photos, 1,019 through the gamma; on
+  // the six TUM VI fisheye photos of aprilgrid_rs_kalibr_grids none at
+  // all, 196; 0.5 gave 1,013 and 104). The tags still merged are grown from
+  // their neighbours (board_growth.h). libapriltag segments and decodes the
+  // remapped levels; every corner is refined on the photo itself.
+  double wide_border_gamma = 0.3;
 
   std::string Check() const;  // empty when valid
 };
@@ -92,12 +110,17 @@ const char* CornerRefinementName(CornerRefinement refinement);
 
 struct TagDetection {
   std::string family;
+  int border_bits = 1;  // of the printed family it was decoded as (tag_family.h)
   int id = -1;
   int hamming = 0;
   double decision_margin = 0;
   std::array<Eigen::Vector2d, 4> corners;           // TargetCorner order, OpenCV pixels
   std::array<Eigen::Vector2d, 4> apriltag_corners;  // libapriltag's, same order, +0.5 shift undone
   CornerRefinement refinement = CornerRefinement::kNone;
+  // Found from the board's layout and verified by its own bits
+  // (board_growth.h), not by libapriltag: `apriltag_corners` are then the
+  // prediction the refinement started from.
+  bool from_neighbours = false;
 
   bool refined() const { return refinement != CornerRefinement::kNone; }
 };
@@ -113,6 +136,13 @@ class TagDetector {
   // Detects tags in an 8-bit grayscale image (CV_8UC1). Not thread-safe: use
   // one detector per thread.
   std::vector<TagDetection> Detect(const cv::Mat& gray);
+
+  // The refinement Detect applies, on its own: refines d->corners from
+  // d->apriltag_corners (libapriltag's, or any start roughly right to ~1 px)
+  // by the edges or the whole pattern and sets d->refinement (kNone, corners
+  // unchanged, when neither holds). d's family and border_bits must be one of
+  // the detector's families.
+  void Refine(const cv::Mat& gray, TagDetection* d);
 
   const DetectorOptions& options() const;
 

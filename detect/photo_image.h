@@ -10,14 +10,21 @@
 //     a linear map, so an edge's sub-pixel position is unchanged;
 //   * 8-bit images are used as they are;
 //   * other depths (16-bit, float) are stretched linearly from the image's own
-//     [min, max] to [0, 255] and rounded. Nothing is clipped, whatever range
-//     the camera used (a 12-bit sensor in a 16-bit file, a dark exposure), and
-//     the corner refinement, which only needs the ink and paper levels on
-//     either side of an edge, is invariant to a linear map of intensity; the
-//     rounding adds at most half a grey level of noise. A fixed >> 8 would turn
-//     a 12-bit image into 16 grey levels.
+//     range [lo, hi] to [0, 255] and rounded (SPEC 7.2: detected on their
+//     full range). lo and hi are the least and greatest values of the image
+//     after a 3 x 3 median filter: a region of 2 x 2 pixels or more (any tag,
+//     any paper) keeps its values through the median and sets the range,
+//     while a single hot or dead pixel (or a pair) does not: one hot pixel at
+//     65535 in a 12-bit image would otherwise squeeze the whole picture into
+//     16 grey levels. Only such isolated pixels fall outside [lo, hi] and
+//     are clipped. Whatever range the camera used (a 12-bit sensor in a
+//     16-bit file, a dark exposure), the corner refinement, which only needs
+//     the ink and paper levels on either side of an edge, is invariant to a
+//     linear map of intensity; the rounding adds at most half a grey level of
+//     noise. A fixed >> 8 would turn a 12-bit image into 16 grey levels.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -36,8 +43,17 @@ struct Photo {
 // Throws std::invalid_argument for other channel counts or depths.
 cv::Mat ToGray8(const cv::Mat& image);
 
-// Reads `path`; throws std::runtime_error naming it when OpenCV cannot read it
-// or its format is not one ToGray8 takes.
+// Reads `path`. Throws PhotoError (a std::runtime_error naming the file and
+// what is wrong with it) when the file is missing or unreadable, is not an
+// image OpenCV decodes, claims more pixels than OpenCV reads
+// (CV_IO_MAX_IMAGE_PIXELS, 2^30 by default: a header claiming 100000 x 100000
+// is refused before any memory is taken), is damaged (a JPEG or PNG cut
+// short: OpenCV's decoders fill the missing rows with grey and say so only
+// on stderr, so the file's own end marker is checked), or has a format
+// ToGray8 does not take.
+struct PhotoError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 Photo LoadPhoto(const std::string& path);
 
 }  // namespace rtscalib::detect

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -38,7 +39,9 @@ void KeepBoardTags(const std::vector<TagDetection>& detections, const TargetScen
   for (const TagDetection& d : detections) {
     int board = -1;
     for (size_t b = 0; b < targets.boards.size(); ++b) {
-      if (targets.boards[b].family == d.family && targets.boards[b].HasId(d.id)) {
+      const TagBoard& tb = targets.boards[b];
+      if (!tb.IsPointBoard() && tb.family == d.family && tb.border_bits == d.border_bits &&
+          tb.HasId(d.id)) {
         board = static_cast<int>(b);
       }
     }
@@ -65,7 +68,8 @@ void KeepBoardTags(const std::vector<TagDetection>& detections, const TargetScen
     }
     photo->tags.push_back({board, d->id, d->corners, d->refinement});
     if (d->refinement == CornerRefinement::kPattern) ++photo->pattern_refined;
-    if (d->refined()) {
+    if (d->from_neighbours) ++photo->from_neighbours;
+    if (d->refined() && !d->from_neighbours) {
       for (int k = 0; k < 4; ++k) {
         const double shift = (d->corners[k] - d->apriltag_corners[k]).norm();
         sum_sq += shift * shift;
@@ -117,14 +121,36 @@ class CvThreads {
 std::string PhotoDetectionOptions::Check() const {
   if (jobs < 1) return "jobs: expected >= 1, got " + std::to_string(jobs);
   DetectorOptions d = detector;
-  d.families = {"tag36h11"};  // replaced by the boards' families
+  d.families = {PrintedFamily{}};  // replaced by the boards' families
   if (const std::string msg = d.Check(); !msg.empty()) return "detector." + msg;
+  if (const std::string msg = growth.Check(); !msg.empty()) return "growth." + msg;
   return "";
 }
 
 std::map<std::string, int> DetectableCodeCounts() {
   std::map<std::string, int> out = FamilyCodeCounts();
+  for (const std::string& name : KnownTagFamilies()) {
+    if (TakesWideBorder(name)) out[WideBorderKey(name)] = out.at(name);
+  }
   for (const auto& [name, markers] : ArucoDictionaryMarkerCounts()) out[ArucoCodesKey(name)] = markers;
+  return out;
+}
+
+std::string TargetsInWords(const TargetScene& targets) {
+  bool tags = false, charuco = false, chessboard = false;
+  for (const TagBoard& b : targets.boards) {
+    tags |= b.kind == BoardKind::kAprilTag;
+    charuco |= b.kind == BoardKind::kCharuco;
+    chessboard |= b.kind == BoardKind::kChessboard;
+  }
+  std::vector<std::string> parts;
+  if (tags) parts.push_back("AprilTags");
+  if (charuco) parts.push_back(chessboard ? "ChArUco" : "ChArUco corners");
+  if (chessboard) parts.push_back("chessboard corners");
+  std::string out;
+  for (size_t i = 0; i < parts.size(); ++i) {
+    out += (i == 0 ? "" : i + 1 == parts.size() ? " and " : ", ") + parts[i];
+  }
   return out;
 }
 
@@ -140,9 +166,10 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
   for (const TagBoard& b : targets.boards) {
     tags_of_boards += b.NumTags();
     if (b.IsPointBoard()) continue;  // OpenCV's detectors (point_boards.h)
-    if (std::find(detector_options.families.begin(), detector_options.families.end(), b.family) ==
+    const PrintedFamily printed{b.family, b.border_bits};
+    if (std::find(detector_options.families.begin(), detector_options.families.end(), printed) ==
         detector_options.families.end()) {
-      detector_options.families.push_back(b.family);
+      detector_options.families.push_back(printed);
     }
   }
   const bool any_tags = !detector_options.families.empty();
@@ -154,6 +181,10 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
   const auto start = std::chrono::steady_clock::now();
 
   std::atomic<int> next{0}, finished{0};
+  // Wakes the waiting thread when a photo is done (a timed wait would end
+  // the detection up to its period late).
+  std::mutex progress_mutex;
+  std::condition_variable progress_cv;
   std::atomic<bool> stop{false};
   std::mutex mutex;  // guards size_of_zoom, first_error*
   std::map<int, std::pair<int, int>> size_of_zoom;
@@ -171,11 +202,11 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
         Photo image;
         try {
           image = LoadPhoto(shot.image_path);
-        } catch (const std::runtime_error&) {
+        } catch (const PhotoError& e) {
           throw InputError::Cell(shots.path, shot.line, "image",
-                                 "an image OpenCV can read (PNG, JPEG or TIFF; 8 or 16 bit; grey "
-                                 "or colour)",
-                                 shot.image_path);
+                                 "a whole image OpenCV can read (PNG, JPEG or TIFF; 8 or 16 bit; "
+                                 "grey or colour)",
+                                 e.what());
         }
         {
           std::lock_guard<std::mutex> lock(mutex);
@@ -190,7 +221,15 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
         photo.bit_depth = image.bit_depth;
         photo.tags_of_boards = tags_of_boards;
         if (detector) {
-          KeepBoardTags(detector->Detect(image.gray), targets, options.keep_unrefined, &photo);
+          std::vector<TagDetection> detections = detector->Detect(image.gray);
+          if (options.grow_boards) {
+            for (const TagBoard& board : targets.boards) {
+              if (!board.IsPointBoard()) {
+                GrowBoardTags(image.gray, board, detector.get(), &detections, options.growth);
+              }
+            }
+          }
+          KeepBoardTags(detections, targets, options.keep_unrefined, &photo);
         }
         KeepPointBoards(image.gray, targets, shot.face, &photo);
         for (const DetectedTag& tag : photo.tags) {
@@ -205,7 +244,11 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
         }
         stop = true;
       }
-      ++finished;
+      {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        ++finished;
+      }
+      progress_cv.notify_one();
     }
   };
   {
@@ -215,7 +258,10 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
     // Progress on long runs: a line every 5 s once a run has lasted 5 s.
     auto last = start;
     while (finished < n && !stop) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      {
+        std::unique_lock<std::mutex> lock(progress_mutex);
+        progress_cv.wait_for(lock, std::chrono::seconds(1), [&] { return finished >= n || stop; });
+      }
       const auto now = std::chrono::steady_clock::now();
       if (options.progress && now - last >= std::chrono::seconds(5)) {
         last = now;
@@ -333,7 +379,7 @@ void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
   CsvWriter w(path, {"line", "shot", "image", "face", "zoom", "width", "height", "channels",
                      "bit_depth", "tags_found", "tags_of_boards", "corners", "refined_corners",
                      "unrefined", "not_on_boards", "duplicates", "shift_rms_px", "shift_max_px",
-                     "pattern_refined"});
+                     "pattern_refined", "from_neighbours"});
   for (size_t i = 0; i < shots.shots.size(); ++i) {
     const PhotoShot& s = shots.shots[i];
     const PhotoDetection& p = result.photos[i];
@@ -346,7 +392,7 @@ void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
            std::to_string(p.tags_of_boards), std::to_string(p.corners),
            std::to_string(p.refined_corners), std::to_string(p.unrefined),
            std::to_string(p.not_on_boards), std::to_string(p.duplicates), rms, max,
-           std::to_string(p.pattern_refined)});
+           std::to_string(p.pattern_refined), std::to_string(p.from_neighbours)});
   }
   w.Close();
 }

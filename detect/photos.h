@@ -1,11 +1,16 @@
 // A real instrument's photos -> detected tag corners (SPEC 7, `rtscalib detect`).
 //
 // Every photo of shots.csv is read (photo_image.h: any of PNG/JPEG/TIFF, 8 or
-// 16 bit, grey or colour, converted to 8-bit grey), searched for tags of the
-// families of targets.yaml, and a detection is kept only when its family and
-// id belong to one of the boards: what is kept never depends on a model or on
-// where a tag "should" be, so partial boards, occlusions and any pose are
-// fine. Per photo, also:
+// 16 bit, grey or colour, converted to 8-bit grey; a damaged or unreadable
+// file is an InputError naming its shots.csv line), searched for tags of the
+// families of targets.yaml (each with its boards' border_bits), and a
+// detection is kept only when its family, border and id belong to one of the
+// boards. Each AprilTag board then grows from the tags libapriltag found
+// (board_growth.h): a missing tag next to found ones is looked for where the
+// board's layout puts it and kept only when its own bits read as its code
+// and its own edges or pattern fit its corners. What is kept never depends
+// on a model, and never on where a tag "should" be alone, so partial boards,
+// occlusions and any pose are fine. Per photo, also:
 //   * a detection that neither of the detector's refinements could refine
 //     (edges, or the whole-pattern fit of small tags; detector.h: bits under
 //     1.5 px, heavy blur, a quad cut by the image edge) is dropped and
@@ -14,7 +19,8 @@
 //   * a tag detected twice in one photo (two printed copies) is dropped
 //     entirely and counted: neither copy can be told from the other;
 //   * the detector's own check: the shift between our refined corners and
-//     libapriltag's (RMS and max). Both estimate the same corner, so a large
+//     libapriltag's (RMS and max) over the tags libapriltag found (not those
+//     grown from their neighbours). Both estimate the same corner, so a large
 //     shift means one of them went wrong (a smudge on an edge, heavy blur);
 //     typically 0.1-0.3 px;
 //   * a photo in which no target was found (no tag, no ChArUco corner, no
@@ -37,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "detect/board_growth.h"
 #include "detect/detector.h"
 #include "libcalib/io/shots.h"
 #include "libcalib/model/observations.h"
@@ -46,6 +53,8 @@ namespace rtscalib::detect {
 
 struct PhotoDetectionOptions {
   DetectorOptions detector;  // `families` is replaced by the boards' families
+  bool grow_boards = true;   // AprilTag boards grown from their found tags (board_growth.h)
+  GrowthOptions growth;
   int jobs = 1;              // detection threads
   bool keep_unrefined = false;
   bool progress = true;  // images/s lines on stderr during long runs
@@ -71,12 +80,14 @@ struct PhotoDetection {
   int corners = 0;                  // of the kept targets: 4 per tag, 1 per inner corner
   int unrefined = 0;      // board tags whose refinement failed (dropped unless keep_unrefined)
   int pattern_refined = 0;  // kept tags whose corners come from the pattern fit (detector.h)
+  int from_neighbours = 0;  // kept tags grown from their found neighbours (board_growth.h)
   int not_on_boards = 0;  // detections of families/ids of no board (dropped)
   int duplicates = 0;     // detections of a tag seen twice in this photo (dropped)
   std::vector<int> duplicate_ids;  // those tags' ids
   int duplicate_boards = 0;  // chessboards found twice in this photo (dropped, point_boards.h)
   int misoriented_boards = 0;  // chessboards found in no orientation a face allows (point_boards.h)
-  // Refined vs libapriltag corners over the kept refined tags [px].
+  // Refined vs libapriltag corners over the kept refined tags that
+  // libapriltag found [px]; `refined_corners` counts those corners.
   double shift_rms_px = 0, shift_max_px = 0;
   int refined_corners = 0;
 };
@@ -91,6 +102,11 @@ struct PhotoDetectionResult {
 // families with their numbers of codes (tag_family.h) and OpenCV's ArUco
 // dictionaries as "aruco:<name>" with their numbers of markers.
 std::map<std::string, int> DetectableCodeCounts();
+
+// What DetectPhotos looks for on `targets`' boards, in words for a log line:
+// "AprilTags", "chessboard corners", "ChArUco corners", or two or three of
+// them joined ("AprilTags and chessboard corners").
+std::string TargetsInWords(const TargetScene& targets);
 
 // Detects every photo of `shots`. Throws InputError (naming shots.csv's line
 // and the image) for unreadable images and for image sizes that differ within
@@ -119,7 +135,9 @@ std::map<int, ImageSize> ImageSizesOf(const ShotsFile& shots, const PhotoDetecti
 
 // One row per photo: line, shot, image, face, zoom, width, height, channels,
 // bit_depth, tags_found, tags_of_boards, corners, refined_corners, unrefined,
-// not_on_boards, duplicates, shift_rms_px, shift_max_px, pattern_refined.
+// not_on_boards, duplicates, shift_rms_px, shift_max_px, pattern_refined,
+// from_neighbours. `tags_found` and `tags_of_boards` count targets: tags, and
+// the inner corners of ChArUco and chessboards.
 void WriteDetectionSummary(const std::string& path, const ShotsFile& shots,
                            const PhotoDetectionResult& result);
 

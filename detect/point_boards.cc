@@ -99,50 +99,143 @@ PointBoardDetection DetectCharuco(const cv::Mat& gray, const TagBoard& board) {
   return out;
 }
 
+// The smallest distance between neighbouring corners of a row of a grid of
+// `nc` corners per row: one square in pixels (1e9 for a grid of one column).
+double SmallestRowStep(const std::vector<cv::Point2f>& grid, int nc) {
+  double step = 1e9;
+  for (size_t k = 0; k + 1 < grid.size(); ++k) {
+    if (static_cast<int>(k) % nc != nc - 1) {
+      step = std::min(step, static_cast<double>(cv::norm(grid[k + 1] - grid[k])));
+    }
+  }
+  return step;
+}
+
+// The chessboard search's levels of a photo: level 0 the photo itself, each
+// next one half its width and height (means of 2 x 2 pixels, so that pixel
+// (i, j) of level l + 1 is centred at (2 i + 0.5, 2 j + 0.5) of level l),
+// down to the last whose shorter side is at least kCoarsestSide pixels.
+// OpenCV's saddle-point search (findChessboardCornersSB) costs time in
+// proportion to the pixels it is given (about 100 ns a pixel: 3 s on a 6000
+// x 4000 photo) and finds boards whose squares are 5 px or more, so a board
+// that fills a good part of the photo is found in a small copy of it: a
+// quarter of the time at half the size. The 61 real photos of OpenCV's,
+// BoofCV's and ValidationBoof's chessboard sets (640 x 480, squares of 28
+// to 62 px) are all found in their copies of 160 x 120, and give the same
+// corners as a search of the photo itself (below).
+constexpr int kCoarsestSide = 120;
+
+// OpenCV's quick check (checkChessboard: the classic detector's
+// CALIB_CB_FAST_CHECK, quads of the right count at a few thresholds) sees
+// boards whose squares are about kCheckSquarePx or more (its quads are at
+// least 5 px across after an erosion; measured on boards turned by 7
+// degrees, blurred by 0.7 px: found at 14 px, not at 12 px).
+constexpr double kCheckSquarePx = 14;
+
+std::vector<cv::Mat> SearchLevels(const cv::Mat& gray) {
+  std::vector<cv::Mat> levels = {gray};
+  while (std::min(levels.back().cols, levels.back().rows) / 2 >= kCoarsestSide) {
+    cv::Mat half;
+    cv::resize(levels.back(), half, cv::Size(levels.back().cols / 2, levels.back().rows / 2), 0, 0,
+               cv::INTER_AREA);
+    levels.push_back(half);
+  }
+  return levels;
+}
+
+// The coarsest level from the coarsest down to `finest` at which the quick
+// check sees a board, or -1. Most photos of a session show no chessboard
+// (another board, or this one out of view), and there it answers in
+// milliseconds where the search would run through every level. With it the
+// 50 rendered photos of three ChArUco boards and a chessboard are detected
+// in 2.7 s instead of 20.2 s (Release, RenderedPointBoards' own output),
+// every visible corner still found. It keeps every board of OpenCV's 26
+// sample photos of a real camera
+// (PointBoards.QuickCheckKeepsEveryChessboardOfOpenCvsSamplePhotos). A
+// board whose squares are too small for it at a coarse level is seen at a
+// finer one; level 0, the photo itself, is the check of the whole photo.
+// At coarse levels it costs a fraction of the photo's check: on a noisy
+// 6000 x 4000 photo the check of the photo itself took 100 ms, of its half
+// size 5 ms (fewer specks of noise cross its thresholds).
+int QuickCheck(const std::vector<cv::Mat>& levels, cv::Size size, int finest) {
+  for (int l = static_cast<int>(levels.size()) - 1; l >= finest; --l) {
+    if (cv::checkChessboard(levels[l], size)) return l;
+  }
+  return -1;
+}
+
+// One level: the exhaustive search first; on real photos it misses a few
+// boards that the plain search finds (OpenCV's left11.jpg at full size:
+// blur and a steep view), so that one is tried next. Not the classic quad
+// detector: on a photo without a board it can search for minutes (540 s on
+// 1280 x 960 noise, 9.5 s with its fast check). Without CALIB_CB_ACCURACY:
+// its corners were 0.13 px RMS off on rendered photos and it cost 0.3 s more
+// per 1280 x 960 image; cornerSubPix from either start converges to the same
+// saddles, 0.06 px RMS (tests/render/point_boards_test.cc, docs/photos.md).
+bool FindGridAt(const cv::Mat& level, cv::Size size, std::vector<cv::Point2f>* grid) {
+  grid->clear();
+  if (cv::findChessboardCornersSB(level, size, *grid,
+                                  cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE)) {
+    return true;
+  }
+  grid->clear();
+  return cv::findChessboardCornersSB(level, size, *grid, cv::CALIB_CB_NORMALIZE_IMAGE);
+}
+
+// The grid of a whole chessboard of `size` inner corners when the quick
+// check saw one down to level `finest`: searched from level `checked` + 1
+// (the search sees squares of a third of the size the check needs; coarser
+// levels hold none it could find) down to the photo (the first level that
+// holds it wins), then taken down level by level, refined to the saddles at
+// each (RefineSaddles, its window a quarter of that level's square): the
+// search's corners are up to 1.5 px of their level off the saddles, so a
+// start from level l is within the window of level l - 1 once refined at
+// level l. At the photo they are the saddles a search of the photo itself
+// and cornerSubPix give, cornerSubPix converging to the same point from
+// either start. False when no level holds the board.
+bool FindChessboardGrid(const std::vector<cv::Mat>& levels, cv::Size size, int finest,
+                        std::vector<cv::Point2f>* grid) {
+  grid->clear();
+  const int checked = QuickCheck(levels, size, finest);
+  if (checked < 0) return false;
+  for (int l = std::min(checked + 1, static_cast<int>(levels.size()) - 1); l >= 0; --l) {
+    if (!FindGridAt(levels[l], size, grid) ||
+        static_cast<int>(grid->size()) != size.width * size.height) {
+      continue;
+    }
+    for (int k = l; k >= 0; --k) {
+      if (k < l) {
+        for (cv::Point2f& p : *grid) p = p * 2.0f + cv::Point2f(0.5f, 0.5f);
+      }
+      RefineSaddles(levels[k], SmallestRowStep(*grid, size.width), 1.0, grid);
+    }
+    return true;
+  }
+  grid->clear();
+  return false;
+}
+
 PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board, int face) {
   const int nc = board.cols - 1, nr = board.rows - 1;
-  std::vector<cv::Point2f> grid;
   PointBoardDetection out;
-  // Without CALIB_CB_ACCURACY: its corners were 0.13 px RMS off on rendered
-  // photos and it cost 0.3 s more per 1280 x 960 image; cornerSubPix from
-  // either start converges to the same saddles, 0.06 px RMS
-  // (tests/render/point_boards_test.cc, docs/photos.md).
-  // The exhaustive search first; on real photos it misses a few boards that
-  // the plain search finds (OpenCV's left11.jpg: blur and a steep view), so
-  // that one is tried next (~0.5 s more on a 1280 x 960 photo without a
-  // board). Not the classic quad detector: on a photo without a board it
-  // can search for minutes (540 s on 1280 x 960 noise, 9.5 s with its fast
-  // check). Either grid is refined below.
   const cv::Size size(nc, nr);
-  // Most photos of a session show no chessboard (another board, or this one
-  // out of view), and there both searches below run to the end. OpenCV's
-  // quick check (the classic detector's CALIB_CB_FAST_CHECK: quads of the
-  // right count at a few thresholds) answers in milliseconds. With it the
-  // 50 rendered photos of three ChArUco boards and a chessboard are
-  // detected in 2.7 s instead of 20.2 s (Release, RenderedPointBoards'
-  // own output), every visible corner still found. It keeps every board of
-  // OpenCV's 26 sample photos of a real camera
-  // (PointBoards.QuickCheckKeepsEveryChessboardOfOpenCvsSamplePhotos).
-  if (!cv::checkChessboard(gray, size)) return out;
-  bool found = cv::findChessboardCornersSB(gray, size, grid,
-                                           cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
-  if (!found) {
-    grid.clear();
-    found = cv::findChessboardCornersSB(gray, size, grid, cv::CALIB_CB_NORMALIZE_IMAGE);
-  }
-  if (!found || static_cast<int>(grid.size()) != nc * nr) return out;
-  // A second copy: the found board masked out (its hull, grown by one
-  // square, filled with the photo's mean grey) and the photo searched again
-  // (the fast non-exhaustive search: a second whole board would be as clear).
+  std::vector<cv::Point2f> grid;
+  if (!FindChessboardGrid(SearchLevels(gray), size, 0, &grid)) return out;
+  // A second copy: the found board masked out (its hull, grown by one and a
+  // half squares, filled with the photo's mean grey) and the photo searched
+  // again, as for the first board, for copies whose squares are at least a
+  // quarter of the found one's (printed alike and up to 4 times as far
+  // away, or a reflection): the quick check runs down to the level where
+  // such squares are kCheckSquarePx. A photo with one board passes no check
+  // once it is masked (none of the 61 real photos above), so the second
+  // search costs only the checks, a fraction of the photo's own where the
+  // board is large in a large photo.
+  const double step = SmallestRowStep(grid, nc);
   {
     std::vector<cv::Point2f> hull_f;
     cv::convexHull(grid, hull_f);
     const cv::Point2f centre = std::accumulate(hull_f.begin(), hull_f.end(), cv::Point2f(0, 0)) *
                                (1.0f / static_cast<float>(hull_f.size()));
-    double step = 1e9;
-    for (int k = 0; k + 1 < nc * nr; ++k) {
-      if (k % nc != nc - 1) step = std::min(step, static_cast<double>(cv::norm(grid[k + 1] - grid[k])));
-    }
     std::vector<cv::Point> hull;
     for (const cv::Point2f& p : hull_f) {
       const cv::Point2f out_dir = p - centre;
@@ -151,19 +244,13 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
     }
     cv::Mat masked = gray.clone();
     cv::fillConvexPoly(masked, hull, cv::Scalar(cv::mean(gray)[0]));
+    const int finest = std::max(0, static_cast<int>(std::floor(std::log2(step / 4 / kCheckSquarePx))));
     std::vector<cv::Point2f> second;
-    if (cv::findChessboardCornersSB(masked, size, second, cv::CALIB_CB_NORMALIZE_IMAGE)) {
+    if (FindChessboardGrid(SearchLevels(masked), size, finest, &second)) {
       out.duplicated = true;
       return out;
     }
   }
-  double square_px = 1e9;
-  for (int k = 0; k + 1 < nc * nr; ++k) {
-    if (k % nc != nc - 1) {
-      square_px = std::min(square_px, static_cast<double>(cv::norm(grid[k + 1] - grid[k])));
-    }
-  }
-  RefineSaddles(gray, square_px, 1.0, &grid);
   // Directions of the grid's rows (along k) and columns in the image.
   auto at = [&](int r, int c) { return Eigen::Vector2d(grid[r * nc + c].x, grid[r * nc + c].y); };
   const Eigen::Vector2d along_row = at(0, nc - 1) - at(0, 0);

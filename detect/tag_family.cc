@@ -78,14 +78,43 @@ std::map<std::string, int> FamilyCodeCounts() {
   return out;
 }
 
-TagFamilyPtr CreateTagFamily(const std::string& name) {
-  return TagFamilyPtr(FamilyOrThrow(name).create());
+bool TakesWideBorder(const std::string& name) {
+  const FamilyEntry& e = FamilyOrThrow(name);
+  apriltag_family_t* f = e.create();
+  const bool classic = !f->reversed_border;
+  e.destroy(f);
+  return classic;
 }
 
-TagFamilyInfo GetTagFamilyInfo(const std::string& name) {
-  const TagFamilyPtr f = CreateTagFamily(name);
+TagFamilyPtr CreateTagFamily(const std::string& name, int border_bits) {
+  TagFamilyPtr f(FamilyOrThrow(name).create());
+  if (border_bits == 1) return f;
+  if (border_bits < 1 || f->reversed_border) {
+    throw std::invalid_argument("tag family " + name + " cannot be printed with a black border of " +
+                                std::to_string(border_bits) + " bits" +
+                                (f->reversed_border ? " (its quad is not a black border's edge)"
+                                                    : ""));
+  }
+  // The same arrays, edited in place: the family's destroy frees them alike.
+  const int extra = border_bits - 1;
+  f->width_at_border += 2 * extra;
+  f->total_width += 2 * extra;
+  for (uint32_t i = 0; i < f->nbits; ++i) {
+    f->bit_x[i] += extra;
+    f->bit_y[i] += extra;
+  }
+  return f;
+}
+
+TagFamilyPtr CreateTagFamily(const PrintedFamily& family) {
+  return CreateTagFamily(family.name, family.border_bits);
+}
+
+TagFamilyInfo GetTagFamilyInfo(const std::string& name, int border_bits) {
+  const TagFamilyPtr f = CreateTagFamily(name, border_bits);
   TagFamilyInfo info;
   info.name = name;
+  info.border_bits = border_bits;
   info.num_codes = static_cast<int>(f->ncodes);
   info.width_at_border = f->width_at_border;
   info.total_width = f->total_width;
@@ -93,8 +122,8 @@ TagFamilyInfo GetTagFamilyInfo(const std::string& name) {
   return info;
 }
 
-cv::Mat TagCodeImage(const std::string& family, int id) {
-  return TagCodeImage(CreateTagFamily(family).get(), id);
+cv::Mat TagCodeImage(const std::string& family, int id, int border_bits) {
+  return TagCodeImage(CreateTagFamily(family, border_bits).get(), id);
 }
 
 cv::Mat TagCodeImage(apriltag_family* f, int id) {

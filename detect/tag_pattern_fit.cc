@@ -284,12 +284,32 @@ PatternFitResult FitTagPattern(const cv::Mat& gray, const cv::Mat& code, int bor
   const int y0 = std::max(0, static_cast<int>(std::floor(lo.y())));
   const int y1 = std::min(gray.rows - 1, static_cast<int>(std::ceil(hi.y())));
   const Eigen::Matrix3d h_inv0 = h.inverse();
+  // Whether code point q (centred) lies within half a bit of an unknown bit.
+  bool any_unknown = false;
+  for (int y = 0; y < width; ++y) {
+    for (int x = 0; x < width; ++x) any_unknown |= code.at<uint8_t>(y, x) == kUnknownCodeBit;
+  }
+  auto near_unknown = [&](const Eigen::Vector2d& qc) {
+    const Eigen::Vector2d q = qc + code_centre;
+    for (const double dy : {-0.5, 0.5}) {
+      for (const double dx : {-0.5, 0.5}) {
+        const int bx = static_cast<int>(std::floor(q.x() + dx));
+        const int by = static_cast<int>(std::floor(q.y() + dy));
+        if (bx >= 0 && by >= 0 && bx < width && by < width &&
+            code.at<uint8_t>(by, bx) == kUnknownCodeBit) {
+          return true;
+        }
+      }
+    }
+    return false;
+  };
   std::vector<Pixel> pixels;
   for (int y = y0; y <= y1; ++y) {
     for (int x = x0; x <= x1; ++x) {
       const Eigen::Vector2d p = Eigen::Vector2d(x, y) - image_centre;
       const Eigen::Vector2d q = PatternModel::CodePoint(h_inv0, p);
       if (std::abs(q.x()) > half || std::abs(q.y()) > half) continue;
+      if (any_unknown && near_unknown(q)) continue;
       pixels.push_back({p, static_cast<double>(gray.at<uint8_t>(y, x))});
     }
   }
@@ -330,7 +350,12 @@ PatternFitResult FitTagPattern(const cv::Mat& gray, const cv::Mat& code, int bor
     *n = NormalEquations();
     for (const Pixel& px : pixels) {
       Vec g;
-      const double r = px.value - model.Value(t, ht, ht_inv, px.p, &g);
+      const double m = model.Value(t, ht, ht_inv, px.p, &g);
+      // A pixel at the sensor's clip level (an overexposed paper, a black
+      // crushed to 0) says only that the scene was at least (at most) that
+      // bright: where the model goes beyond the clip, it has no residual.
+      if ((px.value >= 255 && m >= 255) || (px.value <= 0 && m <= 0)) continue;
+      const double r = px.value - m;
       n->jtj.selfadjointView<Eigen::Upper>().rankUpdate(g);
       n->jtr += r * g;
       n->cost += r * r;

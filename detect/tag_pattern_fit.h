@@ -40,11 +40,18 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <string>
 
 #include <opencv2/core.hpp>
 
 namespace rtscalib::detect {
+
+// A bit of a code image that the print does not fix: the corner bits of the
+// quiet zone of a Kalibr AprilGrid's tag, which the grid's black squares
+// cover, are white on other prints. No pixel whose centre lies within half a
+// bit of such a bit is fitted, and the model takes it as paper.
+constexpr uint8_t kUnknownCodeBit = 128;
 
 struct PatternFitOptions {
   int max_iterations = 20;
@@ -71,7 +78,8 @@ struct PatternFitResult {
 };
 
 // Fits the pattern `code` (the tag's code image, CV_8UC1, one pixel per bit,
-// < 128 = ink; tag_family.h's TagCodeImage) to `gray` (CV_8UC1), starting from
+// < 128 = ink, kUnknownCodeBit = unknown, else paper; tag_family.h's
+// TagCodeImage) to `gray` (CV_8UC1), starting from
 // `corners` (TargetCorner order, SPEC 2 pixels, roughly right to ~1 px) of
 // the quad of `width_at_border` bits that starts `border_offset` bits into
 // the code image. Returns the fit; `converged` is false (and `corners` the

@@ -34,13 +34,14 @@ void RequireValid(const TargetScene& scene, const std::map<std::string, int>* fa
     RequireFinite(b.tag_size, "tag_size");
     RequireFinite(b.spacing, "spacing");
     Require(b.tag_size > 0 && b.spacing >= 0, "tag_size > 0, spacing >= 0");
+    Require(b.border_bits == 1 || b.border_bits == 2, "border_bits 1 or 2");
     const Eigen::Matrix3d& R = b.ref_from_board.rotation;
     for (int k = 0; k < 9; ++k) RequireFinite(R.data()[k], "pose rotation");
     for (int k = 0; k < 3; ++k) RequireFinite(b.ref_from_board.translation[k], "pose t");
     Require((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() < 1e-9 &&
                 std::abs(R.determinant() - 1) < 1e-9,
             "the pose's rotation is proper");
-    if (families) {
+    if (families && !b.IsPointBoard()) {
       const auto family = families->find(b.family);
       Require(family != families->end(), "a known family");
       Require(last < family->second, "ids within the family's codes");
@@ -73,6 +74,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       const TagBoard& b = again.boards[i];
       Require(a.family == b.family && a.first_id == b.first_id && a.rows == b.rows &&
                   a.cols == b.cols && a.tag_size == b.tag_size && a.spacing == b.spacing &&
+                  a.border_bits == b.border_bits && a.ids_from == b.ids_from &&
+                  a.kind == b.kind && a.square_size == b.square_size &&
                   a.pose_known == b.pose_known,
               "a board reads back the same");
       Require((a.ref_from_board.rotation - b.ref_from_board.rotation).norm() < 1e-12 &&

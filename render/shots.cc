@@ -554,8 +554,9 @@ DetectShotsResult DetectShots(const TargetScene& scene, const std::vector<Shot>&
   for (const TagBoard& b : scene.boards) {
     point_boards = point_boards || b.IsPointBoard();
     if (b.IsPointBoard()) continue;  // OpenCV's detectors (detect/point_boards.h)
-    if (std::find(dopt.families.begin(), dopt.families.end(), b.family) == dopt.families.end()) {
-      dopt.families.push_back(b.family);
+    const detect::PrintedFamily printed{b.family, b.border_bits};
+    if (std::find(dopt.families.begin(), dopt.families.end(), printed) == dopt.families.end()) {
+      dopt.families.push_back(printed);
     }
   }
   // A scene of point boards alone needs no AprilTag detector.

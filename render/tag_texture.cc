@@ -166,7 +166,8 @@ TagTexture MakePointBoardTexture(const TagBoard& board, const TagTextureOptions&
 double PrintedBitSize(const TagBoard& board) {
   switch (board.kind) {
     case BoardKind::kAprilTag:
-      return board.tag_size / detect::GetTagFamilyInfo(board.family).width_at_border;
+      return board.tag_size /
+             detect::GetTagFamilyInfo(board.family, board.border_bits).width_at_border;
     case BoardKind::kCharuco:
       return board.marker_size / detect::CharucoMarkerImages(board).front().cols;
     case BoardKind::kChessboard:
@@ -199,7 +200,7 @@ BoardRect PrintedArea(const TagBoard& board, double margin) {
     const double m = margin < 0 ? board.square_size : margin;
     return {-m, board.Width() + m, -m, board.Height() + m};
   }
-  const detect::TagFamilyInfo info = detect::GetTagFamilyInfo(board.family);
+  const detect::TagFamilyInfo info = detect::GetTagFamilyInfo(board.family, board.border_bits);
   const double bit = board.tag_size / info.width_at_border;
   const double m = margin < 0 ? bit : margin;
   const double off = info.border_offset() * bit;
@@ -217,8 +218,8 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
   if (board.rows < 1 || board.cols < 1 || !(board.tag_size > 0) || board.spacing < 0) {
     throw std::invalid_argument("TagBoard: expected rows, cols >= 1, tag_size > 0, spacing >= 0");
   }
-  const detect::TagFamilyPtr family = detect::CreateTagFamily(board.family);
-  const detect::TagFamilyInfo info = detect::GetTagFamilyInfo(board.family);
+  const detect::TagFamilyPtr family = detect::CreateTagFamily(board.family, board.border_bits);
+  const detect::TagFamilyInfo info = detect::GetTagFamilyInfo(board.family, board.border_bits);
   if (board.first_id < 0 || board.first_id + board.NumTags() > info.num_codes) {
     throw std::invalid_argument("TagBoard: ids " + std::to_string(board.first_id) + ".." +
                                 std::to_string(board.first_id + board.NumTags() - 1) +
@@ -261,10 +262,10 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
   tex.image = cv::Mat(bits_y * ppb, bits_x * ppb, CV_8UC1, cv::Scalar(options.white));
   const int step = (code_bits + gap_bits) * ppb;
   for (int i = 0; i < board.NumTags(); ++i) {
-    const int r = i / board.cols, c = i % board.cols;
+    const GridCell cell = board.GridOf(i);
     PaintCode(detect::TagCodeImage(family.get(), board.first_id + i),
-              margin_bits * ppb + c * step, margin_bits * ppb + r * step, ppb, options,
-              &tex.image);
+              margin_bits * ppb + cell.col * step, margin_bits * ppb + cell.row * step, ppb,
+              options, &tex.image);
   }
   return tex;
 }

@@ -3,9 +3,11 @@
 //
 // AprilTag boards. Layout (targets.h): tag (r, c)'s detection quad is the square
 // [x0, x0 + tag_size] x [y0, y0 + tag_size] of the board frame with
-// x0 = (tag_size + spacing) c, y0 = (tag_size + spacing) r; x right, y down.
-// One code bit is b = tag_size / width_at_border, so the tag's whole code image
-// (tag_family.h) covers [x0 - o b, x0 + tag_size + o b] with o = border_offset.
+// x0 = (tag_size + spacing) c, y0 = (tag_size + spacing) r; x right, y down;
+// tag first_id + i sits in cell TagBoard::GridOf(i). One code bit is
+// b = tag_size / width_at_border (of the board's border_bits), so the tag's
+// whole code image (tag_family.h) covers [x0 - o b, x0 + tag_size + o b] with
+// o = border_offset. (Kalibr's squares between the tags are not drawn.)
 //
 // ChArUco and chessboards (docs/photos.md). `rows` x `cols` squares of
 // square_size, square (r, c) = [c s, (c + 1) s] x [r s, (r + 1) s], black when

@@ -362,6 +362,12 @@ void WriteModelYaml(const std::string& path, const InstrumentModel& model,
       } else {
         e << YAML::Key << "tag_size" << YAML::Value << YamlDouble(layout.tag_size);
         e << YAML::Key << "spacing" << YAML::Value << YamlDouble(layout.spacing);
+        if (layout.border_bits != 1) {
+          e << YAML::Key << "border_bits" << YAML::Value << layout.border_bits;
+        }
+        if (layout.ids_from == IdOrigin::kBottomLeft) {
+          e << YAML::Key << "ids_from" << YAML::Value << "bottom_left";
+        }
       }
       // SPEC 7.1: the placement the pose is of, and camera-only its zoom,
       // whose camera frame is then the reference (cam_from_board).

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -18,6 +19,16 @@ namespace {
 
 // ArUco dictionaries in the family_codes map (ArucoCodesKey).
 const std::string kArucoPrefix = "aruco:";
+// Tag families that may be printed with a wider black border (WideBorderKey).
+const std::string kWideBorderPrefix = "wide_border:";
+// The widest black border a tag board may have [code bits]: Kalibr's 2.
+constexpr int kMaxBorderBits = 2;
+// OpenCV's chessboard detector needs at least 3 x 3 inner corners
+// (findChessboardCornersSB refuses smaller patterns).
+constexpr int kMinChessboardSquares = 4;
+
+const std::vector<std::pair<std::string, IdOrigin>> kIdOrigins = {
+    {"top_left", IdOrigin::kTopLeft}, {"bottom_left", IdOrigin::kBottomLeft}};
 
 // Bounds that no AprilTag board reaches (see ReadScene).
 constexpr long long kMaxTagsPerBoard = 48714;
@@ -38,7 +49,7 @@ std::vector<const char*> KeysOf(BoardKind kind) {
     case BoardKind::kAprilTag:
       break;
   }
-  return {"family", "first_id", "rows", "cols", "tag_size", "spacing"};
+  return {"family", "first_id", "rows", "cols", "tag_size", "spacing", "border_bits", "ids_from"};
 }
 
 // A name (tag36h11, tagStandard41h12, DICT_4X4_50): letters, digits and '_',
@@ -63,6 +74,8 @@ double ReadLength(const YamlNode& item, const char* key, bool zero_ok, const std
 }  // namespace
 
 std::string ArucoCodesKey(const std::string& dictionary) { return kArucoPrefix + dictionary; }
+
+std::string WideBorderKey(const std::string& family) { return kWideBorderPrefix + family; }
 
 TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>* family_codes) {
   TagBoard b;
@@ -91,17 +104,25 @@ TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>*
   const YamlNode first_id = item.Require("first_id");
   b.first_id = first_id.AsInt();
   if (b.first_id < 0) first_id.Fail("a tag id >= 0");
-  const int min_squares = b.IsPointBoard() ? 2 : 1;
+  const int min_squares = b.kind == BoardKind::kChessboard ? kMinChessboardSquares
+                          : b.IsPointBoard()                ? 2
+                                                            : 1;
+  const std::string why_min = b.kind == BoardKind::kChessboard
+                                  ? " (3 inner corners: OpenCV's chessboard detector takes no fewer)"
+                                  : "";
   const YamlNode rows = item.Require("rows");
   b.rows = rows.AsInt();
   if (b.rows < min_squares) {
-    rows.Fail(b.IsPointBoard() ? "a number of rows of squares >= 2" : "a number of rows >= 1");
+    rows.Fail(b.IsPointBoard()
+                  ? "a number of rows of squares >= " + std::to_string(min_squares) + why_min
+                  : "a number of rows >= 1");
   }
   const YamlNode cols = item.Require("cols");
   b.cols = cols.AsInt();
   if (b.cols < min_squares) {
-    cols.Fail(b.IsPointBoard() ? "a number of columns of squares >= 2"
-                               : "a number of columns >= 1");
+    cols.Fail(b.IsPointBoard()
+                  ? "a number of columns of squares >= " + std::to_string(min_squares) + why_min
+                  : "a number of columns >= 1");
   }
   // Memory and the tag ids stay bounded by what a tag family can hold (the
   // largest AprilTag family, tagStandard52h13, has 48,714 codes), not by a
@@ -138,6 +159,27 @@ TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>*
   if (b.kind == BoardKind::kAprilTag) {
     b.tag_size = ReadLength(item, "tag_size", false, "a tag size > 0 [m]");
     b.spacing = ReadLength(item, "spacing", true, "a spacing >= 0 [m]");
+    if (const std::optional<YamlNode> border = item.Find("border_bits")) {
+      b.border_bits = border->AsInt();
+      if (b.border_bits < 1 || b.border_bits > kMaxBorderBits) {
+        border->Fail("a black border of 1 or " + std::to_string(kMaxBorderBits) +
+                     " code bits (2: Kalibr's AprilGrid)");
+      }
+      if (b.border_bits > 1 && family_codes != nullptr &&
+          family_codes->count(WideBorderKey(b.family)) == 0) {
+        std::string known;
+        for (const auto& entry : *family_codes) {
+          if (entry.first.rfind(kWideBorderPrefix, 0) == 0) {
+            known += (known.empty() ? "" : ", ") + entry.first.substr(kWideBorderPrefix.size());
+          }
+        }
+        border->Fail("1 for family " + b.family + " (" +
+                     (known.empty() ? std::string("no family detected here takes a wider border")
+                                    : "a wider border is printed only on " + known) +
+                     ")");
+      }
+    }
+    item.ReadEnum("ids_from", kIdOrigins, &b.ids_from);
   } else {
     b.square_size = ReadLength(item, "square_size", false, "a square size > 0 [m]");
   }
@@ -154,8 +196,105 @@ TagBoard ReadBoardLayout(const YamlNode& item, const std::map<std::string, int>*
 
 namespace {
 
+// A positive number at `key` of a Kalibr target file.
+double ReadPositive(const YamlNode& root, const char* key, const std::string& what) {
+  const YamlNode node = root.Require(key);
+  const double x = node.AsDouble();
+  if (!(x > 0)) node.Fail(what);
+  return x;
+}
+
+// An integer >= `min` at `key` of a Kalibr target file.
+int ReadCount(const YamlNode& root, const char* key, int min, const std::string& what) {
+  const YamlNode node = root.Require(key);
+  const int n = node.AsInt();
+  if (n < min) node.Fail(what);
+  return n;
+}
+
+// Kalibr's own target file (SPEC 7.2), `target_type` at its top:
+//   aprilgrid:    tagCols, tagRows, tagSize [m], tagSpacing (gap / tagSize)
+//   checkerboard: targetCols, targetRows (inner corners), rowSpacingMeters,
+//                 colSpacingMeters [m]
+// as one board of unknown pose. The AprilGrid is tag36h11 with a 2-bit
+// border, ids from 0 at the bottom-left tag, rows counted upwards (Kalibr's
+// target frame has y up the printed page; targets.h maps it onto SPEC 7's
+// frame). Kalibr's checkerboard may give different row and column spacings;
+// rtscalib's chessboards have square squares (one square_size), so two
+// spacings that differ are an error naming colSpacingMeters.
+TargetScene ReadKalibrTarget(const YamlDocument& doc, const YamlNode& type,
+                             const std::map<std::string, int>* family_codes) {
+  const YamlNode root = doc.Root();
+  const std::string kind = type.AsString();
+  const bool aprilgrid = kind == "aprilgrid";
+  if (!aprilgrid && kind != "checkerboard") {
+    type.Fail("a Kalibr target rtscalib detects: aprilgrid or checkerboard");
+  }
+  // Typos first (as in a targets.yaml): the other type's keys are unknown here.
+  const std::vector<const char*> keys =
+      aprilgrid ? std::vector<const char*>{"tagCols", "tagRows", "tagSize", "tagSpacing"}
+                : std::vector<const char*>{"targetCols", "targetRows", "rowSpacingMeters",
+                                           "colSpacingMeters"};
+  for (const char* key : keys) root.Find(key);
+  doc.CheckAllKeysUsed();
+
+  TagBoard b;
+  b.first_id = 0;
+  b.pose_known = false;
+  if (aprilgrid) {
+    b.kind = BoardKind::kAprilTag;
+    b.family = "tag36h11";
+    b.border_bits = 2;
+    b.ids_from = IdOrigin::kBottomLeft;
+    if (family_codes != nullptr && family_codes->count(WideBorderKey(b.family)) == 0) {
+      type.Fail("a target this program detects (no tag36h11 tags of a 2-bit border here)");
+    }
+    b.cols = ReadCount(root, "tagCols", 1, "a number of tag columns >= 1");
+    b.rows = ReadCount(root, "tagRows", 1, "a number of tag rows >= 1");
+    b.tag_size = ReadPositive(root, "tagSize", "a tag size > 0 [m] (the black border's outer edge)");
+    b.spacing = b.tag_size * ReadPositive(root, "tagSpacing",
+                                          "a gap between tags > 0, as a fraction of tagSize");
+    // Ids 0 .. rows cols - 1 must be codes of the family (587 for tag36h11).
+    long long max_tags = kMaxTagsPerBoard;
+    if (family_codes != nullptr && family_codes->count(b.family) > 0) {
+      max_tags = std::min<long long>(max_tags, family_codes->at(b.family));
+    }
+    if (static_cast<long long>(b.rows) * b.cols > max_tags) {
+      root.Require("tagRows")
+          .Fail("a grid of at most " + std::to_string(max_tags) + " tags (the codes of " +
+                b.family + "), not tagRows x tagCols = " + std::to_string(b.rows) + " x " +
+                std::to_string(b.cols));
+    }
+  } else {
+    b.kind = BoardKind::kChessboard;
+    b.family = "chessboard";
+    const std::string corners = " >= 3 (OpenCV's chessboard detector takes no fewer)";
+    b.cols = 1 + ReadCount(root, "targetCols", kMinChessboardSquares - 1,
+                           "a number of inner corners along a row" + corners);
+    b.rows = 1 + ReadCount(root, "targetRows", kMinChessboardSquares - 1,
+                           "a number of inner corners along a column" + corners);
+    if (static_cast<long long>(b.rows) * b.cols > kMaxTagsPerBoard) {
+      root.Require("targetRows")
+          .Fail("a board of at most " + std::to_string(kMaxTagsPerBoard) + " squares");
+    }
+    b.square_size = ReadPositive(root, "rowSpacingMeters", "a square size > 0 [m]");
+    const YamlNode col = root.Require("colSpacingMeters");
+    const double col_spacing = col.AsDouble();
+    if (!(std::abs(col_spacing - b.square_size) <= 1e-9 * b.square_size)) {
+      col.Fail("the same spacing as rowSpacingMeters (" + FormatDouble(b.square_size) +
+               " m): rtscalib's chessboards have square squares");
+    }
+  }
+  TargetScene scene;
+  scene.boards.push_back(b);
+  return scene;
+}
+
 TargetScene ReadScene(const YamlDocument& doc, const std::map<std::string, int>* family_codes) {
   const YamlNode root = doc.Root();
+  if (const std::optional<YamlNode> type = root.Find("target_type")) {
+    return ReadKalibrTarget(doc, *type, family_codes);
+  }
   const YamlNode boards = root.Require("boards");
   if (!boards.IsSequence()) boards.Fail("a list of at least one board");
   // Typos first: a misspelt key must be named as such, not reported as the
@@ -244,6 +383,8 @@ void WriteTargets(const std::string& path, const TargetScene& scene, bool with_p
       if (b.kind == BoardKind::kCharuco) o << ", marker_size: " << FormatDouble(b.marker_size);
     } else {
       o << ", tag_size: " << FormatDouble(b.tag_size) << ", spacing: " << FormatDouble(b.spacing);
+      if (b.border_bits != 1) o << ", border_bits: " << b.border_bits;
+      if (b.ids_from == IdOrigin::kBottomLeft) o << ", ids_from: bottom_left";
     }
     if (with_poses && b.pose_known) {
       const Eigen::Vector3d e = EulerFromRotation(b.ref_from_board.rotation);

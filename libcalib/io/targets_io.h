@@ -18,10 +18,24 @@
 // Per board: family (a tag family name), first_id (integer >= 0), rows and
 // cols (integers >= 1), tag_size (> 0 [m], the detection quad's edge, for
 // tag36h11 the outer edge of the black border), spacing (>= 0 [m], the gap
-// between neighbouring quads) and an optional pose: ref_from_board with
+// between neighbouring quads), optionally border_bits (1, the default, or 2:
+// the black border's width in code bits, Kalibr's AprilGrid has 2; only for
+// families whose quad is the outer edge of their black border) and ids_from
+// (top_left, the default, or bottom_left: Kalibr's AprilGrid numbers its rows
+// upwards), and an optional pose: ref_from_board with
 // R = Rz(g) Ry(b) Rx(a) [rad] (SPEC 1, paper Eq. 83) and t [m]. A board
 // without a pose gets TagBoard::pose_known = false. Board layout and corner
-// order: libcalib/model/targets.h.
+// order: libcalib/model/targets.h. A chessboard needs at least 4 x 4 squares
+// (3 x 3 inner corners, what OpenCV's detector takes).
+//
+// Kalibr's own target file is read too (SPEC 7.2), wherever a targets.yaml
+// is: `target_type: aprilgrid` (tagCols, tagRows, tagSize [m], tagSpacing =
+// gap / tagSize) is one tag36h11 board with border_bits 2, first_id 0,
+// ids_from bottom_left and spacing = tagSpacing tagSize; `target_type:
+// checkerboard` (targetCols, targetRows = inner corners, rowSpacingMeters,
+// colSpacingMeters, which must be equal) is one chessboard of (targetRows +
+// 1) x (targetCols + 1) squares. Neither has a pose. Other keys are errors
+// naming the key, as in a targets.yaml.
 //
 // Tag ids are the `target` column of pixels.csv, so the id ranges
 // [first_id, first_id + rows cols) of all boards must not overlap (whatever
@@ -45,6 +59,9 @@ class YamlNode;
 
 // The key of an ArUco dictionary in `family_codes` ("aruco:<name>").
 std::string ArucoCodesKey(const std::string& dictionary);
+// The key in `family_codes` of a tag family that may be printed with a wider
+// black border (`border_bits` > 1): present when the caller can detect it.
+std::string WideBorderKey(const std::string& family);
 
 // One board's layout (everything but its pose) from a targets.yaml or
 // model.yaml board mapping, with the rules above; errors name the key.

@@ -1,14 +1,28 @@
 // Known calibration targets: boards of AprilTags placed in the reference frame.
 //
 // A board is a grid of `rows` x `cols` tags of one family with consecutive ids
-// starting at `first_id` (row-major, row 0 at the board's top). In the board
-// frame the tags lie in the z = 0 plane, x to the right along a row, y down
-// along a column, z out of the back of the board (so a camera looking at the
-// printed side looks along +z). Tag (r, c)'s black square has edge `tag_size`
+// starting at `first_id`, row by row. In the board frame the tags lie in the
+// z = 0 plane, x to the right along a row, y down along a column, z out of the
+// back of the board (so a camera looking at the printed side looks along +z);
+// row 0 is the board's top row. Tag (r, c)'s black square has edge `tag_size`
 // and its top-left corner at ((tag_size + spacing) * c, (tag_size + spacing) * r).
 // Corner order of one tag follows libapriltag's detection order (see
 // detect/detector.h): corner 0 = bottom-left, 1 = bottom-right, 2 = top-right,
 // 3 = top-left, as seen in an upright image of the printed tag.
+//
+// Which tag an id names (`ids_from`, read in GridOf alone): SPEC 7 counts ids
+// from the top-left tag, left to right, then down (tag first_id + i is row
+// i / cols from the top). Kalibr's AprilGrid counts from the bottom-left tag,
+// left to right, then UP (its target frame has y up the printed page): tag
+// first_id + i is row i / cols from the bottom, i.e. row rows - 1 - i / cols
+// of the board frame. Ids stay the print's, coordinates are this frame's.
+//
+// `border_bits`: the width of a tag's black border in code bits (SPEC 7.2).
+// libapriltag's own prints have 1; Kalibr's AprilGrid has 2 (the code bits
+// sit one bit further in, the quad of a tag36h11 tag is 10 bits wide instead
+// of 8) and small black squares of side `spacing` where four tags' corners
+// meet, touching each corner. `tag_size` is always the outer edge of the
+// black border.
 //
 // `ref_from_board` is the board's pose when `pose_known` (surveyed, or the
 // simulation's truth). A board of a real instrument's targets.yaml without a
@@ -36,6 +50,15 @@ namespace rtscalib {
 // top-left square is black, as cv::aruco::CharucoBoard draws it).
 enum class BoardKind { kAprilTag, kCharuco, kChessboard };
 
+// Where a board's tag ids start (see above).
+enum class IdOrigin { kTopLeft, kBottomLeft };
+
+// A tag's place in its board's grid: row r from the board's top, column c
+// from its left.
+struct GridCell {
+  int row = 0, col = 0;
+};
+
 struct TagBoard {
   BoardKind kind = BoardKind::kAprilTag;
   std::string family = "tag36h11";  // ChArUco: the ArUco dictionary (DICT_4X4_50, ...)
@@ -44,6 +67,8 @@ struct TagBoard {
   int cols = 4;
   double tag_size = 0.08;  // edge of the black square [m] (AprilTag)
   double spacing = 0.02;   // white gap between neighbouring tags [m] (AprilTag)
+  int border_bits = 1;     // black border of a tag [code bits] (AprilTag)
+  IdOrigin ids_from = IdOrigin::kTopLeft;  // (AprilTag)
   double square_size = 0;  // [m] (ChArUco, chessboard)
   double marker_size = 0;  // [m] (ChArUco)
   Rigid3 ref_from_board;
@@ -55,6 +80,16 @@ struct TagBoard {
   int NumTags() const { return IsPointBoard() ? (rows - 1) * (cols - 1) : rows * cols; }
   int LastId() const { return first_id + NumTags() - 1; }
   bool HasId(int id) const { return id >= first_id && id <= LastId(); }
+  // The grid cell of tag `index` (0 .. NumTags-1, id first_id + index) of an
+  // AprilTag board, by `ids_from`; and the index of a cell.
+  GridCell GridOf(int index) const {
+    const int r = index / cols, c = index % cols;
+    return {ids_from == IdOrigin::kBottomLeft ? rows - 1 - r : r, c};
+  }
+  int IndexOf(const GridCell& cell) const {
+    const int r = ids_from == IdOrigin::kBottomLeft ? rows - 1 - cell.row : cell.row;
+    return r * cols + cell.col;
+  }
   // The four corners of tag `index` (0 .. NumTags-1) in the board frame; for
   // a point board all four are its inner corner `index`.
   std::array<Eigen::Vector3d, 4> CornersInBoard(int index) const {
@@ -63,8 +98,8 @@ struct TagBoard {
       const Eigen::Vector3d p(square_size * (c + 1), square_size * (r + 1), 0);
       return {p, p, p, p};
     }
-    const int r = index / cols, c = index % cols;
-    const double x0 = (tag_size + spacing) * c, y0 = (tag_size + spacing) * r;
+    const GridCell cell = GridOf(index);
+    const double x0 = (tag_size + spacing) * cell.col, y0 = (tag_size + spacing) * cell.row;
     return {Eigen::Vector3d(x0, y0 + tag_size, 0), Eigen::Vector3d(x0 + tag_size, y0 + tag_size, 0),
             Eigen::Vector3d(x0 + tag_size, y0, 0), Eigen::Vector3d(x0, y0, 0)};
   }

@@ -1,6 +1,7 @@
 // `rtscalib detect` in-process: a synthesized photo of one posed tag (the
 // photo synthesis and the corner accuracy are tested in tests/detect), the
 // command's files and its refusal to overwrite them.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -8,8 +9,11 @@
 #include <fstream>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "app/commands.h"
+#include "app/photo_session.h"
+#include "libcalib/text/errors.h"
 #include "libcalib/io/records.h"
 #include "tests/detect/synthetic_photo.h"
 
@@ -85,6 +89,107 @@ TEST(DetectCommandTest, WritesPixelsAndSummaryAndRefusesToOverwrite) {
   std::getline(written, row);
   EXPECT_EQ(row.rfind("1,0,45,90,p1,", 0), 0u) << row;
   fs::remove_all(dir);
+}
+
+// Bad photos and boards are InputErrors naming the file and the shots.csv
+// line or the targets key, never OpenCV's internal errors: a JPEG cut in
+// half (OpenCV decodes it with grey rows and a warning on stderr only), a
+// PNG whose header claims 100000 x 100000 pixels (CV_IO_MAX_IMAGE_PIXELS),
+// a chessboard of 3 rows (findChessboardCornersSB takes no fewer than 3 x 3
+// inner corners).
+TEST(DetectCommandTest, BadPhotosAndBoardsNameTheirFileAndLine) {
+  const fs::path dir = fs::path(::testing::TempDir()) /
+                       ("rtscalib_detect_command_bad_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  cv::Mat img(200, 300, CV_8UC1, cv::Scalar(200));
+  cv::rectangle(img, cv::Rect(50, 40, 100, 80), cv::Scalar(20), cv::FILLED);
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", img, jpeg);
+  std::ofstream(dir / "whole.jpg", std::ios::binary)
+      .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(jpeg.size()));
+  std::ofstream(dir / "half.jpg", std::ios::binary)
+      .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(jpeg.size() / 2));
+  std::vector<uint8_t> png;
+  cv::imencode(".png", img, png);
+  png = detect::testing::PngClaimingSize(png, 100000, 100000);
+  std::ofstream(dir / "huge.png", std::ios::binary)
+      .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  std::ofstream(dir / "targets.yaml") << "boards:\n"
+                                         "  - {family: tag36h11, first_id: 0, rows: 1, cols: 1,\n"
+                                         "     tag_size: 0.1, spacing: 0.02}\n";
+
+  app::DetectArgs args;
+  args.targets = (dir / "targets.yaml").string();
+  args.out = (dir / "pixels.csv").string();
+  args.quiet = true;
+  args.force = true;
+  struct Case {
+    const char* image;
+    const char* says;
+  };
+  for (const Case& c : {Case{"half.jpg", "is damaged"}, Case{"huge.png", "100000 x 100000"}}) {
+    const std::string shots = (dir / (std::string(c.image) + ".csv")).string();
+    std::ofstream(shots) << "face,zoom,phi,theta,image\n1,0,,,whole.jpg\n1,0,,," << c.image
+                         << "\n";
+    args.shots = shots;
+    try {
+      app::RunDetect(args);
+      ADD_FAILURE() << c.image << ": expected an InputError";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file, shots);
+      EXPECT_EQ(e.line, 3) << c.image;
+      EXPECT_EQ(e.column, "image");
+      EXPECT_THAT(e.got, ::testing::HasSubstr(c.image));
+      EXPECT_THAT(e.got, ::testing::HasSubstr(c.says));
+    }
+  }
+  std::ofstream(dir / "chess.yaml") << "boards:\n"
+                                       "  - {type: chessboard, first_id: 0, rows: 3, cols: 7,\n"
+                                       "     square_size: 0.03}\n";
+  args.targets = (dir / "chess.yaml").string();
+  args.shots = (dir / "half.jpg.csv").string();
+  try {
+    app::RunDetect(args);
+    ADD_FAILURE() << "expected an InputError for rows: 3";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file, args.targets);
+    EXPECT_EQ(e.key, "boards[0].rows");
+    EXPECT_EQ(e.line, 2);
+  }
+  fs::remove_all(dir);
+}
+
+// The log speaks of what was found (the photo session's line): a session of
+// chessboards finds corners, not tags, and has no libapriltag to compare
+// with; a session of tags says how many came from their neighbours.
+TEST(DetectCommandTest, TheSessionLineNamesWhatWasFound) {
+  app::PhotoSessionSummary chess;
+  chess.photos.resize(13);
+  chess.point_words = "chessboard corners";
+  chess.point_corners = 702;
+  chess.tags = 702;
+  chess.corners = 702;
+  chess.images_per_second = 3.2;
+  const std::string line = app::PhotoSessionLine(chess);
+  EXPECT_THAT(line, ::testing::HasSubstr("13 photos: 702 chessboard corners"));
+  EXPECT_THAT(line, ::testing::Not(::testing::HasSubstr("tag")));
+  EXPECT_THAT(line, ::testing::Not(::testing::HasSubstr("libapriltag")));
+
+  app::PhotoSessionSummary grid;
+  grid.photos.resize(30);
+  grid.tag_boards = true;
+  grid.apriltags = 1046;
+  grid.tags = 1046;
+  grid.corners = 4184;
+  grid.from_neighbours = 28;
+  grid.refined_corners = 4072;
+  grid.shift_rms_px = 0.25;
+  grid.shift_max_px = 1.7;
+  const std::string tags = app::PhotoSessionLine(grid);
+  EXPECT_THAT(tags, ::testing::HasSubstr("1046 tags (4184 corners; 28 of the tags grown from their "
+                                         "neighbours)"));
+  EXPECT_THAT(tags, ::testing::HasSubstr("refined vs libapriltag corners RMS 0.250 px"));
 }
 
 }  // namespace

@@ -31,6 +31,7 @@
 #include <unistd.h>
 
 #include "app/pipeline.h"
+#include "tests/real_photos/opencv_calibration.h"
 
 namespace rtscalib::app {
 namespace {
@@ -41,28 +42,8 @@ const char* const kSamples = "/usr/share/doc/opencv-doc/examples/data";
 const char* const kPhotos[] = {"left01", "left02", "left03", "left04", "left05", "left06", "left07",
                                "left08", "left09", "left11", "left12", "left13", "left14"};
 
-struct OpenCvCalibration {
-  double rms = 0;
-  double k[4] = {0, 0, 0, 0};      // fx, fy, cx, cy
-  double sigma[4] = {0, 0, 0, 0};  // stdDeviationsIntrinsics
-};
-
-OpenCvCalibration CalibrateWithOpenCv(const std::vector<std::vector<cv::Point3f>>& object,
-                                      const std::vector<std::vector<cv::Point2f>>& image) {
-  cv::Mat k, d, sd_intrinsics, sd_extrinsics, per_view;
-  std::vector<cv::Mat> rvecs, tvecs;
-  OpenCvCalibration out;
-  // calibrateCameraExtended (its C++ name is this overload of calibrateCamera);
-  // flags 0: OpenCV's default model, k1 k2 p1 p2 k3 (bench.yaml's effects).
-  out.rms = cv::calibrateCamera(object, image, cv::Size(640, 480), k, d, rvecs, tvecs,
-                                sd_intrinsics, sd_extrinsics, per_view, 0);
-  out.k[0] = k.at<double>(0, 0);
-  out.k[1] = k.at<double>(1, 1);
-  out.k[2] = k.at<double>(0, 2);
-  out.k[3] = k.at<double>(1, 2);
-  for (int i = 0; i < 4; ++i) out.sigma[i] = sd_intrinsics.at<double>(i);
-  return out;
-}
+using testing_real_photos::CalibrateWithOpenCv;
+using testing_real_photos::OpenCvCalibration;
 
 TEST(OpenCvSamplePhotos, CameraOnlyCalibrationAgreesWithCalibrateCamera) {
   for (const char* name : kPhotos) {
@@ -93,20 +74,10 @@ TEST(OpenCvSamplePhotos, CameraOnlyCalibrationAgreesWithCalibrateCamera) {
 
   // OpenCV on rtscalib's corners: per photo, the board-frame corners
   // (TagBoard::CornersInBoard) and the detected pixels, in pixels.csv order.
-  std::map<std::string, std::pair<std::vector<cv::Point3f>, std::vector<cv::Point2f>>> views;
-  for (const PixelObservation& p : r.obs.pixels) {
-    const TagBoard& b = r.obs.targets.boards.at(0);
-    const Eigen::Vector3d x = b.CornersInBoard(p.target - b.first_id)[0];
-    views[p.shot].first.emplace_back(x.x(), x.y(), x.z());
-    views[p.shot].second.emplace_back(p.uv.x(), p.uv.y());
-  }
-  std::vector<std::vector<cv::Point3f>> object;
-  std::vector<std::vector<cv::Point2f>> image;
-  for (const auto& [shot, v] : views) {
-    object.push_back(v.first);
-    image.push_back(v.second);
-  }
-  const OpenCvCalibration same = CalibrateWithOpenCv(object, image);
+  const testing_real_photos::OpenCvViews views =
+      testing_real_photos::ViewsOf(r.obs.pixels, r.obs.targets);
+  const OpenCvCalibration same =
+      CalibrateWithOpenCv(views.object, views.image, cv::Size(640, 480));
 
   // OpenCV's own detection, as its calibration tutorial does it.
   std::vector<std::vector<cv::Point3f>> own_object;
@@ -125,7 +96,7 @@ TEST(OpenCvSamplePhotos, CameraOnlyCalibrationAgreesWithCalibrateCamera) {
     own_object.push_back(grid);
     own_image.push_back(corners);
   }
-  const OpenCvCalibration own = CalibrateWithOpenCv(own_object, own_image);
+  const OpenCvCalibration own = CalibrateWithOpenCv(own_object, own_image, cv::Size(640, 480));
 
   const char* const names[] = {"fx", "fy", "cx", "cy"};
   const double rms = r.calibration.final_errors.pixels.rms_px;

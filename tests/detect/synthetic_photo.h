@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -31,20 +32,54 @@ struct PrintedTag {
   double x0 = 0, y0 = 0, size = 1;
 };
 
-inline PrintedTag PrintTag(const std::string& family, int id, double x0, double y0, double size) {
-  const TagFamilyInfo info = GetTagFamilyInfo(family);
-  return {TagCodeImage(family, id), info.width_at_border, info.border_offset(), x0, y0, size};
+inline PrintedTag PrintTag(const std::string& family, int id, double x0, double y0, double size,
+                           int border_bits = 1) {
+  const TagFamilyInfo info = GetTagFamilyInfo(family, border_bits);
+  return {TagCodeImage(family, id, border_bits), info.width_at_border, info.border_offset(), x0,
+          y0, size};
 }
 
-// Every tag of `board` with its quad in board coordinates [m] (targets.h).
+// A black square [x0, x0 + size]^2 on the plane (one ink bit).
+inline PrintedTag PrintSquare(double x0, double y0, double size) {
+  return {cv::Mat(1, 1, CV_8UC1, cv::Scalar(0)), 1, 0, x0, y0, size};
+}
+
+// Every tag of `board` with its quad in board coordinates [m] (targets.h),
+// with the board's border_bits.
 inline std::vector<PrintedTag> PrintBoard(const TagBoard& board) {
   std::vector<PrintedTag> tags;
   for (int i = 0; i < board.NumTags(); ++i) {
     const Eigen::Vector3d top_left = board.CornersInBoard(i)[3];
-    tags.push_back(
-        PrintTag(board.family, board.first_id + i, top_left.x(), top_left.y(), board.tag_size));
+    tags.push_back(PrintTag(board.family, board.first_id + i, top_left.x(), top_left.y(),
+                            board.tag_size, board.border_bits));
   }
   return tags;
+}
+
+// Kalibr's AprilGrid (SPEC 7.2): `board`'s tags and a black square of side
+// `spacing` at every crossing of the gaps, the outer ones included, each
+// touching the corners of the tags around it. With `overlap` > 0 [plane
+// units] the squares grow by that much on every side and cover the tags'
+// corners, as some prints do (TUM VI's). `skip` squares (by crossing index
+// r (cols + 1) + c, r, c = 0 .. rows, cols from the top-left) are left out.
+// The squares come first: CellAt finds a square before the white quiet
+// zone of the tag whose corner bit it covers. With overlap, the ink that a
+// square and a tag's border share is counted twice by RenderCoverage (pixel
+// values clipped at ink), at the junctions only.
+inline std::vector<PrintedTag> PrintAprilGrid(const TagBoard& board, double overlap = 0,
+                                              const std::vector<int>& skip = {}) {
+  std::vector<PrintedTag> out;
+  const double pitch = board.tag_size + board.spacing;
+  for (int r = 0; r <= board.rows; ++r) {
+    for (int c = 0; c <= board.cols; ++c) {
+      if (std::find(skip.begin(), skip.end(), r * (board.cols + 1) + c) != skip.end()) continue;
+      out.push_back(PrintSquare(c * pitch - board.spacing - overlap,
+                                r * pitch - board.spacing - overlap,
+                                board.spacing + 2 * overlap));
+    }
+  }
+  for (const PrintedTag& t : PrintBoard(board)) out.push_back(t);
+  return out;
 }
 
 // The code bit under plane point p: which tag (-1 = plain paper) and which
@@ -152,7 +187,8 @@ inline cv::Mat RenderCoverage(const std::vector<PrintedTag>& tags,
       }
       // The tags at the pixel's corners: code images are at least one white
       // bit apart and their outer ring is white for the families used here,
-      // so no other tag can change the pixel's value.
+      // so no other tag can change the pixel's value (an AprilGrid's squares
+      // touch the tags only where the tags' code images are white).
       std::vector<int> candidates;
       for (const int k : at) {
         const int tag = corners[k].tag;
@@ -189,7 +225,7 @@ inline cv::Mat RenderCoverage(const std::vector<PrintedTag>& tags,
           }
         }
       }
-      out.at<double>(j, i) = 1.0 - ink;
+      out.at<double>(j, i) = std::max(0.0, 1.0 - ink);
     }
   }
   return out;
@@ -230,6 +266,27 @@ inline Eigen::Matrix3d MakeHomography(double size, const Eigen::Vector2d& centre
   to_centre(0, 2) = centre.x();
   to_centre(1, 2) = centre.y();
   return to_centre * rotate * perspective * to_origin;
+}
+
+// A PNG file's bytes (as cv::imencode writes them) whose header claims
+// `width` x `height` pixels: IHDR's width and height, big-endian, at bytes
+// 16..23 (after the signature and the chunk's length and type), and its
+// CRC over type and data (bytes 12..28) at 29..32, made right so that
+// libpng reads the header (PNG spec 5.3, CRC-32 of ISO 3309).
+inline std::vector<uint8_t> PngClaimingSize(std::vector<uint8_t> png, uint32_t width,
+                                            uint32_t height) {
+  for (int i = 0; i < 4; ++i) {
+    png[16 + i] = static_cast<uint8_t>(width >> (24 - 8 * i));
+    png[20 + i] = static_cast<uint8_t>(height >> (24 - 8 * i));
+  }
+  uint32_t crc = 0xFFFFFFFFu;
+  for (int i = 12; i < 29; ++i) {
+    crc ^= png[i];
+    for (int b = 0; b < 8; ++b) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  crc ^= 0xFFFFFFFFu;
+  for (int i = 0; i < 4; ++i) png[29 + i] = static_cast<uint8_t>(crc >> (24 - 8 * i));
+  return png;
 }
 
 }  // namespace rtscalib::detect::testing

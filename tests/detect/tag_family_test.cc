@@ -106,6 +106,32 @@ TEST(TagFamily, CodeImageBordersFollowTheHeaderGeometry) {
   EXPECT_GT(cv::norm(TagCodeImage("tag36h11", 0), TagCodeImage("tag36h11", 1), cv::NORM_L1), 0);
 }
 
+// SPEC 7.2: a 2-bit border (Kalibr's AprilGrid). The code image is two bits
+// wider: a white quiet ring, two black rings, and the same data bits as the
+// 1-bit image's, one bit further in. Families whose quad is not a black
+// border's edge take no wider border.
+TEST(TagFamily, TwoBitBorderMovesTheCodeOneBitIn) {
+  const TagFamilyInfo one = GetTagFamilyInfo("tag36h11");
+  const TagFamilyInfo two = GetTagFamilyInfo("tag36h11", 2);
+  EXPECT_EQ(two.width_at_border, one.width_at_border + 2);
+  EXPECT_EQ(two.total_width, one.total_width + 2);
+  EXPECT_EQ(two.border_offset(), 1);
+  EXPECT_EQ(two.num_codes, one.num_codes);
+  for (const int id : {0, 17, 586}) {
+    const cv::Mat a = TagCodeImage("tag36h11", id);
+    const cv::Mat b = TagCodeImage("tag36h11", id, 2);
+    ASSERT_EQ(b.rows, 12);
+    EXPECT_EQ(RingValue(b, 0), 255);
+    EXPECT_EQ(RingValue(b, 1), 0);
+    EXPECT_EQ(RingValue(b, 2), 0);
+    EXPECT_EQ(cv::norm(a(cv::Rect(2, 2, 6, 6)), b(cv::Rect(3, 3, 6, 6)), cv::NORM_L1), 0) << id;
+  }
+  EXPECT_TRUE(TakesWideBorder("tag36h11"));
+  EXPECT_FALSE(TakesWideBorder("tagStandard41h12"));
+  EXPECT_THROW(CreateTagFamily("tagStandard41h12", 2), std::invalid_argument);
+  EXPECT_THROW(CreateTagFamily("tag36h11", 0), std::invalid_argument);
+}
+
 TEST(TagFamily, IdsOutsideTheFamilyThrow) {
   EXPECT_THROW(TagCodeImage("tag16h5", 30), std::out_of_range);
   EXPECT_THROW(TagCodeImage("tag16h5", -1), std::out_of_range);
@@ -122,15 +148,22 @@ TEST(TagFamily, IdsOutsideTheFamilyThrow) {
 // which shows that row 0 is the top of the upright tag.
 TEST(TagFamily, LibapriltagDetectsTheCodeImageUprightWithSpecCornerOrder) {
   constexpr int kScale = 16, kMargin = 40;
-  for (const auto& [name, id] : std::vector<std::pair<std::string, int>>{
-           {"tag36h11", 0}, {"tag36h11", 123}, {"tag25h9", 20}, {"tagStandard41h12", 77}}) {
-    const TagFamilyInfo info = GetTagFamilyInfo(name);
+  struct Case {
+    std::string name;
+    int id, border_bits;
+  };
+  for (const auto& [name, id, border] : std::vector<Case>{{"tag36h11", 0, 1},
+                                                          {"tag36h11", 123, 1},
+                                                          {"tag25h9", 20, 1},
+                                                          {"tagStandard41h12", 77, 1},
+                                                          {"tag36h11", 123, 2}}) {
+    const TagFamilyInfo info = GetTagFamilyInfo(name, border);
     cv::Mat big;
-    cv::resize(TagCodeImage(name, id), big, cv::Size(), kScale, kScale, cv::INTER_NEAREST);
+    cv::resize(TagCodeImage(name, id, border), big, cv::Size(), kScale, kScale, cv::INTER_NEAREST);
     cv::Mat padded;
     cv::copyMakeBorder(big, padded, kMargin, kMargin, kMargin, kMargin, cv::BORDER_CONSTANT,
                        cv::Scalar(255));
-    const TagFamilyPtr family = CreateTagFamily(name);
+    const TagFamilyPtr family = CreateTagFamily(name, border);
     apriltag_detector_t* td = apriltag_detector_create();
     td->quad_decimate = 1.0;
     td->nthreads = 1;

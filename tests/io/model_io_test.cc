@@ -410,6 +410,8 @@ TEST(ModelIoBoards, BoardsAndPointsRoundTrip) {
   b.board.cols = 8;
   b.board.tag_size = 0.06;
   b.board.spacing = 0.015;
+  b.board.border_bits = 2;  // Kalibr's AprilGrid (SPEC 7.2)
+  b.board.ids_from = IdOrigin::kBottomLeft;
   b.pose = PoseBlock::FromRigid(Rigid3::FromEuler({0.1, -0.2, 1.3}, {2.0 / 3.0, -4.0, 1.5}));
   b.sigma.rotation = {1e-4, 2e-4, 3e-4};
   b.sigma.euler = {1e-4, 2e-4, 3e-4};
@@ -432,6 +434,8 @@ TEST(ModelIoBoards, BoardsAndPointsRoundTrip) {
   EXPECT_EQ(r.boards[0].board.cols, 8);
   EXPECT_EQ(r.boards[0].board.tag_size, 0.06);
   EXPECT_EQ(r.boards[0].board.spacing, 0.015);
+  EXPECT_EQ(r.boards[0].board.border_bits, 2);
+  EXPECT_EQ(r.boards[0].board.ids_from, IdOrigin::kBottomLeft);
   EXPECT_FALSE(r.boards[0].board.pose_known);
   EXPECT_EQ(r.boards[0].pose.q, b.pose.q);
   EXPECT_EQ(r.boards[0].pose.t, b.pose.t);

@@ -242,13 +242,162 @@ TEST(Targets, PointBoardErrorsNameTheKey) {
             "boards[0].tag_size");
   ExpectKeyError(TargetsError(head + "type: chessboard, first_id: 0, rows: 1, cols: 4, "
                                      "square_size: 0.02}\n"),
-                 "boards[0].rows", 2, "a number of rows of squares >= 2", "1");
+                 "boards[0].rows", 2, "a number of rows of squares >= 4", "1");
+  // OpenCV's chessboard detector takes no fewer than 3 x 3 inner corners: a
+  // board of 3 rows of squares is refused here, not by OpenCV later.
+  ExpectKeyError(TargetsError(head + "type: chessboard, first_id: 0, rows: 3, cols: 7, "
+                                     "square_size: 0.02}\n"),
+                 "boards[0].rows", 2, "3 inner corners", "3");
+  ExpectKeyError(TargetsError(head + "type: chessboard, first_id: 0, rows: 5, cols: 2, "
+                                     "square_size: 0.02}\n"),
+                 "boards[0].cols", 2, "a number of columns of squares >= 4", "2");
   ExpectKeyError(TargetsError(head + "type: charuco, dictionary: DICT_4X4_50, first_id: 0, rows: 3, "
                                      "cols: 4, square_size: 0.02, marker_size: 0.02}\n"),
                  "boards[0].marker_size", 2, "a marker size > 0 and < square_size", "0.02");
   ExpectKeyError(TargetsError(head + "type: charuco, dictionary: 'DICT 4X4', first_id: 0, rows: 3, "
                                      "cols: 4, square_size: 0.02, marker_size: 0.01}\n"),
                  "boards[0].dictionary", 2, "an ArUco dictionary name", "DICT 4X4");
+}
+
+}  // namespace
+}  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// SPEC 7.2: tag boards with a 2-bit border, Kalibr's id layout.
+TEST(Targets, TagBoardsTakeBorderBitsAndWhereTheirIdsStart) {
+  const std::string text =
+      "boards:\n"
+      "  - {family: tag36h11, first_id: 0, rows: 2, cols: 3, tag_size: 0.1, spacing: 0.03,\n"
+      "     border_bits: 2, ids_from: bottom_left}\n"
+      "  - {family: tag36h11, first_id: 10, rows: 2, cols: 3, tag_size: 0.1, spacing: 0.03}\n";
+  const std::map<std::string, int> codes = {{"tag36h11", 587},
+                                            {WideBorderKey("tag36h11"), 587},
+                                            {"tagStandard41h12", 2115}};
+  const TargetScene s = ParseTargets(text, kName, &codes);
+  ASSERT_EQ(s.boards.size(), 2u);
+  const TagBoard& kalibr = s.boards[0];
+  EXPECT_EQ(kalibr.border_bits, 2);
+  EXPECT_EQ(kalibr.ids_from, IdOrigin::kBottomLeft);
+  EXPECT_EQ(s.boards[1].border_bits, 1);
+  EXPECT_EQ(s.boards[1].ids_from, IdOrigin::kTopLeft);
+  // Tag 0 is the bottom row's first (row 1 from the top), tag 3 above it.
+  EXPECT_TRUE(kalibr.CornersInBoard(0)[3].isApprox(Eigen::Vector3d(0, 0.13, 0)));
+  EXPECT_TRUE(kalibr.CornersInBoard(3)[3].isApprox(Eigen::Vector3d(0, 0, 0), 1e-12));
+  EXPECT_TRUE(s.boards[1].CornersInBoard(0)[3].isApprox(Eigen::Vector3d(0, 0, 0), 1e-12));
+
+  // Written and read back.
+  TempDir dir;
+  const std::string path = dir.Path("t.yaml");
+  WriteTargets(path, s);
+  const TargetScene again = ReadTargets(path, &codes);
+  EXPECT_EQ(again.boards[0].border_bits, 2);
+  EXPECT_EQ(again.boards[0].ids_from, IdOrigin::kBottomLeft);
+  EXPECT_EQ(again.boards[1].border_bits, 1);
+
+  const std::string head = "boards:\n  - {family: tag36h11, first_id: 0, rows: 1, cols: 1, "
+                           "tag_size: 0.1, spacing: 0, ";
+  ExpectKeyError(TargetsError(head + "border_bits: 3}\n"), "boards[0].border_bits", 2,
+                 "a black border of 1 or 2 code bits", "3");
+  ExpectKeyError(TargetsError(head + "ids_from: bottom}\n"), "boards[0].ids_from", 2,
+                 "one of top_left, bottom_left", "bottom");
+  // A family whose quad is not a black border's edge takes no wider border.
+  ExpectKeyError(TargetsError("boards:\n  - {family: tagStandard41h12, first_id: 0, rows: 1, "
+                              "cols: 1, tag_size: 0.1, spacing: 0, border_bits: 2}\n",
+                              &codes),
+                 "boards[0].border_bits", 2, "1 for family tagStandard41h12", "2");
+  // A point board has no border_bits: a typo of its own keys.
+  EXPECT_EQ(TargetsError("boards:\n  - {type: chessboard, first_id: 0, rows: 5, cols: 5, "
+                         "square_size: 0.02, border_bits: 2}\n")
+                .key,
+            "boards[0].border_bits");
+}
+
+// Kalibr's own target files (SPEC 7.2), read wherever a targets.yaml is.
+TEST(Targets, KalibrAprilGridIsOneTag36h11BoardWithKalibrsLayout) {
+  const std::string text =
+      "target_type: 'aprilgrid' #gridtype\n"
+      "tagCols: 6               #number of apriltags\n"
+      "tagRows: 5               #number of apriltags\n"
+      "tagSize: 0.088           #size of apriltag, edge to edge [m]\n"
+      "tagSpacing: 0.3          #ratio of space between tags to tagSize\n";
+  const std::map<std::string, int> codes = {{"tag36h11", 587}, {WideBorderKey("tag36h11"), 587}};
+  const TargetScene s = ParseTargets(text, kName, &codes);
+  ASSERT_EQ(s.boards.size(), 1u);
+  const TagBoard& b = s.boards[0];
+  EXPECT_EQ(b.kind, BoardKind::kAprilTag);
+  EXPECT_EQ(b.family, "tag36h11");
+  EXPECT_EQ(b.border_bits, 2);
+  EXPECT_EQ(b.first_id, 0);
+  EXPECT_EQ(b.rows, 5);
+  EXPECT_EQ(b.cols, 6);
+  EXPECT_EQ(b.tag_size, 0.088);
+  EXPECT_NEAR(b.spacing, 0.0264, 1e-15);
+  EXPECT_FALSE(b.pose_known);
+  // Kalibr's frame: tag 0 at the origin, the printed target's bottom-left,
+  // ids to the right along a row, then up; corner 0 = (x0, y0), 1 = (x0 +
+  // s, y0), 2 = (x0 + s, y0 + s), 3 = (x0, y0 + s) with y up. In SPEC 7's
+  // frame (y down from the top row) the same corners are y_spec = H - y:
+  // a rigid turn by 180 degrees about x, so every tag keeps its shape.
+  const double pitch = 0.088 + 0.0264, height = b.Height();
+  for (int id = 0; id < b.NumTags(); ++id) {
+    const double x0 = pitch * (id % 6), y0 = pitch * (id / 6);  // Kalibr
+    const Eigen::Vector3d kalibr[4] = {{x0, y0, 0}, {x0 + 0.088, y0, 0},
+                                       {x0 + 0.088, y0 + 0.088, 0}, {x0, y0 + 0.088, 0}};
+    const std::array<Eigen::Vector3d, 4> spec = b.CornersInBoard(id);
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_NEAR(spec[k].x(), kalibr[k].x(), 1e-12) << id << " " << k;
+      EXPECT_NEAR(spec[k].y(), height - kalibr[k].y(), 1e-12) << id << " " << k;
+    }
+  }
+
+  // Other Kalibr keys (the checkerboard's, a typo) are errors naming the key.
+  ExpectKeyError(TargetsError(text + "targetRows: 5\n"), "targetRows", 6, "", "targetRows");
+  ExpectKeyError(TargetsError("target_type: aprilgrid\ntagCols: 6\ntagRows: 6\ntagSize: 0.088\n"
+                              "tagSpaceing: 0.3\n"),
+                 "tagSpaceing", 5, "did you mean 'tagSpacing'", "tagSpaceing");
+  EXPECT_EQ(TargetsError("target_type: aprilgrid\ntagCols: 6\ntagRows: 6\ntagSize: 0.088\n").key,
+            "tagSpacing");
+  ExpectKeyError(TargetsError("target_type: aprilgrid\ntagCols: 6\ntagRows: 6\ntagSize: -1\n"
+                              "tagSpacing: 0.3\n"),
+                 "tagSize", 4, "a tag size > 0", "-1");
+  ExpectKeyError(TargetsError("target_type: circlegrid\ntargetCols: 6\n"), "target_type", 1,
+                 "aprilgrid or checkerboard", "circlegrid");
+  // More tags than tag36h11 has codes.
+  ExpectKeyError(TargetsError("target_type: aprilgrid\ntagCols: 30\ntagRows: 20\n"
+                              "tagSize: 0.02\ntagSpacing: 0.3\n",
+                              &codes),
+                 "tagRows", 3, "at most 587 tags", "20");
+}
+
+TEST(Targets, KalibrCheckerboardIsAChessboardOfSquareSquares) {
+  const std::string text =
+      "target_type: 'checkerboard' #gridtype\n"
+      "targetCols: 6               #number of internal chessboard corners\n"
+      "targetRows: 7               #number of internal chessboard corners\n"
+      "rowSpacingMeters: 0.06      #size of one chessboard square [m]\n"
+      "colSpacingMeters: 0.06      #size of one chessboard square [m]\n";
+  const TargetScene s = ParseTargets(text, kName);
+  ASSERT_EQ(s.boards.size(), 1u);
+  const TagBoard& b = s.boards[0];
+  EXPECT_EQ(b.kind, BoardKind::kChessboard);
+  EXPECT_EQ(b.rows, 8);
+  EXPECT_EQ(b.cols, 7);
+  EXPECT_EQ(b.NumTags(), 42);
+  EXPECT_EQ(b.square_size, 0.06);
+  EXPECT_FALSE(b.pose_known);
+  // One square_size: row and column spacings that differ are refused.
+  std::string other = text;
+  other.replace(other.find("colSpacingMeters: 0.06"), 22, "colSpacingMeters: 0.05");
+  ExpectKeyError(TargetsError(other), "colSpacingMeters", 5, "the same spacing as rowSpacingMeters",
+                 "0.05");
+  // Fewer than 3 inner corners: OpenCV's detector would refuse them.
+  other = text;
+  other.replace(other.find("targetRows: 7"), 13, "targetRows: 2");
+  ExpectKeyError(TargetsError(other), "targetRows", 3, "inner corners along a column >= 3", "2");
+  // The aprilgrid's keys are unknown here.
+  ExpectKeyError(TargetsError(text + "tagSize: 0.1\n"), "tagSize", 6, "", "tagSize");
 }
 
 }  // namespace

@@ -159,3 +159,29 @@ TEST(Targets, DefaultsAndEmptyScene) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// Kalibr's id layout (targets.h `ids_from`): tag first_id + i in row
+// rows - 1 - i / cols; GridOf and IndexOf invert each other either way.
+TEST(Targets, IdsFromTheBottomLeftCountRowsUpwards) {
+  TagBoard b;
+  b.rows = 3;
+  b.cols = 4;
+  for (const IdOrigin origin : {IdOrigin::kTopLeft, IdOrigin::kBottomLeft}) {
+    b.ids_from = origin;
+    for (int i = 0; i < b.NumTags(); ++i) EXPECT_EQ(b.IndexOf(b.GridOf(i)), i);
+  }
+  b.ids_from = IdOrigin::kBottomLeft;
+  EXPECT_EQ(b.GridOf(0).row, 2);
+  EXPECT_EQ(b.GridOf(0).col, 0);
+  EXPECT_EQ(b.GridOf(5).row, 1);
+  EXPECT_EQ(b.GridOf(5).col, 1);
+  EXPECT_EQ(b.GridOf(11).row, 0);
+  // Tag 4 sits above tag 0: smaller y in the board frame (y down).
+  EXPECT_LT(b.CornersInBoard(4)[3].y(), b.CornersInBoard(0)[3].y());
+}
+
+}  // namespace
+}  // namespace rtscalib

@@ -168,7 +168,7 @@ TEST(DetectorTest, OtherFamilies) {
     const CameraTool cam = TestCamera(true);
     const Rigid3 pose = AimAt(Eigen::Vector3d(0.1, 0, 0), board.CentreInRef(), 700, 420, 0.2, cam);
     DetectorOptions options;
-    options.families = {family};
+    options.families = {detect::PrintedFamily{family}};
     TagDetector detector(options);
     const std::vector<TagDetection> detections = detector.Detect(renderer.Render(pose, cam));
     EXPECT_EQ(detections.size(), 6u) << family;
