@@ -18,17 +18,15 @@
 // rational_distortion in the config gives on the same corners.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <vector>
 
 #include "app/pipeline.h"
 #include "libcalib/screen/gross.h"
 #include "tests/real_photos/mrcal_corners.h"
+#include "tests/real_photos/photo_sets.h"
 #include "tests/real_photos/real_photos.h"
 
 namespace rtscalib::testing_real_photos {
@@ -36,41 +34,29 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A temporary folder for one session, removed at the end of the test.
-struct Scratch {
-  fs::path dir;
-  explicit Scratch(const std::string& name)
-      : dir(fs::temp_directory_path() /
-            ("rtscalib_real_diagnosis_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  ~Scratch() { fs::remove_all(dir); }
-};
-
-// shots.csv, targets.yaml and config.yaml of a camera-only chessboard
-// session: the photos `names` of `set_dir`, one placement per photo, a
-// board of `cols` x `rows` squares of `square` m (targets.yaml counts
-// squares: inner corners + 1). Returns the config's path.
-std::string WriteSession(const std::string& set_dir, const std::vector<std::string>& names,
-                         int cols, int rows, double square, const fs::path& dir) {
-  std::ofstream shots(dir / "shots.csv");
-  shots << "face,zoom,phi,theta,image,placement\n";
-  for (const std::string& n : names) shots << "1,0,,," << set_dir << "/" << n << ".jpg," << n << "\n";
-  std::ofstream targets(dir / "targets.yaml");
-  targets << "boards:\n  - {type: chessboard, first_id: 0, rows: " << rows << ", cols: " << cols
-          << ", square_size: " << square << "}\n";
-  std::ofstream config(dir / "config.yaml");
-  config << "data: {shots: shots.csv, targets: targets.yaml}\n"
-            "model:\n"
-            "  kinematics: none\n"
-            "  effects: [radial_distortion, tangential_distortion]\n"
-            "  intrinsics: fit\n"
-            "fit: {sigmas: {pixel_px: 0.1}}\n"
-            "detect: {jobs: 2}\n"
-            "diagnose: {enabled: true}\n"
-            "output: out\n";
-  return (dir / "config.yaml").string();
+// A camera-only chessboard session of the photos `names` of `set_dir`
+// (one placement per photo, WriteShots) with a board of `cols` x `rows`
+// squares of `square` m (targets.yaml counts squares: inner corners + 1),
+// k1 k2 p1 p2 k3 as OpenCV's default. Returns the config's path.
+std::string WriteSession(const TestFolder& folder, const std::string& set_dir,
+                         const std::vector<std::string>& names, int cols, int rows,
+                         double square) {
+  std::vector<SetPhoto> photos;
+  for (const std::string& n : names) photos.push_back({set_dir + "/" + n + ".jpg", n, 0});
+  WriteShots(folder, photos);
+  folder.Write("targets.yaml", "boards:\n  - {type: chessboard, first_id: 0, rows: " +
+                                   std::to_string(rows) + ", cols: " + std::to_string(cols) +
+                                   ", square_size: " + std::to_string(square) + "}\n");
+  return folder.Write("config.yaml",
+                      "data: {shots: shots.csv, targets: targets.yaml}\n"
+                      "model:\n"
+                      "  kinematics: none\n"
+                      "  effects: [radial_distortion, tangential_distortion]\n"
+                      "  intrinsics: fit\n"
+                      "fit: {sigmas: {pixel_px: 0.1}}\n"
+                      "detect: {jobs: 2}\n"
+                      "diagnose: {enabled: true}\n"
+                      "output: out\n");
 }
 
 std::vector<std::string> Numbered(const std::string& stem, int n) {
@@ -116,32 +102,33 @@ void ExpectTruthfulDiagnosis(const std::string& name, const app::PipelineResult&
   EXPECT_TRUE(d.harmonics.unexplained.empty()) << name;  // camera-only: no phi, theta
 }
 
-app::PipelineResult RunSession(const std::string& config, const fs::path& work) {
+app::PipelineResult RunSession(const std::string& config, const std::string& work) {
   app::Progress progress(true);
-  return app::RunPipeline(app::LoadRunSettings(config), work.string(), &progress);
+  return app::RunPipeline(app::LoadRunSettings(config), work, &progress);
 }
 
 TEST(RealDiagnosis, BoofcvSonyChessSaysNothingWithinTheScatter) {
   RTSCALIB_REQUIRE_REAL_PHOTOS(set, "boofcv_sony_chess");
-  Scratch s("sony");
+  TestFolder folder;
   // 6 x 4 inner corners of 30 mm (PROVENANCE.md): 7 x 5 squares.
-  const std::string config = WriteSession(set, Numbered("frame", 13), 7, 5, 0.03, s.dir);
-  ExpectTruthfulDiagnosis("boofcv_sony_chess", RunSession(config, s.dir / "work"));
+  const std::string config = WriteSession(folder, set, Numbered("frame", 13), 7, 5, 0.03);
+  ExpectTruthfulDiagnosis("boofcv_sony_chess", RunSession(config, folder.Path("work")));
 }
 
 TEST(RealDiagnosis, ValidationBoofLeftSaysNothingWithinTheScatter) {
   RTSCALIB_REQUIRE_REAL_PHOTOS(set, "validationboof_bb2_chess");
-  Scratch s("bb2_left");
+  TestFolder folder;
   // 4 x 6 inner corners of 30 mm: 5 x 7 squares.
-  const std::string config = WriteSession(set, Numbered("left", 11), 5, 7, 0.03, s.dir);
-  ExpectTruthfulDiagnosis("validationboof_bb2_chess left", RunSession(config, s.dir / "work"));
+  const std::string config = WriteSession(folder, set, Numbered("left", 11), 5, 7, 0.03);
+  ExpectTruthfulDiagnosis("validationboof_bb2_chess left", RunSession(config, folder.Path("work")));
 }
 
 TEST(RealDiagnosis, ValidationBoofRightSaysNothingWithinTheScatter) {
   RTSCALIB_REQUIRE_REAL_PHOTOS(set, "validationboof_bb2_chess");
-  Scratch s("bb2_right");
-  const std::string config = WriteSession(set, Numbered("right", 11), 5, 7, 0.03, s.dir);
-  ExpectTruthfulDiagnosis("validationboof_bb2_chess right", RunSession(config, s.dir / "work"));
+  TestFolder folder;
+  const std::string config = WriteSession(folder, set, Numbered("right", 11), 5, 7, 0.03);
+  ExpectTruthfulDiagnosis("validationboof_bb2_chess right",
+                          RunSession(config, folder.Path("work")));
 }
 
 TEST(RealDiagnosis, BenchSaysNothingWithinTheScatter) {
@@ -149,9 +136,10 @@ TEST(RealDiagnosis, BenchSaysNothingWithinTheScatter) {
   if (!fs::exists("/usr/share/doc/opencv-doc/examples/data/left01.jpg")) {
     GTEST_SKIP() << "Debian's opencv-doc is not installed (scripts/install-deps.sh)";
   }
-  Scratch s("bench");
+  TestFolder folder;
   ExpectTruthfulDiagnosis("configs/bench.yaml",
-                          RunSession(std::string(RTSCALIB_SOURCE_DIR) + "/configs/bench.yaml", s.dir));
+                          RunSession(std::string(RTSCALIB_SOURCE_DIR) + "/configs/bench.yaml",
+                                     folder.Path("work")));
 }
 
 // A wide lens fitted with k1 k2 p1 p2 k3 (15 px rms): rational_distortion
@@ -163,21 +151,19 @@ TEST(RealDiagnosis, BenchSaysNothingWithinTheScatter) {
 // stopped: within 5 %.
 TEST(RealDiagnosis, MrcalTourNamesRationalDistortionWithTheFallARefitGives) {
   RTSCALIB_REQUIRE_REAL_PHOTOS(set, "mrcal_tour_corners");
-  Scratch s("mrcal");
-  WriteMrcalSession(set, s.dir.string());
-  {
-    std::ofstream config(s.dir / "config.yaml");
-    config << "data: {pixels: pixels.csv, targets: targets.yaml}\n"
-              "model:\n"
-              "  kinematics: none\n"
-              "  effects: [radial_distortion, tangential_distortion]\n"
-              "  intrinsics: fit\n"
-              "diagnose: {enabled: true}\n"
-              "output: out\n";
-  }
-  const app::RunSettings settings = app::LoadRunSettings((s.dir / "config.yaml").string());
+  TestFolder folder;
+  WriteMrcalSession(set, folder.Path(""));
+  const app::RunSettings settings = app::LoadRunSettings(
+      folder.Write("config.yaml",
+                   "data: {pixels: pixels.csv, targets: targets.yaml}\n"
+                   "model:\n"
+                   "  kinematics: none\n"
+                   "  effects: [radial_distortion, tangential_distortion]\n"
+                   "  intrinsics: fit\n"
+                   "diagnose: {enabled: true}\n"
+                   "output: out\n"));
   app::Progress progress(true);
-  const app::PipelineResult r = app::RunPipeline(settings, (s.dir / "work").string(), &progress);
+  const app::PipelineResult r = app::RunPipeline(settings, folder.Path("work"), &progress);
   ASSERT_TRUE(r.calibration.diagnosis.has_value());
   const Diagnosis& d = *r.calibration.diagnosis;
   std::printf("mrcal_tour_corners (diagnosis %.3f s):\n%s", d.seconds, Verdict(d).c_str());
