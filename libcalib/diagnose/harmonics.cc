@@ -10,10 +10,13 @@ namespace {
 
 constexpr double kArcsecPerRad = 180.0 * 3600.0 / M_PI;
 
-Harmonic MakeHarmonic(const ColumnBlock& block, const ColumnTest& t, double level,
-                      double unit_length, const Linearization& lin, const Materiality& material) {
+// `t` gives the amplitude, phase and test; `added` the gain (for a
+// selected probe, what it adds where the selection took it).
+Harmonic MakeHarmonic(const ColumnBlock& block, const ColumnTest& t, const ColumnTest& added,
+                      double level, double unit_length, const Linearization& lin,
+                      const Materiality& material) {
   Harmonic h;
-  h.gain = RelativeGain(material.current, RmsLess(lin, material.current, t.fitted));
+  h.gain = RelativeGain(material.current, RmsLess(lin, material.current, added.fitted));
   h.material = material.Material(h.gain);
   h.probe = block.probe;
   h.block = block.name;
@@ -94,7 +97,8 @@ HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const ProbeAnalysis&
   for (int s : probes.selected) {
     const ProbeResult& r = probes.probes[s];
     if (r.block->probe.kind != ProbeKind::kHarmonic) continue;
-    Harmonic h = MakeHarmonic(*r.block, r.joint, out.level, lin.edm_cyclic_unit_length, lin, scale);
+    Harmonic h = MakeHarmonic(*r.block, r.joint, r.at_selection, out.level,
+                              lin.edm_cyclic_unit_length, lin, scale);
     // Below the resolution floor a statistically significant term is
     // round-off of exact data, not structure; within the scatter it is real
     // but buys nothing.
@@ -102,7 +106,8 @@ HarmonicAnalysis AnalyseHarmonics(const Linearization& lin, const ProbeAnalysis&
   }
   for (const ProbeResult& r : probes.probes) {
     if (r.block->probe.kind != ProbeKind::kHarmonic || !r.raw_significant) continue;
-    Harmonic h = MakeHarmonic(*r.block, r.raw, out.level, lin.edm_cyclic_unit_length, lin, scale);
+    Harmonic h =
+        MakeHarmonic(*r.block, r.raw, r.raw, out.level, lin.edm_cyclic_unit_length, lin, scale);
     h.explained_by = r.explained_by;
     out.before_catalogue.push_back(h);
   }

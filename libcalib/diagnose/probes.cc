@@ -130,6 +130,13 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     }
     if (best < 0 || best_p >= out.level) break;
     selected.push_back(best);
+    // What this probe adds where it was selected: on top of the catalogue
+    // and the probes selected before it (their sum is what all of them
+    // explain together, however alike they are).
+    ProbeResult& chosen = out.probes[best];
+    chosen.selection_columns = t_sel.Block(best);
+    chosen.at_selection = TestProbe(ys, chosen.selection_columns, red, *chosen.block, g,
+                                    dof_base + cat.rank() + sel.rank());
     const int known = sel.rank();
     first.push_back(sel);
     sel.Add(t_cat(best));
@@ -146,8 +153,7 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
     for (size_t o = i + 1; o < selected.size(); ++o) others.Add(t_cat(selected[o]));
     ProbeResult& r = out.probes[s];
     r.selected = true;
-    r.joint_columns = others.Apply(t_cat(s));
-    r.joint = TestProbe(others.Apply(y), r.joint_columns, red, *r.block, g,
+    r.joint = TestProbe(others.Apply(y), others.Apply(t_cat(s)), red, *r.block, g,
                         dof_base + cat.rank() + others.rank());
   }
   out.selected = selected;

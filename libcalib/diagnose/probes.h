@@ -38,9 +38,13 @@ struct ProbeResult {
   bool raw_significant = false;
   bool selected = false;     // (2) significant on top of the whole catalogue
   ColumnTest joint;          // (2) with the other selected probes (selected only)
-  // (2) the probe's columns that `joint` regressed on: what neither the
-  // model, the catalogue nor the other selected probes can take up.
-  Eigen::MatrixXd joint_columns;
+  // (2) the test where the selection took it (on top of the catalogue and
+  // the probes selected before it) and its columns there: what it adds to
+  // them. Two probes of one structure (a focus seen against the target and
+  // the focus distance) each add little on top of the other, but the first
+  // selected carries it: its gain and size are the structure's.
+  ColumnTest at_selection;
+  Eigen::MatrixXd selection_columns;
   std::string explained_by;  // (3) raw significant, not significant on top of the catalogue
   std::string same_as;       // (3) significant on top of the catalogue, but a selected probe holds it
 };

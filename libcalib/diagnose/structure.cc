@@ -424,15 +424,17 @@ std::string ReachText(const Probe& p, const Materiality& scale) {
 // catalogue are large while the columns left are small, so the coefficients
 // alone (a motion evaluated at the image corner, a field where no photo
 // reached) are never the size.
-StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& t,
+// `test` gives the finding's significance; `t` and `columns` its gain and
+// sizes (for a selected probe, where the selection took it: what it adds).
+StructureFinding MakeFinding(const ColumnBlock& b, const ColumnTest& test, const ColumnTest& t,
                              const Eigen::Ref<const Eigen::MatrixXd>& columns, const Reduced& red,
                              const Linearization& lin, const InstrumentModel& model,
                              const Materiality& scale) {
   StructureFinding f;
   f.probe = b.probe;
   f.block = b.name;
-  f.wald = t.wald;
-  f.p_value = t.p_value;
+  f.wald = test.wald;
+  f.p_value = test.p_value;
   f.gain = RelativeGain(scale.current, RmsLess(lin, scale.current, t.fitted));
   f.material = scale.Material(f.gain);
   const Probe& p = b.probe;
@@ -555,16 +557,17 @@ StructureAnalysis AnalyseStructure(const Linearization& lin, const Reduced& red,
   for (int s : probes.selected) {
     const ProbeResult& r = probes.probes[s];
     if (r.block->probe.kind == ProbeKind::kHarmonic) continue;
-    StructureFinding f =
-        MakeFinding(*r.block, r.joint, r.joint_columns, red, lin, model, scale);
+    StructureFinding f = MakeFinding(*r.block, r.joint, r.at_selection, r.selection_columns, red,
+                                     lin, model, scale);
     f.unexplained = true;
     if (!AboveFloor(f, pixel_sigma)) continue;
     (f.material ? out.unexplained : out.negligible).push_back(f);
   }
   for (const ProbeResult& r : probes.probes) {
     if (r.block->probe.kind == ProbeKind::kHarmonic || !r.raw_significant || r.selected) continue;
-    StructureFinding f = MakeFinding(*r.block, r.raw, red.extra.middleCols(r.block->first, r.block->size),
-                                     red, lin, model, scale);
+    StructureFinding f =
+        MakeFinding(*r.block, r.raw, r.raw, red.extra.middleCols(r.block->first, r.block->size),
+                    red, lin, model, scale);
     f.explained_by = r.explained_by;
     f.same_as = r.same_as;
     if (AboveFloor(f, pixel_sigma)) out.explained.push_back(f);
