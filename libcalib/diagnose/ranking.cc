@@ -295,7 +295,7 @@ RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
       r.focus.push_back({zoom, kFocusParamNames[index], index, -t.beta[k],
                          std::sqrt(std::max(t.cov(k, k), 0.0))});
     }
-  } else {
+  } else if (IsDistortion(b.effect)) {
     for (int k = 0; k < b.size; ++k) {
       const auto [zoom, index] = b.distortion[k];
       r.distortion.push_back({zoom, kDistortionCoefficientNames[index], index,
@@ -477,7 +477,7 @@ void ConfirmByRefinement(const Context& cx, Ranking* out) {
       r.value = ToReportUnits(r.effect, r.si, r.si_cov);
     } else if (r.effect == Effect::kFocus) {
       for (FocusValue& f : r.focus) f.value = m.cams[f.zoom].focus[f.index];
-    } else {
+    } else if (IsDistortion(r.effect)) {
       for (DistortionValue& d : r.distortion) d.value = m.cams[d.zoom].distortion[d.index];
     }
   }
