@@ -134,6 +134,8 @@ InstrumentModel WithCandidates(const InstrumentModel& model,
       for (CameraTool& cam : work.cams) cam.focus.fill(0.0);
     }
   }
+  // board_warp: a warp at zero for every board of estimated pose.
+  SyncBoardWarps(&work);
   return work;
 }
 
@@ -160,6 +162,7 @@ std::map<std::pair<const double*, int>, int> CandidateColumns(const Parameteriza
         extra_col[{d.block, static_cast<int>(k)}] = b.first + b.size;
         b.param_names.push_back(c.name);
         if (IsCameraEffect(e)) b.distortion.push_back({c.zoom, c.index});
+        if (IsBoardEffect(e)) b.boards.push_back({c.board, c.index});
         ++b.size;
       }
     }

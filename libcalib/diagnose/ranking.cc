@@ -265,6 +265,13 @@ RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
       r.focus.push_back({zoom, kFocusParamNames[index], index, -t.beta[k],
                          std::sqrt(std::max(t.cov(k, k), 0.0))});
     }
+  } else if (IsBoardEffect(b.effect)) {
+    // Linearised at zero (WithCandidates), likewise.
+    for (int k = 0; k < b.size; ++k) {
+      const auto [first_id, index] = b.boards[k];
+      r.board_warp.push_back({first_id, Info(b.effect).param_names[index], index, -t.beta[k],
+                              std::sqrt(std::max(t.cov(k, k), 0.0))});
+    }
   } else {
     for (int k = 0; k < b.size; ++k) {
       const auto [zoom, index] = b.distortion[k];
@@ -418,6 +425,15 @@ void ConfirmByRefinement(const Context& cx, Ranking* out) {
           f.sigma = std::max(f.sigma, m.sigmas.focus[f.zoom][f.index]);
         }
       }
+    } else if (IsBoardEffect(r.effect)) {
+      for (WarpValue& w : r.board_warp) {
+        const BoardWarp* fitted = m.WarpOf(w.first_id);
+        if (!fitted) continue;
+        w.value = fitted->w[w.index];
+        if (m.sigmas.valid) {
+          w.sigma = std::max(w.sigma, std::sqrt(std::max(fitted->cov[3 * w.index], 0.0)));
+        }
+      }
     } else {
       for (DistortionValue& d : r.distortion) {
         d.value = m.cams[d.zoom].distortion[d.index];
@@ -439,6 +455,12 @@ void AddAtEstimate(const RankedEffect& r, InstrumentModel* m) {
   } else if (r.effect == Effect::kFocus) {
     for (CameraTool& cam : m->cams) cam.focus.fill(0.0);
     for (const FocusValue& f : r.focus) m->cams[f.zoom].focus[f.index] = f.value;
+  } else if (IsBoardEffect(r.effect)) {
+    SyncBoardWarps(m);  // a warp at zero for every board
+    for (const WarpValue& w : r.board_warp) {
+      if (BoardWarp* warp = m->WarpOf(w.first_id)) warp->w[w.index] = w.value;
+    }
+    SyncBoardWarps(m);
   } else {
     for (const DistortionValue& d : r.distortion) m->cams[d.zoom].distortion[d.index] = d.value;
   }

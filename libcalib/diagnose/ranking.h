@@ -91,6 +91,15 @@ struct FocusValue {
   double value = 0, sigma = 0;
 };
 
+// One warp parameter of one board of estimated pose (board_warp), in SI [m]
+// (reports in mm).
+struct WarpValue {
+  int first_id = 0;   // the board's first tag
+  std::string name;   // wx, wy
+  int index = 0;
+  double value = 0, sigma = 0;
+};
+
 struct RankedEffect {
   Effect effect = Effect::kCollimation;
   std::string name;
@@ -107,6 +116,7 @@ struct RankedEffect {
   EffectReportValue value;  // in report units
   std::vector<DistortionValue> distortion;
   std::vector<FocusValue> focus;
+  std::vector<WarpValue> board_warp;
   bool has_equivalent = false;  // redundant: value read off the model
   EffectReportValue equivalent;
   std::vector<std::string> needs;  // what data would make it identifiable / better determined
@@ -145,7 +155,7 @@ struct RankingInput {
 Ranking RankEffects(const RankingInput& in, const RankingOptions& options);
 
 // `model` with effect r.effect added at r's estimate (kinematic value,
-// distortion coefficients or focus terms): the warm start of a refinement
+// distortion coefficients, focus terms or board warps): the warm start of a refinement
 // that adds it (the confirmation here, the stepwise ladder).
 void AddAtEstimate(const RankedEffect& r, InstrumentModel* model);
 

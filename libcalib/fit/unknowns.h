@@ -25,6 +25,8 @@ namespace rtscalib {
 // Makes the model hold every board of obs.targets without a pose that a
 // used pixel sees, and every point a used record names, with the starting
 // values above; boards and points the model already holds keep their values.
+// With the effect board_warp, every board gets a warp (zero; one it already
+// has is kept: SyncBoardWarps).
 // When `facts` say no position is known, first re-expresses the start in the
 // instrument's ideal base frame (SPEC 7; ToIdealBaseFrame,
 // libcalib/model/gauge.h: base and, dh, link 1's held d and gamma_offset
