@@ -707,8 +707,9 @@ CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptio
   // a plain diagnosis only reads the result (DiagnoseCalibration).
   if (options.diagnose.enabled && !DiagnosisPending(options)) {
     try {
-      // The diagnosis sees the estimated boards and points (SPEC 7) fixed at the fit's values.
-      StepwiseDiagnosis(WithEstimates(used, result.model), options, progress, &result);
+      // The diagnosis and the ladder's refits see the rows as the fit did
+      // (boards and points of unknown position free; SPEC 7).
+      StepwiseDiagnosis(used, options, progress, &result);
     } catch (const std::exception& e) {
       result.diagnosis.reset();
       result.notes.push_back(DiagnosisFailed(e, progress));
@@ -735,13 +736,13 @@ CalibrationDiagnosis DiagnoseCalibration(const Observations& obs,
   if (progress == nullptr) progress = &silent;
   CalibrationDiagnosis out;
   if (!DiagnosisPending(options)) return out;
-  // The rows the fit used, with the estimated boards and points (SPEC 7)
-  // fixed at the fit's values.
+  // The rows the fit used, as it used them (Diagnose sees the boards and
+  // points of unknown position, SPEC 7, where it needs positions).
   const Observations used = WithoutRows(obs, result.gross_rows);
   progress->Step("diagnosing the model (ranking the missing effects)");
   try {
-    out.diagnosis = Diagnose(WithEstimates(used, result.model), result.model,
-                             ContextOf(result.fit_options, result.fit), SettingsOf(options));
+    out.diagnosis = Diagnose(used, result.model, ContextOf(result.fit_options, result.fit),
+                             SettingsOf(options));
     for (const std::string& v : out.diagnosis->verdict) progress->Note(v);
   } catch (const std::exception& e) {
     out.notes.push_back(DiagnosisFailed(e, progress));

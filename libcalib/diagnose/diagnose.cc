@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "libcalib/fit/unknowns.h"
 #include "libcalib/text/number_text.h"
 
 namespace rtscalib {
@@ -240,6 +241,10 @@ const RankedEffect* Diagnosis::Next() const {
 
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
                    const DiagnosisSettings& settings) {
+  // The linearisation and the refits see the rows as the fit did (boards and
+  // points of unknown position free); everything that reads a row's
+  // position sees them at the model's estimate.
+  const Observations positions = WithEstimates(obs, model);
   const std::string msg = settings.Check();
   if (!msg.empty()) throw std::invalid_argument(msg);
   const auto t0 = std::chrono::steady_clock::now();
@@ -251,7 +256,7 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
     d.model_description += (i ? ", " : "") + d.effects[i];
   d.model_description += "]";
   for (int g = 0; g < 3; ++g) d.sigma[g] = fit.sigma[g];
-  d.coverage = MeasureCoverage(obs, model, fit.options);
+  d.coverage = MeasureCoverage(positions, model, fit.options);
 
   // A camera-only model (SPEC 7.1) has no axes and no EDM: only the camera's
   // own effects are candidates, and there is no phi or theta to find
@@ -279,18 +284,18 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   if (harmonics)
     lo.probes = DefaultProbes(d.coverage.faces, d.coverage.has_edm, settings.max_harmonic);
   if (settings.structure) {
-    lo.variables = SessionVariables(obs, model);
-    for (const Probe& p : StructureProbes(lo.variables, obs, model, !camera_only)) {
+    lo.variables = SessionVariables(positions, model);
+    for (const Probe& p : StructureProbes(lo.variables, positions, model, !camera_only)) {
       lo.probes.push_back(p);
     }
   }
   const Linearization lin = Linearize(obs, model, lo);
   const Reduced red = Reduce(lin);
   d.num_rows = lin.NumRows();
-  d.num_parameters = red.base.rank();
+  d.num_parameters = red.Rank();
   d.excluded_critical = lin.excluded_critical;
   d.fit_quality =
-      AssessFitQuality(lin, obs, fit.options, d.num_parameters, settings.significance);
+      AssessFitQuality(lin, positions, fit.options, d.num_parameters, settings.significance);
 
   std::vector<const ColumnBlock*> catalogue;
   for (const ColumnBlock& b : lin.blocks) {
@@ -356,7 +361,7 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
     d.wild = FindWildParameters(lin, model, d.distortion_terms, nearest);
   }
   if (settings.outliers) {
-    d.outliers = TestOutliers(obs, lin, red, ObservationResiduals(obs, model, fit.options),
+    d.outliers = TestOutliers(positions, lin, red, ObservationResiduals(positions, model, fit.options),
                               settings.significance, settings.outliers_listed);
   }
   d.verdict = Verdict(d);

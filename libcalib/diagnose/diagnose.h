@@ -89,6 +89,9 @@ struct Diagnosis {
   const RankedEffect* Next() const;
 };
 
+// `obs`: the rows the fit used, as it used them (boards of estimated pose
+// and points of unknown position are the model's, free in the
+// linearisation and in the refits of the ranking: Linearize).
 Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const FitContext& fit,
                    const DiagnosisSettings& settings);
 

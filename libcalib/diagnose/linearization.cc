@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Dense>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -9,12 +10,15 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <tuple>
 
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/cost_functions.h"
+#include "libcalib/fit/parameter_layout.h"
 #include "libcalib/fit/parameterization.h"
+#include "libcalib/fit/unknowns.h"
 #include "libcalib/model/focus.h"
 #include "libcalib/model/kinematics.h"
 
@@ -232,32 +236,42 @@ std::vector<ceres::ResidualBlockId> AddResiduals(const Observations& obs,
   return residual_ids;
 }
 
+// A cluster's own nuisance columns (Linearization::num_profiled): its rows
+// and the columns' values there.
+struct ExclusiveColumns {
+  std::vector<int> rows;
+  Eigen::MatrixXd cols;
+};
+
 // One Jacobian evaluation: r, the base columns (the fit's free parameters,
 // in the parameterisation's order) and the candidates' columns of `extra`
 // (`extra_col`); `num_extra_cols` sizes `extra` (candidates and probes).
-void EvaluateColumns(ceres::Problem* problem, const std::vector<ceres::ResidualBlockId>& ids,
-                     const std::vector<const BlockDecision*>& free_blocks,
-                     const std::map<std::pair<const double*, int>, int>& extra_col,
-                     int num_extra_cols, int num_threads, Linearization* lin) {
+// Columns of `nuisance` blocks whose rows all lie in one cluster are left
+// out of `base` and returned per cluster (ProfileExclusive projects them
+// out once `extra` is complete).
+std::vector<ExclusiveColumns> EvaluateColumns(
+    ceres::Problem* problem, const std::vector<ceres::ResidualBlockId>& ids,
+    const std::vector<const BlockDecision*>& free_blocks,
+    const std::set<const double*>& nuisance,
+    const std::map<std::pair<const double*, int>, int>& extra_col, int num_extra_cols,
+    int num_threads, Linearization* lin) {
   ceres::Problem::EvaluateOptions eopt;
   eopt.residual_blocks = ids;
   eopt.apply_loss_function = false;
   eopt.num_threads = num_threads;
-  // Per Jacobian column: its base column or its extra column.
+  // Per Jacobian column: its base column or its extra column, and whether
+  // it belongs to a nuisance block.
   std::vector<int> base_col, to_extra;
+  std::vector<char> of_nuisance;
+  std::vector<FreeColumn> columns;
   for (const BlockDecision* d : free_blocks) {
     eopt.parameter_blocks.push_back(d->block);
     for (size_t k = 0; k < d->columns.size(); ++k) {
       auto it = extra_col.find({d->block, static_cast<int>(k)});
-      if (it != extra_col.end()) {
-        base_col.push_back(-1);
-        to_extra.push_back(it->second);
-      } else {
-        base_col.push_back(static_cast<int>(lin->base_names.size()));
-        to_extra.push_back(-1);
-        lin->base_names.push_back(d->columns[k].name);
-        lin->base_columns.push_back(d->columns[k]);
-      }
+      base_col.push_back(it != extra_col.end() ? -1 : 0);
+      to_extra.push_back(it != extra_col.end() ? it->second : -1);
+      of_nuisance.push_back(it == extra_col.end() && nuisance.count(d->block) > 0);
+      columns.push_back(d->columns[k]);
     }
   }
   double cost = 0;
@@ -271,6 +285,49 @@ void EvaluateColumns(ceres::Problem* problem, const std::vector<ceres::ResidualB
       jac.num_cols != static_cast<int>(base_col.size())) {
     throw std::logic_error("linearization: row or column bookkeeping does not match Ceres");
   }
+  // The cluster of each nuisance column's rows, -2 when several see it.
+  std::vector<int> cluster_of_col(jac.num_cols, -1);
+  for (int i = 0; i < n; ++i) {
+    for (int k = jac.rows[i]; k < jac.rows[i + 1]; ++k) {
+      const int c = jac.cols[k];
+      if (!of_nuisance[c] || jac.values[k] == 0.0) continue;
+      int& owner = cluster_of_col[c];
+      if (owner == -1) owner = lin->rows[i].cluster;
+      if (owner != lin->rows[i].cluster) owner = -2;
+    }
+  }
+  // Base columns: the rest, in order; exclusive columns per cluster.
+  std::map<int, std::vector<int>> exclusive_of;  // cluster -> Jacobian columns
+  for (int c = 0; c < jac.num_cols; ++c) {
+    if (base_col[c] < 0) continue;
+    if (of_nuisance[c] && cluster_of_col[c] >= 0) {
+      base_col[c] = -2;
+      exclusive_of[cluster_of_col[c]].push_back(c);
+      continue;
+    }
+    base_col[c] = static_cast<int>(lin->base_names.size());
+    lin->base_names.push_back(columns[c].name);
+    lin->base_columns.push_back(columns[c]);
+  }
+  std::vector<ExclusiveColumns> out;
+  std::map<int, int> slot_of_cluster;
+  std::vector<int> local_col(jac.num_cols, -1);
+  for (const auto& [cluster, cols] : exclusive_of) {
+    slot_of_cluster[cluster] = static_cast<int>(out.size());
+    out.emplace_back();
+    for (size_t a = 0; a < cols.size(); ++a) local_col[cols[a]] = static_cast<int>(a);
+  }
+  for (int i = 0; i < n; ++i) {
+    auto it = slot_of_cluster.find(lin->rows[i].cluster);
+    if (it != slot_of_cluster.end()) out[it->second].rows.push_back(i);
+  }
+  for (auto& [cluster, slot] : slot_of_cluster) {
+    out[slot].cols = Eigen::MatrixXd::Zero(out[slot].rows.size(), exclusive_of[cluster].size());
+  }
+  std::map<int, int> row_in_slot;  // only rows of clusters with exclusive columns
+  for (const ExclusiveColumns& e : out) {
+    for (size_t a = 0; a < e.rows.size(); ++a) row_in_slot[e.rows[a]] = static_cast<int>(a);
+  }
   lin->r = Eigen::Map<const Eigen::VectorXd>(residuals.data(), n);
   lin->base = Eigen::MatrixXd::Zero(n, lin->base_names.size());
   lin->extra = Eigen::MatrixXd::Zero(n, num_extra_cols);
@@ -279,10 +336,52 @@ void EvaluateColumns(ceres::Problem* problem, const std::vector<ceres::ResidualB
       const int c = jac.cols[k];
       if (base_col[c] >= 0) {
         lin->base(i, base_col[c]) = jac.values[k];
+      } else if (base_col[c] == -2) {
+        out[slot_of_cluster[lin->rows[i].cluster]].cols(row_in_slot[i], local_col[c]) =
+            jac.values[k];
       } else {
         lin->extra(i, to_extra[c]) = jac.values[k];
       }
     }
+  }
+  return out;
+}
+
+// Projects each cluster's exclusive columns out of its rows of r, base and
+// extra (orthonormal basis by a column-pivoted QR, rank by its diagonal as
+// Projector decides), and counts them.
+void ProfileExclusive(const std::vector<ExclusiveColumns>& exclusive, Linearization* lin) {
+  lin->profiled_leverage = Eigen::VectorXd::Zero(lin->NumRows());
+  lin->extra_norm = lin->extra.colwise().norm().transpose();
+  for (const ExclusiveColumns& e : exclusive) {
+    const int m = static_cast<int>(e.rows.size());
+    Eigen::MatrixXd x = e.cols;
+    for (int j = 0; j < x.cols(); ++j) {
+      const double norm = x.col(j).norm();
+      x.col(j) *= norm > 0 ? 1.0 / norm : 0.0;
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(x);
+    const int k = std::min<int>(m, static_cast<int>(x.cols()));
+    int rank = 0;
+    for (int i = 0; i < k; ++i) {
+      if (std::abs(qr.matrixR()(i, i)) > 1e-7) ++rank;
+    }
+    if (rank == 0) continue;
+    const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(m, rank);
+    auto project = [&](Eigen::MatrixXd& full) {
+      if (full.cols() == 0) return;
+      Eigen::MatrixXd part(m, full.cols());
+      for (int a = 0; a < m; ++a) part.row(a) = full.row(e.rows[a]);
+      part -= q * (q.transpose() * part);
+      for (int a = 0; a < m; ++a) full.row(e.rows[a]) = part.row(a);
+    };
+    Eigen::MatrixXd r = lin->r;
+    project(r);
+    lin->r = r.col(0);
+    project(lin->base);
+    project(lin->extra);
+    for (int a = 0; a < m; ++a) lin->profiled_leverage[e.rows[a]] = q.row(a).squaredNorm();
+    lin->num_profiled += rank;
   }
 }
 
@@ -673,6 +772,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   lin.edm_cyclic_unit_length = model.edm_cyclic_unit_length;
 
   InstrumentModel work = WithCandidates(model, options.candidates);
+  // Probes need the rows' positions: the boards and points at the model's estimate.
+  const Observations positions = WithEstimates(obs, model);
   // Rows the fit uses; the model is already fitted, so rows of a zoom it has
   // no camera for are skipped rather than reported.
   const UsedRows rows = SelectRows(obs, options.fit, model.NumZooms(), UnknownZoom::kSkip);
@@ -700,18 +801,26 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   }
 
   const std::vector<const BlockDecision*> free_blocks = param.Apply(&problem, false);
+  // The session's own parameters (boards, points, board warps: not in the
+  // model's reported parameter vector, ParameterLayout).
+  std::set<const double*> nuisance;
+  for (const BlockDecision* d : free_blocks) nuisance.insert(d->block);
+  for (const LayoutBlock& lb : ParameterLayout(work)) nuisance.erase(lb.data(work));
   int num_probe_cols = 0;
   for (const Probe& p : options.probes) num_probe_cols += ProbeSize(p, options.variables);
-  EvaluateColumns(&problem, residual_ids, free_blocks, extra_col,
-                  num_candidate_cols + num_probe_cols, options.fit.num_threads, &lin);
+  const std::vector<ExclusiveColumns> exclusive =
+      EvaluateColumns(&problem, residual_ids, free_blocks, nuisance, extra_col,
+                      num_candidate_cols + num_probe_cols, options.fit.num_threads, &lin);
   if (!options.probes.empty())
-    AddProbeColumns(obs, model, options.probes, num_candidate_cols, &lin);
+    AddProbeColumns(positions, model, options.probes, num_candidate_cols, &lin);
+  ProfileExclusive(exclusive, &lin);
   return lin;
 }
 
 Reduced Reduce(const Linearization& lin) {
   const int n = lin.NumRows();
   Reduced red(n);
+  red.profiled = lin.num_profiled;
   red.base.Add(lin.base, 1e-9);
   red.r = red.base.Apply(lin.r);
   red.extra = red.base.Apply(lin.extra);
@@ -721,7 +830,8 @@ Reduced Reduce(const Linearization& lin) {
   red.kept_fraction = Eigen::VectorXd::Zero(m);
   red.column_norm = Eigen::VectorXd::Zero(m);
   for (int j = 0; j < m; ++j) {
-    red.column_norm[j] = lin.extra.col(j).norm();
+    red.column_norm[j] =
+        lin.extra_norm.size() == m ? lin.extra_norm[j] : lin.extra.col(j).norm();
     if (red.column_norm[j] > 0) red.kept_fraction[j] = red.extra.col(j).norm() / red.column_norm[j];
   }
   return red;

@@ -163,6 +163,17 @@ struct Linearization {
   int num_clusters = 0;
   std::vector<std::string>
       cluster_names;  // "face 1, phi 30.0 deg, theta 90.0 deg" or "shot z0f1s3"
+  // The fit's own nuisance parameters that one cluster's rows alone see (a
+  // photo's board pose in a camera-only session, SPEC 7.1: one placement
+  // per photo) are not columns of `base`: they are projected out of that
+  // cluster's rows of r, base and extra (an exact step of elimination, as
+  // the fit's own block structure allows), which keeps `base` to the
+  // parameters several clusters share. Their number (the degrees of
+  // freedom they take), and each row's leverage from them.
+  int num_profiled = 0;
+  Eigen::VectorXd profiled_leverage;
+  // |column of extra| before they were projected out (Reduced::column_norm).
+  Eigen::VectorXd extra_norm;
   double sigma[3] = {1, 1, 1};
   int num_observations[3] = {0, 0, 0};  // records (edm, cam) and pixel points used
   int excluded_critical = 0;
@@ -174,7 +185,11 @@ struct Linearization {
   int NumRows() const { return static_cast<int>(r.size()); }
 };
 
-// Throws std::invalid_argument for bad options, like Refine.
+// `obs`: the rows the fit used, as the fit saw them (boards of estimated
+// pose and points of unknown position included: their poses and positions
+// are free columns like every other parameter of the fit; probes read the
+// positions of WithEstimates). Throws std::invalid_argument for bad options,
+// like Refine.
 Linearization Linearize(const Observations& obs, const InstrumentModel& model,
                         const LinearizeOptions& options);
 
@@ -187,6 +202,10 @@ struct Reduced {
   Eigen::VectorXd r;
   Eigen::MatrixXd extra;
   Projector base;
+  int profiled = 0;  // Linearization::num_profiled
+  // The number of the fit's parameters the data determine: base's rank and
+  // the profiled ones.
+  int Rank() const { return base.rank() + profiled; }
   std::vector<int> cluster;
   // |column of extra after projection| / |column before|, per column (0 when
   // the column is zero: the data do not see that parameter at all).

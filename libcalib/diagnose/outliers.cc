@@ -46,6 +46,7 @@ OutlierReport TestOutliers(const Observations& obs, const Linearization& lin, co
     it.group = row.group;
     it.index = row.index;
     it.h += q.cols() > 0 ? q.row(i).squaredNorm() : 0.0;
+    if (lin.profiled_leverage.size() > i) it.h += lin.profiled_leverage[i];
     ++it.rows;
   }
   const int num_records = static_cast<int>(obs.records.size());

@@ -74,7 +74,7 @@ ProbeAnalysis AnalyseProbes(const Linearization& lin, const Reduced& red,
   out.level = significance / out.tests;
   const int n = lin.NumRows();
   const int g = lin.num_clusters;
-  const int dof_base = red.base.rank();
+  const int dof_base = red.Rank();
 
   // 1. Against the fitted model alone.
   for (ProbeResult& r : out.probes) {

@@ -30,7 +30,7 @@
 
 namespace rtscalib {
 
-constexpr double kAbsorbed = 1e-3;
+constexpr double kAbsorbed = 0.05;
 
 struct ProbeResult {
   const ColumnBlock* block = nullptr;

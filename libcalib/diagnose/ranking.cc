@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/fit/unknowns.h"
 
 namespace rtscalib {
 namespace {
@@ -250,7 +251,7 @@ RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
   r.delta_bic = GroupLogRatio(lin, cx.y, cx.y - t.fitted) + t.rank * cx.log_n;
   r.wald = t.wald;
   r.p_value = t.p_value;
-  const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.base.rank());
+  const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.Rank());
   r.after = RmsOfWhitened(lin, red.r - plain.fitted);
 
   // r regressed on its own derivative gives minus the Gauss-Newton step.
@@ -354,7 +355,7 @@ void FindAliases(const std::vector<const ColumnBlock*>& effects, const Context& 
       const ColumnBlock* be = BlockOf(r.effect, effects);
       const ColumnTest t =
           TestColumns(y, p->Apply(red.extra.middleCols(be->first, be->size)), red.cluster,
-                      cx.lin.num_clusters, red.base.rank() + p->rank());
+                      cx.lin.num_clusters, red.Rank() + p->rank());
       if (!(t.rank > 0 && t.p_value < out->level)) r.aliases.push_back(o.name);
     }
   }
@@ -375,7 +376,7 @@ void AlsoAfterBest(const std::vector<const ColumnBlock*>& effects, const Context
     if (!o.significant) continue;
     const ColumnBlock* bo = BlockOf(o.effect, effects);
     const ColumnTest t = TestColumns(yb, p.Apply(red.extra.middleCols(bo->first, bo->size)),
-                                     red.cluster, cx.lin.num_clusters, red.base.rank() + p.rank());
+                                     red.cluster, cx.lin.num_clusters, red.Rank() + p.rank());
     if (t.rank > 0 && t.p_value < out->level) out->also_after_best.push_back(o.name);
   }
 }
@@ -406,7 +407,7 @@ void ConfirmByRefinement(const Context& cx, Ranking* out) {
     } catch (const std::exception&) {
       continue;
     }
-    const GroupRms after = RmsOfModel(*in.obs, m, in.fit);
+    const GroupRms after = RmsOfModel(WithEstimates(*in.obs, m), m, in.fit);
     if (!(after.WhitenedRss(lin.sigma) <= r.after.WhitenedRss(lin.sigma) * 1.05)) continue;
     r.after = after;
     r.after_source = "refined";
@@ -488,7 +489,7 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
                    *in.nuisance,
                    Normals(lin, effects),
                    in.nuisance->Apply(red.r),
-                   red.base.rank() + in.nuisance->rank(),
+                   red.Rank() + in.nuisance->rank(),
                    std::log(std::max(n, 2)),
                    out.level,
                    out.current};

@@ -141,7 +141,7 @@ struct Ranking {
 };
 
 struct RankingInput {
-  const Observations* obs = nullptr;
+  const Observations* obs = nullptr;  // as the fit used them (the refits free the boards)
   const InstrumentModel* model = nullptr;
   FitOptions fit;  // as the fit used them
   const Linearization* lin = nullptr;

@@ -1,5 +1,7 @@
 #include "libcalib/fit/robust.h"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -34,7 +36,14 @@ struct Row {
   int group = 0;  // 0 EDM, 1 camera rows, 2 pixels
   int index = 0;
   double r = 0;  // |residual|, NaN when the model cannot evaluate the row
+  Eigen::Vector2d delta = Eigen::Vector2d::Zero();  // pixels: the residual [px]
 };
+
+// Image points of one photo that a flagged one is compared with: its
+// nearest this many in the image (a chessboard corner's neighbours on both
+// sides, or on one side at the board's edge; a tag's own corners and the
+// next tag's).
+constexpr int kNeighbours = 8;
 
 std::vector<Row> RowResiduals(const Observations& obs, const UsedRows& used,
                               const InstrumentModel& model) {
@@ -50,7 +59,8 @@ std::vector<Row> RowResiduals(const Observations& obs, const UsedRows& used,
   std::vector<PixelObservation> pixels;
   for (int i : used.pixels) pixels.push_back(est.pixels[i]);
   for (const PixelResidual& pr : PixelResiduals(model, pixels)) {
-    out.push_back({2, used.pixels[pr.index], pr.valid ? pr.delta.norm() : std::nan("")});
+    out.push_back({2, used.pixels[pr.index], pr.valid ? pr.delta.norm() : std::nan(""),
+                   pr.valid ? pr.delta : Eigen::Vector2d::Zero()});
   }
   return out;
 }
@@ -132,7 +142,50 @@ std::vector<ExcludedRow> Flag(const Observations& usable, const FitOptions& opti
     }
   }
 
-  // 4. Rows beyond `reject` robust sigmas.
+  // Image points of each photo (shot, zoom), for the neighbours below.
+  std::map<std::pair<std::string, int>, std::vector<int>> photo_rows;
+  for (int k = 0; k < static_cast<int>(rows.size()); ++k) {
+    if (rows[k].group != 2 || !std::isfinite(rows[k].r)) continue;
+    const PixelObservation& p = usable.pixels[rows[k].index];
+    photo_rows[{p.shot, p.zoom}].push_back(k);
+  }
+  // The residual of an image point relative to its neighbours in the photo:
+  // what a plane through their residuals over the image (per coordinate,
+  // least squares) leaves at the point, so that a model's error that
+  // changes across the image (steeply at a wide lens's edge) is followed,
+  // also at a board's edge where every neighbour lies on one side. Its own
+  // residual when the photo has too few other points.
+  auto unlike_neighbours = [&](size_t k) {
+    const PixelObservation& p = usable.pixels[rows[k].index];
+    const std::vector<int>& photo = photo_rows[{p.shot, p.zoom}];
+    if (static_cast<int>(photo.size()) <= kNeighbours) return rows[k].r;
+    std::vector<std::pair<double, int>> near;
+    for (int other : photo) {
+      if (other == static_cast<int>(k)) continue;
+      near.push_back({(usable.pixels[rows[other].index].uv - p.uv).squaredNorm(), other});
+    }
+    std::partial_sort(near.begin(), near.begin() + kNeighbours, near.end());
+    Eigen::Matrix<double, kNeighbours, 3> a;
+    Eigen::Matrix<double, kNeighbours, 2> b;
+    const double scale = std::sqrt(near[kNeighbours - 1].first) + 1e-12;
+    for (int n = 0; n < kNeighbours; ++n) {
+      const Row& other = rows[near[n].second];
+      const Eigen::Vector2d d = (usable.pixels[other.index].uv - p.uv) / scale;
+      a.row(n) << 1.0, d.x(), d.y();
+      b.row(n) = other.delta.transpose();
+    }
+    // The plane's value at the point (its constant term); collinear
+    // neighbours (one row of a board) give a line, which the minimum-norm
+    // least-squares solution takes.
+    const Eigen::Matrix<double, 3, 2> plane = a.completeOrthogonalDecomposition().solve(b);
+    return (rows[k].delta - plane.row(0).transpose()).norm();
+  };
+
+  // 4. Rows beyond `reject` robust sigmas. An image point is gross only
+  // when it is also that far from its neighbours in its photo: a detector's
+  // gross error is one corner off, while a model that lacks a term (a wide
+  // lens fitted without rational_distortion, a bent board) moves every
+  // corner of a region alike, and those corners are the data that show it.
   std::vector<ExcludedRow> flagged;
   const double apriori[3] = {options.sigma_edm_m, options.sigma_cam_m, options.sigma_pixel_px};
   for (size_t k = 0; k < rows.size(); ++k) {
@@ -142,13 +195,21 @@ std::vector<ExcludedRow> Flag(const Observations& usable, const FitOptions& opti
     const double s = std::max(sigma_of[k], kSigmaFloor * apriori[r.group]);
     const double limit = robust.reject * s;
     if (std::isfinite(r.r) && !(r.r > limit && s > 0)) continue;
-    char buf[256];
+    const double apart = std::isfinite(r.r) && r.group == 2 ? unlike_neighbours(k) : r.r;
+    if (std::isfinite(r.r) && !(apart > limit)) continue;
+    char buf[320];
     std::snprintf(buf, sizeof buf,
                   "residual %.4g %s after the robust fit, %.1f robust sigmas (sigma %.3g %s of "
                   "the %s like it; limit %.3g sigmas)",
                   r.r, kUnits[r.group], s > 0 ? r.r / s : 0.0, s, kUnits[r.group],
                   kGroupNames[r.group], robust.reject);
-    flagged.push_back(Excluded(usable, r, buf));
+    std::string reason = buf;
+    if (r.group == 2 && std::isfinite(r.r)) {
+      std::snprintf(buf, sizeof buf, "; %.4g px from its %d nearest neighbours' in the photo",
+                    apart, kNeighbours);
+      reason += buf;
+    }
+    flagged.push_back(Excluded(usable, r, reason));
   }
   *rows_out = rows;
   return flagged;
