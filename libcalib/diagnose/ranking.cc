@@ -201,6 +201,21 @@ void StrongestCorrelation(const ColumnBlock& b, const Normals& n, const Lineariz
       }
     }
   }
+  // The parameters projected out cluster by cluster (each photo's own board
+  // pose, Linearization::num_profiled) are no columns of base: a column's
+  // multiple correlation with them, sqrt(1 - (|after| / |before|)^2).
+  if (lin.extra_norm.size() == lin.extra.cols()) {
+    for (int j = b.first; j < b.first + k; ++j) {
+      const double before = lin.extra_norm[j];
+      if (!(before > 0)) continue;
+      const double kept = std::min(1.0, lin.extra.col(j).norm() / before);
+      const double multiple = std::sqrt(std::max(0.0, 1.0 - kept * kept));
+      if (multiple > std::abs(r->rho)) {
+        r->rho = multiple;
+        r->correlated_with = "the boards' poses (each photo's own; multiple correlation)";
+      }
+    }
+  }
 }
 
 // What the ranking needs of every effect, computed once.
