@@ -17,12 +17,7 @@
 namespace rtscalib {
 namespace {
 
-using testing_scene::CameraOnly;
-using testing_scene::SimulateWarpedSession;
-using testing_scene::WarpedSession;
-
-constexpr double kNoisePx = 0.05;
-constexpr std::array<double, 2> kWarp = {0.002, -0.001};
+using namespace testing_scene;
 
 struct FlatBoardFit {
   InstrumentModel model;
@@ -54,7 +49,7 @@ const RankedEffect* RankedEntry(const Diagnosis& d, Effect e) {
 }
 
 TEST(BoardWarpDiagnosis, TiltedBoardIsFoundFirstAndItsWarpRecovered) {
-  const WarpedSession s = SimulateWarpedSession(21, kNoisePx, true, kWarp);
+  const WarpedSession s = SimulateWarpedSession(21, kWarpSessionNoisePx, true, kHiddenWarp);
   const Observations obs = CameraOnly(s.obs);
   const FlatBoardFit f = FitFlatBoard(obs, s.truth);
   const Diagnosis d = Diagnose(obs, f.model, ContextOf(f.options, f.summary), DiagnosisSettings());
@@ -68,14 +63,14 @@ TEST(BoardWarpDiagnosis, TiltedBoardIsFoundFirstAndItsWarpRecovered) {
   // it is wide of chance for ~5,000 points) and finds the hidden warp
   // within 3 of its sigmas.
   EXPECT_EQ(next->after_source, "refined");
-  EXPECT_LT(next->after.pixels_px, 1.1 * std::sqrt(2.0) * kNoisePx);
+  EXPECT_LT(next->after.pixels_px, 1.1 * std::sqrt(2.0) * kWarpSessionNoisePx);
   ASSERT_EQ(next->board_warp.size(), 2u);
   for (const WarpValue& w : next->board_warp) {
     std::cout << "board " << w.first_id << " " << w.name << " = " << w.value * 1e3 << " +- "
-              << w.sigma * 1e3 << " mm (truth " << kWarp[w.index] * 1e3 << ")\n";
+              << w.sigma * 1e3 << " mm (truth " << kHiddenWarp[w.index] * 1e3 << ")\n";
     EXPECT_EQ(w.first_id, 0);
     ASSERT_GT(w.sigma, 0.0);
-    EXPECT_LT(std::abs(w.value - kWarp[w.index]), 3 * w.sigma) << w.name;
+    EXPECT_LT(std::abs(w.value - kHiddenWarp[w.index]), 3 * w.sigma) << w.name;
   }
   EXPECT_NE(next->config_line.find("board_warp"), std::string::npos) << next->config_line;
 }
@@ -84,7 +79,7 @@ TEST(BoardWarpDiagnosis, HeadOnBoardsSayWhatWouldTellTheWarp) {
   // Every placement faces the instrument: the camera-only photos see the
   // board within a few degrees of head-on, where a bow moves the image as
   // the board's distance and the lens's radial terms do.
-  const WarpedSession s = SimulateWarpedSession(22, kNoisePx, false, kWarp);
+  const WarpedSession s = SimulateWarpedSession(22, kWarpSessionNoisePx, false, kHiddenWarp);
   const Observations obs = CameraOnly(s.obs);
   const FlatBoardFit f = FitFlatBoard(obs, s.truth);
   const Diagnosis d = Diagnose(obs, f.model, ContextOf(f.options, f.summary), DiagnosisSettings());
@@ -103,7 +98,7 @@ TEST(BoardWarpDiagnosis, OnePhotoCannotTellTheWarpAndSaysSo) {
   // One photo of the board: its pose, the lens and a bow all explain the
   // same 48 corners; the ranking marks the warp not identifiable (|rho| >
   // 0.95 with a parameter of the model) and asks for more views.
-  const WarpedSession s = SimulateWarpedSession(23, kNoisePx, false, kWarp);
+  const WarpedSession s = SimulateWarpedSession(23, kWarpSessionNoisePx, false, kHiddenWarp);
   Observations obs = CameraOnly(s.obs);
   const std::string first = obs.pixels.front().shot;
   std::vector<PixelObservation> one;

@@ -16,14 +16,7 @@
 namespace rtscalib {
 namespace {
 
-using testing_scene::CameraOnly;
-using testing_scene::SimulateWarpedSession;
-using testing_scene::WarpedSession;
-
-constexpr double kNoisePx = 0.05;
-// 2 mm across, -1 mm along the board: a bow of about a board's thickness
-// (mrcal's tour board: -1.04 and +0.52 mm over 0.69 m).
-constexpr std::array<double, 2> kWarp = {0.002, -0.001};
+using namespace testing_scene;
 
 // The model to fit: the truth's effects, the given start, intrinsics a few
 // pixels off; with or without board_warp.
@@ -46,12 +39,12 @@ void ExpectWarpRecovered(const InstrumentModel& m, const char* what) {
   for (int i = 0; i < 2; ++i) {
     const double sigma = std::sqrt(w.cov[3 * i]);
     std::cout << what << ": w" << "xy"[i] << " = " << w.w[i] * 1e3 << " +- " << sigma * 1e3
-              << " mm (truth " << kWarp[i] * 1e3 << ")\n";
+              << " mm (truth " << kHiddenWarp[i] * 1e3 << ")\n";
     ASSERT_GT(sigma, 0.0) << what;
     // 3 sigma: a 0.3 % chance per component for a right sigma.
-    EXPECT_LT(std::abs(w.w[i] - kWarp[i]), 3 * sigma) << what << " component " << i;
+    EXPECT_LT(std::abs(w.w[i] - kHiddenWarp[i]), 3 * sigma) << what << " component " << i;
     // Tilted placements determine it well: a fifth of the warp at most.
-    EXPECT_LT(sigma, 0.2 * std::abs(kWarp[i])) << what << " component " << i;
+    EXPECT_LT(sigma, 0.2 * std::abs(kHiddenWarp[i])) << what << " component " << i;
   }
   // Every pose of the board carries the fitted warp (WithEstimates, model.yaml, predict).
   for (const EstimatedBoard& b : m.boards) {
@@ -60,7 +53,7 @@ void ExpectWarpRecovered(const InstrumentModel& m, const char* what) {
 }
 
 TEST(BoardWarp, RecoveredWithTheBoardPosesOfAnInstrumentSession) {
-  const WarpedSession s = SimulateWarpedSession(11, kNoisePx, true, kWarp);
+  const WarpedSession s = SimulateWarpedSession(11, kWarpSessionNoisePx, true, kHiddenWarp);
   InstrumentModel flat = PerturbedStart(s.truth, 11, 1e-3);
   InstrumentModel warped = flat;
   const FitSummary without = FitWarpScene(s.obs, &flat, false);
@@ -70,15 +63,15 @@ TEST(BoardWarp, RecoveredWithTheBoardPosesOfAnInstrumentSession) {
   EXPECT_EQ(warped.boards.size(), 6u);  // one pose per placement
   ExpectWarpRecovered(warped, "instrument");
   std::cout << "pixel sigma: flat board " << without.sigma_pixel_px << " px, with board_warp "
-            << with.sigma_pixel_px << " px (noise " << kNoisePx << ")\n";
+            << with.sigma_pixel_px << " px (noise " << kWarpSessionNoisePx << ")\n";
   // ~5,000 residuals: the estimated sigma is the noise within ~2 %; 10 % is
   // wide of chance. The flat board's model leaves the warp's 0.1-0.3 px.
-  EXPECT_NEAR(with.sigma_pixel_px, kNoisePx, 0.1 * kNoisePx);
-  EXPECT_GT(without.sigma_pixel_px, 1.5 * kNoisePx);
+  EXPECT_NEAR(with.sigma_pixel_px, kWarpSessionNoisePx, 0.1 * kWarpSessionNoisePx);
+  EXPECT_GT(without.sigma_pixel_px, 1.5 * kWarpSessionNoisePx);
 }
 
 TEST(BoardWarp, RecoveredInACameraOnlySession) {
-  const WarpedSession s = SimulateWarpedSession(12, kNoisePx, true, kWarp);
+  const WarpedSession s = SimulateWarpedSession(12, kWarpSessionNoisePx, true, kHiddenWarp);
   const Observations obs = CameraOnly(s.obs);
   CameraTool cam = s.truth.cams[0];
   InstrumentModel model = IdealModel(Kinematics::kNone, 1, cam);
@@ -89,7 +82,7 @@ TEST(BoardWarp, RecoveredInACameraOnlySession) {
   // One pose per photo, one warp for them all.
   EXPECT_GT(model.boards.size(), 20u);
   ExpectWarpRecovered(model, "camera-only");
-  EXPECT_NEAR(with.sigma_pixel_px, kNoisePx, 0.1 * kNoisePx);
+  EXPECT_NEAR(with.sigma_pixel_px, kWarpSessionNoisePx, 0.1 * kWarpSessionNoisePx);
 }
 
 }  // namespace
