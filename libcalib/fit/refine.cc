@@ -221,6 +221,9 @@ int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residual
     pinv += v * v.transpose() / l;
   }
 
+  // A score g (scaled coordinates) moves the whitened reported parameters
+  // by influence * g: C_LL^-1/2 (C g)_L, one p x n product for all clusters.
+  const Eigen::MatrixXd influence = white * c_all.transpose();
   Eigen::MatrixXd w_sum = Eigen::MatrixXd::Zero(p, p);
   double fourth = 0;  // sum_c |w_c|^4
   std::vector<int> touched;
@@ -269,11 +272,8 @@ int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residual
         rc + q * (se.eigenvectors() * stretch.cwiseProduct(se.eigenvectors().transpose() * qr_c));
     const Eigen::VectorXd g = jc.transpose() * adjusted;
     // 2. Its influence on the reported parameters, whitened.
-    Eigen::VectorXd u = Eigen::VectorXd::Zero(nl);
-    for (int a = 0; a < kc; ++a) {
-      for (int b = 0; b < nl; ++b) u[b] += c_scaled(l_cols[b], touched[a]) * g[a];
-    }
-    const Eigen::VectorXd w = white * u;
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(p);
+    for (int a = 0; a < kc; ++a) w += influence.col(touched[a]) * g[a];
     w_sum += w * w.transpose();
     fourth += w.squaredNorm() * w.squaredNorm();
   }
