@@ -140,9 +140,10 @@ std::vector<std::vector<int>> AssignClusters(const Observations& obs,
 //    influences and scatters around its truth, the more the fewer clusters
 //    there are per reported direction (six photos tell nine directions
 //    apart poorly). It is pulled towards its mean eigenvalue k = tr(W) / p
-//    by the weight the clusters' own scatter gives, alpha = min(1, b^2 /
-//    d^2) with d^2 = |S - mu I|^2, b^2 = sum_c |w_c w_c^T - S|^2 / G^2
-//    (S = W / G, mu = tr(S) / p): W* = alpha k I + (1 - alpha) W. Few
+//    (at least 1) by the weight the clusters' own scatter gives, alpha =
+//    min(1, b^2 / d^2) with d^2 = |S - mu I|^2, b^2 = sum_c |w_c w_c^T -
+//    S|^2 / G^2 (S = W / G, mu = tr(S) / p): W* = alpha max(k, 1) I + (1 -
+//    alpha) W. Few
 //    clusters leave a common inflation k of all reported directions, many
 //    clusters the direction each error really has (a photo's reading error
 //    in the directions of the camera's pointing).
@@ -286,8 +287,11 @@ int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residual
   const double d2 = s_norm2 - p * mu * mu;
   const double b2 = std::max(0.0, (fourth - g_count * s_norm2) / (g_count * g_count));
   const double alpha = d2 > 0 ? std::min(1.0, b2 / d2) : 1.0;
+  // The target: the mean eigenvalue, or the independent-error covariance
+  // when the clusters scatter less than it (no direction is taken below it
+  // anyway, and a small mean would drag the directions that do exceed it).
   const Eigen::MatrixXd shrunk =
-      alpha * mu * g_count * Eigen::MatrixXd::Identity(p, p) + (1.0 - alpha) * w_sum;
+      alpha * std::max(mu * g_count, 1.0) * Eigen::MatrixXd::Identity(p, p) + (1.0 - alpha) * w_sum;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> we(shrunk);
   if (we.info() != Eigen::Success) return used;
   // 4. The widening where the shrunk sandwich exceeds C_LL.
