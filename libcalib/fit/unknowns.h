@@ -37,7 +37,8 @@ std::vector<std::string> StartUnknowns(const Observations& obs, const UsedRows& 
                                        const DataFacts& facts, InstrumentModel* model);
 
 // A copy of `obs` whose pixels of the model's estimated boards carry their
-// corner's position (ref_from_board * corner_in_board) as a known X, and
+// corner's position (ref_from_board * corner_in_board, warped by the
+// board's board_warp) as a known X, and
 // whose records of the model's estimated points carry the point as a known x
 // (`point` cleared): for evaluations that need positions (errors, checks of
 // a start or a fit, the diagnosis's residuals), which then see the boards
