@@ -14,6 +14,7 @@
 #include "app/commands.h"
 #include "app/figures.h"
 #include "libcalib/api/compare.h"
+#include "libcalib/diagnose/statistics.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/text/errors.h"
 #include "libcalib/text/number_text.h"
@@ -71,6 +72,14 @@ std::string Text(const CompareArgs& args, const Comparison& c) {
   o << "\nMean square of the normalised differences: " << Fmt("%.3g", c.mean_square_normalised)
     << " over " << c.num_normalised
     << " parameters (about 1 for two fits of one instrument whose sigmas are right)\n";
+  if (c.effective_parameters > 0) {
+    // Correlated differences: chi^2_nu / nu (libcalib/api/compare.h).
+    const double nu = c.effective_parameters;
+    o << "  correlated as they are, they count as " << Fmt("%.3g", nu)
+      << " independent ones: for right sigmas the mean square lies between "
+      << Fmt("%.2g", ChiSquareCritical(0.995, nu) / nu) << " and "
+      << Fmt("%.3g", ChiSquareCritical(0.005, nu) / nu) << " (99 %)\n";
+  }
   for (const std::string& n : c.notes) o << "note: " << n << "\n";
   return o.str();
 }
@@ -109,6 +118,7 @@ json Json(const CompareArgs& args, const Comparison& c) {
           {"zooms", zooms},
           {"parameters", params},
           {"mean_square_normalised", c.mean_square_normalised},
+          {"effective_parameters", c.effective_parameters},
           {"num_normalised", c.num_normalised},
           {"notes", c.notes}};
 }

@@ -16,6 +16,7 @@
 
 #include "app/report_html.h"
 #include "app/vega.h"
+#include "libcalib/diagnose/statistics.h"
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/text/number_text.h"
@@ -346,6 +347,13 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& ro
 // ---------------------------------------------------------------------------
 // Image residuals per zoom: the fitted pixel rows binned over the image.
 
+// Photos a cell needs before its mean is tested (the 2 x 2 scatter of fewer
+// is too rough for the chi-square below).
+constexpr int kStructureMinPhotos = 10;
+// Family-wise level of the cells' tests: "structure" is a cell mean that
+// fewer than 1 % of noise-only images would show anywhere.
+constexpr double kStructureLevel = 0.01;
+
 Figure ImageResiduals(int zoom, const CameraTool& cam,
                       const std::vector<ObservationResidual>& rows) {
   const int nx = 16;
@@ -353,6 +361,8 @@ Figure ImageResiduals(int zoom, const CameraTool& cam,
   struct Cell {
     double du = 0, dv = 0;
     int n = 0;
+    // Per photo (a camera record: on its own) the sum of its residuals here.
+    std::map<std::string, std::pair<Eigen::Vector2d, int>> photos;
   };
   std::vector<Cell> cells(nx * ny);
   double ss = 0;
@@ -368,22 +378,39 @@ Figure ImageResiduals(int zoom, const CameraTool& cam,
     c.du += o.image_delta.x();
     c.dv += o.image_delta.y();
     ++c.n;
+    const std::string photo = o.shot.empty() ? "record " + std::to_string(o.index) : o.shot;
+    auto& sum = c.photos.try_emplace(photo, Eigen::Vector2d::Zero(), 0).first->second;
+    sum.first += o.image_delta;
+    ++sum.second;
     ss += o.image_delta.squaredNorm();
     ++n;
     records += o.group == ObsGroup::kCam;
   }
   const double rms = n ? std::sqrt(ss / n) : 0;
+  // Structure: a cell whose mean residual the scatter of its photos does
+  // not explain. A photo's points in one cell share its errors (its pose,
+  // its detection), so the photos are the independent samples: with m_p
+  // each photo's mean residual in the cell (P photos), m their mean and S
+  // their 2 x 2 scatter, Hotelling's T^2 = P m' S^-1 m against chi^2 with 2
+  // degrees of freedom at kStructureLevel over the cells tested
+  // (Bonferroni). A lens term the model lacks, a bent board or a detector's
+  // bias there shows as a mean no photo-to-photo scatter gives.
+  int tested = 0;
+  for (const Cell& c : cells) tested += static_cast<int>(c.photos.size()) >= kStructureMinPhotos;
+  const double critical = tested ? ChiSquareCritical(kStructureLevel / tested, 2) : 0;
   std::vector<double> lengths;
   for (const Cell& c : cells) {
     if (c.n) lengths.push_back(std::hypot(c.du / c.n, c.dv / c.n));
   }
   // The reference arrow: a round residual near the longest cell means (the
   // 90th percentile, so that one cell of few points does not set it), drawn
-  // 0.9 cell widths long.
+  // 0.9 cell widths long; a longer arrow is cut at the cell's width.
   const double reference_px = NiceAbove(Percentile(lengths, 0.9));
   const double cell_w = double(cam.width) / nx;
   const double gain = 0.9 * cell_w / reference_px;
   json values = json::array();
+  int significant = 0, with_points = 0, cut = 0;
+  double max_significant = 0, max_u = 0, max_v = 0;
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
       const Cell& c = cells[j * nx + i];
@@ -393,42 +420,88 @@ Figure ImageResiduals(int zoom, const CameraTool& cam,
                    v1 = (j + 1) * cam.height / double(ny) - 0.5;
       json cell = {{"i", i}, {"j", j}, {"u0", u0}, {"u1", u1}, {"v0", v0}, {"v1", v1}, {"n", c.n}};
       if (c.n) {
+        ++with_points;
         const double du = c.du / c.n, dv = c.dv / c.n;
         const double u = 0.5 * (u0 + u1), v = 0.5 * (v0 + v1);
+        double t2 = 0;
+        const int photos = static_cast<int>(c.photos.size());
+        if (photos >= kStructureMinPhotos) {
+          Eigen::Vector2d m = Eigen::Vector2d::Zero();
+          for (const auto& [name, sum] : c.photos) m += sum.first / sum.second;
+          m /= photos;
+          Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+          for (const auto& [name, sum] : c.photos) {
+            const Eigen::Vector2d e = sum.first / sum.second - m;
+            scatter += e * e.transpose() / (photos - 1.0);
+          }
+          if (scatter.determinant() > 0) t2 = photos * m.dot(scatter.inverse() * m);
+        }
+        const bool structure = photos >= kStructureMinPhotos && t2 > critical;
+        const double length = std::hypot(du, dv);
+        if (structure) {
+          ++significant;
+          if (length > max_significant) {
+            max_significant = length;
+            max_u = u;
+            max_v = v;
+          }
+        }
+        // Drawn at most a cell's width long.
+        const double drawn = std::min(gain, length > 0 ? cell_w / length : gain);
+        cut += drawn < gain;
         cell.update({{"du", du},
                      {"dv", dv},
                      {"u", u},
                      {"v", v},
-                     {"tip_u", u + gain * du},
-                     {"tip_v", v + gain * dv},
-                     {"angle", std::atan2(du, -dv) * kDeg}});
+                     {"tip_u", u + drawn * du},
+                     {"tip_v", v + drawn * dv},
+                     {"angle", std::atan2(du, -dv) * kDeg},
+                     {"t2", t2},
+                     {"structure", structure}});
       }
       values.push_back(cell);
     }
   }
+  std::string subtitle =
+      std::to_string(n - records) + " fitted image points and " + std::to_string(records) +
+      " camera records, rms " + Significant(rms, 3) + " px; arrow: " +
+      Significant(reference_px, 3) + " px residual = " + Significant(0.9, 3) +
+      " cell widths (longer ones cut at a cell's width: " + std::to_string(cut) + ")";
+  std::string structure_line =
+      "red: structure, a cell mean its photos' scatter does not explain (" +
+      std::to_string(significant) + " of " + std::to_string(tested) + " cells of >= " +
+      std::to_string(kStructureMinPhotos) + " photos";
+  structure_line += significant ? "; the largest " + Significant(max_significant, 3) + " px at (" +
+                                      Significant(max_u, 4) + ", " + Significant(max_v, 4) + ")"
+                                : "";
+  structure_line += "); grey: noise; blue line: where the points lie";
   json spec = Chart("Image residuals, zoom " + std::to_string(zoom) +
                         ": mean observed - predicted pixel per cell",
-                    std::to_string(n - records) + " fitted image points and " +
-                        std::to_string(records) + " camera records, rms " + Significant(rms, 3) +
-                        " px; arrow: " + Significant(reference_px, 3) +
-                        " px residual = " + Significant(0.9, 3) +
-                        " cell widths; cell colour and number: points per cell");
+                    subtitle + "; " + structure_line);
   int w = 0, h = 0;
   ImageScales(&spec, cam.width, cam.height, &w, &h);
   spec["data"].push_back({{"name", "cells"}, {"values", values}});
   spec["data"].push_back({{"name", "arrows"},
                           {"source", "cells"},
                           {"transform", {{{"type", "filter"}, {"expr", "datum.n > 0"}}}}});
+  spec["data"].push_back({{"name", "structure"},
+                          {"source", "cells"},
+                          {"transform", {{{"type", "filter"}, {"expr", "datum.structure"}}}}});
+  spec["data"].push_back({{"name", "noise"},
+                          {"source", "cells"},
+                          {"transform", {{{"type", "filter"},
+                                          {"expr", "datum.n > 0 && !datum.structure"}}}}});
   spec["scales"].push_back({{"name", "count"},
                             {"type", "sqrt"},
                             {"domain", {{"data", "cells"}, {"field", "n"}}},
                             {"zero", true},
-                            {"range", {"#ffffff", "#6baed6"}}});
+                            {"range", {"#ffffff", "#dbe6f0"}}});
   json& marks = spec["marks"];
   const json tip = Tip({{"cell", "datum.i + ', ' + datum.j"},
                         {"points", "datum.n"},
                         {"mean du [px]", "format(datum.du, '.4f')"},
-                        {"mean dv [px]", "format(datum.dv, '.4f')"}});
+                        {"mean dv [px]", "format(datum.dv, '.4f')"},
+                        {"T^2 of the mean", "format(datum.t2, '.1f')"}});
   marks.push_back(Mark("rect", "cells",
                        {{"x", Field("u", "u0")},
                         {"x2", Field("u", "u1")},
@@ -457,13 +530,29 @@ Figure ImageResiduals(int zoom, const CameraTool& cam,
                         {"y2", Field("v", "v1")},
                         {"stroke", {{"value", "#999"}}},
                         {"strokeDash", {{"value", {4, 4}}}}}));
+  // Where the points lie (the camera's valid region, the convex hull of the
+  // calibration's points): outside it the model is extrapolated.
+  if (cam.valid_region.size() >= 3) {
+    json hull = json::array();
+    for (size_t k = 0; k <= cam.valid_region.size(); ++k) {
+      const Eigen::Vector2d& q = cam.valid_region[k % cam.valid_region.size()];
+      hull.push_back({{"k", k}, {"u", q.x()}, {"v", q.y()}});
+    }
+    spec["data"].push_back({{"name", "region"}, {"values", hull}});
+    marks.push_back(Mark("line", "region",
+                         {{"x", Field("u", "u")},
+                          {"y", Field("v", "v")},
+                          {"stroke", {{"value", "#2c7fb8"}}},
+                          {"strokeWidth", {{"value", 1.5}}}}));
+  }
   marks.push_back(Mark("text", "arrows",
                        {{"x", {{"scale", "u"}, {"field", "u0"}, {"offset", 2}}},
                         {"y", {{"scale", "v"}, {"field", "v1"}, {"offset", -2}}},
                         {"fontSize", {{"value", 8}}},
                         {"fill", {{"value", "#555"}}},
                         {"text", {{"field", "n"}}}}));
-  Arrows(&marks, "arrows", "#c0392b", tip);
+  Arrows(&marks, "noise", "#9a9a9a", tip);
+  Arrows(&marks, "structure", "#c0392b", tip);
   ScaleBar(&marks, 0.9 * cell_w * w / cam.width, Significant(reference_px, 3) + " px", w);
   Figure f;
   f.name = "image_residuals_zoom" + std::to_string(zoom);
@@ -472,18 +561,27 @@ Figure ImageResiduals(int zoom, const CameraTool& cam,
   f.caption =
       "The fitted image observations of this zoom (image points and camera records; residual "
       "table, final model, boards at their estimated poses), binned over the image: each arrow is "
-      "the mean observed-minus-predicted "
-      "pixel of its cell, drawn at the scale the red reference arrow states; the number is the "
-      "cell's points. A pattern of arrows is a model error (distortion, a principal point, a "
-      "tool); random arrows shorter than the rms are noise. Empty corner ninths (dashed) mean "
-      "the distortion is extrapolated there.";
+      "the mean observed-minus-predicted pixel of its cell, drawn at the scale the reference "
+      "arrow states and cut at a cell's width; the number is the cell's points. Red arrows are "
+      "structure: means that the scatter of the cell's photos does not explain (Hotelling's T^2 "
+      "of the photos' means against chi-square with 2 degrees of freedom, 1 % over the cells of "
+      "at least " +
+      std::to_string(kStructureMinPhotos) +
+      " photos): a lens term the model lacks, a bent board, a detector's bias there. Grey "
+      "arrows are noise. The blue line encloses the points (the camera's valid region): the "
+      "model is extrapolated outside it, and empty corner ninths (dashed) leave the distortion "
+      "extrapolated at the image corners.";
   f.spec = spec;
   f.summary = {{"zoom", zoom},
                {"fitted_rows", n},
                {"camera_records", records},
                {"rms_px", rms},
                {"arrow_scale_px", reference_px},
-               {"cells", {nx, ny}}};
+               {"cells", {nx, ny}},
+               {"cells_tested", tested},
+               {"structure_cells", significant},
+               {"structure_max_px", max_significant},
+               {"structure_max_at", {max_u, max_v}}};
   return f;
 }
 

@@ -100,6 +100,22 @@ json ModelJson(const InstrumentModel& m) {
     }
     eff[info.name] = ej;
   }
+  if (m.effects.Has(Effect::kBoardWarp)) {
+    // One warp per board of estimated pose, by its first tag id.
+    const EffectInfo& info = Info(Effect::kBoardWarp);
+    const double scale = ReportScale(Effect::kBoardWarp);
+    json wj = json::object();
+    for (const BoardWarp& w : m.board_warps) {
+      json bj = json::object();
+      for (int k = 0; k < kNumBoardWarp; ++k) {
+        bj[info.param_names[k]] = {{"value", w.w[k] * scale},
+                                   {"sigma", std::sqrt(std::max(w.cov[3 * k], 0.0)) * scale},
+                                   {"unit", info.report_units[k]}};
+      }
+      wj[std::to_string(w.first_id)] = bj;
+    }
+    eff[info.name] = wj;
+  }
   j["effect_values"] = eff;
   // SPEC 7 / 7.1: the estimated board poses, one per board and placement
   // (camera-only: and zoom, in that zoom's camera frame).
@@ -804,6 +820,20 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
             o << "  " << kFocusParamNames[i] << " = "
               << Fmt("%.4g", m.cams[z].focus[i] * kFocusReportScale[i]) << " +- "
               << Fmt("%.2g", sigma) << " " << kFocusReportUnits[i];
+          }
+          o << "\n";
+        }
+        continue;
+      }
+      if (IsBoardEffect(e)) {
+        // One warp per board of estimated pose, in mm.
+        const double scale = ReportScale(e);
+        for (const BoardWarp& w : r.calibration.model.board_warps) {
+          o << "  " << Info(e).name << " board " << w.first_id;
+          for (int k = 0; k < kNumBoardWarp; ++k) {
+            o << "  " << Info(e).param_names[k] << " = " << Fmt("%.4g", w.w[k] * scale)
+              << " +- " << Fmt("%.2g", std::sqrt(std::max(w.cov[3 * k], 0.0)) * scale) << " "
+              << Info(e).report_units[k];
           }
           o << "\n";
         }

@@ -306,6 +306,7 @@ Comparison CompareInstruments(const CalibratedInstrument& a, const CalibratedIns
   const std::vector<LayoutBlock> la = ParameterLayout(ma), lb = ParameterLayout(mb);
   const bool sa = ga.cov.rows() > 0, sb = gb.cov.rows() > 0;
   double sum = 0;
+  std::vector<std::pair<int, int>> compared;  // offsets in a's and b's covariance
   for (const LayoutBlock& ba : la) {
     const LayoutBlock* bb = nullptr;
     for (const LayoutBlock& x : lb) {
@@ -335,6 +336,7 @@ Comparison CompareInstruments(const CalibratedInstrument& a, const CalibratedIns
       if (p.has_sigma) {
         sum += p.normalised * p.normalised;
         ++out.num_normalised;
+        compared.push_back({ba.offset + i, bb->offset + i});
       }
       out.parameters.push_back(p);
     }
@@ -345,6 +347,24 @@ Comparison CompareInstruments(const CalibratedInstrument& a, const CalibratedIns
     if (!found) out.notes.push_back("'" + x.name + "' is only in the second model");
   }
   out.mean_square_normalised = out.num_normalised ? sum / out.num_normalised : 0.0;
+  if (sa && sb && !compared.empty()) {
+    const int p = static_cast<int>(compared.size());
+    Eigen::MatrixXd c(p, p);
+    for (int i = 0; i < p; ++i) {
+      for (int j = 0; j < p; ++j) {
+        c(i, j) = ga.cov(compared[i].first, compared[j].first) +
+                  gb.cov(compared[i].second, compared[j].second);
+      }
+    }
+    double rho2 = 0;
+    for (int i = 0; i < p; ++i) {
+      for (int j = 0; j < p; ++j) {
+        const double d = c(i, i) * c(j, j);
+        rho2 += d > 0 ? c(i, j) * c(i, j) / d : (i == j ? 1.0 : 0.0);
+      }
+    }
+    out.effective_parameters = static_cast<double>(p) * p / rho2;
+  }
   return out;
 }
 

@@ -23,7 +23,11 @@
 // are independent fits) and the normalised difference d / sigma; held
 // coordinates (sigma 0) have none. For two fits of independent data of one
 // instrument the normalised differences are ~N(0, 1): a mean square far from
-// 1 says the stated uncertainties are wrong or the instruments differ.
+// 1 says the stated uncertainties are wrong or the instruments differ. They
+// are correlated (a focal length with the distortion), so their mean square
+// spreads like chi^2_nu / nu with nu = p^2 / sum_ij rho_ij^2 (Satterthwaite;
+// rho the correlations of the differences under P_a + P_b, p of them), not
+// with p degrees of freedom: `effective_parameters` is nu.
 #pragma once
 
 #include <string>
@@ -68,6 +72,8 @@ struct Comparison {
   std::vector<ParameterDifference> parameters;
   double mean_square_normalised = 0;  // over parameters with a sigma
   int num_normalised = 0;
+  // nu above (0 without both full covariances).
+  double effective_parameters = 0;
   bool full_covariance = false;    // both models had their full covariance
   std::vector<std::string> notes;  // blocks only one model has, ...
 };

@@ -4,9 +4,11 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <set>
 
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/model/focus.h"
+#include "libcalib/model/kinematics.h"
 #include "libcalib/text/number_text.h"
 
 namespace rtscalib {
@@ -66,10 +68,37 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
     }
   }
   const std::vector<double> focus = PhotoFocusDistances(model, obs.pixels, &obs.targets);
+  // Each photo's view of each board of estimated pose, once: the direction
+  // from the board's centre to the camera in the board frame (its z points
+  // away from the camera), as tilts about the board's axes.
+  std::set<std::pair<std::string, const EstimatedBoard*>> seen;
+  auto board_view = [&](const PixelObservation& p) {
+    if (p.zoom < 0 || p.zoom >= model.NumZooms()) return;
+    const EstimatedBoard* b = model.BoardOf(p.target, p.placement, p.zoom);
+    if (!b || !seen.insert({p.shot, b}).second) return;
+    const Rigid3 board_from_cam =
+        b->pose.ToRigid().Inverse() * RefFromCam(model, p.zoom, p.phi, p.theta);
+    const Eigen::Vector3d centre(0.5 * b->board.Width(), 0.5 * b->board.Height(), 0.0);
+    const Eigen::Vector3d to_camera = board_from_cam.translation - centre;
+    const double tx = std::atan2(to_camera.x(), -to_camera.z()) * 180 / M_PI;
+    const double ty = std::atan2(to_camera.y(), -to_camera.z()) * 180 / M_PI;
+    auto [it, fresh] = c.boards.emplace(b->board.first_id, BoardViews{});
+    BoardViews& v = it->second;
+    if (fresh || v.views == 0) {
+      v.tilt_x_min = v.tilt_x_max = tx;
+      v.tilt_y_min = v.tilt_y_max = ty;
+    }
+    ++v.views;
+    v.tilt_x_min = std::min(v.tilt_x_min, tx);
+    v.tilt_x_max = std::max(v.tilt_x_max, tx);
+    v.tilt_y_min = std::min(v.tilt_y_min, ty);
+    v.tilt_y_max = std::max(v.tilt_y_max, ty);
+  };
   for (size_t i = 0; i < obs.pixels.size(); ++i) {
     const PixelObservation& p = obs.pixels[i];
     if (InCriticalRegion(p.theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
     ++c.pixels;
+    board_view(p);
     c.has_cam = true;
     pointing(p.face, p.phi, p.theta);
     corner(p.zoom, p.uv.x(), p.uv.y());
@@ -193,6 +222,26 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
       }
     }
   };
+  auto need_many_poses = [&] {
+    if (c.boards.empty()) {
+      out.push_back("photos of boards of estimated pose (a board with a surveyed pose is taken "
+                    "as surveyed, warp included)");
+      return;
+    }
+    for (const auto& [first_id, v] : c.boards) {
+      const double span_x = v.tilt_x_max - v.tilt_x_min, span_y = v.tilt_y_max - v.tilt_y_min;
+      if (v.views >= rules.warp_views && span_x >= rules.warp_tilt_span_deg &&
+          span_y >= rules.warp_tilt_span_deg) {
+        continue;
+      }
+      out.push_back("board " + std::to_string(first_id) + " in more views, tilted both ways "
+                    "about both its axes (" + std::to_string(v.views) + " view(s) spanning " +
+                    Significant(span_x, 2) + " deg about its y axis and " +
+                    Significant(span_y, 2) + " deg about its x axis; at least " +
+                    std::to_string(rules.warp_views) + " views and " +
+                    Significant(rules.warp_tilt_span_deg, 2) + " deg each)");
+    }
+  };
   // What data each effect needs is a column of the catalogue (effects.h); the
   // advice is given in DataNeed order.
   for (int bit = 0; bit < kNumDataNeeds; ++bit) {
@@ -227,6 +276,9 @@ std::vector<std::string> WhatWouldHelp(Effect e, const Coverage& c, const Instru
         break;
       case kNeedNearAndFar:
         need_near_and_far();
+        break;
+      case kNeedManyPoses:
+        need_many_poses();
         break;
     }
   }

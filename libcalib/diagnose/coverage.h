@@ -12,6 +12,9 @@
 //   edm_cyclic                                      -> distances sampled finer than U/4 over >= U
 //   distortion groups                               -> points near the image corners
 //   focus                                           -> camera targets near and far (per zoom)
+//   board_warp                                      -> each board of estimated pose seen in
+//                                                      several views, tilted both ways about
+//                                                      both its axes (BoardViews)
 // `WhatWouldHelp` returns the requirements the data do not meet, in words.
 //
 // Image coverage per zoom (ImageCoverage): an occupancy grid of
@@ -51,6 +54,21 @@ struct CoverageRules {
   double corner_fraction = 0.7;  // of the half-diagonal from the image centre
   // focus (SPEC 4.1) is 1/D: targets at one distance cannot tell it from fx, cx, cy.
   double focus_distance_ratio = 2.0;  // farthest / nearest camera target of a zoom
+  // board_warp: seen head-on, a board's bow moves its image like a change of
+  // its distance and of the lens's radial distortion; tilted, its near and
+  // far halves move apart, which no pose does. Views of each board spanning
+  // this much tilt about each of its axes, and this many views.
+  double warp_tilt_span_deg = 20.0;
+  int warp_views = 3;
+};
+
+// How a board of estimated pose was seen: its views (photos) and the span of
+// the viewing direction's tilt away from the board's normal, about the
+// board's y axis (across, along x) and about its x axis (along y) [deg].
+struct BoardViews {
+  int views = 0;
+  double tilt_x_min = 0, tilt_x_max = 0;  // about the board's y axis
+  double tilt_y_min = 0, tilt_y_max = 0;  // about the board's x axis
 };
 
 inline constexpr int kCoverageCells = 8;
@@ -76,6 +94,7 @@ struct Coverage {
   // per zoom: nearest and farthest camera target (photos' D, cam rows' d) [m]
   std::map<int, std::pair<double, double>> target_distance;
   std::vector<ImageCoverage> images;    // per zoom with image points
+  std::map<int, BoardViews> boards;     // per board of estimated pose (first_id)
   int records = 0, pixels = 0;          // used (outside the critical regions)
 };
 

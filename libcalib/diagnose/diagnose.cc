@@ -60,6 +60,20 @@ std::string ValueText(const RankedEffect& r) {
     }
     return out;
   }
+  if (IsBoardEffect(r.effect)) {
+    std::string out;
+    const double scale = ReportScale(r.effect);
+    int board = -1;
+    for (const WarpValue& w : r.board_warp) {
+      if (w.first_id != board) {
+        out += std::string(out.empty() ? "" : "; ") + "board " + std::to_string(w.first_id) + ":";
+        board = w.first_id;
+      }
+      out += " " + w.name + " = " + Fmt("%.3g", w.value * scale) + " +- " +
+             Fmt("%.2g", w.sigma * scale) + " " + info.report_units[w.index];
+    }
+    return out;
+  }
   if (!IsKinematic(r.effect)) return "";
   std::string out;
   for (int k = 0; k < r.value.num; ++k) {

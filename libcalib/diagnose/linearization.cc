@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Dense>
 #include <Eigen/Geometry>
 #include <Eigen/QR>
 #include <algorithm>
@@ -11,11 +12,13 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <tuple>
 
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/cost_functions.h"
+#include "libcalib/fit/parameter_layout.h"
 #include "libcalib/fit/parameterization.h"
 #include "libcalib/fit/unknowns.h"
 #include "libcalib/model/focus.h"
@@ -137,6 +140,8 @@ InstrumentModel WithCandidates(const InstrumentModel& model,
       for (CameraTool& cam : work.cams) cam.focus.fill(0.0);
     }
   }
+  // board_warp: a warp at zero for every board of estimated pose.
+  SyncBoardWarps(&work);
   return work;
 }
 
@@ -163,6 +168,7 @@ std::map<std::pair<const double*, int>, int> CandidateColumns(const Parameteriza
         extra_col[{d.block, static_cast<int>(k)}] = b.first + b.size;
         b.param_names.push_back(c.name);
         if (IsCameraEffect(e)) b.distortion.push_back({c.zoom, c.index});
+        if (IsBoardEffect(e)) b.boards.push_back({c.board, c.index});
         ++b.size;
       }
     }

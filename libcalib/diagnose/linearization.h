@@ -136,6 +136,8 @@ struct ColumnBlock {
   bool is_effect = false;
   Effect effect = Effect::kCollimation;
   std::vector<std::pair<int, int>> distortion;  // (zoom, coefficient or focus index)
+  // Per-board effects (board_warp): which (board first_id, index) each column is.
+  std::vector<std::pair<int, int>> boards;
   // Probes.
   bool is_probe = false;
   Probe probe;

@@ -30,7 +30,13 @@
 
 namespace rtscalib {
 
-constexpr double kAbsorbed = 1e-3;
+// A probe's column that keeps less than this fraction of its norm once the
+// fit's own parameters are projected out is theirs, not the probe's: what
+// is left of it is too little of its shape to be named after it (an image
+// rotation in photos that each have their own board pose, which turns with
+// the photo: a coefficient fitted to the remaining 1 % would state a
+// rotation of hundreds of pixels).
+constexpr double kAbsorbed = 0.05;
 
 struct ProbeResult {
   const ColumnBlock* block = nullptr;

@@ -229,6 +229,21 @@ void StrongestCorrelation(const ColumnBlock& b, const Normals& n, const Lineariz
       }
     }
   }
+  // The parameters projected out cluster by cluster (each photo's own board
+  // pose, Linearization::num_profiled) are no columns of base: a column's
+  // multiple correlation with them, sqrt(1 - (|after| / |before|)^2).
+  if (lin.extra_norm.size() == lin.extra.cols()) {
+    for (int j = b.first; j < b.first + k; ++j) {
+      const double before = lin.extra_norm[j];
+      if (!(before > 0)) continue;
+      const double kept = std::min(1.0, lin.extra.col(j).norm() / before);
+      const double multiple = std::sqrt(std::max(0.0, 1.0 - kept * kept));
+      if (multiple > std::abs(r->rho)) {
+        r->rho = multiple;
+        r->correlated_with = "the boards' poses (each photo's own; multiple correlation)";
+      }
+    }
+  }
 }
 
 // What the ranking needs of every effect, computed once.
@@ -294,6 +309,13 @@ RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
       const auto [zoom, index] = b.distortion[k];
       r.focus.push_back({zoom, kFocusParamNames[index], index, -t.beta[k],
                          std::sqrt(std::max(t.cov(k, k), 0.0))});
+    }
+  } else if (IsBoardEffect(b.effect)) {
+    // Linearised at zero (WithCandidates), likewise.
+    for (int k = 0; k < b.size; ++k) {
+      const auto [first_id, index] = b.boards[k];
+      r.board_warp.push_back({first_id, Info(b.effect).param_names[index], index, -t.beta[k],
+                              std::sqrt(std::max(t.cov(k, k), 0.0))});
     }
   } else if (IsDistortion(b.effect)) {
     for (int k = 0; k < b.size; ++k) {
@@ -477,6 +499,10 @@ void ConfirmByRefinement(const Context& cx, Ranking* out) {
       r.value = ToReportUnits(r.effect, r.si, r.si_cov);
     } else if (r.effect == Effect::kFocus) {
       for (FocusValue& f : r.focus) f.value = m.cams[f.zoom].focus[f.index];
+    } else if (IsBoardEffect(r.effect)) {
+      for (WarpValue& w : r.board_warp) {
+        if (const BoardWarp* fitted = m.WarpOf(w.first_id)) w.value = fitted->w[w.index];
+      }
     } else if (IsDistortion(r.effect)) {
       for (DistortionValue& d : r.distortion) d.value = m.cams[d.zoom].distortion[d.index];
     }
@@ -507,6 +533,12 @@ void AddAtEstimate(const RankedEffect& r, InstrumentModel* m) {
   } else if (r.effect == Effect::kFocus) {
     for (CameraTool& cam : m->cams) cam.focus.fill(0.0);
     for (const FocusValue& f : r.focus) m->cams[f.zoom].focus[f.index] = f.value;
+  } else if (IsBoardEffect(r.effect)) {
+    SyncBoardWarps(m);  // a warp at zero for every board
+    for (const WarpValue& w : r.board_warp) {
+      if (BoardWarp* warp = m->WarpOf(w.first_id)) warp->w[w.index] = w.value;
+    }
+    SyncBoardWarps(m);
   } else {
     for (const DistortionValue& d : r.distortion) m->cams[d.zoom].distortion[d.index] = d.value;
   }

@@ -126,6 +126,15 @@ struct FocusValue {
   double value = 0, sigma = 0;
 };
 
+// One warp parameter of one board of estimated pose (board_warp), in SI [m]
+// (reports in mm).
+struct WarpValue {
+  int first_id = 0;   // the board's first tag
+  std::string name;   // wx, wy
+  int index = 0;
+  double value = 0, sigma = 0;
+};
+
 struct RankedEffect {
   Effect effect = Effect::kCollimation;
   std::string name;
@@ -148,6 +157,7 @@ struct RankedEffect {
   EffectReportValue value;  // in report units
   std::vector<DistortionValue> distortion;
   std::vector<FocusValue> focus;
+  std::vector<WarpValue> board_warp;
   bool has_equivalent = false;  // redundant: value read off the model
   EffectReportValue equivalent;
   std::vector<std::string> needs;  // what data would make it identifiable / better determined
@@ -179,7 +189,7 @@ struct Ranking {
 };
 
 struct RankingInput {
-  const Observations* obs = nullptr;
+  const Observations* obs = nullptr;  // as the fit used them (the refits free the boards)
   const InstrumentModel* model = nullptr;
   FitOptions fit;  // as the fit used them
   const Linearization* lin = nullptr;
@@ -193,7 +203,7 @@ struct RankingInput {
 Ranking RankEffects(const RankingInput& in, const RankingOptions& options);
 
 // `model` with effect r.effect added at r's estimate (kinematic value,
-// distortion coefficients or focus terms), the model's other parameters as
+// distortion coefficients, focus terms or board warps), the model's other parameters as
 // they are.
 void AddAtEstimate(const RankedEffect& r, InstrumentModel* model);
 

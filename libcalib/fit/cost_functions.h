@@ -7,7 +7,8 @@
 //   [intrinsics(4) distortion(14) for camera tools] [focus(3) for camera tools
 //   when the model has the focus effect] [one block per enabled kinematic
 //   effect, in catalogue order] [board_q(4) board_t(3) per board of
-//   unknown pose the group sees] [point(3) per point of unknown position]
+//   unknown pose the group sees, and its warp(2) when the model has
+//   board_warp] [point(3) per point of unknown position]
 // Observations that share a pointing share one residual block, so that the
 // chain ref_from_tool(phi, theta) is differentiated once per pointing, not
 // once per point (with a robust loss every observation gets its own block,
@@ -16,7 +17,9 @@
 //   pixels of one shot:            (project(X) - uv) / sigma        2 per point
 // SPEC 7: a record of a named point uses that point's block as x; a pixel of
 // a board of unknown pose uses X = ref_from_board * corner_in_board, with
-// ref_from_board from that board's blocks.
+// ref_from_board from that board's blocks; with a warp block (board_warp,
+// TagBoard::warp) the corner leaves the board's plane by
+// wx (1 - xr^2) + wy (1 - yr^2) along the board's z.
 // SPEC 4.1 (focus block present): a camera record projects with the
 // intrinsics focused at D = its ray length d, a shot with those focused at
 // the photo's D (libcalib/model/focus.h): its focus_distance when given, else
@@ -48,11 +51,17 @@ struct BlockLayout {
   int effect[kNumKinematicEffects];
   double edm_cyclic_unit_length = 1.5;
   // Layout indices of the (q, t) blocks of boards of unknown pose and of the
-  // points of unknown position (SPEC 7), in the order the functor refers to.
+  // points of unknown position (SPEC 7), in the order the functor refers to;
+  // per board, the index of its warp block (board_warp), -1 without one.
   std::vector<std::pair<int, int>> boards;
+  std::vector<int> board_warps;
   std::vector<int> points;
 
   BlockLayout() { std::fill(std::begin(effect), std::end(effect), -1); }
+  // The warp block of board slot `board`, -1 without one.
+  int WarpBlock(int board) const {
+    return board < static_cast<int>(board_warps.size()) ? board_warps[board] : -1;
+  }
 
   template <typename T>
   ModelView<T> View(T const* const* p) const {
@@ -371,9 +380,11 @@ struct RecordGroupResidual {
 // --benchmark_filter=FiveIterations/3); the values are identical.
 struct ShotResidual {
   struct Point {
-    Eigen::Vector3d X;  // reference frame, or the board frame when board >= 0
+    Eigen::Vector3d X;  // reference frame, or the flat board's frame when board >= 0
     Eigen::Vector2d uv;
     int board = -1;  // >= 0: X is a corner of layout.boards[board]
+    // The warp's shape at X (TagBoard::WarpShape) when the board has a warp block.
+    Eigen::Vector2d warp_shape = Eigen::Vector2d::Zero();
   };
   // The photo's points summed for its centroid (SPEC 4.1): known points
   // (board -1, reference frame) or the corners of one board of unknown pose
@@ -382,6 +393,7 @@ struct ShotResidual {
   struct FocusTerm {
     int board = -1;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Vector2d warp_shape_sum = Eigen::Vector2d::Zero();  // of the points' warp shapes
     int count = 0;
   };
   BlockLayout layout;
@@ -404,6 +416,15 @@ struct ShotResidual {
     return out;
   }
 
+  // The warp's offset along the board's z of a point of board slot `board`
+  // with warp shape `shape` (0 without a warp block).
+  template <typename T>
+  T WarpOffset(T const* const* p, int board, const Eigen::Vector2d& shape) const {
+    const int w = layout.WarpBlock(board);
+    if (w < 0) return T(0);
+    return p[w][0] * shape[0] + p[w][1] * shape[1];
+  }
+
   // The intrinsics of this photo: focused at its D when the layout has a
   // focus block (SPEC 4.1), the block's own otherwise.
   template <typename T>
@@ -422,7 +443,9 @@ struct ShotResidual {
         if (f.board < 0) {
           sum += f.sum.cast<T>();
         } else {
-          sum += boards[f.board].R * Vec3<T>(f.sum.cast<T>()) + boards[f.board].t * T(f.count);
+          Vec3<T> in_board = f.sum.cast<T>();
+          in_board[2] += WarpOffset(p, f.board, f.warp_shape_sum);
+          sum += boards[f.board].R * in_board + boards[f.board].t * T(f.count);
         }
       }
       const Vec3<T> from_camera = sum / T(focus_count) - ref_from_cam.t;
@@ -451,8 +474,19 @@ struct ShotResidual {
                                 cam_from_ref_R * (ref_from_board.t - ref_from_cam.t)});
     }
     cam_from_frame.push_back({cam_from_ref_R, -(cam_from_ref_R * ref_from_cam.t)});
-    const auto frame_of = [&](size_t k) -> const RigidT<T>& {
-      return cam_from_frame[points[k].board < 0 ? layout.boards.size() : points[k].board];
+    // The point in the camera frame: cam_from_frame * X, and for a warped
+    // board's corner its offset along the board's z (column 2 of
+    // cam_from_board's rotation).
+    const auto in_camera = [&](size_t k) {
+      const Point& pt = points[k];
+      if (pt.board < 0) return Apply(cam_from_frame[layout.boards.size()], pt.X);
+      const RigidT<T>& frame = cam_from_frame[pt.board];
+      Vec3<T> x = Apply(frame, pt.X);
+      if (layout.WarpBlock(pt.board) >= 0) {
+        const T dz = WarpOffset(p, pt.board, pt.warp_shape);
+        for (int i = 0; i < 3; ++i) x[i] += frame.R(i, 2) * dz;
+      }
+      return x;
     };
     T intrinsics[kNumIntrinsics];
     if (!PhotoIntrinsics(p, boards, ref_from_cam, intrinsics)) return false;
@@ -461,7 +495,7 @@ struct ShotResidual {
       T m[9];
       TiltMatrix(dist[kTauX], dist[kTauY], m);
       for (size_t k = 0; k < points.size(); ++k) {
-        const Vec3<T> x_cam = Apply(frame_of(k), points[k].X);
+        const Vec3<T> x_cam = in_camera(k);
         T pixel[2];
         if (!internal::ProjectWithTilt(intrinsics, dist, m, x_cam.data(), pixel)) {
           return false;  // behind the camera: the solver must reject the step
@@ -478,7 +512,7 @@ struct ShotResidual {
       LocalJet m[9];
       TiltMatrix(cam.dist[kTauX], cam.dist[kTauY], m);
       for (size_t k = 0; k < points.size(); ++k) {
-        const Vec3<T> x_cam = Apply(frame_of(k), points[k].X);
+        const Vec3<T> x_cam = in_camera(k);
         const double lx[3] = {x_cam[0].a, x_cam[1].a, x_cam[2].a};
         LocalJet pixel[2];
         if (!internal::ProjectWithTiltLocal(cam.intrinsics, cam.dist, m, lx, pixel)) return false;

@@ -299,6 +299,20 @@ Parameterization::Parameterization(InstrumentModel* model, const FitOptions& opt
     const std::string name = "point[" + p.name + "]";
     Add(Euclidean(p.x.data(), name, BlockKind::kFree, 3, {}, name + "[", kAxes, "]"));
   }
+  // board_warp: one free pair per board of unknown pose, shared by its poses.
+  if (m.effects.Has(Effect::kBoardWarp)) {
+    const EffectInfo& info = Info(Effect::kBoardWarp);
+    for (BoardWarp& w : m.board_warps) {
+      const std::string name = std::string(info.name) + "[" + std::to_string(w.first_id) + "]";
+      BlockDecision d = Euclidean(w.w.data(), name, BlockKind::kFree, kNumBoardWarp, {},
+                                  name + ".", info.param_names.data(), "");
+      for (FreeColumn& c : d.columns) {
+        c.effect = Effect::kBoardWarp;
+        c.board = w.first_id;
+      }
+      Add(std::move(d));
+    }
+  }
 }
 
 void Parameterization::Add(BlockDecision d) {
@@ -443,13 +457,29 @@ ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGro
                                     std::to_string(px.corner));
       }
       if (EstimatedBoard* b = model->BoardOf(px.target, px.placement, px.zoom)) {
+        // board_warp: the board's warp block, shared by all its poses.
+        BoardWarp* warp = model->effects.Has(Effect::kBoardWarp)
+                              ? model->WarpOf(b->board.first_id)
+                              : nullptr;
         auto it = slots.find(b);
         if (it == slots.end()) {
           it = slots.emplace(b, static_cast<int>(f->layout.boards.size())).first;
           f->layout.boards.push_back(
               {f->layout.Add(b->pose.q.data(), 4), f->layout.Add(b->pose.t.data(), 3)});
+          int warp_block = -1;
+          if (warp) {
+            // One block appears once per residual, whichever of the board's
+            // poses the shot sees.
+            for (size_t k = 0; k < f->layout.blocks.size() && warp_block < 0; ++k) {
+              if (f->layout.blocks[k] == warp->w.data()) warp_block = static_cast<int>(k);
+            }
+            if (warp_block < 0) warp_block = f->layout.Add(warp->w.data(), kNumBoardWarp);
+          }
+          f->layout.board_warps.push_back(warp_block);
         }
-        pt.X = b->board.CornersInBoard(px.target - b->board.first_id)[px.corner];
+        // The flat corner: the warp enters through its block (or not at all).
+        pt.X = b->board.FlatCornersInBoard(px.target - b->board.first_id)[px.corner];
+        if (warp) pt.warp_shape = b->board.WarpShape(pt.X);
         pt.board = it->second;
         return pt;
       }
@@ -478,9 +508,10 @@ ceres::CostFunction* MakeGroupCost(const Observations& obs, const ObservationGro
           auto it = term_of.find(pt.board);
           if (it == term_of.end()) {
             it = term_of.emplace(pt.board, static_cast<int>(f->focus_terms.size())).first;
-            f->focus_terms.push_back({pt.board, Eigen::Vector3d::Zero(), 0});
+            f->focus_terms.push_back({pt.board, Eigen::Vector3d::Zero(), Eigen::Vector2d::Zero(), 0});
           }
           f->focus_terms[it->second].sum += pt.X;
+          f->focus_terms[it->second].warp_shape_sum += pt.warp_shape;
           ++f->focus_terms[it->second].count;
           ++f->focus_count;
         }

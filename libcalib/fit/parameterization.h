@@ -21,6 +21,8 @@
 //   <effect>         one free block per enabled kinematic effect (effects.h)
 //   board[id]        a board of unknown pose (SPEC 7): quaternion manifold + free t
 //   point[name]      a point of unknown position (SPEC 7): free 3-vector
+//   board_warp[id]   {wx, wy} of the board whose first tag is id, when the model has
+//                    board_warp: free, one pair per board shared by its poses
 // What the data cannot determine (DataFacts, docs/refinement.md) is held:
 //   no row with a known position: the base pose (and, dh, link1 d and
 //     gamma_offset as always) at the ideal base frame (SPEC 7);
@@ -81,6 +83,7 @@ struct FreeColumn {
   std::string name;              // "base.rotation[x]", "link1.alpha", "cam[0].k1", "edm_scale[0]"
   std::optional<Effect> effect;  // the effect this parameter belongs to, if any
   int zoom = -1;                 // per-zoom blocks: the zoom
+  int board = -1;                // per-board blocks (board_warp): the board's first_id
   int index = 0;                 // ambient index within the block (distortion: coefficient)
 };
 
@@ -112,7 +115,7 @@ class Parameterization {
                    const DataFacts& facts = DataFacts());
 
   // All decisions, in a fixed order: base, links, EDM, cameras by zoom, effects
-  // in catalogue order, boards, points.
+  // in catalogue order, boards, points, board warps.
   const std::vector<BlockDecision>& Blocks() const { return blocks_; }
   const BlockDecision* Find(const double* block) const;
   // Human-readable list of the held gauge freedoms (FitSummary::fixed_gauges).

@@ -110,21 +110,59 @@ std::vector<std::vector<int>> AssignClusters(const Observations& obs,
 }
 
 // The cluster-robust part of TangentCovariance (see there): returns the
-// number of clusters and replaces `cov` by its widened version. `scale`,
-// `eig`, `inv` are the Jacobi scaling and the eigen-decomposition of the
-// scaled J^T J with its pseudo-inverse eigenvalues.
+// number of clusters and widens `cov`, which holds C (the pseudo-inverse of
+// J^T J) on entry. `scale`, `eig`, `inv` are the Jacobi scaling and the
+// eigen-decomposition of the scaled J^T J with its pseudo-inverse
+// eigenvalues; `reported` marks the columns of the parameters the model
+// reports (ParameterLayout: not the boards and points, the session's
+// nuisance parameters).
+//
+// 1. Leverage (Bell & McCaffrey 2002, "CR2"): each cluster's residuals are
+//    corrected, r_c -> (I - H_cc)^-1/2 r_c with H_cc = J_c C J_c^T. A fit
+//    pulls every observation towards itself, and a cluster that alone
+//    informs some direction (the photos that see the image corners, a
+//    camera-only session of six photos) is pulled most: its residuals
+//    understate its errors, and the plain sandwich with G/(G-1) (Liang &
+//    Zeger's CR1) then claims up to ~1.5x too little on 16 photos. With the
+//    correction E[M] = J^T J for independent errors of the assumed sigmas,
+//    whatever the number of clusters. H_cc is formed in the columns the
+//    cluster touches (k of them): J_c = Q R (thin QR), H_cc = Q S Q^T with
+//    S = R C_kk R^T, so (I - H_cc)^-1/2 = I + Q U ((1 - s)^-1/2 - 1) U^T Q^T
+//    (S = U diag(s) U^T) costs m k^2 per cluster of m rows. Directions with
+//    1 - s ~ 0 are the cluster's own parameters (its board pose): its
+//    residuals have no component there at the solution and are left as
+//    they are.
+// 2. The clusters' influence on the reported parameters, whitened by their
+//    independent-error covariance C_LL: w_c = C_LL^-1/2 (C g_c)_L, g_c =
+//    J_c^T r_c (corrected). W = sum_c w_c w_c^T is the sandwich relative to
+//    C_LL: identity in expectation for independent errors.
+// 3. Shrinkage (Ledoit & Wolf 2004): W is a sample covariance of G
+//    influences and scatters around its truth, the more the fewer clusters
+//    there are per reported direction (six photos tell nine directions
+//    apart poorly). It is pulled towards its mean eigenvalue k = tr(W) / p
+//    (at least 1) by the weight the clusters' own scatter gives, alpha =
+//    min(1, b^2 / d^2) with d^2 = |S - mu I|^2, b^2 = sum_c |w_c w_c^T -
+//    S|^2 / G^2 (S = W / G, mu = tr(S) / p): W* = alpha max(k, 1) I + (1 -
+//    alpha) W. Few
+//    clusters leave a common inflation k of all reported directions, many
+//    clusters the direction each error really has (a photo's reading error
+//    in the directions of the camera's pointing).
+// 4. Taken where larger: C_LL + C_LL^1/2 V diag(max(0, l_i - 1)) V^T
+//    C_LL^1/2 (W* = V diag(l) V^T), so that no reported direction is claimed
+//    more precise than independent errors allow; the nuisance parameters
+//    follow through their regression on the reported ones (the widening
+//    D of C_LL enters the whole covariance as C_:L C_LL^+ D C_LL^+ C_L:).
 int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residuals,
                   const std::vector<ResidualRef>& refs,
                   const std::vector<std::vector<int>>& clusters, ceres::Problem* problem,
                   const Eigen::VectorXd& scale,
                   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& eig,
-                  const Eigen::VectorXd& inv, Eigen::MatrixXd* cov) {
+                  const Eigen::VectorXd& inv, const std::vector<char>& reported,
+                  Eigen::MatrixXd* cov) {
   const int n = j.num_cols;
-  // Scores per cluster, g_c = J_c^T r_c, in the scaled coordinates, one
-  // cluster at a time: the residual rows are first sorted by cluster
-  // (counting sort, stable), so that memory is two ints per row instead of
-  // one dense score per cluster (a million records, each its own cluster,
-  // held 224 MB of scores).
+  // The residual rows sorted by cluster (counting sort, stable): memory is
+  // two ints per row, and each cluster is handled on its own (a million
+  // records, each its own cluster, would hold 224 MB of dense scores).
   int num_clusters = 0;
   for (const std::vector<int>& of_ref : clusters) {
     for (int c : of_ref) num_clusters = std::max(num_clusters, c + 1);
@@ -149,9 +187,48 @@ int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residual
       if (cluster_of_row[r] >= 0) rows_by_cluster[next[cluster_of_row[r]]++] = r;
     }
   }
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n, n);
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+  // C in the scaled coordinates (the scaled J^T J's pseudo-inverse), and
+  // the whitening of its reported block: C_LL^-1/2 over the directions C_LL
+  // has (a reported direction the data do not determine has none).
+  const Eigen::MatrixXd c_scaled =
+      eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+  std::vector<int> l_cols;
+  for (int i = 0; i < n; ++i) {
+    if (reported[i]) l_cols.push_back(i);
+  }
+  const int nl = static_cast<int>(l_cols.size());
+  if (nl == 0) return num_clusters;
+  Eigen::MatrixXd c_ll(nl, nl), c_all(n, nl);
+  for (int b = 0; b < nl; ++b) {
+    c_all.col(b) = c_scaled.col(l_cols[b]);
+    for (int a = 0; a < nl; ++a) c_ll(a, b) = c_scaled(l_cols[a], l_cols[b]);
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> le(c_ll);
+  if (le.info() != Eigen::Success) return num_clusters;
+  const double l_max = le.eigenvalues().maxCoeff();
+  std::vector<int> kept;
+  for (int i = 0; i < nl; ++i) {
+    if (le.eigenvalues()[i] > 1e-12 * l_max) kept.push_back(i);
+  }
+  const int p = static_cast<int>(kept.size());
+  if (p == 0) return num_clusters;
+  // Rows of `white`: the kept eigen-directions, scaled by l^-1/2 (w = white u).
+  Eigen::MatrixXd white(p, nl), root(nl, p), pinv = Eigen::MatrixXd::Zero(nl, nl);
+  for (int a = 0; a < p; ++a) {
+    const double l = le.eigenvalues()[kept[a]];
+    const Eigen::VectorXd v = le.eigenvectors().col(kept[a]);
+    white.row(a) = v.transpose() / std::sqrt(l);
+    root.col(a) = v * std::sqrt(l);
+    pinv += v * v.transpose() / l;
+  }
+
+  // A score g (scaled coordinates) moves the whitened reported parameters
+  // by influence * g: C_LL^-1/2 (C g)_L, one p x n product for all clusters.
+  const Eigen::MatrixXd influence = white * c_all.transpose();
+  Eigen::MatrixXd w_sum = Eigen::MatrixXd::Zero(p, p);
+  double fourth = 0;  // sum_c |w_c|^4
   std::vector<int> touched;
+  std::vector<int> local(n, -1);
   int used = 0;
   for (int c = 0; c < num_clusters; ++c) {
     if (start[c] == start[c + 1]) continue;
@@ -159,34 +236,72 @@ int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residual
     touched.clear();
     for (int k = start[c]; k < start[c + 1]; ++k) {
       const int r = rows_by_cluster[k];
-      for (int a = j.rows[r]; a < j.rows[r + 1]; ++a) {
-        const int col = j.cols[a];
-        touched.push_back(col);
-        g[col] += j.values[a] * scale[col] * residuals[r];
-      }
+      for (int a = j.rows[r]; a < j.rows[r + 1]; ++a) touched.push_back(j.cols[a]);
     }
     std::sort(touched.begin(), touched.end());
     touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-    for (int a : touched) {
-      for (int b : touched) m(a, b) += g[a] * g[b];
+    const int kc = static_cast<int>(touched.size());
+    const int mc = start[c + 1] - start[c];
+    for (int a = 0; a < kc; ++a) local[touched[a]] = a;
+    Eigen::MatrixXd jc = Eigen::MatrixXd::Zero(mc, kc);
+    Eigen::VectorXd rc(mc);
+    for (int k = start[c]; k < start[c + 1]; ++k) {
+      const int r = rows_by_cluster[k];
+      rc[k - start[c]] = residuals[r];
+      for (int a = j.rows[r]; a < j.rows[r + 1]; ++a) {
+        jc(k - start[c], local[j.cols[a]]) = j.values[a] * scale[j.cols[a]];
+      }
     }
-    for (int a : touched) g[a] = 0;
+    for (int a : touched) local[a] = -1;
+    // 1. The leverage correction in the cluster's column space.
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(jc);
+    const int rank = std::min(mc, kc);
+    const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(mc, rank);
+    const Eigen::MatrixXd rr = qr.matrixQR().topRows(rank).triangularView<Eigen::Upper>();
+    Eigen::MatrixXd c_kk(kc, kc);
+    for (int a = 0; a < kc; ++a) {
+      for (int b = 0; b < kc; ++b) c_kk(a, b) = c_scaled(touched[a], touched[b]);
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> se(rr * c_kk * rr.transpose());
+    const Eigen::VectorXd qr_c = q.transpose() * rc;
+    Eigen::VectorXd stretch(rank);
+    for (int a = 0; a < rank; ++a) {
+      const double free = 1.0 - se.eigenvalues()[a];
+      stretch[a] = free > 1e-10 ? 1.0 / std::sqrt(free) - 1.0 : 0.0;
+    }
+    const Eigen::VectorXd adjusted =
+        rc + q * (se.eigenvectors() * stretch.cwiseProduct(se.eigenvectors().transpose() * qr_c));
+    const Eigen::VectorXd g = jc.transpose() * adjusted;
+    // 2. Its influence on the reported parameters, whitened.
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(p);
+    for (int a = 0; a < kc; ++a) w += influence.col(touched[a]) * g[a];
+    w_sum += w * w.transpose();
+    fourth += w.squaredNorm() * w.squaredNorm();
   }
   if (used < 2) return used;
-  m *= static_cast<double>(used) / (used - 1);
-  // In the eigenbasis of the scaled J^T J, whitened: W = L^-1/2 V^T M V L^-1/2
-  // is the sandwich relative to the independent-error covariance (identity).
-  const Eigen::VectorXd half = inv.cwiseSqrt();
-  const Eigen::MatrixXd w =
-      half.asDiagonal() * (eig.eigenvectors().transpose() * m * eig.eigenvectors()) *
-      half.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> we(w);
+  // 3. Shrinkage towards the mean eigenvalue.
+  const double g_count = used;
+  const Eigen::MatrixXd s_mean = w_sum / g_count;
+  const double mu = s_mean.trace() / p;
+  const double s_norm2 = s_mean.squaredNorm();
+  const double d2 = s_norm2 - p * mu * mu;
+  const double b2 = std::max(0.0, (fourth - g_count * s_norm2) / (g_count * g_count));
+  const double alpha = d2 > 0 ? std::min(1.0, b2 / d2) : 1.0;
+  // The target: the mean eigenvalue, or the independent-error covariance
+  // when the clusters scatter less than it (no direction is taken below it
+  // anyway, and a small mean would drag the directions that do exceed it).
+  const Eigen::MatrixXd shrunk =
+      alpha * std::max(mu * g_count, 1.0) * Eigen::MatrixXd::Identity(p, p) + (1.0 - alpha) * w_sum;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> we(shrunk);
   if (we.info() != Eigen::Success) return used;
+  // 4. The widening where the shrunk sandwich exceeds C_LL.
   const Eigen::VectorXd excess = (we.eigenvalues().array() - 1.0).max(0.0).matrix();
-  const Eigen::MatrixXd widen_white = we.eigenvectors() * excess.asDiagonal() *
-                                      we.eigenvectors().transpose();
-  const Eigen::MatrixXd back = eig.eigenvectors() * half.asDiagonal();
-  *cov += scale.asDiagonal() * (back * widen_white * back.transpose()) * scale.asDiagonal();
+  if (excess.maxCoeff() <= 0) return used;
+  const Eigen::MatrixXd widen_white =
+      we.eigenvectors() * excess.asDiagonal() * we.eigenvectors().transpose();
+  const Eigen::MatrixXd widen_ll = root * widen_white * root.transpose();
+  const Eigen::MatrixXd lift = c_all * pinv;  // C_:L C_LL^+
+  *cov += scale.asDiagonal() * (lift * widen_ll * lift.transpose()) * scale.asDiagonal();
   return used;
 }
 
@@ -202,21 +317,23 @@ int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residual
 // counted in `dropped`.
 //
 // With `refs` (the cluster-robust covariance, FitOptions::covariance_clusters)
-// the result is the sandwich C M C (Liang & Zeger 1986) with C the
-// pseudo-inverse above and M = G/(G-1) sum_c g_c g_c^T, g_c = J_c^T r_c over
-// the whitened rows of cluster c (G clusters): the scatter of the clusters'
-// scores measured from the residuals instead of assumed from the sigmas, so
-// that errors correlated within a cluster (a photo's detector bias) count
-// once per cluster, not once per row. For independent errors of the assumed
-// sigmas it equals C (E[g g^T] = J_c^T J_c). It is taken where it is larger:
-// the final covariance is C + V diag(max(0, l_i - 1)) V^T ... in the whitened
-// metric of C (l_i the eigenvalues of C^-1/2 C M C C^-1/2), so that no
-// direction is claimed more precise than the independent-error covariance
-// says (few clusters make the sandwich noisy; it can fall below C by chance).
+// the covariance of the parameters in `reported` is widened to the sandwich
+// C M C (Liang & Zeger 1986), M = sum_c g_c g_c^T with g_c = J_c^T
+// (I - H_cc)^-1/2 r_c over the whitened rows of cluster c: the scatter of
+// the clusters' scores measured from the residuals instead of assumed from
+// the sigmas, so that errors correlated within a cluster (a photo's
+// detector bias, a camera whose principal point moves from photo to photo)
+// count once per cluster, not once per row. For independent errors of the
+// assumed sigmas its expectation is C. ClusterRobust says how: the leverage
+// correction (I - H_cc)^-1/2, the shrinkage of a sandwich of few clusters
+// towards its mean, and the widening only where it is larger than C, so
+// that no direction is claimed more precise than the independent-error
+// covariance says.
 bool TangentCovariance(ceres::Problem* problem, const std::vector<const double*>& blocks, int n,
                        int num_threads, const std::vector<ResidualRef>* refs,
-                       const std::vector<std::vector<int>>* clusters, Eigen::MatrixXd* cov,
-                       int* dropped, int* num_clusters) {
+                       const std::vector<std::vector<int>>* clusters,
+                       const std::vector<char>& reported, Eigen::MatrixXd* cov, int* dropped,
+                       int* num_clusters) {
   ceres::Problem::EvaluateOptions eo;
   for (const double* p : blocks) eo.parameter_blocks.push_back(const_cast<double*>(p));
   if (refs) {
@@ -258,7 +375,8 @@ bool TangentCovariance(ceres::Problem* problem, const std::vector<const double*>
          (eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose()) *
          scale.asDiagonal();
   if (refs) {
-    *num_clusters = ClusterRobust(j, residuals, *refs, *clusters, problem, scale, eig, inv, cov);
+    *num_clusters =
+        ClusterRobust(j, residuals, *refs, *clusters, problem, scale, eig, inv, reported, cov);
   }
   return true;
 }
@@ -312,26 +430,40 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks,
     n += problem->ParameterBlockTangentSize(p);
   }
   model->sigmas.covariance.resize(0, 0);
-  // The sandwich's middle term sum_c g_c g_c^T has rank <= G (the number of
-  // clusters): with no more clusters than free parameters it cannot measure
-  // the scatter in every direction, and the widening would follow the noise
-  // of a few clusters (a camera-only session: 13 photos, each with its own
-  // board pose). The independent-error covariance is then the honest one.
+  // The sandwich measures the scatter of the clusters' scores in the
+  // directions several clusters share; a cluster's own parameters (a photo's
+  // board pose in a camera-only session) have a zero score at the solution
+  // and add no unknown to it. Its middle term has rank <= G - 1 there (the
+  // scores sum to zero): where it cannot measure a direction, the widening
+  // below keeps the independent-error covariance. Two clusters give one
+  // number for every direction (their scores are opposite), too little to
+  // widen anything by.
   if (refs && clusters) {
     std::set<int> distinct;
     for (const std::vector<int>& of_ref : *clusters) distinct.insert(of_ref.begin(), of_ref.end());
-    if (static_cast<int>(distinct.size()) <= n) {
+    if (distinct.size() < 3) {
       summary->message += " covariance: independent errors (" + std::to_string(distinct.size()) +
-                          " clusters cannot measure the scatter of " + std::to_string(n) +
-                          " free parameters; fit.covariance_clusters not applied);";
+                          " cluster(s) cannot measure a scatter; fit.covariance_clusters not "
+                          "applied);";
       refs = nullptr;
       clusters = nullptr;
     }
   }
+  // The columns of the parameters the model reports (ParameterLayout; not
+  // the boards, points and board warps, which are the session's own).
+  std::vector<char> reported(n, 0);
+  for (const LayoutBlock& lb : ParameterLayout(*model)) {
+    const double* data = lb.data(*model);
+    for (size_t k = 0; k < free_blocks.size(); ++k) {
+      if (free_blocks[k] != data) continue;
+      const int ts = problem->ParameterBlockTangentSize(free_blocks[k]);
+      std::fill(reported.begin() + offsets[k], reported.begin() + offsets[k] + ts, 1);
+    }
+  }
   Eigen::MatrixXd c;
   int dropped = 0;
-  if (!TangentCovariance(problem, free_blocks, n, num_threads, refs, clusters, &c, &dropped,
-                         &summary->covariance_clusters)) {
+  if (!TangentCovariance(problem, free_blocks, n, num_threads, refs, clusters, reported, &c,
+                         &dropped, &summary->covariance_clusters)) {
     summary->message += " covariance could not be computed;";
     return;
   }
@@ -420,6 +552,13 @@ void FillSigmas(ceres::Problem* problem, const NamedBlocks& blocks,
     if (!s.focus.empty()) ambient_sigma(model->cams[z].focus.data(), kNumFocus, s.focus[z].data());
   }
   for (EstimatedBoard& b : model->boards) pose_sigma(b.pose, &b.sigma);
+  for (BoardWarp& w : model->board_warps) {
+    Eigen::MatrixXd wc;
+    w.cov = {0, 0, 0, 0};
+    if (!block_cov(w.w.data(), &wc)) continue;
+    const double c01 = 0.5 * (wc(0, 1) + wc(1, 0));
+    w.cov = {wc(0, 0), c01, c01, wc(1, 1)};
+  }
   for (EstimatedPoint& p : model->points) ambient_sigma(p.x.data(), 3, p.sigma.data());
   for (Effect e : model->effects.List()) {
     if (!IsKinematic(e)) continue;
@@ -732,6 +871,7 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
                &clusters, &m, &summary, options.num_threads);
   }
   for (EstimatedBoard& b : m.boards) b.board.ref_from_board = b.pose.ToRigid();
+  SyncBoardWarps(&m);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

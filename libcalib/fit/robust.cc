@@ -1,5 +1,7 @@
 #include "libcalib/fit/robust.h"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +36,72 @@ struct Row {
   int group = 0;  // 0 EDM, 1 camera rows, 2 pixels
   int index = 0;
   double r = 0;  // |residual|, NaN when the model cannot evaluate the row
+  Eigen::Vector2d delta = Eigen::Vector2d::Zero();  // pixels: the residual [px]
+};
+
+// Image points of other photos that a flagged one is compared with: the
+// nearest this many in the image of its zoom.
+constexpr int kNeighbours = 8;
+// Cells per image side of the index that finds them.
+constexpr int kNeighbourCells = 32;
+
+// The image points of one zoom's photos in a grid over the image, to find
+// the points of other photos nearest an image position.
+class ImageIndex {
+ public:
+  ImageIndex(const std::vector<Eigen::Vector2d>& uv, const std::vector<int>& rows)
+      : uv_(uv), rows_(rows) {
+    Eigen::Vector2d lo = uv.empty() ? Eigen::Vector2d::Zero() : uv[0], hi = lo;
+    for (const Eigen::Vector2d& x : uv) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+    lo_ = lo;
+    cell_ = std::max((hi - lo).maxCoeff() / kNeighbourCells, 1e-9);
+    for (size_t i = 0; i < uv.size(); ++i) cells_[Cell(uv[i])].push_back(static_cast<int>(i));
+  }
+  // Up to `count` entries (indices into the constructor's lists) nearest
+  // `at`, skipping those `skip` rejects, nearest first.
+  template <typename Skip>
+  std::vector<int> Nearest(const Eigen::Vector2d& at, int count, Skip skip) const {
+    const std::pair<int, int> centre = Cell(at);
+    std::vector<std::pair<double, int>> found;
+    for (int ring = 0; ring <= 2 * kNeighbourCells; ++ring) {
+      for (int dy = -ring; dy <= ring; ++dy) {
+        for (int dx = -ring; dx <= ring; ++dx) {
+          if (std::max(std::abs(dx), std::abs(dy)) != ring) continue;
+          const auto it = cells_.find({centre.first + dx, centre.second + dy});
+          if (it == cells_.end()) continue;
+          for (int i : it->second) {
+            if (!skip(i)) found.push_back({(uv_[i] - at).squaredNorm(), i});
+          }
+        }
+      }
+      // Every point beyond this ring is farther than `ring` cells.
+      if (static_cast<int>(found.size()) >= count) {
+        std::partial_sort(found.begin(), found.begin() + count, found.end());
+        if (found[count - 1].first <= (ring * cell_) * (ring * cell_)) break;
+      }
+    }
+    std::sort(found.begin(), found.end());
+    std::vector<int> out;
+    for (int k = 0; k < count && k < static_cast<int>(found.size()); ++k) {
+      out.push_back(found[k].second);
+    }
+    return out;
+  }
+  int Row(int i) const { return rows_[i]; }
+
+ private:
+  std::pair<int, int> Cell(const Eigen::Vector2d& x) const {
+    return {static_cast<int>(std::floor((x.x() - lo_.x()) / cell_)),
+            static_cast<int>(std::floor((x.y() - lo_.y()) / cell_))};
+  }
+  std::vector<Eigen::Vector2d> uv_;
+  std::vector<int> rows_;
+  Eigen::Vector2d lo_;
+  double cell_ = 1;
+  std::map<std::pair<int, int>, std::vector<int>> cells_;
 };
 
 std::vector<Row> RowResiduals(const Observations& obs, const UsedRows& used,
@@ -50,7 +118,8 @@ std::vector<Row> RowResiduals(const Observations& obs, const UsedRows& used,
   std::vector<PixelObservation> pixels;
   for (int i : used.pixels) pixels.push_back(est.pixels[i]);
   for (const PixelResidual& pr : PixelResiduals(model, pixels)) {
-    out.push_back({2, used.pixels[pr.index], pr.valid ? pr.delta.norm() : std::nan("")});
+    out.push_back({2, used.pixels[pr.index], pr.valid ? pr.delta.norm() : std::nan(""),
+                   pr.valid ? pr.delta : Eigen::Vector2d::Zero()});
   }
   return out;
 }
@@ -132,7 +201,54 @@ std::vector<ExcludedRow> Flag(const Observations& usable, const FitOptions& opti
     }
   }
 
-  // 4. Rows beyond `reject` robust sigmas.
+  // The image points of each zoom, for the comparison below.
+  std::map<int, std::vector<Eigen::Vector2d>> zoom_uv;
+  std::map<int, std::vector<int>> zoom_rows;
+  for (int k = 0; k < static_cast<int>(rows.size()); ++k) {
+    if (rows[k].group != 2 || !std::isfinite(rows[k].r)) continue;
+    const PixelObservation& p = usable.pixels[rows[k].index];
+    zoom_uv[p.zoom].push_back(p.uv);
+    zoom_rows[p.zoom].push_back(k);
+  }
+  std::map<int, ImageIndex> index;
+  for (const auto& [zoom, uv] : zoom_uv) index.emplace(zoom, ImageIndex(uv, zoom_rows[zoom]));
+  // The residual of an image point relative to the other photos' points
+  // around it in the image: what a plane through their residuals over the
+  // image (per coordinate, least squares) leaves at the point. A lens term
+  // the model lacks moves every photo's points at one image position alike
+  // (the residual is a field over the image), so that plane follows it, at
+  // the edge of the image too; a detector's gross error is one corner off,
+  // and a photo with a gross error of its own (a wrong reading, a wrong
+  // zoom) moves its points where the other photos' stay. Its own residual
+  // when fewer other points are there.
+  auto unlike_others = [&](size_t k) {
+    const PixelObservation& p = usable.pixels[rows[k].index];
+    const ImageIndex& at = index.at(p.zoom);
+    const std::vector<int> near = at.Nearest(p.uv, kNeighbours, [&](int i) {
+      return usable.pixels[rows[at.Row(i)].index].shot == p.shot;
+    });
+    if (static_cast<int>(near.size()) < kNeighbours) return rows[k].r;
+    Eigen::Matrix<double, kNeighbours, 3> a;
+    Eigen::Matrix<double, kNeighbours, 2> b;
+    const Eigen::Vector2d far = usable.pixels[rows[at.Row(near.back())].index].uv - p.uv;
+    const double scale = far.norm() + 1e-12;
+    for (int n = 0; n < kNeighbours; ++n) {
+      const Row& other = rows[at.Row(near[n])];
+      const Eigen::Vector2d d = (usable.pixels[other.index].uv - p.uv) / scale;
+      a.row(n) << 1.0, d.x(), d.y();
+      b.row(n) = other.delta.transpose();
+    }
+    // The plane's value at the point (its constant term); neighbours on a
+    // line give the minimum-norm least-squares solution.
+    const Eigen::Matrix<double, 3, 2> plane = a.completeOrthogonalDecomposition().solve(b);
+    return (rows[k].delta - plane.row(0).transpose()).norm();
+  };
+
+  // 4. Rows beyond `reject` robust sigmas. An image point is gross only
+  // when it is also that far from what the other photos show at its place
+  // in the image (unlike_others): a model that lacks a lens term (a wide
+  // lens fitted without rational_distortion) misses every photo's points
+  // there alike, and those points are the data that show it.
   std::vector<ExcludedRow> flagged;
   const double apriori[3] = {options.sigma_edm_m, options.sigma_cam_m, options.sigma_pixel_px};
   for (size_t k = 0; k < rows.size(); ++k) {
@@ -142,13 +258,22 @@ std::vector<ExcludedRow> Flag(const Observations& usable, const FitOptions& opti
     const double s = std::max(sigma_of[k], kSigmaFloor * apriori[r.group]);
     const double limit = robust.reject * s;
     if (std::isfinite(r.r) && !(r.r > limit && s > 0)) continue;
-    char buf[256];
+    const double apart = std::isfinite(r.r) && r.group == 2 ? unlike_others(k) : r.r;
+    if (std::isfinite(r.r) && !(apart > limit)) continue;
+    char buf[320];
     std::snprintf(buf, sizeof buf,
                   "residual %.4g %s after the robust fit, %.1f robust sigmas (sigma %.3g %s of "
                   "the %s like it; limit %.3g sigmas)",
                   r.r, kUnits[r.group], s > 0 ? r.r / s : 0.0, s, kUnits[r.group],
                   kGroupNames[r.group], robust.reject);
-    flagged.push_back(Excluded(usable, r, buf));
+    std::string reason = buf;
+    if (r.group == 2 && std::isfinite(r.r)) {
+      std::snprintf(buf, sizeof buf,
+                    "; %.4g px from what the %d nearest points of other photos show there", apart,
+                    kNeighbours);
+      reason += buf;
+    }
+    flagged.push_back(Excluded(usable, r, reason));
   }
   *rows_out = rows;
   return flagged;

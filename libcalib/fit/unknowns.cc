@@ -136,6 +136,10 @@ std::vector<std::string> StartUnknowns(const Observations& obs, const UsedRows& 
                     " shot(s) (PnP and the start model's chain)");
   }
 
+  // board_warp: a warp per board of unknown pose (zero to start; kept when
+  // the model already has one).
+  SyncBoardWarps(&m);
+
   // Points: the mean of the start model's predictions of their records.
   std::map<std::string, std::pair<Eigen::Vector3d, int>> sums;
   std::vector<std::string> order;

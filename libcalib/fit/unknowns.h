@@ -25,6 +25,8 @@ namespace rtscalib {
 // Makes the model hold every board of obs.targets without a pose that a
 // used pixel sees, and every point a used record names, with the starting
 // values above; boards and points the model already holds keep their values.
+// With the effect board_warp, every board gets a warp (zero; one it already
+// has is kept: SyncBoardWarps).
 // When `facts` say no position is known, first re-expresses the start in the
 // instrument's ideal base frame (SPEC 7; ToIdealBaseFrame,
 // libcalib/model/gauge.h: base and, dh, link 1's held d and gamma_offset
@@ -35,7 +37,8 @@ std::vector<std::string> StartUnknowns(const Observations& obs, const UsedRows& 
                                        const DataFacts& facts, InstrumentModel* model);
 
 // A copy of `obs` whose pixels of the model's estimated boards carry their
-// corner's position (ref_from_board * corner_in_board) as a known X, and
+// corner's position (ref_from_board * corner_in_board, warped by the
+// board's board_warp) as a known X, and
 // whose records of the model's estimated points carry the point as a known x
 // (`point` cleared): for evaluations that need positions (errors, checks of
 // a start or a fit, the diagnosis's residuals), which then see the boards

@@ -448,6 +448,11 @@ TagBoard ReadBoard(const YamlNode& m) {
   // A board at the instrument's origin is never meant: the placement is required.
   m.Require("t");
   ReadPoseFields(m, &b.ref_from_board);
+  // The board_warp of the simulated board (TagBoard::warp): [wx, wy] [m].
+  if (const std::optional<YamlNode> warp = m.Find("warp")) {
+    const std::vector<double> w = warp->AsDoubles(2);
+    b.warp = {w[0], w[1]};
+  }
   return b;
 }
 
@@ -500,10 +505,11 @@ InstrumentModel ReadTruth(const YamlNode& m, const ModelSettings& model, int pla
       const std::optional<Effect> e = EffectFromName(entry.key.AsString());
       if (!e) entry.key.FailChoice(AllEffectNames());
       const EffectInfo& info = Info(*e);
-      if (IsCameraEffect(*e)) {
+      if (!IsKinematic(*e)) {
         entry.key.Fail(
             "a kinematic or EDM effect (distortion coefficients go in "
-            "simulate.truth.cameras[zoom].distortion, focus in simulate.truth.cameras[zoom].focus)");
+            "simulate.truth.cameras[zoom].distortion, focus in simulate.truth.cameras[zoom].focus, "
+            "a board's warp in simulate.targets[i].warp)");
       }
       if (kinematics == Kinematics::kDh && info.redundant_in_dh) {
         entry.key.Fail(
@@ -732,6 +738,10 @@ void EmitSimulate(YAML::Emitter& e, const SimulationOptions& sim, bool truth_fro
       e << YAML::Key << "tag_size" << YAML::Value << Num(b.tag_size);
       e << YAML::Key << "spacing" << YAML::Value << Num(b.spacing);
       EmitPose(e, PoseBlock::FromRigid(b.ref_from_board));
+      if (b.warp[0] != 0 || b.warp[1] != 0) {
+        e << YAML::Key << "warp" << YAML::Value;
+        EmitNumbers(e, b.warp.data(), 2, /*shortest=*/true);
+      }
       e << YAML::EndMap;
     }
     e << YAML::EndSeq;

@@ -65,10 +65,43 @@ void EmitPose(YAML::Emitter& e, const PoseBlock& pose, const PoseSigma* sigma,
   e << YAML::EndMap;
 }
 
+// board_warp: per board {first_id, si: [wx, wy] [m], covariance (2 x 2 row
+// major [m^2]), report: {wx, wy} in mm}.
+void EmitBoardWarps(YAML::Emitter& e, const InstrumentModel& model) {
+  const EffectInfo& info = Info(Effect::kBoardWarp);
+  const double scale = ReportScale(Effect::kBoardWarp);
+  e << YAML::Key << "boards" << YAML::Value << YAML::BeginSeq;
+  for (const BoardWarp& w : model.board_warps) {
+    e << YAML::BeginMap;
+    e << YAML::Key << "first_id" << YAML::Value << w.first_id;
+    e << YAML::Key << "si" << YAML::Value;
+    EmitNumbers(e, w.w.data(), kNumBoardWarp, /*shortest=*/false);
+    if (model.sigmas.valid) {
+      e << YAML::Key << "covariance" << YAML::Value;
+      EmitNumbers(e, w.cov.data(), 4, /*shortest=*/false);
+    }
+    e << YAML::Key << "report" << YAML::Value << YAML::BeginMap;
+    for (int i = 0; i < kNumBoardWarp; ++i) {
+      e << YAML::Key << info.param_names[i] << YAML::Value << YAML::Flow << YAML::BeginMap;
+      e << YAML::Key << "value" << YAML::Value << YamlDouble(w.w[i] * scale);
+      if (model.sigmas.valid) {
+        e << YAML::Key << "sigma" << YAML::Value
+          << YamlDouble(std::sqrt(std::max(w.cov[3 * i], 0.0)) * scale);
+      }
+      e << YAML::Key << "unit" << YAML::Value << info.report_units[i];
+      e << YAML::EndMap;
+    }
+    e << YAML::EndMap;
+    e << YAML::EndMap;
+  }
+  e << YAML::EndSeq;
+}
+
 void EmitEffect(YAML::Emitter& e, const InstrumentModel& model, Effect effect) {
   const EffectInfo& info = Info(effect);
   e << YAML::BeginMap;
   e << YAML::Key << "name" << YAML::Value << info.name;
+  if (IsBoardEffect(effect)) EmitBoardWarps(e, model);
   if (IsKinematic(effect)) {
     const std::array<double, 4>& cov = model.sigmas.effect_cov[static_cast<int>(effect)];
     e << YAML::Key << "si" << YAML::Value;
@@ -226,6 +259,52 @@ PoseBlock ReadPose(const YamlNode& m, bool with_sigma, PoseSigma* sigma,
   return pose;
 }
 
+// A 2 x 2 covariance (row major): variances >= 0, symmetric, |rho| <= 1.
+void ReadCovariance2(const YamlNode& c, std::array<double, 4>* out) {
+  std::array<double, 4>& cov = *out;
+  const std::vector<YamlNode> items = c.Items();
+  if (items.size() != 4) c.Fail("a list of 4 numbers (a 2 x 2 covariance, row major)");
+  for (int i = 0; i < 4; ++i) cov[i] = items[i].AsDoubleOrNan();
+  const bool nan = std::isnan(cov[0]) || std::isnan(cov[3]);
+  // Symmetric to round-off: a covariance from the solver's inverse may
+  // differ in its last digits between (0, 1) and (1, 0); it is made exactly
+  // symmetric here.
+  const double scale = std::sqrt(std::abs(cov[0] * cov[3]));
+  if (!nan && (cov[0] < 0 || cov[3] < 0 || !(std::abs(cov[1] - cov[2]) <= 1e-9 * scale) ||
+               cov[1] * cov[2] > cov[0] * cov[3] * (1 + 1e-9))) {
+    c.Fail("a covariance: variances >= 0, symmetric, |correlation| <= 1");
+  }
+  if (!nan) cov[1] = cov[2] = 0.5 * (cov[1] + cov[2]);
+}
+
+// board_warp's `boards` (EmitBoardWarps); each first_id once. Whether every
+// warp belongs to a board of the file is checked once the boards are read.
+void ReadBoardWarps(const YamlNode& m, bool with_sigma, InstrumentModel* model) {
+  const EffectInfo& info = Info(Effect::kBoardWarp);
+  const double scale = ReportScale(Effect::kBoardWarp);
+  for (const YamlNode& item : m.Require("boards").Items()) {
+    BoardWarp w;
+    const YamlNode id = item.Require("first_id");
+    w.first_id = id.AsInt();
+    if (w.first_id < 0) id.Fail("the board's first tag id (an integer >= 0)");
+    if (model->WarpOf(w.first_id)) id.Fail("each board once");
+    ReadNumbersInto(item.Require("si"), w.w.data(), kNumBoardWarp);
+    if (with_sigma) ReadCovariance2(item.Require("covariance"), &w.cov);
+    const YamlNode report = item.Require("report");
+    for (int i = 0; i < kNumBoardWarp; ++i) {
+      const YamlNode p = report.Require(info.param_names[i]);
+      const double value = p.Require("value").AsDouble();
+      if (with_sigma) ReadNumber(p.Require("sigma"), Number::kSigma);
+      const YamlNode unit = p.Require("unit");
+      if (unit.AsString() != info.report_units[i]) unit.Fail(info.report_units[i]);
+      if (std::fabs(value / scale - w.w[i]) > kDerivedTolerance * std::hypot(w.w[0], w.w[1])) {
+        report.Fail("report values that convert to si (predictions use si; edit both together)");
+      }
+    }
+    model->board_warps.push_back(w);
+  }
+}
+
 void ReadEffect(const YamlNode& m, bool with_sigma, InstrumentModel* model) {
   const YamlNode name = m.Require("name");
   const std::optional<Effect> effect = EffectFromName(name.AsString());
@@ -236,28 +315,13 @@ void ReadEffect(const YamlNode& m, bool with_sigma, InstrumentModel* model) {
   }
   if (model->effects.Has(*effect)) name.Fail("each effect once");
   model->effects.Add(*effect);
+  if (IsBoardEffect(*effect)) ReadBoardWarps(m, with_sigma, model);
   if (!IsKinematic(*effect)) return;
   const EffectInfo& info = Info(*effect);
   std::array<double, 2>& si = model->EffectValue(*effect);
   ReadNumbersInto(m.Require("si"), si.data(), info.num_params);
   std::array<double, 4>& cov = model->sigmas.effect_cov[static_cast<int>(*effect)];
-  if (with_sigma) {
-    // A 2 x 2 covariance (row major): variances >= 0, symmetric, |rho| <= 1.
-    const YamlNode c = m.Require("covariance");
-    const std::vector<YamlNode> items = c.Items();
-    if (items.size() != 4) c.Fail("a list of 4 numbers (a 2 x 2 covariance, row major)");
-    for (int i = 0; i < 4; ++i) cov[i] = items[i].AsDoubleOrNan();
-    const bool nan = std::isnan(cov[0]) || std::isnan(cov[3]);
-    // Symmetric to round-off: a covariance from the solver's inverse may
-    // differ in its last digits between (0, 1) and (1, 0); it is made exactly
-    // symmetric here.
-    const double scale = std::sqrt(std::abs(cov[0] * cov[3]));
-    if (!nan && (cov[0] < 0 || cov[3] < 0 || !(std::abs(cov[1] - cov[2]) <= 1e-9 * scale) ||
-                 cov[1] * cov[2] > cov[0] * cov[3] * (1 + 1e-9))) {
-      c.Fail("a covariance: variances >= 0, symmetric, |correlation| <= 1");
-    }
-    if (!nan) cov[1] = cov[2] = 0.5 * (cov[1] + cov[2]);
-  }
+  if (with_sigma) ReadCovariance2(m.Require("covariance"), &cov);
   // The report values are derived; they must still say what si says.
   const YamlNode report = m.Require("report");
   std::array<double, 2> values{0, 0};
@@ -277,6 +341,14 @@ void ReadEffect(const YamlNode& m, bool with_sigma, InstrumentModel* model) {
       report.Fail("report values that convert to si (predictions use si; edit both together)");
     }
   }
+}
+
+// The item of `effects` that names effect `e` (it is there: ReadEffect read it).
+std::optional<YamlNode> FindEffect(const YamlNode& root, Effect e) {
+  for (const YamlNode& item : root.Require("effects").Items()) {
+    if (item.Require("name").AsString() == Info(e).name) return item;
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -550,6 +622,27 @@ InstrumentModel ReadModelYaml(const std::string& path, ModelMetadata* metadata) 
       b.board.pose_known = false;  // estimated, not surveyed
       model.boards.push_back(b);
     }
+  }
+  // board_warp: a warp for every board, and every warp of a board.
+  if (model.effects.Has(Effect::kBoardWarp)) {
+    const YamlNode warps = FindEffect(root, Effect::kBoardWarp)->Require("boards");
+    for (const EstimatedBoard& b : model.boards) {
+      if (!model.WarpOf(b.board.first_id)) {
+        warps.Fail("a warp of every board in `boards` (board " +
+                   std::to_string(b.board.first_id) + " has none)");
+      }
+    }
+    const std::vector<YamlNode> items = warps.Items();
+    for (size_t i = 0; i < model.board_warps.size(); ++i) {
+      bool seen = false;
+      for (const EstimatedBoard& b : model.boards) {
+        seen = seen || b.board.first_id == model.board_warps[i].first_id;
+      }
+      if (!seen) {
+        items[i].Require("first_id").Fail("the first_id of a board in `boards`");
+      }
+    }
+    SyncBoardWarps(&model);
   }
   if (const std::optional<YamlNode> points = root.Find("points")) {
     for (const YamlNode& item : points->Items()) {

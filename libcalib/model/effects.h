@@ -30,6 +30,9 @@
 //   focus            per zoom [kf, au, av]                 m, px m, px m
 //                    (SPEC 4.1, libcalib/model/focus.h: the camera constant and
 //                    the principal point at focus distance D)
+//   board_warp       per board of estimated pose [wx, wy]  m
+//                    (libcalib/model/targets.h TagBoard::warp: the board's
+//                    points leave its plane by wx (1 - xr^2) + wy (1 - yr^2))
 #pragma once
 
 #include <array>
@@ -57,12 +60,14 @@ enum DataNeed : unsigned {
   kNeedFineDistances = 1u << 6,  // EDM distances finer than the cyclic unit
   kNeedImageCorners = 1u << 7,   // camera observations reaching the image corners
   kNeedNearAndFar = 1u << 8,     // camera targets at several distances, near and far
+  kNeedManyPoses = 1u << 9,      // each board seen in many poses, tilted both ways
 };
-constexpr int kNumDataNeeds = 9;
+constexpr int kNumDataNeeds = 10;
 
 // clang-format off
 // THE effect list. One row per effect, kinematic and EDM effects first, then
-// the per-zoom camera effects (the distortion groups, then focus):
+// the per-zoom camera effects (the distortion groups, then focus), then the
+// per-board effects:
 //   X(enumerator, name, kind, num_params, param_names {p0, p1}, report_units {u0, u1},
 //     redundant_in_dh, needs, definition, signature)
 // Report units are "arcsec", "ppm" or "mm" for the (amplitude) parameter and
@@ -112,7 +117,12 @@ constexpr int kNumDataNeeds = 9;
   X(kFocus, "focus", kFocus, 0, "", "", "", "", false, kNeedNearAndFar,                           \
     "per zoom: fx* = fx (1 + kf/D), fy* = fy (1 + kf/D), cx* = cx + au/D, cy* = cy + av/D, "      \
     "D = the photo's focus distance",                                                              \
-    "image scale and principal point that change with the target's distance")
+    "image scale and principal point that change with the target's distance")              \
+  X(kBoardWarp, "board_warp", kBoard, 0, "wx", "wy", "mm", "mm", false, kNeedManyPoses,           \
+    "per board of estimated pose: its points leave the board's plane along its z (out of its "   \
+    "back) by wx (1 - xr^2) + wy (1 - yr^2), xr, yr in [-1, 1] across its points "              \
+    "(mrcal's calobject_warp)",                                                                    \
+    "residuals that follow the board's own coordinates as a bowl or a saddle, whatever its pose")
 
 // OpenCV's 14 distortion coefficients, in DistortionIndex order, each
 // with the effect (distortion group) that owns it: X(name, camera index, group).
@@ -141,8 +151,9 @@ enum class Effect : int {
 
 // kAngle, kAxis, kEdm: one block of their own (InstrumentModel::effect_values);
 // kDistortion: coefficients of each zoom's distortion block; kFocus: each
-// zoom's focus block (CameraTool::focus, libcalib/model/focus.h).
-enum class EffectKind { kAngle, kAxis, kEdm, kDistortion, kFocus };
+// zoom's focus block (CameraTool::focus, libcalib/model/focus.h); kBoard: one
+// block per board of estimated pose (InstrumentModel::board_warps).
+enum class EffectKind { kAngle, kAxis, kEdm, kDistortion, kFocus, kBoard };
 
 // The list as a constexpr table (compile-time checks below; EffectInfo adds
 // the derived distortion coefficients at run time).
@@ -185,10 +196,12 @@ inline constexpr const char* kDistortionCoefficientNames[] = {
 };
 
 namespace effects_internal {
+constexpr bool KinematicKind(EffectKind kind) {
+  return kind == EffectKind::kAngle || kind == EffectKind::kAxis || kind == EffectKind::kEdm;
+}
 constexpr int CountKinematic() {
   int n = 0;
-  for (const EffectRow& r : kEffectRows)
-    n += r.kind != EffectKind::kDistortion && r.kind != EffectKind::kFocus;
+  for (const EffectRow& r : kEffectRows) n += KinematicKind(r.kind);
   return n;
 }
 constexpr int CountKind(EffectKind kind) {
@@ -201,18 +214,24 @@ constexpr bool Same(const char* a, const char* b) {
   return *a == *b;
 }
 // Rows in enum order, kinematic effects first, then the distortion groups,
-// then focus; parameter counts and report units consistent with the kind
-// (per-zoom camera effects have no block of their own: num_params 0).
+// then focus, then the per-board effects; parameter counts and report units
+// consistent with the kind (per-zoom camera and per-board effects have no
+// block in effect_values: num_params 0; a per-board effect's report units
+// are millimetres).
 constexpr bool RowsConsistent() {
-  int stage = 0;  // 0 kinematic, 1 distortion, 2 focus
+  int stage = 0;  // 0 kinematic, 1 distortion, 2 focus, 3 board
   for (int i = 0; i < static_cast<int>(std::size(kEffectRows)); ++i) {
     const EffectRow& r = kEffectRows[i];
     if (static_cast<int>(r.effect) != i) return false;
-    const int s = r.kind == EffectKind::kDistortion ? 1 : r.kind == EffectKind::kFocus ? 2 : 0;
+    const int s = r.kind == EffectKind::kDistortion ? 1
+                  : r.kind == EffectKind::kFocus    ? 2
+                  : r.kind == EffectKind::kBoard    ? 3
+                                                    : 0;
     if (s < stage) return false;
     stage = s;
     const bool distortion = s > 0;
     if (distortion != (r.num_params == 0)) return false;
+    if (s == 3 && (!Same(r.report_units[0], "mm") || !Same(r.report_units[1], "mm"))) return false;
     if (!distortion && !Same(r.report_units[0], "arcsec") && !Same(r.report_units[0], "ppm") &&
         !Same(r.report_units[0], "mm"))
       return false;
@@ -240,7 +259,7 @@ constexpr bool CoefficientsConsistent() {
 }  // namespace effects_internal
 
 // Effects with a parameter block of their own (the rest live in the per-zoom
-// camera blocks: distortion, focus).
+// camera blocks: distortion, focus; and in the per-board blocks: board_warp).
 constexpr int kNumKinematicEffects = effects_internal::CountKinematic();
 constexpr int kNumDistortionGroups = effects_internal::CountKind(EffectKind::kDistortion);
 constexpr int kMaxEffectParams = 2;
@@ -282,7 +301,17 @@ inline bool IsDistortion(Effect e) {
 }
 // An effect of each zoom's camera (distortion groups and focus): its
 // parameters live in the cameras (CameraTool), not in effect_values.
-inline bool IsCameraEffect(Effect e) { return !IsKinematic(e); }
+inline bool IsCameraEffect(Effect e) {
+  const EffectKind kind = kEffectRows[static_cast<int>(e)].kind;
+  return kind == EffectKind::kDistortion || kind == EffectKind::kFocus;
+}
+// An effect of each board of estimated pose (board_warp): its parameters
+// live in InstrumentModel::board_warps, one pair per board.
+inline bool IsBoardEffect(Effect e) {
+  return kEffectRows[static_cast<int>(e)].kind == EffectKind::kBoard;
+}
+// Number of parameters of a per-board effect per board.
+constexpr int kNumBoardWarp = 2;
 
 // The distortion group (effect) that owns coefficient `index`.
 inline Effect DistortionGroupOf(int index) { return kDistortionCoefficients[index].group; }

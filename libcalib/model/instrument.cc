@@ -167,5 +167,29 @@ const EstimatedPoint* InstrumentModel::Point(const std::string& name) const {
 EstimatedPoint* InstrumentModel::Point(const std::string& name) {
   return const_cast<EstimatedPoint*>(static_cast<const InstrumentModel*>(this)->Point(name));
 }
+const BoardWarp* InstrumentModel::WarpOf(int first_id) const {
+  for (const BoardWarp& w : board_warps) {
+    if (w.first_id == first_id) return &w;
+  }
+  return nullptr;
+}
+BoardWarp* InstrumentModel::WarpOf(int first_id) {
+  return const_cast<BoardWarp*>(static_cast<const InstrumentModel*>(this)->WarpOf(first_id));
+}
+
+void SyncBoardWarps(InstrumentModel* model) {
+  const bool on = model->effects.Has(Effect::kBoardWarp);
+  if (!on) model->board_warps.clear();
+  for (EstimatedBoard& b : model->boards) {
+    BoardWarp* w = model->WarpOf(b.board.first_id);
+    if (on && !w) {
+      BoardWarp fresh;
+      fresh.first_id = b.board.first_id;
+      model->board_warps.push_back(fresh);
+      w = &model->board_warps.back();
+    }
+    b.board.warp = w ? w->w : std::array<double, kNumBoardWarp>{0, 0};
+  }
+}
 
 }  // namespace rtscalib

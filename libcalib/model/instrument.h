@@ -11,6 +11,8 @@
 //   boards[b]   ref_from_board pose of a board of unknown pose (SPEC 7):
 //               quaternion + translation [m]; scale fixed by its tag_size
 //   points[p]   position of a fixed point of unknown position (SPEC 7) [m]
+//   board_warps[w] {wx, wy} [m] of a board of unknown pose (the effect
+//               board_warp, TagBoard::warp), one per board, shared by its poses
 //
 // Two kinematics share these blocks (kinematics.h has the formulas):
 //   dh         Klug Sec. 3:   ref_from_flange = Base * Z1 X1 * Z2 X2
@@ -140,6 +142,16 @@ struct EstimatedBoard {
   // (fit columns, covariance.yaml).
   std::string Key() const;
 };
+// The warp of a board of estimated pose (the catalogue effect board_warp,
+// TagBoard::warp), one pair per board, identified by its first_id: a board
+// bends alike wherever it is put, so every pose of it (placements, zooms)
+// shares the pair. Fitted when the model has the effect; after a fit each
+// EstimatedBoard of the board carries it in board.warp (SyncBoardWarps).
+struct BoardWarp {
+  int first_id = 0;
+  std::array<double, kNumBoardWarp> w{0, 0};  // {wx, wy} [m]
+  std::array<double, 4> cov{};                // 2 x 2 row major [m^2], filled by the fit
+};
 // A fixed point of unknown position named by records.csv's `point` column.
 struct EstimatedPoint {
   std::string name;
@@ -165,6 +177,9 @@ struct InstrumentModel {
   // the block addresses a fit holds.
   std::vector<EstimatedBoard> boards;
   std::vector<EstimatedPoint> points;
+  // board_warp: one per board of `boards` (by first_id) when the model has the
+  // effect; a vector for the same reason as above.
+  std::vector<BoardWarp> board_warps;
 
   int NumZooms() const { return static_cast<int>(cams.size()); }
   std::array<double, 2>& EffectValue(Effect e) { return effect_values[static_cast<int>(e)]; }
@@ -177,7 +192,16 @@ struct InstrumentModel {
   EstimatedBoard* BoardOf(int id, const std::string& placement, int zoom);
   const EstimatedPoint* Point(const std::string& name) const;
   EstimatedPoint* Point(const std::string& name);
+  // The warp of the board whose first tag is `first_id`, or nullptr.
+  const BoardWarp* WarpOf(int first_id) const;
+  BoardWarp* WarpOf(int first_id);
 };
+
+// board_warp: gives the model a warp for every board of `boards` it has none
+// for (at zero) when it has the effect, and none at all without it; then
+// copies each warp into the EstimatedBoards of its board (board.warp), zero
+// without the effect.
+void SyncBoardWarps(InstrumentModel* model);
 
 // Which face a (phi, theta) reading belongs to: face 1 for theta in [0, pi],
 // face 2 for theta in (pi, 2 pi).

@@ -24,6 +24,17 @@
 // meet, touching each corner. `tag_size` is always the outer edge of the
 // black border.
 //
+// A board need not be flat (the catalogue effect `board_warp`, mrcal's
+// calobject_warp): its points leave the z = 0 plane by
+//   z = wx (1 - xr^2) + wy (1 - yr^2)   [m],  `warp` = {wx, wy},
+// with xr, yr the point's x and y mapped onto [-1, 1] across the extent of
+// the board's points (AprilTag boards: the tags' outer corners, 0 .. Width()
+// and 0 .. Height(); boards of points: their first to last inner corner):
+// two parabolas, zero along the board's edges and wx + wy at its centre,
+// positive out of its back (away from a camera that faces the printed
+// side). A flat board has warp {0, 0}; a bent one bends alike wherever it
+// is put, so the warp belongs to the board, not to a pose of it.
+//
 // `ref_from_board` is the board's pose when `pose_known` (surveyed, or the
 // simulation's truth). A board of a real instrument's targets.yaml without a
 // `pose` has `pose_known = false` (SPEC 7): its pose is to be estimated and
@@ -73,6 +84,7 @@ struct TagBoard {
   double marker_size = 0;  // [m] (ChArUco)
   Rigid3 ref_from_board;
   bool pose_known = true;
+  std::array<double, 2> warp{0, 0};  // {wx, wy} [m], above
 
   bool IsPointBoard() const { return kind != BoardKind::kAprilTag; }
   // Corners per target: 4 for a tag, 1 for a point board's inner corner.
@@ -90,9 +102,10 @@ struct TagBoard {
     const int r = ids_from == IdOrigin::kBottomLeft ? rows - 1 - cell.row : cell.row;
     return r * cols + cell.col;
   }
-  // The four corners of tag `index` (0 .. NumTags-1) in the board frame; for
-  // a point board all four are its inner corner `index`.
-  std::array<Eigen::Vector3d, 4> CornersInBoard(int index) const {
+  // The four corners of tag `index` (0 .. NumTags-1) in the board frame, on
+  // the flat board (z = 0); for a point board all four are its inner corner
+  // `index`.
+  std::array<Eigen::Vector3d, 4> FlatCornersInBoard(int index) const {
     if (IsPointBoard()) {
       const int r = index / (cols - 1), c = index % (cols - 1);
       const Eigen::Vector3d p(square_size * (c + 1), square_size * (r + 1), 0);
@@ -102,6 +115,33 @@ struct TagBoard {
     const double x0 = (tag_size + spacing) * cell.col, y0 = (tag_size + spacing) * cell.row;
     return {Eigen::Vector3d(x0, y0 + tag_size, 0), Eigen::Vector3d(x0 + tag_size, y0 + tag_size, 0),
             Eigen::Vector3d(x0 + tag_size, y0, 0), Eigen::Vector3d(x0, y0, 0)};
+  }
+  // The extent of the board's points in x and y [m]: {x_min, x_max, y_min, y_max}.
+  std::array<double, 4> PointsExtent() const {
+    if (IsPointBoard()) {
+      return {square_size, square_size * (cols - 1), square_size, square_size * (rows - 1)};
+    }
+    return {0.0, Width(), 0.0, Height()};
+  }
+  // The warp's shape at a flat board point: {1 - xr^2, 1 - yr^2} (above); 0
+  // along an axis on which the points do not extend (one column of inner
+  // corners).
+  Eigen::Vector2d WarpShape(const Eigen::Vector3d& flat) const {
+    const std::array<double, 4> e = PointsExtent();
+    auto shape = [](double v, double lo, double hi) {
+      if (!(hi > lo)) return 0.0;
+      const double t = 2.0 * (v - lo) / (hi - lo) - 1.0;
+      return 1.0 - t * t;
+    };
+    return {shape(flat.x(), e[0], e[1]), shape(flat.y(), e[2], e[3])};
+  }
+  // The four corners of tag `index` in the board frame, warped (above).
+  std::array<Eigen::Vector3d, 4> CornersInBoard(int index) const {
+    std::array<Eigen::Vector3d, 4> out = FlatCornersInBoard(index);
+    if (warp[0] != 0 || warp[1] != 0) {
+      for (Eigen::Vector3d& p : out) p.z() = WarpShape(p).dot(Eigen::Vector2d(warp[0], warp[1]));
+    }
+    return out;
   }
   // Width and height of the printed pattern [m].
   double Width() const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <map>
 
 namespace rtscalib {
 
@@ -97,6 +98,18 @@ std::string SimulationOptions::Check() const {
                "': expected letters, digits, '_', '-', '.' (no leading '.')";
       }
       if (scene.boards.empty()) return "placements: " + name + " has no boards";
+    }
+    // A board bends alike wherever it is put (board_warp): one warp per board.
+    std::map<int, std::array<double, 2>> warp_of;
+    for (const auto& [name, scene] : placements) {
+      for (const TagBoard& b : scene.boards) {
+        const auto [it, fresh] = warp_of.emplace(b.first_id, b.warp);
+        if (!fresh && it->second != b.warp) {
+          return "placements: " + name + ": board " + std::to_string(b.first_id) +
+                 " has another warp than in an earlier placement (a board bends alike "
+                 "wherever it is put)";
+        }
+      }
     }
   }
   return msg;

@@ -74,7 +74,10 @@ struct SimulationOptions {
   InstrumentModel truth;
   NoiseOptions noise;
   AcquisitionPlan plan;
-  TargetScene targets;  // empty = no pixel observations
+  // empty = no pixel observations. A board's TagBoard::warp hides the effect
+  // board_warp in the data: its corners are warped, the observations do not
+  // say so.
+  TargetScene targets;
   // SPEC 7.1: boards moved between sets of shots (a surveyor's one board):
   // the scene of each placement by name (letters, digits, '_', '-', '.').
   // Non-empty replaces `targets` (which must then be empty); the shots are

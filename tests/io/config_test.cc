@@ -702,3 +702,32 @@ TEST(ConfigDistortionChoice, ErrorsNameTheKeyExpectedAndGot) {
 
 }  // namespace
 }  // namespace rtscalib
+
+namespace rtscalib {
+namespace {
+
+// board_warp is turned on with one line, in a camera-only model too; the
+// simulated truth hides a warp per board (simulate.targets[i].warp [m]),
+// which the effective config writes and reads back; a warp is no kinematic
+// value of the truth.
+TEST(Config, BoardWarpOnOneLineAndHiddenInTheSimulatedBoards) {
+  TempDir dir;
+  const RunConfig c = LoadConfig(dir.Write(
+      "run.yaml",
+      "simulate:\n"
+      "  seed: 3\n"
+      "  targets: [{first_id: 0, rows: 3, cols: 4, tag_size: 0.08, spacing: 0.02,\n"
+      "             t: [0, 5, 0], warp: [0.001, -0.0005]}]\n"
+      "model: {kinematics: none, effects: [radial_distortion, board_warp]}\n"));
+  EXPECT_TRUE(c.calibration.model.effects.Has(Effect::kBoardWarp));
+  ASSERT_TRUE(c.simulate.has_value());
+  ASSERT_EQ(c.simulate->targets.boards.size(), 1u);
+  EXPECT_EQ(c.simulate->targets.boards[0].warp, (std::array<double, 2>{0.001, -0.0005}));
+  const RunConfig again = LoadConfig(dir.Write("again.yaml", DumpConfig(c)));
+  EXPECT_EQ(again.simulate->targets.boards[0].warp, c.simulate->targets.boards[0].warp);
+  const InputError e = ConfigError(dir, "simulate: {seed: 3, truth: {effects: {board_warp: 1}}}\n");
+  EXPECT_THAT(e.what(), HasSubstr("simulate.targets[i].warp"));
+}
+
+}  // namespace
+}  // namespace rtscalib

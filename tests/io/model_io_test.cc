@@ -495,6 +495,60 @@ TEST(ModelIoBoards, PlacementsAndCameraOnlyModelRoundTrip) {
   EXPECT_THAT(e.what(), HasSubstr("zoom"));
 }
 
+// board_warp: one warp per board (shared by its placements), written with
+// its covariance under the effect and read back bit for bit; every pose of
+// the board carries it (its corners are warped: predictions use it). A warp
+// of no board in the file, or a board without a warp, names the key.
+TEST(ModelIoBoards, BoardWarpRoundTripsWithItsSigma) {
+  testing_io::TempDir dir;
+  InstrumentModel m = IdealModel(Kinematics::kNone, 1, CameraTool());
+  m.effects.Add(Effect::kRadialDistortion);
+  m.effects.Add(Effect::kBoardWarp);
+  for (const std::string placement : {"p1", "p2"}) {
+    EstimatedBoard b;
+    b.board.kind = BoardKind::kChessboard;
+    b.board.family = "chessboard";
+    b.board.rows = 11;
+    b.board.cols = 11;
+    b.board.square_size = 0.077;
+    b.placement = placement;
+    b.zoom = 0;
+    b.pose = PoseBlock::FromRigid(Rigid3::FromEuler({0.1, -0.2, 1.3}, {0.1, -0.2, 0.5}));
+    m.boards.push_back(b);
+  }
+  SyncBoardWarps(&m);
+  ASSERT_EQ(m.board_warps.size(), 1u);
+  m.board_warps[0].w = {-1.0367429980730084e-3, 5.4051798868024392e-4};
+  m.board_warps[0].cov = {9.3e-11, 2.3e-11, 2.3e-11, 4.27e-11};
+  m.sigmas.valid = true;
+  m.sigmas.intrinsics.assign(1, {1, 1, 1, 1});
+  m.sigmas.distortion.assign(1, {});
+  m.sigmas.cam_tools.assign(1, {});
+  SyncBoardWarps(&m);
+  WriteModelYaml(dir.Path("model.yaml"), m, {});
+  const std::string text = dir.Read("model.yaml");
+  EXPECT_THAT(text, HasSubstr("name: board_warp"));
+  EXPECT_THAT(text, HasSubstr("unit: mm"));
+  const InstrumentModel r = ReadModelYaml(dir.Path("model.yaml"), nullptr);
+  ASSERT_TRUE(r.effects.Has(Effect::kBoardWarp));
+  ASSERT_EQ(r.board_warps.size(), 1u);
+  EXPECT_EQ(r.board_warps[0].first_id, 0);
+  EXPECT_EQ(r.board_warps[0].w, m.board_warps[0].w);
+  EXPECT_EQ(r.board_warps[0].cov, m.board_warps[0].cov);
+  for (const EstimatedBoard& b : r.boards) {
+    EXPECT_EQ(b.board.warp, m.board_warps[0].w) << b.Name();
+    // The board's centre corner is warped by wx + wy (1 - 0 each) * ... its shape.
+    const Eigen::Vector3d corner = b.board.CornersInBoard(44)[0];
+    EXPECT_NE(corner.z(), 0.0);
+  }
+  // A warp of a board the file does not hold.
+  InstrumentModel stray = m;
+  stray.board_warps[0].first_id = 7;
+  WriteModelYaml(dir.Path("stray.yaml"), stray, {});
+  const InputError e = CatchInputError([&] { ReadModelYaml(dir.Path("stray.yaml"), nullptr); });
+  EXPECT_THAT(e.what(), HasSubstr("board"));
+}
+
 }  // namespace
 }  // namespace rtscalib
 

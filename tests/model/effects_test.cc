@@ -12,7 +12,7 @@ namespace {
 // The tables derived from RTSCALIB_EFFECT_LIST hold the values the catalogue
 // had when each was kept by hand (SPEC 4, docs/effects.md).
 TEST(EffectCatalogue, DerivedCountsAndOrder) {
-  EXPECT_EQ(kNumEffects, 17);
+  EXPECT_EQ(kNumEffects, 18);
   EXPECT_EQ(kNumKinematicEffects, 11);
   EXPECT_EQ(kNumDistortionGroups, 5);
   ASSERT_EQ(static_cast<int>(EffectCatalogue().size()), kNumEffects);
@@ -29,6 +29,14 @@ TEST(EffectCatalogue, DerivedCountsAndOrder) {
   EXPECT_TRUE(IsDistortion(Effect::kSensorTilt));
   EXPECT_EQ(std::string(Info(Effect::kFocus).name), "focus");
   EXPECT_TRUE(Info(Effect::kFocus).distortion_indices.empty());
+  // The per-board effect, last: neither kinematic nor a camera's.
+  EXPECT_EQ(std::string(Info(Effect::kBoardWarp).name), "board_warp");
+  EXPECT_TRUE(IsBoardEffect(Effect::kBoardWarp));
+  EXPECT_FALSE(IsCameraEffect(Effect::kBoardWarp));
+  EXPECT_FALSE(IsKinematic(Effect::kBoardWarp));
+  EXPECT_FALSE(IsBoardEffect(Effect::kFocus));
+  EXPECT_EQ(ReportScale(Effect::kBoardWarp), 1e3);  // mm per metre
+  EXPECT_EQ(Info(Effect::kBoardWarp).needs, static_cast<unsigned>(kNeedManyPoses));
   EXPECT_FALSE(EffectFromName("no_such_effect").has_value());
 }
 

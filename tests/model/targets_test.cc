@@ -150,6 +150,57 @@ TEST(Targets, AllCornersCarryIdsCornersAndReferencePositions) {
   EXPECT_TRUE(found);
 }
 
+// board_warp (TagBoard::warp) is mrcal's calobject_warp: for corner (i, j)
+// of a W x H corner grid, mrcal adds warp.x 4 xr (1 - xr) + warp.y 4 yr (1 -
+// yr) to the board-frame z, xr = i / (W - 1), yr = j / (H - 1) (mrcal.c).
+// On the mrcal tour's board (10 x 10 inner corners of 0.077 m, mrcal's
+// corner (i, j) = our inner corner row j, column i, mrcal's x along a row as
+// ours) the two agree corner by corner, and both put +z out of the board's
+// back.
+TEST(Targets, WarpIsMrcalsCalobjectWarpOnItsBoard) {
+  TagBoard b;
+  b.kind = BoardKind::kChessboard;
+  b.rows = b.cols = 11;  // squares: 10 x 10 inner corners
+  b.square_size = 0.077;
+  b.warp = {-0.00104, 0.00052};  // mrcal's OPENCV8 solution of the tour (PROVENANCE.md)
+  for (int j = 0; j < 10; ++j) {
+    for (int i = 0; i < 10; ++i) {
+      const double xr = i / 9.0, yr = j / 9.0;
+      const double mrcal = b.warp[0] * 4 * xr * (1 - xr) + b.warp[1] * 4 * yr * (1 - yr);
+      const Eigen::Vector3d p = b.CornersInBoard(j * 10 + i)[0];
+      EXPECT_NEAR(p.z(), mrcal, kTargetsRoundOff) << i << "," << j;
+      // The warp moves corners along z only.
+      EXPECT_EQ(p.head<2>(), b.FlatCornersInBoard(j * 10 + i)[0].head<2>());
+    }
+  }
+}
+
+TEST(Targets, WarpIsZeroAlongTheEdgesAndWxPlusWyAtTheCentre) {
+  // A tag board: its points span 0 .. Width() x 0 .. Height(); the middle
+  // tag's centre is the board's centre when rows and cols are odd.
+  TagBoard b = Board(0, 3, 3, 0.1, 0.02);
+  b.warp = {0.002, -0.0005};
+  const Eigen::Vector3d centre(0.5 * b.Width(), 0.5 * b.Height(), 0);
+  EXPECT_NEAR(b.WarpShape(centre)[0], 1.0, kTargetsRoundOff);
+  EXPECT_NEAR(b.WarpShape(centre)[1], 1.0, kTargetsRoundOff);
+  // Tag 0's top-left corner is the board's corner: no deflection there.
+  EXPECT_NEAR(b.CornersInBoard(0)[3].z(), 0.0, kTargetsRoundOff);
+  // Tag 8's bottom-right corner likewise; tag 1's top-right corner lies on
+  // the top edge, so only the x term is left.
+  EXPECT_NEAR(b.CornersInBoard(8)[1].z(), 0.0, kTargetsRoundOff);
+  const Eigen::Vector3d top = b.FlatCornersInBoard(1)[2];
+  const double xr = 2 * top.x() / b.Width() - 1;
+  EXPECT_NEAR(b.CornersInBoard(1)[2].z(), b.warp[0] * (1 - xr * xr), kTargetsRoundOff);
+  // One column of inner corners has no extent across: no term there.
+  TagBoard narrow;
+  narrow.kind = BoardKind::kChessboard;
+  narrow.rows = 5;
+  narrow.cols = 2;
+  narrow.square_size = 0.03;
+  narrow.warp = {0.001, 0.0};
+  EXPECT_EQ(narrow.CornersInBoard(0)[0].z(), 0.0);
+}
+
 TEST(Targets, DefaultsAndEmptyScene) {
   const TagBoard b;
   EXPECT_EQ(b.family, "tag36h11");
