@@ -12,10 +12,9 @@
 //   - no structure outside the catalogue is said larger than 3x the fit's
 //     rms at the observed points (its size is stated there, never at image
 //     corners no photo reached).
-// The mrcal tour's corners (a wide lens that needs OpenCV's rational model)
-// with k1 k2 p1 p2 k3: the diagnosis names rational_distortion first, from
-// a refit, and the fall it states is the one a calibration with
-// rational_distortion in the config gives on the same corners.
+// The wide lens of the mrcal tour, whose diagnosis must name
+// rational_distortion with the fall a calibration with it gives, is
+// tests/real_photos/mrcal_tour_test.cc.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -24,8 +23,6 @@
 #include <vector>
 
 #include "app/pipeline.h"
-#include "libcalib/screen/gross.h"
-#include "tests/real_photos/mrcal_corners.h"
 #include "tests/real_photos/photo_sets.h"
 #include "tests/real_photos/real_photos.h"
 
@@ -140,60 +137,6 @@ TEST(RealDiagnosis, BenchSaysNothingWithinTheScatter) {
   ExpectTruthfulDiagnosis("configs/bench.yaml",
                           RunSession(std::string(RTSCALIB_SOURCE_DIR) + "/configs/bench.yaml",
                                      folder.Path("work")));
-}
-
-// A wide lens fitted with k1 k2 p1 p2 k3 (15 px rms): rational_distortion
-// is named first, and its stated "after" is a refit's, the rms that a
-// calibration with rational_distortion in the config (the user's next run,
-// from its own start) gives on the same corners. The two differ by how
-// each screened gross rows (the 15 px fit leaves out corners the rational
-// fit keeps, which then pull the latter's optimum) and by where each
-// stopped: within 5 %.
-TEST(RealDiagnosis, MrcalTourNamesRationalDistortionWithTheFallARefitGives) {
-  RTSCALIB_REQUIRE_REAL_PHOTOS(set, "mrcal_tour_corners");
-  TestFolder folder;
-  WriteMrcalSession(set, folder.Path(""));
-  const app::RunSettings settings = app::LoadRunSettings(
-      folder.Write("config.yaml",
-                   "data: {pixels: pixels.csv, targets: targets.yaml}\n"
-                   "model:\n"
-                   "  kinematics: none\n"
-                   "  effects: [radial_distortion, tangential_distortion]\n"
-                   "  intrinsics: fit\n"
-                   "diagnose: {enabled: true}\n"
-                   "output: out\n"));
-  app::Progress progress(true);
-  const app::PipelineResult r = app::RunPipeline(settings, folder.Path("work"), &progress);
-  ASSERT_TRUE(r.calibration.diagnosis.has_value());
-  const Diagnosis& d = *r.calibration.diagnosis;
-  std::printf("mrcal_tour_corners (diagnosis %.3f s):\n%s", d.seconds, Verdict(d).c_str());
-  const RankedEffect* next = d.Next();
-  ASSERT_NE(next, nullptr) << Verdict(d);
-  EXPECT_EQ(next->effect, Effect::kRationalDistortion) << Verdict(d);
-  EXPECT_EQ(next->after_source, "refined");
-
-  // The user's next run: rational_distortion in the config, calibrated from
-  // its own start, its rms taken over the corners the diagnosis used.
-  CalibrationOptions options = settings.config.calibration;
-  options.model.effects.Add(Effect::kRationalDistortion);
-  options.diagnose.enabled = false;
-  const CalibrationResult with = Calibrate(r.obs, options);
-  const Observations used = WithoutRows(r.obs, r.calibration.gross_rows);
-  const double calibrated = RmsOfModel(used, with.model, with.fit_options).Main();
-  std::printf("rational_distortion: diagnosis %.4g -> %.4g px (linear prediction %.4g px); "
-              "calibrated with it %.4g px over the same %d corners (%.4g px over its own %d); "
-              "OpenCV's calibrateCamera (ref.json) 1.364 px\n",
-              next->rms_before, next->rms_after, next->linear_after.Main(), calibrated,
-              d.current.pixels_n, with.final_errors.pixels.rms_px, with.final_errors.pixels.n);
-  EXPECT_NEAR(next->rms_after, calibrated, 0.05 * calibrated);
-  // Beside mrcal's own solution of these corners (OPENCV8 with board warp
-  // and outlier rejection, PROVENANCE.md): for the record, not a test
-  // (rtscalib has no board warp here, and screens other corners).
-  const CameraTool& cam = with.model.cams[0];
-  std::printf("with rational_distortion: fx %.2f fy %.2f cx %.2f cy %.2f, k1 %.4f k4 %.4f k5 %.4f "
-              "(mrcal OPENCV8: 2073.87 2077.45 3004.69 1997.38, 0.4792 0.7667 0.09634)\n",
-              cam.intrinsics[0], cam.intrinsics[1], cam.intrinsics[2], cam.intrinsics[3],
-              cam.distortion[kK1], cam.distortion[kK4], cam.distortion[kK5]);
 }
 
 }  // namespace

@@ -153,6 +153,9 @@ TEST(MrcalTour, WideLensConvergesAndAgreesWithOpenCvAndMrcal) {
   const RankedEffect* first = NextEffect(k5.result);
   ASSERT_NE(first, nullptr);
   EXPECT_EQ(first->effect, Effect::kRationalDistortion);
+  // Its "after" is a refit's (the ranking refits its leading candidates),
+  // not the first-order prediction.
+  EXPECT_EQ(first->after_source, "refined");
   std::cout << "k1 k2 p1 p2 k3: " << FittedRms(k5.result) << " px over "
             << k5.result.calibration.final_errors.pixels.n << " corners ("
             << k5.result.calibration.gross_rows.size()
