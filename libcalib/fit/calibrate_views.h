@@ -21,8 +21,10 @@
 //      distortion groups; the same with radial k1 k2 only, without
 //      distortion, and initCameraMatrix2D alone are the fallbacks.
 //   3. cv::solvePnP (SQPnP, then iterative) on all of a shot's points gives
-//      the shot's pose for each of those starts; the start that poses the
-//      most shots, then with the lowest RMS, is kept.
+//      the shot's pose for each of those starts (the first two always, the
+//      others while none poses every shot within 1 px RMS); of the starts
+//      tried, the one that poses the most shots, then with the lowest RMS,
+//      is kept.
 //   4. Ceres's Levenberg-Marquardt refines intrinsics, the enabled
 //      distortion groups and every shot's pose in double precision, with
 //      autodiff through the project's own ProjectToPixel (each shot's
