@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <map>
 #include <opencv2/calib3d.hpp>
@@ -633,6 +634,7 @@ std::string CalibrateViewsOptions::Check() const {
         << "; ";
   }
   if (max_iterations < 1) msg << "max_iterations must be >= 1, got " << max_iterations << "; ";
+  if (threads < 1) msg << "threads must be >= 1, got " << threads << "; ";
   if (!(rms_tolerance_px > 0) || !std::isfinite(rms_tolerance_px)) {
     msg << "rms_tolerance_px must be a positive number of pixels, got " << rms_tolerance_px << "; ";
   }
@@ -693,19 +695,42 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   // iterations do not converge).
   constexpr double kGoodStartPx = 1.0;
   const OpenCvViews views = PlanarViews(shots, width, height, options);
+  // One start and its poses, or nothing with *fails saying why.
+  struct Tried {
+    bool ok = false;
+    Start start;
+    std::string fails;
+  };
+  auto attempt = [&](int which) {
+    Tried t;
+    Init init;
+    t.ok = OpenCvStart(views, which, options, &init, &t.fails);
+    if (t.ok) t.start = PoseShots(init, shots);
+    return t;
+  };
   std::string failures;
   Start best;
   bool started = false;
-  for (int which = 0; which < kNumOpenCvStarts; ++which) {
-    Init init;
-    if (!OpenCvStart(views, which, options, &init, &failures)) continue;
-    Start start = PoseShots(init, shots);
-    if (!started || start.posed.size() > best.posed.size() ||
-        (start.posed.size() == best.posed.size() && start.rms_px < best.rms_px)) {
-      best = std::move(start);
+  // The starts in pairs, the second of a pair on a thread of its own with
+  // options.threads > 1; then chosen from in order, as one after the other.
+  for (int which = 0; which < kNumOpenCvStarts; which += 2) {
+    Tried pair[2];
+    {
+      std::future<Tried> second;
+      if (options.threads > 1) second = std::async(std::launch::async, attempt, which + 1);
+      pair[0] = attempt(which);
+      pair[1] = second.valid() ? second.get() : attempt(which + 1);
     }
-    started = true;
-    if (which >= 1 && best.posed.size() == shots.size() && best.rms_px <= kGoodStartPx) break;
+    for (Tried& t : pair) {
+      failures += t.fails;
+      if (!t.ok) continue;
+      if (!started || t.start.posed.size() > best.posed.size() ||
+          (t.start.posed.size() == best.posed.size() && t.start.rms_px < best.rms_px)) {
+        best = std::move(t.start);
+      }
+      started = true;
+    }
+    if (best.posed.size() == shots.size() && best.rms_px <= kGoodStartPx) break;
   }
   if (!started) {
     throw std::runtime_error("CalibrateViews: OpenCV initialisation failed:" + failures);

@@ -76,6 +76,9 @@ struct CalibrateViewsOptions {
   // Step 4 has converged when an iteration improves the RMS by less than this
   // [px] (far below any detector's noise; exact data reach ~1e-13 px).
   double rms_tolerance_px = 1e-10;
+  // Threads for step 2: OpenCV's starts are made two at a time with 2 or more
+  // (the same starts, the same choice).
+  int threads = 1;
   // Empty if valid, otherwise what is wrong.
   std::string Check() const;
 };
