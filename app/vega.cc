@@ -307,8 +307,18 @@ bool BuildSnapshot(const std::string& node, const std::string& runtime, const fs
                            (work / "snapshot.js").string(), work.string()});
   const bool built = Wait(Start(argv, -1, work / "log.txt")) == 0 && fs::file_size(tmp, ec) > 0;
   if (built) fs::rename(tmp, blob, ec);
-  if (!built || ec) fs::remove(tmp, ec);
-  return built && !ec;
+  if (!built || ec) {
+    fs::remove(tmp, ec);
+    return false;
+  }
+  // The snapshots of another node or runtime are replaced by this one.
+  for (const fs::directory_entry& e : fs::directory_iterator(blob.parent_path(), ec)) {
+    const std::string name = e.path().filename().string();
+    if (e.path() != blob && name.rfind("vega-", 0) == 0 && e.path().extension() == ".blob") {
+      fs::remove(e.path(), ec);
+    }
+  }
+  return true;
 }
 
 }  // namespace

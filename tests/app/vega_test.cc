@@ -152,18 +152,23 @@ class SnapshotCache : public ::testing::Test {
   std::optional<ScopedEnv> env_;
 };
 
-TEST_F(SnapshotCache, IsBuiltOnceAndStartedFromWithTheSameSvg) {
+TEST_F(SnapshotCache, IsBuiltOnceReplacingOthersAndStartedFromWithTheSameSvg) {
   const std::string blob = VegaSnapshotPath(node_);
   ASSERT_FALSE(blob.empty());
   EXPECT_EQ(fs::path(blob).parent_path(), cache_ / "rtscalib");
   EXPECT_FALSE(fs::exists(blob));
+  // Another node's snapshot, replaced by this one.
+  const fs::path stale = fs::path(blob).parent_path() / "vega-0123456789abcdef.blob";
+  fs::create_directories(stale.parent_path());
+  std::ofstream(stale) << "another node's";
   std::string note;
   VegaRenderer first;
   EXPECT_EQ(first.how(), "built the snapshot " + blob);
   const std::vector<RenderedFigure> built = first.Draw({Bar()}, &note);
   ASSERT_EQ(built.size(), 1u) << note;
   EXPECT_TRUE(fs::exists(blob));
-  // Only the snapshot is left in the cache folder (no file of the build).
+  // Only the snapshot is left in the cache folder (no file of the build, no
+  // other snapshot).
   EXPECT_EQ(std::distance(fs::directory_iterator(cache_ / "rtscalib"), fs::directory_iterator()), 1);
   VegaRenderer second;
   EXPECT_EQ(second.how(), "started from the snapshot " + blob);
