@@ -11,6 +11,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <condition_variable>
+#include <deque>
+#include <exception>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -21,6 +24,8 @@
 #include <iterator>
 #include <mutex>
 #include <sstream>
+#include <string_view>
+#include <thread>
 
 namespace rtscalib::app {
 namespace {
@@ -262,9 +267,21 @@ pid_t Start(const std::vector<std::string>& argv, int io, const fs::path& log) {
                                        0644);
   }
   ::posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  // The child's environment is the parent's (PATH, RTSCALIB_VEGA_DIR, ...)
+  // but for what would change how node starts: NODE_OPTIONS (flags and
+  // preloaded scripts of the user's own node programs; other flags than the
+  // snapshot's would make node refuse it) and NODE_EXTRA_CA_CERTS (node
+  // reads and parses the certificates when it starts, 30 ms of CPU for
+  // Debian's bundle, and draws figures offline).
+  std::vector<char*> env;
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string_view var(*e);
+    if (var.rfind("NODE_OPTIONS=", 0) == 0 || var.rfind("NODE_EXTRA_CA_CERTS=", 0) == 0) continue;
+    env.push_back(*e);
+  }
+  env.push_back(nullptr);
   pid_t pid = -1;
-  // The child's environment is the parent's (PATH, RTSCALIB_VEGA_DIR, ...).
-  const int err = ::posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  const int err = ::posix_spawn(&pid, args[0], &actions, nullptr, args.data(), env.data());
   ::posix_spawn_file_actions_destroy(&actions);
   return err == 0 ? pid : -1;
 }
@@ -320,6 +337,73 @@ bool BuildSnapshot(const std::string& node, const std::string& runtime, const fs
   }
   return true;
 }
+
+// The PNG of each figure handed over by Add, drawn on a thread of its own
+// one after the other, then given to `drawn`; a figure librsvg cannot draw
+// keeps its error and no SVG. Finish (or the destructor) waits for the
+// last; Finish rethrows what `drawn` threw (the figures after it are drawn
+// but not handed over).
+class PngQueue {
+ public:
+  PngQueue(const SvgRasterizer& raster, std::vector<RenderedFigure>* figures,
+           const VegaRenderer::Drawn& drawn)
+      : raster_(raster), figures_(*figures), drawn_(drawn), thread_([this] { Run(); }) {}
+  ~PngQueue() { Stop(); }
+  PngQueue(const PngQueue&) = delete;
+  PngQueue& operator=(const PngQueue&) = delete;
+
+  void Add(size_t i) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      queue_.push_back(i);
+    }
+    wake_.notify_one();
+  }
+  void Finish() {
+    Stop();
+    if (failed_) std::rethrow_exception(failed_);
+  }
+
+ private:
+  static constexpr size_t kDone = static_cast<size_t>(-1);
+  void Stop() {
+    if (!thread_.joinable()) return;
+    Add(kDone);
+    thread_.join();
+  }
+  void Run() {
+    for (;;) {
+      size_t i = kDone;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return !queue_.empty(); });
+        i = queue_.front();
+        queue_.pop_front();
+      }
+      if (i == kDone) return;
+      RenderedFigure& fig = figures_[i];
+      if (!raster_.ToPng(fig.svg, &fig.png, &fig.error)) {
+        fig.svg.clear();
+        fig.png.clear();
+      } else if (drawn_ && !failed_) {
+        try {
+          drawn_(i, fig);
+        } catch (...) {
+          failed_ = std::current_exception();
+        }
+      }
+    }
+  }
+
+  const SvgRasterizer& raster_;
+  std::vector<RenderedFigure>& figures_;
+  const VegaRenderer::Drawn& drawn_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<size_t> queue_;
+  std::exception_ptr failed_;  // written and read by the drawing thread until it ends
+  std::thread thread_;
+};
 
 }  // namespace
 
@@ -524,38 +608,36 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   const SvgRasterizer& raster = SvgRasterizer::Get();
   std::vector<RenderedFigure> out(specs.size());
-  std::vector<std::future<void>> png(specs.size());
   std::vector<char> answered(specs.size(), 0);
   std::string requests;
   for (const auto& [bytes, i] : by_size) requests += std::to_string(i) + "\n";
   size_t count = 0;
-  std::string line;
+  {
+    // The PNGs are drawn by one thread of this process, in the order node
+    // answers, each while node draws the next SVG: one thread, so that on
+    // two cores node keeps one of its own (the PNGs take about half of
+    // node's time; a thread per PNG had two or three of them, the
+    // diagnosis and the reports' writing share node's core).
+    PngQueue pngs(raster, &out, drawn);
+    std::string line;
   if (s.Send(requests)) {
-    while (count < specs.size() && s.ReadLine(&line)) {
-      const int i = std::atoi(line.c_str());
-      if (i < 0 || i >= static_cast<int>(specs.size()) || answered[i]) continue;
-      answered[i] = 1;
-      ++count;
-      RenderedFigure& fig = out[i];
-      fig.svg = ReadText(s.dir / ("fig_" + std::to_string(i) + ".svg"));
-      if (fig.svg.empty()) {
-        fig.error = ReadText(s.dir / ("error_" + std::to_string(i) + ".txt"));
-        if (fig.error.empty()) fig.error = "no SVG written";
-        continue;
-      }
-      png[i] = std::async(std::launch::async, [&raster, &fig, &drawn, i] {
-        if (!raster.ToPng(fig.svg, &fig.png, &fig.error)) {
-          fig.svg.clear();
-          fig.png.clear();
-        } else if (drawn) {
-          drawn(static_cast<size_t>(i), fig);
+      while (count < specs.size() && s.ReadLine(&line)) {
+        const int i = std::atoi(line.c_str());
+        if (i < 0 || i >= static_cast<int>(specs.size()) || answered[i]) continue;
+        answered[i] = 1;
+        ++count;
+        RenderedFigure& fig = out[i];
+        fig.svg = ReadText(s.dir / ("fig_" + std::to_string(i) + ".svg"));
+        if (fig.svg.empty()) {
+          fig.error = ReadText(s.dir / ("error_" + std::to_string(i) + ".txt"));
+          if (fig.error.empty()) fig.error = "no SVG written";
+          continue;
         }
-      });
+        pngs.Add(static_cast<size_t>(i));
+      }
     }
-  }
-  s.Stop();
-  for (std::future<void>& f : png) {
-    if (f.valid()) f.get();  // rethrows what `drawn` threw
+    s.Stop();
+    pngs.Finish();  // rethrows what `drawn` threw
   }
   if (count < specs.size()) {
     for (size_t i = 0; i < specs.size(); ++i) {
