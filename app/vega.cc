@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -471,6 +472,7 @@ struct VegaRenderer::State {
     socket = fds[0];
     std::string line;
     if (ReadLine(&line, 60000) && line == "ready") return true;
+    ::kill(pid, SIGKILL);  // a node that hangs would not end with its input
     Stop();
     return false;
   }
