@@ -69,10 +69,10 @@ Figure DifferenceFigure(const ZoomDifference& d);
 
 // Writes <dir>/<name>.vg.json for each figure and, when the PNG renderer is
 // installed (app/vega.h), <name>.svg and <name>.png; returns the names of
-// the files written per figure (in figure order) and, in *note, why no PNG
-// was written ("" when they were). `renderer`: one started earlier (the run
-// starts its own when the calibration starts, app/vega.h), else one is
-// started here.
+// the files written per figure (in figure order) and, in *note, why a PNG
+// was not written ("" when every one was). `renderer`: one started earlier
+// (the run starts its own when it has read its config, app/vega.h), else
+// one is started here.
 std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>& figures,
                                                        const std::string& dir, std::string* note,
                                                        VegaRenderer* renderer = nullptr);

@@ -94,11 +94,9 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
 }
 
 PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_dir,
-                           Progress* progress, const Alongside& alongside,
-                           const std::function<void()>& calibrating) {
+                           Progress* progress, const Alongside& alongside) {
   PipelineResult result;
   result.obs = LoadObservations(settings, work_dir, &result, progress);
-  if (calibrating) calibrating();
   const CalibrationOptions& options = settings.config.calibration;
   result.calibration = CalibrateModel(result.obs, options, progress);
   // The plain diagnosis only reads the calibration: it runs on a second

@@ -70,12 +70,7 @@ using Alongside = std::function<void(const PipelineResult&)>;
 // DiagnoseCalibration), then the projection uncertainty maps. `alongside`,
 // when given, runs while the diagnosis does when the diagnosis only reads
 // the calibration (DiagnosisPending); with diagnose.auto, after it.
-// `calibrating`, when given, is called once the observations are in, just
-// before the calibration starts (the run starts its figure renderer there,
-// app/vega.h: the calibration leaves a core idle that the photos' detection
-// kept busy).
 PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_dir,
-                           Progress* progress, const Alongside& alongside = nullptr,
-                           const std::function<void()>& calibrating = nullptr);
+                           Progress* progress, const Alongside& alongside = nullptr);
 
 }  // namespace rtscalib::app

@@ -5,7 +5,6 @@
 #include <fstream>
 #include <future>
 #include <iostream>
-#include <optional>
 
 #include "app/commands.h"
 #include "app/diagnosis_report.h"
@@ -35,18 +34,19 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   if (args.diagnose_auto) config.calibration.diagnose.auto_add = true;
   // The figures need the calibrated model, its residuals and uncertainty
   // maps but not its diagnosis. Their renderer (node, librsvg: app/vega.h)
-  // starts with the calibration; the specs are made as soon as the model is
-  // fitted and drawn on threads of their own while the diagnosis runs and
-  // the model and the reports are written. report.json and report.html,
-  // which list the figure files, come last: the run ends once its figures
-  // are drawn, and says how long it waited for them.
+  // starts now, beside the reading of the observations, so that node is
+  // waiting when the model is fitted; the specs are made then and drawn on
+  // threads of their own while the diagnosis runs and the model and the
+  // reports are written. report.json and report.html, which list the
+  // figure files, come last: the run ends once its figures are drawn, and
+  // says how long it waited for them.
   using Clock = std::chrono::steady_clock;
   std::vector<Figure> figures;
   std::vector<std::vector<std::string>> figure_files;
   std::string figures_note;
   Clock::time_point figures_start, figures_end;
   nlohmann::json history;  // earlier runs, for the figures and report.json
-  std::optional<VegaRenderer> renderer;
+  VegaRenderer renderer;
   // Declared after everything the drawing thread uses: destroyed (joined)
   // before them, also when an exception leaves this function.
   std::future<void> drawing;
@@ -57,12 +57,11 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
         history = HistoryJson(out);
         figures = MakeFigures(fitted, history);
         drawing = std::async(std::launch::async, [&] {
-          figure_files = WriteFigureFiles(figures, out.RunFile("figures"), &figures_note,
-                                          renderer ? &*renderer : nullptr);
+          figure_files =
+              WriteFigureFiles(figures, out.RunFile("figures"), &figures_note, &renderer);
           figures_end = Clock::now();
         });
-      },
-      [&] { renderer.emplace(); });
+      });
 
   progress.Step("writing the model and the reports");
   if (result.simulated) {

@@ -3,13 +3,21 @@
 #include "app/svg_raster.h"
 
 #include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <condition_variable>
+#include <deque>
+#include <exception>
 #include <cerrno>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <future>
 #include <filesystem>
@@ -17,6 +25,8 @@
 #include <iterator>
 #include <mutex>
 #include <sstream>
+#include <string_view>
+#include <thread>
 
 namespace rtscalib::app {
 namespace {
@@ -76,16 +86,16 @@ std::string BuildRuntime(std::string* missing) {
   return o.str();
 }
 
-// The node side, a server on stdin and stdout: it reads the runtime, then
-// for each line "<i>" draws spec_<i>.json of its folder to fig_<i>.svg (or
-// error_<i>.txt) and answers "<i>", one spec after the other; it ends when
-// its input ends. Before the first spec it draws a small one with the marks,
-// axes and legend the figures use, so that V8 has compiled their code when
-// the first figure comes.
-constexpr const char* kRenderScript = R"js(
-const fs = require('fs'), path = require('path');
-const dir = process.argv[2];
-(0, eval)(fs.readFileSync(path.join(dir, 'vega.js'), 'utf8'));
+// The node side, a server on stdin and stdout: it answers "ready" once the
+// runtime is loaded, then for each line "<i>" draws spec_<i>.json of its
+// folder to fig_<i>.svg (or error_<i>.txt) and answers "<i>", one spec after
+// the other; it ends when its input ends. Node compiles a function's
+// bytecode when it first runs, which for Vega's parser, dataflow and SVG
+// writer costs about as much as drawing a figure: the warm-up specs (the
+// marks, scales, axes, legends, layouts, transforms and expressions the
+// figures use) are drawn before the first figure, in the snapshot when node
+// starts from one (below), else while the server waits for specs.
+constexpr const char* kServerScript = R"js(
 async function svg(spec) {
   const view = new vega.View(vega.parse(spec), {renderer: 'none'});
   view.logLevel(vega.Error);
@@ -93,7 +103,7 @@ async function svg(spec) {
   view.finalize();
   return out;
 }
-async function draw(i) {
+async function draw(dir, i) {
   try {
     const spec = JSON.parse(fs.readFileSync(path.join(dir, 'spec_' + i + '.json'), 'utf8'));
     fs.writeFileSync(path.join(dir, 'fig_' + i + '.svg'), await svg(spec));
@@ -101,40 +111,128 @@ async function draw(i) {
     fs.writeFileSync(path.join(dir, 'error_' + i + '.txt'), String(e).slice(0, 400));
   }
 }
-const warm = {
-  width: 60, height: 40, padding: 5,
-  data: [{name: 't', values: [{x: 1, y: 2, g: 'a'}, {x: 2, y: 1, g: 'b'}]}],
-  scales: [
-    {name: 'x', type: 'linear', domain: {data: 't', field: 'x'}, range: 'width', nice: true},
-    {name: 'y', type: 'linear', domain: {data: 't', field: 'y'}, range: 'height', zero: true},
-    {name: 'c', type: 'ordinal', domain: {data: 't', field: 'g'}, range: 'category'}],
-  axes: [{orient: 'bottom', scale: 'x', title: 'x', grid: true}, {orient: 'left', scale: 'y'}],
-  legends: [{fill: 'c', title: 'g', orient: 'top'}],
-  marks: [
-    {type: 'symbol', from: {data: 't'}, encode: {enter: {x: {scale: 'x', field: 'x'},
-      y: {scale: 'y', field: 'y'}, fill: {scale: 'c', field: 'g'}, tooltip: {field: 'g'}}}},
-    {type: 'line', from: {data: 't'}, encode: {enter: {x: {scale: 'x', field: 'x'},
-      y: {scale: 'y', field: 'y'}, stroke: {value: '#444'}}}},
-    {type: 'area', from: {data: 't'}, encode: {enter: {x: {scale: 'x', field: 'x'},
-      y: {scale: 'y', field: 'y'}, y2: {scale: 'y', value: 0}, fillOpacity: {value: 0.2}}}},
-    {type: 'rect', from: {data: 't'}, encode: {enter: {x: {scale: 'x', field: 'x'}, width: {value: 3},
-      y: {scale: 'y', field: 'y'}, y2: {scale: 'y', value: 0}}}},
-    {type: 'rule', encode: {enter: {x: {value: 0}, x2: {value: 60}, y: {value: 20},
-      strokeDash: {value: [3, 3]}}}},
-    {type: 'text', encode: {enter: {x: {value: 30}, y: {value: 20}, text: {value: 'w'},
-      align: {value: 'center'}}}}]};
-let chain = svg(warm).catch(() => {}), pending = '';
-process.stdin.setEncoding('utf8');
-process.stdin.on('data', d => {
-  pending += d;
-  for (let at = pending.indexOf('\n'); at >= 0; at = pending.indexOf('\n')) {
-    const i = Number(pending.slice(0, at));
-    pending = pending.slice(at + 1);
-    chain = chain.then(() => draw(i)).then(() => process.stdout.write(i + '\n'));
-  }
-});
-process.stdin.on('end', () => chain.then(() => process.exit(0)));
+const xy = {x: {scale: 'x', field: 'x'}, y: {scale: 'y', field: 'y'}};
+const points = [{x: 1, y: 2, g: 'a'}, {x: 2, y: 1, g: 'b'}, {x: 3, y: 3, g: 'a'}];
+function panel(type) {
+  return {type: 'group', encode: {enter: {width: {value: 60}, height: {value: 40}}},
+    data: [{name: 'p', values: points, transform: [{type: 'filter', expr: 'datum.y > 0'}]}],
+    scales: [
+      {name: 'x', type: type, domain: {data: 'p', field: 'x'}, range: 'width', zero: false},
+      {name: 'y', type: 'linear', domain: {data: 'p', field: 'y'}, range: 'height', nice: true}],
+    axes: [
+      {orient: 'bottom', scale: 'x', title: 'x', grid: true, tickCount: 4, labelFontSize: 10},
+      {orient: 'left', scale: 'y', title: 'y', titleFontSize: 11}],
+    marks: [
+      {type: 'symbol', from: {data: 'p'}, encode: {enter: Object.assign({fill: {scale: 'c', field: 'g'},
+        tooltip: {signal: "{'x': format(datum.x, '.3g'), 'g': datum.g}"}}, xy)}},
+      {type: 'line', from: {data: 'p'}, encode: {enter: Object.assign({stroke: {value: '#444'}}, xy)}},
+      {type: 'area', from: {data: 'p'}, encode: {enter: Object.assign({y2: {scale: 'y', value: 0},
+        fillOpacity: {value: 0.2}}, xy)}},
+      {type: 'rule', encode: {enter: {x: {value: 0}, x2: {value: 60}, y: {value: 20},
+        strokeDash: {value: [3, 3]}}}},
+      {type: 'text', encode: {enter: {x: {value: 30}, y: {value: 20}, text: {value: 'w'},
+        align: {value: 'center'}}}}]};
+}
+const kWarmUps = [
+  {padding: 5, background: 'white', autosize: 'pad',
+    title: {text: 'panels', subtitle: ['one', 'two'], anchor: 'start', fontSize: 14},
+    layout: {columns: 2, padding: {row: 10, column: 10}, bounds: 'flush', align: 'all'},
+    scales: [{name: 'c', type: 'ordinal', domain: ['a', 'b'], range: 'category'}],
+    legends: [{fill: 'c', title: 'g', orient: 'top', direction: 'horizontal'}],
+    marks: [panel('linear'), panel('log'), panel('sqrt')]},
+  {width: 40, height: 30, padding: 5, background: 'white',
+    data: [{name: 'cells', values: [{u0: 0, u1: 1, v0: 0, v1: 1, value: 1, inside: true},
+      {u0: 1, u1: 2, v0: 0, v1: 1, value: null, inside: false}]}],
+    scales: [
+      {name: 'u', type: 'linear', domain: [0, 2], range: [0, 40], zero: false, nice: false},
+      {name: 'v', type: 'linear', domain: [0, 1], range: [0, 30], zero: false, nice: false},
+      {name: 'k', type: 'point', domain: ['a', 'b'], range: 'width'},
+      {name: 'colour', type: 'linear', scheme: 'viridis', domain: {data: 'cells', field: 'value'},
+        zero: true, nice: true}],
+    axes: [{orient: 'bottom', scale: 'k'}, {orient: 'left', scale: 'v', tickCount: 3}],
+    legends: [{fill: 'colour', type: 'gradient', title: 's'}],
+    marks: [
+      {type: 'image', encode: {enter: {x: {value: 0}, y: {value: 0}, width: {value: 40},
+        height: {value: 30}, aspect: {value: false}, url: {value:
+        'data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklEQVR4nGNoAAAAggCBd81ytgAAAABJRU5ErkJggg=='}}}},
+      {type: 'rect', from: {data: 'cells'}, encode: {enter: {
+        x: {scale: 'u', field: 'u0'}, x2: {scale: 'u', field: 'u1'},
+        y: {scale: 'v', field: 'v0'}, y2: {scale: 'v', field: 'v1'},
+        fill: {signal: "datum.value === null ? '#bbbbbb' : scale('colour', datum.value)"},
+        fillOpacity: {signal: 'datum.inside ? 1 : 0.55'}}}}]}];
+function warmUp() {
+  return kWarmUps.reduce((chain, spec) => chain.then(() => svg(spec)).catch(() => {}),
+                         Promise.resolve());
+}
+function serve(dir, before) {
+  let chain = before, pending = '';
+  process.stdout.write('ready\n');
+  process.stdin.setEncoding('utf8');
+  process.stdin.on('data', d => {
+    pending += d;
+    for (let at = pending.indexOf('\n'); at >= 0; at = pending.indexOf('\n')) {
+      const i = Number(pending.slice(0, at));
+      pending = pending.slice(at + 1);
+      chain = chain.then(() => draw(dir, i)).then(() => process.stdout.write(i + '\n'));
+    }
+  });
+  process.stdin.on('end', () => chain.then(() => process.exit(0)));
+}
 )js";
+
+// The runtime read from vega.js of the folder in argv[2] (node's argv: node,
+// script, folder).
+constexpr const char* kLoadRuntime =
+    "const fs = require('fs'), path = require('path');\n"
+    "(0, eval)(fs.readFileSync(path.join(process.argv[2], 'vega.js'), 'utf8'));\n";
+
+// Node reading the runtime itself: the server on the folder in argv[2],
+// the warm-up drawn while it waits.
+std::string PlainScript() {
+  return std::string(kLoadRuntime) + kServerScript + "serve(process.argv[2], warmUp());\n";
+}
+
+// The script a start-up snapshot is built from (`node --build-snapshot`):
+// the runtime loaded and the warm-up drawn, then the heap, compiled
+// bytecode included, is written to the snapshot; node started from it
+// serves the folder in its argv[1] (node's argv from a snapshot: node,
+// folder).
+std::string SnapshotScript() {
+  return std::string(kLoadRuntime) + kServerScript +
+         "warmUp();\n"
+         "require('v8').startupSnapshot.setDeserializeMainFunction(\n"
+         "    () => serve(process.argv[1], Promise.resolve()));\n";
+}
+
+// V8's flags, the same for a snapshot's build and every start from it (V8
+// refuses a snapshot built with other flags).
+// --no-opt: V8's optimising compiler off. One pass over a few dozen specs
+// is too short for its compiled code to pay back: node takes about a third
+// less CPU time for the photo session's figures (which share the machine
+// with the diagnosis), and writes the same SVG bytes.
+// --single-threaded: no helper threads for V8's garbage collector and
+// compiler, which on a machine whose cores are busy cost more than they
+// save (the bench's figures: 0.24 instead of 0.27 s of CPU).
+const std::vector<std::string> kNodeFlags = {"--no-opt", "--single-threaded"};
+
+// 64-bit FNV-1a: a name for the snapshot's inputs.
+uint64_t Fnv1a(const std::string& text, uint64_t h = 14695981039346656037ull) {
+  for (const unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// The user's cache folder for rtscalib ($XDG_CACHE_HOME/rtscalib, else
+// ~/.cache/rtscalib), or "" when neither is set.
+fs::path CacheDir() {
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  if (xdg && *xdg == '/') return fs::path(xdg) / "rtscalib";
+  const char* home = std::getenv("HOME");
+  if (home && *home == '/') return fs::path(home) / ".cache" / "rtscalib";
+  return {};
+}
 
 // The program `name` on PATH, or "".
 std::string FindProgram(const std::string& name) {
@@ -148,8 +246,8 @@ std::string FindProgram(const std::string& name) {
   return "";
 }
 
-// Starts argv[0] (a path) with `io` as its stdin and stdout and stderr to
-// `log`; its pid, or -1.
+// Starts argv[0] (a path) with `io` as its stdin and stdout (-1: stdin from
+// /dev/null, stdout to `log`) and stderr to `log`; its pid, or -1.
 // posix_spawn, not fork: glibc spawns with the parent's memory shared until
 // the exec (clone with CLONE_VM | CLONE_VFORK), where fork copies the page
 // tables of the whole process, its heap of observations and matrices
@@ -161,12 +259,30 @@ pid_t Start(const std::vector<std::string>& argv, int io, const fs::path& log) {
   args.push_back(nullptr);
   posix_spawn_file_actions_t actions;
   if (::posix_spawn_file_actions_init(&actions) != 0) return -1;
-  ::posix_spawn_file_actions_adddup2(&actions, io, 0);
-  ::posix_spawn_file_actions_adddup2(&actions, io, 1);
+  if (io >= 0) {
+    ::posix_spawn_file_actions_adddup2(&actions, io, 0);
+    ::posix_spawn_file_actions_adddup2(&actions, io, 1);
+  } else {
+    ::posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    ::posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND,
+                                       0644);
+  }
   ::posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  // The child's environment is the parent's (PATH, RTSCALIB_VEGA_DIR, ...)
+  // but for what would change how node starts: NODE_OPTIONS (flags and
+  // preloaded scripts of the user's own node programs; other flags than the
+  // snapshot's would make node refuse it) and NODE_EXTRA_CA_CERTS (node
+  // reads and parses the certificates when it starts, 30 ms of CPU for
+  // Debian's bundle, and draws figures offline).
+  std::vector<char*> env;
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string_view var(*e);
+    if (var.rfind("NODE_OPTIONS=", 0) == 0 || var.rfind("NODE_EXTRA_CA_CERTS=", 0) == 0) continue;
+    env.push_back(*e);
+  }
+  env.push_back(nullptr);
   pid_t pid = -1;
-  // The child's environment is the parent's (PATH, RTSCALIB_VEGA_DIR, ...).
-  const int err = ::posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  const int err = ::posix_spawn(&pid, args[0], &actions, nullptr, args.data(), env.data());
   ::posix_spawn_file_actions_destroy(&actions);
   return err == 0 ? pid : -1;
 }
@@ -188,6 +304,108 @@ std::string Tail(const fs::path& log) {
   return s;
 }
 
+// Builds the snapshot `blob` with node (its folder made when missing):
+// written beside it under a name of its own, then renamed, so that a run
+// reading it never sees half a file and two runs building it at once each
+// leave a whole one. `work` is a folder for the scripts and the log.
+bool BuildSnapshot(const std::string& node, const std::string& runtime, const fs::path& blob,
+                   const fs::path& work) {
+  std::error_code ec;
+  fs::create_directories(blob.parent_path(), ec);
+  if (ec) return false;
+  std::string tmp = blob.string() + ".XXXXXX";
+  const int fd = ::mkstemp(tmp.data());
+  if (fd < 0) return false;
+  ::close(fd);
+  std::ofstream(work / "vega.js", std::ios::binary) << runtime;
+  std::ofstream(work / "snapshot.js", std::ios::binary) << SnapshotScript();
+  std::vector<std::string> argv = {node};
+  argv.insert(argv.end(), kNodeFlags.begin(), kNodeFlags.end());
+  argv.insert(argv.end(), {"--snapshot-blob", tmp, "--build-snapshot",
+                           (work / "snapshot.js").string(), work.string()});
+  const bool built = Wait(Start(argv, -1, work / "log.txt")) == 0 && fs::file_size(tmp, ec) > 0;
+  if (built) fs::rename(tmp, blob, ec);
+  if (!built || ec) {
+    fs::remove(tmp, ec);
+    return false;
+  }
+  // The snapshots of another node or runtime are replaced by this one.
+  for (const fs::directory_entry& e : fs::directory_iterator(blob.parent_path(), ec)) {
+    const std::string name = e.path().filename().string();
+    if (e.path() != blob && name.rfind("vega-", 0) == 0 && e.path().extension() == ".blob") {
+      fs::remove(e.path(), ec);
+    }
+  }
+  return true;
+}
+
+// The PNG of each figure handed over by Add, drawn on a thread of its own
+// one after the other, then given to `drawn`; a figure librsvg cannot draw
+// keeps its error and no SVG. Finish (or the destructor) waits for the
+// last; Finish rethrows what `drawn` threw (the figures after it are drawn
+// but not handed over).
+class PngQueue {
+ public:
+  PngQueue(const SvgRasterizer& raster, std::vector<RenderedFigure>* figures,
+           const VegaRenderer::Drawn& drawn)
+      : raster_(raster), figures_(*figures), drawn_(drawn), thread_([this] { Run(); }) {}
+  ~PngQueue() { Stop(); }
+  PngQueue(const PngQueue&) = delete;
+  PngQueue& operator=(const PngQueue&) = delete;
+
+  void Add(size_t i) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      queue_.push_back(i);
+    }
+    wake_.notify_one();
+  }
+  void Finish() {
+    Stop();
+    if (failed_) std::rethrow_exception(failed_);
+  }
+
+ private:
+  static constexpr size_t kDone = static_cast<size_t>(-1);
+  void Stop() {
+    if (!thread_.joinable()) return;
+    Add(kDone);
+    thread_.join();
+  }
+  void Run() {
+    for (;;) {
+      size_t i = kDone;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return !queue_.empty(); });
+        i = queue_.front();
+        queue_.pop_front();
+      }
+      if (i == kDone) return;
+      RenderedFigure& fig = figures_[i];
+      if (!raster_.ToPng(fig.svg, &fig.png, &fig.error)) {
+        fig.svg.clear();
+        fig.png.clear();
+      } else if (drawn_ && !failed_) {
+        try {
+          drawn_(i, fig);
+        } catch (...) {
+          failed_ = std::current_exception();
+        }
+      }
+    }
+  }
+
+  const SvgRasterizer& raster_;
+  std::vector<RenderedFigure>& figures_;
+  const VegaRenderer::Drawn& drawn_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<size_t> queue_;
+  std::exception_ptr failed_;  // written and read by the drawing thread until it ends
+  std::thread thread_;
+};
+
 }  // namespace
 
 std::string VegaModuleDir() {
@@ -203,30 +421,48 @@ const std::string& VegaRuntime(std::string* missing) {
   return runtime;
 }
 
+std::string VegaSnapshotPath(const std::string& node) {
+  const fs::path cache = CacheDir();
+  std::error_code ec;
+  const fs::path program = fs::canonical(node, ec);
+  struct stat st {};
+  if (cache.empty() || ec || ::stat(program.c_str(), &st) != 0) return "";
+  const std::string& runtime = VegaRuntime();
+  if (runtime.empty()) return "";
+  // What V8 needs to be the same to start from the snapshot (node's binary:
+  // its path, size and time of change) and what the snapshot holds.
+  std::string inputs = program.string() + "\n" + std::to_string(st.st_size) + "\n" +
+                       std::to_string(st.st_mtim.tv_sec) + "." +
+                       std::to_string(st.st_mtim.tv_nsec) + "\n";
+  for (const std::string& f : kNodeFlags) inputs += f + "\n";
+  uint64_t h = Fnv1a(inputs);
+  h = Fnv1a(SnapshotScript(), h);
+  h = Fnv1a(runtime, h);
+  char name[64];
+  std::snprintf(name, sizeof name, "vega-%016llx.blob", static_cast<unsigned long long>(h));
+  return (cache / name).string();
+}
+
 struct VegaRenderer::State {
   std::string missing;  // what is not installed, "" when everything is
   std::string failure;  // why node could not be started, "" when it was
   std::string node;     // node's path
-  fs::path dir;         // the temporary folder: vega.js, render.js, specs, SVG files
+  std::string how;      // how node was started (VegaRenderer::how)
+  fs::path dir;         // the temporary folder: specs, SVG files, log (vega.js, scripts)
   pid_t pid = -1;
   int socket = -1;      // our end of node's stdin and stdout
-  bool no_opt = true;   // node started with --no-opt --single-threaded
+  std::string received;  // node's output not yet read as lines
   std::future<void> started;
 
-  // Node started in `dir` (--no-opt: see Spawn); false when it could not be.
-  bool Spawn() {
+  // Node started with `args` after its path and flags, in `dir`; true once
+  // it has answered "ready". A node that ends first (a snapshot it cannot
+  // read, a flag it does not know) or says nothing for a minute is stopped.
+  bool Spawn(const std::vector<std::string>& args, bool flags) {
     int fds[2];
     if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0) return false;
-    // --no-opt: V8's optimising compiler off. One pass over a few dozen
-    // specs is too short for its compiled code to pay back: node takes about
-    // a third less CPU time for the photo session's figures (which share the
-    // machine with the diagnosis), and writes the same SVG bytes.
-    // --single-threaded: no helper threads for V8's garbage collector and
-    // compiler, which on a machine whose cores are busy cost more than they
-    // save (the bench's figures: 0.24 instead of 0.27 s of CPU).
     std::vector<std::string> argv = {node};
-    if (no_opt) argv.insert(argv.end(), {"--no-opt", "--single-threaded"});
-    argv.insert(argv.end(), {(dir / "render.js").string(), dir.string()});
+    if (flags) argv.insert(argv.end(), kNodeFlags.begin(), kNodeFlags.end());
+    argv.insert(argv.end(), args.begin(), args.end());
     pid = Start(argv, fds[1], dir / "log.txt");
     ::close(fds[1]);
     if (pid < 0) {
@@ -234,28 +470,38 @@ struct VegaRenderer::State {
       return false;
     }
     socket = fds[0];
-    return true;
+    std::string line;
+    if (ReadLine(&line, 60000) && line == "ready") return true;
+    ::kill(pid, SIGKILL);  // a node that hangs would not end with its input
+    Stop();
+    return false;
   }
   void Stop() {
     if (socket >= 0) ::close(socket);  // node's input ends: it exits
     socket = -1;
     if (pid > 0) Wait(pid);
     pid = -1;
+    received.clear();
   }
-  // One line "<i>" from node, or -1 when its output ended.
-  int ReadIndex(std::string* buffer) {
+  // One line from node, or false when its output ended (or, with
+  // timeout_ms >= 0, nothing came for that long).
+  bool ReadLine(std::string* line, int timeout_ms = -1) {
     for (;;) {
-      const size_t at = buffer->find('\n');
+      const size_t at = received.find('\n');
       if (at != std::string::npos) {
-        const std::string line = buffer->substr(0, at);
-        buffer->erase(0, at + 1);
-        return std::atoi(line.c_str());
+        *line = received.substr(0, at);
+        received.erase(0, at + 1);
+        return true;
       }
+      pollfd p{socket, POLLIN, 0};
+      const int ready = ::poll(&p, 1, timeout_ms);
+      if (ready < 0 && errno == EINTR) continue;
+      if (ready <= 0) return false;
       char chunk[256];
       const ssize_t n = ::recv(socket, chunk, sizeof chunk, 0);
       if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) return -1;
-      buffer->append(chunk, static_cast<size_t>(n));
+      if (n <= 0) return false;
+      received.append(chunk, static_cast<size_t>(n));
     }
   }
   bool Send(const std::string& text) {
@@ -268,6 +514,35 @@ struct VegaRenderer::State {
       done += static_cast<size_t>(n);
     }
     return true;
+  }
+  // Node started from the snapshot (built first when missing), else with
+  // the runtime read from the folder, else the same without V8's flags (a
+  // node that does not know them).
+  void StartNode(const std::string& runtime) {
+    const fs::path blob = VegaSnapshotPath(node);
+    std::error_code ec;
+    if (!blob.empty()) {
+      const bool built = !fs::exists(blob, ec) && BuildSnapshot(node, runtime, blob, dir);
+      if (fs::exists(blob, ec)) {
+        if (Spawn({"--snapshot-blob", blob.string(), dir.string()}, true)) {
+          how = std::string(built ? "built the snapshot " : "started from the snapshot ") +
+                blob.string();
+          return;
+        }
+        // Unreadable (damaged, or made by another node of the same name):
+        // the next run builds it again.
+        fs::remove(blob, ec);
+      }
+    }
+    std::ofstream(dir / "vega.js", std::ios::binary) << runtime;
+    std::ofstream(dir / "render.js", std::ios::binary) << PlainScript();
+    const std::vector<std::string> plain = {(dir / "render.js").string(), dir.string()};
+    if (Spawn(plain, true) || Spawn(plain, false)) {
+      how = "read the runtime (no snapshot" +
+            std::string(blob.empty() ? ": no cache folder, $XDG_CACHE_HOME or $HOME" : "") + ")";
+      return;
+    }
+    failure = "cannot start " + node + ": " + Tail(dir / "log.txt");
   }
 };
 
@@ -291,9 +566,7 @@ VegaRenderer::VegaRenderer() : state_(std::make_unique<State>()) {
       return;
     }
     s->dir = tmpl;
-    std::ofstream(s->dir / "vega.js", std::ios::binary) << runtime;
-    std::ofstream(s->dir / "render.js", std::ios::binary) << kRenderScript;
-    if (!s->Spawn()) s->failure = "cannot start " + s->node;
+    s->StartNode(runtime);
   });
 }
 
@@ -306,8 +579,13 @@ VegaRenderer::~VegaRenderer() {
   }
 }
 
+const std::string& VegaRenderer::how() {
+  if (state_->started.valid()) state_->started.get();
+  return state_->how;
+}
+
 std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>& specs,
-                                               std::string* note) {
+                                               std::string* note, const Drawn& drawn) {
   State& s = *state_;
   if (s.started.valid()) s.started.get();
   if (specs.empty()) return {};
@@ -332,64 +610,50 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   const SvgRasterizer& raster = SvgRasterizer::Get();
   std::vector<RenderedFigure> out(specs.size());
-  std::vector<std::future<std::string>> png(specs.size());  // each PNG's error, "" when drawn
+  std::vector<char> answered(specs.size(), 0);
   std::string requests;
   for (const auto& [bytes, i] : by_size) requests += std::to_string(i) + "\n";
-  size_t answered = 0;
-  for (int attempt = 0; attempt < 2 && answered == 0; ++attempt) {
-    // A node that does not know the flags ends at once: it is asked again
-    // without them.
-    if (attempt == 1) {
-      s.Stop();
-      if (s.no_opt) {
-        s.no_opt = false;
-        if (!s.Spawn()) break;
-      } else {
-        break;
+  size_t count = 0;
+  {
+    // The PNGs are drawn by one thread of this process, in the order node
+    // answers, each while node draws the next SVG: one thread, so that on
+    // two cores node keeps one of its own (the PNGs take about half of
+    // node's time; a thread per PNG had two or three of them, the
+    // diagnosis and the reports' writing share node's core).
+    PngQueue pngs(raster, &out, drawn);
+    std::string line;
+  if (s.Send(requests)) {
+      while (count < specs.size() && s.ReadLine(&line)) {
+        const int i = std::atoi(line.c_str());
+        if (i < 0 || i >= static_cast<int>(specs.size()) || answered[i]) continue;
+        answered[i] = 1;
+        ++count;
+        RenderedFigure& fig = out[i];
+        fig.svg = ReadText(s.dir / ("fig_" + std::to_string(i) + ".svg"));
+        if (fig.svg.empty()) {
+          fig.error = ReadText(s.dir / ("error_" + std::to_string(i) + ".txt"));
+          if (fig.error.empty()) fig.error = "no SVG written";
+          continue;
+        }
+        pngs.Add(static_cast<size_t>(i));
       }
     }
-    if (!s.Send(requests)) continue;
-    std::string buffer;
-    for (int i = s.ReadIndex(&buffer); i >= 0; i = s.ReadIndex(&buffer)) {
-      if (i >= static_cast<int>(specs.size()) || png[i].valid()) continue;
-      ++answered;
-      out[i].svg = ReadText(s.dir / ("fig_" + std::to_string(i) + ".svg"));
-      if (out[i].svg.empty()) {
-        out[i].error = ReadText(s.dir / ("error_" + std::to_string(i) + ".txt"));
-        if (out[i].error.empty()) out[i].error = "no SVG written";
-      } else {
-        png[i] = std::async(std::launch::async, [&raster, &fig = out[i]] {
-          std::string error;
-          if (!raster.ToPng(fig.svg, &fig.png, &error)) return error;
-          return std::string();
-        });
-      }
-      if (answered == specs.size()) break;
+    s.Stop();
+    pngs.Finish();  // rethrows what `drawn` threw
+  }
+  if (count < specs.size()) {
+    for (size_t i = 0; i < specs.size(); ++i) {
+      if (!answered[i]) out[i].error = "node stopped before drawing it";
     }
-  }
-  s.Stop();
-  std::string png_error;
-  for (std::future<std::string>& f : png) {
-    if (!f.valid()) continue;
-    const std::string error = f.get();
-    if (!error.empty() && png_error.empty()) png_error = error;
-  }
-  if (answered < specs.size()) {
-    *note = "figures: no PNG files written: node failed rendering the specs: " +
-            Tail(s.dir / "log.txt");
-    return {};
-  }
-  if (!png_error.empty()) {
-    *note = "figures: no PNG files written: " + png_error;
-    return {};
+    *note = "figures: node failed rendering the specs: " + Tail(s.dir / "log.txt");
   }
   return out;
 }
 
 std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& specs,
-                                          std::string* note) {
+                                          std::string* note, const VegaRenderer::Drawn& drawn) {
   VegaRenderer renderer;
-  return renderer.Draw(specs, note);
+  return renderer.Draw(specs, note, drawn);
 }
 
 }  // namespace rtscalib::app

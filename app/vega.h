@@ -19,8 +19,24 @@
 // or librsvg, the run still writes the specs and report.html (which draws
 // them in the browser) and says which program is missing; it never fails
 // for it.
+//
+// Node's start: node itself takes about 50 ms of CPU to start, reading and
+// compiling the runtime 25 ms more, and the first figures cost about 40 ms
+// more than later ones while node compiles the code they run. A start-up
+// snapshot (node's --build-snapshot: the heap after the runtime is loaded
+// and a few warm-up specs are drawn, their compiled code included) holds
+// both: node starts from it in 10 ms more than its own start, and draws the
+// first figure as fast as the next (the bench's 7 figures: 175 instead of
+// 215 ms of node's CPU, start included). It is built once, by the first
+// renderer that finds it missing (about half a second, on the renderer's
+// own thread), into the user's cache folder (VegaSnapshotPath), and named
+// after everything it depends on (node's binary, its flags, the runtime
+// and the scripts), so that a changed node or runtime gets a snapshot of
+// its own. A snapshot node cannot read is removed and node reads the
+// runtime as without one; a run never fails for the snapshot.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -38,18 +54,24 @@ const std::string& VegaRuntime(std::string* missing = nullptr);
 
 struct RenderedFigure {
   std::string svg;  // empty when this spec failed: `error` says why
-  std::vector<unsigned char> png;
+  std::vector<unsigned char> png;  // empty when svg is
   std::string error;
 };
 
+// Node's start-up snapshot of the Vega runtime for the node program at
+// `node` (a path): vega-<hash>.blob in $XDG_CACHE_HOME/rtscalib, else in
+// ~/.cache/rtscalib; "" when neither variable is set or node or the runtime
+// is missing. The file may not exist yet.
+std::string VegaSnapshotPath(const std::string& node);
+
 // The SVG and PNG drawing of figures, started before the figures exist.
-// Node's start and its reading of the Vega runtime (about 75 ms of CPU,
-// whatever the figures), and the opening of librsvg, happen on a thread of
-// their own from the constructor on: a run starts its renderer when the
-// calibration starts, which keeps one core busy, and Draw() finds node
-// waiting for specs. Node then draws one SVG after the other (its start is
-// paid once per run) and this process draws each one's PNG on a thread of
-// its own as soon as node has written it, while node draws the next.
+// Node's start (from the snapshot, built first when missing) and the
+// opening of librsvg happen on a thread of their own from the constructor
+// on: a run starts its renderer when it has read its config, and Draw()
+// finds node waiting for specs. Node then draws one SVG after the other
+// (its start is paid once per run) and this process draws each one's PNG on
+// a thread of its own as soon as node has written it, while node draws the
+// next.
 class VegaRenderer {
  public:
   VegaRenderer();
@@ -58,10 +80,24 @@ class VegaRenderer {
   VegaRenderer(const VegaRenderer&) = delete;
   VegaRenderer& operator=(const VegaRenderer&) = delete;
 
-  // SVG and PNG of each spec (in order), or an empty vector and *note saying
-  // why not (a missing program, or the renderer's own error message). Once
+  // Called with a figure's index and its SVG and PNG as soon as the PNG is
+  // drawn, on the thread that drew it (several at once): the run writes
+  // the files there, while node draws the next spec. What it throws, Draw
+  // throws.
+  using Drawn = std::function<void(size_t, const RenderedFigure&)>;
+
+  // SVG and PNG of each spec (in order), each figure that Vega or librsvg
+  // could not draw with its `error`; *note says why a figure is missing
+  // beyond that (node ended early: its own message). An empty vector and
+  // *note saying why when nothing can be drawn (a missing program). Once
   // per renderer.
-  std::vector<RenderedFigure> Draw(const std::vector<nlohmann::json>& specs, std::string* note);
+  std::vector<RenderedFigure> Draw(const std::vector<nlohmann::json>& specs, std::string* note,
+                                   const Drawn& drawn = nullptr);
+
+  // How node was started ("started from the snapshot <path>", "built the
+  // snapshot <path>", "read the runtime (no snapshot...)"); "" when it was
+  // not (Draw's note says why). Waits for the start.
+  const std::string& how();
 
   struct State;  // vega.cc: node's process, its folder, what is missing
 
@@ -71,6 +107,7 @@ class VegaRenderer {
 
 // One VegaRenderer's Draw (node started now).
 std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& specs,
-                                          std::string* note);
+                                          std::string* note,
+                                          const VegaRenderer::Drawn& drawn = nullptr);
 
 }  // namespace rtscalib::app

@@ -244,6 +244,7 @@ InitFromPixelsOptions PixelStartOptions(const CalibrationOptions& options,
   io.source = obs.pixels_source;
   io.min_zenith_rad = options.fit.min_zenith_rad;
   io.max_zenith_rad = options.fit.max_zenith_rad;
+  io.threads = options.fit.num_threads;
   return io;
 }
 

@@ -21,8 +21,10 @@
 //      distortion groups; the same with radial k1 k2 only, without
 //      distortion, and initCameraMatrix2D alone are the fallbacks.
 //   3. cv::solvePnP (SQPnP, then iterative) on all of a shot's points gives
-//      the shot's pose for each of those starts; the start that poses the
-//      most shots, then with the lowest RMS, is kept.
+//      the shot's pose for each of those starts (the first two always, the
+//      others while none poses every shot within 1 px RMS); of the starts
+//      tried, the one that poses the most shots, then with the lowest RMS,
+//      is kept.
 //   4. Ceres's Levenberg-Marquardt refines intrinsics, the enabled
 //      distortion groups and every shot's pose in double precision, with
 //      autodiff through the project's own ProjectToPixel (each shot's
@@ -74,6 +76,9 @@ struct CalibrateViewsOptions {
   // Step 4 has converged when an iteration improves the RMS by less than this
   // [px] (far below any detector's noise; exact data reach ~1e-13 px).
   double rms_tolerance_px = 1e-10;
+  // Threads for step 2: OpenCV's starts are made two at a time with 2 or more
+  // (the same starts, the same choice).
+  int threads = 1;
   // Empty if valid, otherwise what is wrong.
   std::string Check() const;
 };

@@ -146,6 +146,7 @@ std::map<int, std::vector<PixelObservation>> ByZoom(const std::vector<PixelObser
 CalibrateViewsOptions ViewsOptions(const InitFromPixelsOptions& o) {
   CalibrateViewsOptions v;
   v.distortion = o.distortion;
+  v.threads = o.threads;
   return v;
 }
 

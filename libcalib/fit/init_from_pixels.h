@@ -59,6 +59,7 @@ struct InitFromPixelsOptions {
   // Observations outside this zenith window are not used (critical regions, SPEC 1).
   double min_zenith_rad = 10.0 * M_PI / 180.0;
   double max_zenith_rad = 135.0 * M_PI / 180.0;
+  int threads = 1;  // CalibrateViewsOptions::threads
   std::string Check() const;
 };
 

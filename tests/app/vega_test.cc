@@ -1,14 +1,25 @@
 // The figures' renderer (app/vega.h): node started ahead of the specs, one
-// SVG after the other, each PNG drawn in this process; a spec that Vega
-// cannot draw is named by its own error, the others are drawn; a renderer
-// that never draws ends its node and leaves no temporary folder.
+// SVG after the other, each PNG drawn in this process and handed to the
+// caller as soon as it is drawn; a spec that Vega cannot draw is named by
+// its own error, the others are drawn; a renderer that never draws ends its
+// node and leaves no temporary folder. Node's start-up snapshot is built
+// once into the cache folder and started from after that, with the same
+// SVG bytes; a damaged one is removed and the figures are drawn without it,
+// as they are without a cache folder.
 #include "app/vega.h"
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include "app/svg_raster.h"
@@ -57,10 +68,18 @@ TEST(VegaRenderer, DrawsEachSpecAndNamesTheOneVegaCannotDraw) {
   nlohmann::json broken = Bar();
   broken["marks"][0]["from"] = {{"data", "no_such_data"}};
   std::string note;
-  const std::vector<RenderedFigure> out = renderer.Draw({Bar(), broken, Bar()}, &note);
+  std::mutex mutex;
+  std::multiset<size_t> handed;  // figures handed over as soon as drawn
+  const std::vector<RenderedFigure> out =
+      renderer.Draw({Bar(), broken, Bar()}, &note, [&](size_t i, const RenderedFigure& fig) {
+        EXPECT_FALSE(fig.png.empty());
+        const std::lock_guard<std::mutex> lock(mutex);
+        handed.insert(i);
+      });
   if (note.find("node is not installed") != std::string::npos) GTEST_SKIP() << note;
   ASSERT_EQ(out.size(), 3u) << note;
   EXPECT_TRUE(note.empty()) << note;
+  EXPECT_EQ(handed, (std::multiset<size_t>{0, 2}));
   for (size_t i : {size_t{0}, size_t{2}}) {
     EXPECT_NE(out[i].svg.find("<svg"), std::string::npos);
     EXPECT_TRUE(out[i].error.empty()) << out[i].error;
@@ -72,7 +91,116 @@ TEST(VegaRenderer, DrawsEachSpecAndNamesTheOneVegaCannotDraw) {
     EXPECT_EQ(png.at<cv::Vec3b>(30, 70), cv::Vec3b(255, 255, 255));  // the page
   }
   EXPECT_TRUE(out[1].svg.empty());
+  EXPECT_TRUE(out[1].png.empty());
   EXPECT_NE(out[1].error.find("no_such_data"), std::string::npos) << out[1].error;
+}
+
+// An environment variable set for one test, the old value back after it.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const std::optional<std::string>& value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    if (value) {
+      ::setenv(name, value->c_str(), 1);
+    } else {
+      ::unsetenv(name);
+    }
+  }
+  ~ScopedEnv() {
+    if (old_) {
+      ::setenv(name_, old_->c_str(), 1);
+    } else {
+      ::unsetenv(name_);
+    }
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
+
+// A cache folder of its own, removed afterwards.
+class SnapshotCache : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string why;
+    if (!Drawable(&why)) GTEST_SKIP() << why;
+    node_ = Node();
+    if (node_.empty()) GTEST_SKIP() << "node is not installed";
+    cache_ = fs::temp_directory_path() / ("rtscalib_vega_cache_" + std::to_string(::getpid()));
+    fs::remove_all(cache_);
+    env_.emplace("XDG_CACHE_HOME", cache_.string());
+  }
+  void TearDown() override {
+    env_.reset();
+    std::error_code ec;
+    if (!cache_.empty()) fs::remove_all(cache_, ec);
+  }
+  // node on PATH, as the renderer finds it.
+  static std::string Node() {
+    std::istringstream dirs(std::getenv("PATH") ? std::getenv("PATH") : "");
+    std::string d;
+    while (std::getline(dirs, d, ':')) {
+      if (::access((fs::path(d) / "node").c_str(), X_OK) == 0) return (fs::path(d) / "node").string();
+    }
+    return "";
+  }
+  std::string node_;
+  fs::path cache_;
+  std::optional<ScopedEnv> env_;
+};
+
+TEST_F(SnapshotCache, IsBuiltOnceReplacingOthersAndStartedFromWithTheSameSvg) {
+  const std::string blob = VegaSnapshotPath(node_);
+  ASSERT_FALSE(blob.empty());
+  EXPECT_EQ(fs::path(blob).parent_path(), cache_ / "rtscalib");
+  EXPECT_FALSE(fs::exists(blob));
+  // Another node's snapshot, replaced by this one.
+  const fs::path stale = fs::path(blob).parent_path() / "vega-0123456789abcdef.blob";
+  fs::create_directories(stale.parent_path());
+  std::ofstream(stale) << "another node's";
+  std::string note;
+  VegaRenderer first;
+  EXPECT_EQ(first.how(), "built the snapshot " + blob);
+  const std::vector<RenderedFigure> built = first.Draw({Bar()}, &note);
+  ASSERT_EQ(built.size(), 1u) << note;
+  EXPECT_TRUE(fs::exists(blob));
+  // Only the snapshot is left in the cache folder (no file of the build, no
+  // other snapshot).
+  EXPECT_EQ(std::distance(fs::directory_iterator(cache_ / "rtscalib"), fs::directory_iterator()), 1);
+  VegaRenderer second;
+  EXPECT_EQ(second.how(), "started from the snapshot " + blob);
+  const std::vector<RenderedFigure> started = second.Draw({Bar()}, &note);
+  ASSERT_EQ(started.size(), 1u) << note;
+  EXPECT_FALSE(started[0].svg.empty());
+  EXPECT_EQ(started[0].svg, built[0].svg);
+}
+
+TEST_F(SnapshotCache, ADamagedSnapshotIsRemovedAndTheFiguresAreDrawnWithoutIt) {
+  const std::string blob = VegaSnapshotPath(node_);
+  ASSERT_FALSE(blob.empty());
+  fs::create_directories(fs::path(blob).parent_path());
+  std::ofstream(blob) << "not a snapshot";
+  VegaRenderer renderer;
+  EXPECT_EQ(renderer.how().rfind("read the runtime", 0), 0u) << renderer.how();
+  EXPECT_FALSE(fs::exists(blob));  // the next renderer builds it again
+  std::string note;
+  const std::vector<RenderedFigure> out = renderer.Draw({Bar()}, &note);
+  ASSERT_EQ(out.size(), 1u) << note;
+  EXPECT_FALSE(out[0].png.empty()) << out[0].error;
+}
+
+TEST_F(SnapshotCache, WithoutACacheFolderTheFiguresAreDrawnWithoutASnapshot) {
+  const ScopedEnv xdg("XDG_CACHE_HOME", std::nullopt), home("HOME", std::nullopt);
+  EXPECT_EQ(VegaSnapshotPath(node_), "");
+  VegaRenderer renderer;
+  EXPECT_NE(renderer.how().find("no cache folder"), std::string::npos) << renderer.how();
+  std::string note;
+  const std::vector<RenderedFigure> out = renderer.Draw({Bar()}, &note);
+  ASSERT_EQ(out.size(), 1u) << note;
+  EXPECT_FALSE(out[0].png.empty()) << out[0].error;
 }
 
 TEST(VegaRenderer, EndsItsNodeAndRemovesItsFolderWhenItNeverDraws) {

@@ -329,6 +329,28 @@ TEST(CalibrateViews, NoisyPixels) {
       cal.distortion[kK1] - truth.distortion[kK1], cal.distortion[kK2] - truth.distortion[kK2]);
 }
 
+// OpenCV's starts made two at a time give the start made one after the
+// other: the same choice, the same result to the last bit.
+TEST(CalibrateViews, StartsSideBySideChooseTheSameStart) {
+  Truth truth;
+  truth.distortion[kK1] = -0.1;
+  truth.distortion[kK2] = 0.03;
+  const auto pixels = Observe(FiveBoardScene(), &truth, 4, 0.2, 7);
+  const CalibrateViewsOptions one;
+  CalibrateViewsOptions two = one;
+  two.threads = 2;
+  const ViewsCalibration a = CalibrateViews(pixels, kWidth, kHeight, one);
+  const ViewsCalibration b = CalibrateViews(pixels, kWidth, kHeight, two);
+  EXPECT_EQ(a.init_note, b.init_note);
+  EXPECT_EQ(a.opencv_rms_px, b.opencv_rms_px);
+  EXPECT_EQ(a.rms_px, b.rms_px);
+  EXPECT_EQ(a.intrinsics, b.intrinsics);
+  EXPECT_EQ(a.distortion, b.distortion);
+  CalibrateViewsOptions none = one;
+  none.threads = 0;
+  EXPECT_NE(none.Check().find("threads must be >= 1, got 0"), std::string::npos) << none.Check();
+}
+
 // ---------------------------------------------------------------------------
 // Input errors.
 
