@@ -166,6 +166,15 @@ std::string ValueCell(const RankedEffect& r) {
     }
     return out;
   }
+  if (IsBoardEffect(r.effect)) {
+    for (size_t i = 0; i < r.board_warp.size(); ++i) {
+      const WarpValue& w = r.board_warp[i];
+      out += (i ? "<br>" : "") + std::string("board ") + std::to_string(w.first_id) + " " +
+             w.name + " = " + Fmt("%.3g", w.value * ReportScale(r.effect)) + " &plusmn; " +
+             Fmt("%.2g", w.sigma * ReportScale(r.effect)) + " " + info.report_units[w.index];
+    }
+    return out;
+  }
   for (size_t i = 0; i < r.focus.size(); ++i) {
     const FocusValue& f = r.focus[i];
     out += (i ? "<br>" : "") + std::string("zoom ") + std::to_string(f.zoom) + " " + f.name +
@@ -299,10 +308,16 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     << "<title>rtscalib report " << Esc(run) << "</title><style>" << kStyle
     << "</style></head><body>\n";
   o << "<h1>rtscalib report</h1><p class=meta>run " << Esc(run) << " &middot; config <code>"
-    << Esc(config.config_path) << "</code> &middot; " << r.obs.records.size() << " records ("
-    << Esc(r.obs.records_source) << "), " << r.obs.pixels.size() << " image points"
-    << (r.obs.pixels.empty() ? "" : " (" + Esc(r.obs.pixels_source) + ")")
-    << " &middot; readings given in " << AngleUnitName(r.obs.angle_unit)
+    << Esc(config.config_path) << "</code> &middot; ";
+  if (!r.obs.records.empty() || r.obs.pixels.empty()) {
+    o << r.obs.records.size() << " records (" << Esc(r.obs.records_source) << "), ";
+  }
+  o << r.obs.pixels.size() << " image points"
+    << (r.obs.pixels.empty() ? "" : " (" + Esc(r.obs.pixels_source) + ")");
+  if (r.calibration.model.kinematics != Kinematics::kNone) {
+    o << " &middot; readings given in " << AngleUnitName(r.obs.angle_unit);
+  }
+  o
     << (r.simulated ? " &middot; simulated data" : "") << "</p>\n";
 
   // 1. Verdict.
@@ -379,7 +394,19 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   }
 
   // 3. Maps.
-  o << "<h2 id=\"maps\">Where the model fails</h2>\n" << Figures(figs, "maps");
+  const bool camera_only = r.calibration.model.kinematics == Kinematics::kNone;
+  const std::string maps = Figures(figs, "maps");
+  o << "<h2 id=\"maps\">Where the model fails</h2>\n";
+  if (!maps.empty()) {
+    o << maps;
+  } else if (camera_only) {
+    o << "<p>A camera on its own has no angle readings, so there are no maps over phi and "
+         "theta: <a href=\"#image\">the image residuals</a> show where the model fails over "
+         "the image, <a href=\"#photos\">the worst photos</a> where it fails on a board.</p>\n";
+  } else {
+    o << "<p>No map was drawn (figures are off or their renderer failed: see the run's "
+         "log).</p>\n";
+  }
 
   // 4. Tables.
   if (r.calibration.diagnosis) {
@@ -399,7 +426,9 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
       }
       o << "</table>\n";
     }
-    if (d.harmonics.unexplained.empty()) {
+    if (camera_only) {
+      // No readings: there is no phi, theta or distance to look for harmonics in.
+    } else if (d.harmonics.unexplained.empty()) {
       o << "<p>No harmonic of the phi, theta or distance readings (1 to 4 per turn, or of "
            "the EDM unit "
            "length) is significant once every catalogue effect is allowed for.</p>\n";

@@ -136,8 +136,9 @@ std::vector<std::string> Verdict(const Diagnosis& d) {
   std::vector<std::string> v;
   const bool incomplete = d.fit_quality.Exceeds();
   if (incomplete) v.push_back(FitQualitySentence(d));
+  const int records = d.current.edm_n + d.current.cam_n;
   v.push_back("The model (" + d.model_description + ") fits " + Rms(d.current) + " over " +
-              std::to_string(d.current.edm_n + d.current.cam_n) + " records and " +
+              (records > 0 ? std::to_string(records) + " records and " : std::string()) +
               std::to_string(d.current.pixels_n) + " image points outside the critical regions.");
   if (!d.wild.empty()) {
     std::string list;
@@ -306,7 +307,10 @@ Diagnosis Diagnose(const Observations& obs, const InstrumentModel& model, const 
   Diagnosis d;
   d.kinematics = model.kinematics;
   d.effects = model.effects.Names();
-  d.model_description = std::string(KinematicsName(model.kinematics)) + ", effects: [";
+  d.model_description = (model.kinematics == Kinematics::kNone
+                             ? std::string("camera only")
+                             : std::string(KinematicsName(model.kinematics))) +
+                        ", effects: [";
   for (size_t i = 0; i < d.effects.size(); ++i)
     d.model_description += (i ? ", " : "") + d.effects[i];
   d.model_description += "]";
