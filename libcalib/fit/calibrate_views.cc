@@ -688,11 +688,11 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   // against 0.0176 px, and step 4 from the former stalls at 4e-6 px). The
   // others are tried only while no start poses every shot within
   // kGoodStartPx: they are for starts that fail, leave shots without a pose
-  // or end far off (the full model's calibrateCamera in a wrong minimum,
-  // 25.8 px on a wide lens with the rational group), and the one without
-  // distortion costs the most (OpenCV's bench photos: 17 ms with the
-  // enabled groups, 13 ms with k1 k2, 56 ms without distortion, whose 30
-  // iterations do not converge).
+  // or end far off (the full model's calibrateCamera can end in a wrong
+  // minimum on a wide lens with the rational group), and the one without
+  // distortion costs the most: its 30 iterations do not converge
+  // (opencv_bench_side_by_side_benchmark times the whole calibration of
+  // OpenCV's sample photos).
   constexpr double kGoodStartPx = 1.0;
   const OpenCvViews views = PlanarViews(shots, width, height, options);
   // One start and its poses, or nothing with *fails saying why.
