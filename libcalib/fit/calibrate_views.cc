@@ -424,9 +424,8 @@ struct ShotReprojection {
   bool operator()(const T* intrinsics, const T* distortion, const T* cam_from_ref_q,
                   const T* cam_from_ref_t, T* residuals) const {
     const RigidT<T> cam_from_ref = PoseFromBlocks(cam_from_ref_q, cam_from_ref_t);
-    // ProjectToPixel with its tilt matrix, which depends on the distortion
-    // block only, formed once per shot instead of once per point
-    // (internal::ProjectWithTilt, cost_functions.h; the same formula).
+    // The camera's formula with its tilt matrix, which depends on the
+    // distortion block only, formed once per shot (opencv_model.h).
     T tilt[9];
     TiltMatrix(distortion[kTauX], distortion[kTauY], tilt);
     for (size_t i = 0; i < shot->X.size(); ++i) {
@@ -434,7 +433,7 @@ struct ShotReprojection {
       const Vec3<T> x_cam = cam_from_ref.R * shot->X[i] + cam_from_ref.t;
       T pixel[2];
       // Behind the camera: the evaluation fails and Ceres rejects the step.
-      if (!internal::ProjectWithTilt(intrinsics, distortion, tilt, x_cam.data(), pixel)) {
+      if (!ProjectWithTiltMatrix(intrinsics, distortion, tilt, x_cam.data(), pixel)) {
         return false;
       }
       residuals[2 * i + 0] = pixel[0] - T(shot->uv[i].x());
