@@ -255,8 +255,8 @@ struct RecordGroupResidual {
 // jets; the projection (distortion, tilt, intrinsics) comes with its 2 x 21
 // Jacobian over (x_cam, intrinsics, distortion) from the camera
 // (ProjectWithJacobian, written out there: autodiff in 21-wide local jets
-// costs about half as much again on a joint refinement), and that Jacobian
-// is chained onto the wide jets:
+// makes a joint refinement markedly slower, joint_refine_benchmark), and
+// that Jacobian is chained onto the wide jets:
 //   d pixel = J_pixel_wrt_xcam d x_cam + J_pixel_wrt_intrinsics d intrinsics
 //             + J_pixel_wrt_distortion d distortion.
 // Intrinsics and distortion are seeded unit vectors, so their part is a
