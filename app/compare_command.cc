@@ -13,6 +13,7 @@
 
 #include "app/commands.h"
 #include "app/figures.h"
+#include "app/heat_map_figures.h"
 #include "libcalib/api/compare.h"
 #include "libcalib/diagnose/statistics.h"
 #include "libcalib/io/safe_write.h"

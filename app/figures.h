@@ -19,53 +19,24 @@
 //                 fitted sigma
 //   uncertainty   projection uncertainty per zoom
 // `summary` holds each figure's key numbers for report.json (docs/output.md).
+// The figures themselves: residual_figures.h (maps, image, variables,
+// histograms), photo_figure.h, ladder_figures.h, heat_map_figures.h
+// (uncertainty, and `rtscalib compare`'s difference), all built from
+// vega_spec.h's blocks; this file chooses and orders them and writes them.
 #pragma once
 
-#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "app/pipeline.h"
 #include "app/vega.h"
-#include "libcalib/api/compare.h"
+#include "app/vega_spec.h"
 
 namespace rtscalib::app {
 
-struct Figure {
-  std::string name;     // file stem: figures/<name>.vg.json, .svg, .png
-  std::string section;  // "ladder", "maps", "image", "photos", "variables", ...
-  std::string title;
-  std::string caption;
-  nlohmann::json spec;     // Vega 5
-  nlohmann::json summary;  // what report.json says of the figure
-};
-
 // `history` = report.json's "history" array (earlier runs, oldest first).
 std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
-
-// The final error of the output folder's earlier complete runs (`history`,
-// report.json's "history", oldest first) and of this run (`effects`,
-// `final` as in report.json), the latest kLadderRunsShown of them; its
-// summary's "runs" counts them all.
-constexpr size_t kLadderRunsShown = 12;
-Figure RunsLadderFigure(const nlohmann::json& history, const std::vector<std::string>& effects,
-                        const nlohmann::json& final);
-
-// One photo with its observed corners and scaled residual arrows. `rows`:
-// the residual table's pixel rows of that shot (any status: only fitted
-// rows get arrows, the others are marked); `image` the photo file ("" or
-// unreadable: the corners on a blank image of width x height).
-Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidual>& rows,
-                   const std::string& image, int width, int height);
-
-// The photo files of a run by shot id (the photo session's shots.csv rows,
-// resolved against its folder).
-std::map<std::string, std::string> PhotoFiles(const PhotoSessionSummary& photos);
-
-// The projection difference of one zoom between two models (`rtscalib
-// compare`, libcalib/api/compare.h) as a heat map.
-Figure DifferenceFigure(const ZoomDifference& d);
 
 // Writes <dir>/<name>.vg.json for each figure and, when the PNG renderer is
 // installed (app/vega.h), <name>.svg and <name>.png; returns the names of

@@ -1,5 +1,5 @@
 // `rtscalib show --output OUT --shot ID [--out DIR]`: one photo of a run
-// with its observed corners and scaled residual arrows (app/figures.h
+// with its observed corners and scaled residual arrows (app/photo_figure.h
 // PhotoFigure), from the run's own files: residuals.csv (the residual
 // table at the final model) and report.json (where the photos are, the image
 // sizes). Nothing is predicted again.
@@ -11,6 +11,7 @@
 
 #include "app/commands.h"
 #include "app/figures.h"
+#include "app/photo_figure.h"
 #include "app/report_html.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/text/errors.h"

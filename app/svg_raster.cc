@@ -146,10 +146,11 @@ bool SvgRasterizer::ToPng(const std::string& svg, std::vector<unsigned char>* pn
   cv::cvtColor(bgrx, bgr, cv::COLOR_BGRA2BGR);
   // OpenCV's fast PNG path (no compression level given: every row filtered
   // with "Sub", zlib's fastest level) with zlib's default matching instead of
-  // OpenCV's run-length only: the bench's 7 figures in 35 ms and 1.06 MB,
-  // against 76 ms and 0.89 MB at level 1 with libpng choosing each row's
-  // filter (most of that time), and 34 ms and 1.52 MB with run-length
-  // matching.
+  // OpenCV's run-length only: a figure's flat colours repeat in long
+  // matches that run-length misses, so the files are markedly smaller at
+  // about the same time, while an explicit level makes libpng choose each
+  // row's filter, which costs most of the time and saves few bytes
+  // (BM_PhotoPng in photo_session_benchmark times both paths on photos).
   if (!cv::imencode(".png", bgr, *png,
                     {cv::IMWRITE_PNG_STRATEGY, cv::IMWRITE_PNG_STRATEGY_DEFAULT})) {
     *error = "OpenCV cannot encode the PNG";

@@ -211,8 +211,8 @@ std::string SnapshotScript() {
 // less CPU time for the photo session's figures (which share the machine
 // with the diagnosis), and writes the same SVG bytes.
 // --single-threaded: no helper threads for V8's garbage collector and
-// compiler, which on a machine whose cores are busy cost more than they
-// save (the bench's figures: 0.24 instead of 0.27 s of CPU).
+// compiler, which on a machine whose cores are busy cost more CPU than they
+// save (opencv_bench_side_by_side_benchmark's run includes the figures).
 const std::vector<std::string> kNodeFlags = {"--no-opt", "--single-threaded"};
 
 // 64-bit FNV-1a: a name for the snapshot's inputs.
@@ -272,8 +272,8 @@ pid_t Start(const std::vector<std::string>& argv, int io, const fs::path& log) {
   // but for what would change how node starts: NODE_OPTIONS (flags and
   // preloaded scripts of the user's own node programs; other flags than the
   // snapshot's would make node refuse it) and NODE_EXTRA_CA_CERTS (node
-  // reads and parses the certificates when it starts, 30 ms of CPU for
-  // Debian's bundle, and draws figures offline).
+  // reads and parses the certificates when it starts, which costs CPU time
+  // for nothing: it draws figures offline).
   std::vector<char*> env;
   for (char** e = environ; *e != nullptr; ++e) {
     const std::string_view var(*e);

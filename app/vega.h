@@ -20,14 +20,14 @@
 // them in the browser) and says which program is missing; it never fails
 // for it.
 //
-// Node's start: node itself takes about 50 ms of CPU to start, reading and
-// compiling the runtime 25 ms more, and the first figures cost about 40 ms
-// more than later ones while node compiles the code they run. A start-up
-// snapshot (node's --build-snapshot: the heap after the runtime is loaded
-// and a few warm-up specs are drawn, their compiled code included) holds
-// both: node starts from it in 10 ms more than its own start, and draws the
-// first figure as fast as the next (the bench's 7 figures: 175 instead of
-// 215 ms of node's CPU, start included). It is built once, by the first
+// Node's start: node starts, then reads and compiles the runtime, and the
+// first figures cost more than later ones while node compiles the code they
+// run. A start-up snapshot (node's --build-snapshot: the heap after the
+// runtime is loaded and a few warm-up specs are drawn, their compiled code
+// included) holds both: node starts from it barely slower than its own
+// start, and draws the first figure as fast as the next
+// (opencv_bench_side_by_side_benchmark's run of configs/bench.yaml includes
+// its figures). It is built once, by the first
 // renderer that finds it missing (about half a second, on the renderer's
 // own thread), into the user's cache folder (VegaSnapshotPath), and named
 // after everything it depends on (node's binary, its flags, the runtime

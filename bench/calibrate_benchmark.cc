@@ -1,6 +1,6 @@
 // The whole calibration as a library call (libcalib/calibrate), clean and
-// with gross errors (issue 11 item 3: a run with 5 % gross rows may take at
-// most twice a clean one), and a million records read from a file, screened
+// with gross errors (goal: a run with 5 % gross rows takes at most twice a
+// clean one, bench/goals.yaml), and a million records read from a file, screened
 // and calibrated (time and peak memory).
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>

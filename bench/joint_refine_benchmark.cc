@@ -1,4 +1,4 @@
-// Joint refinement speed (issue 3): 7 zoom levels x 2 faces x ~50 shots x
+// Joint refinement speed: 7 zoom levels x 2 faces x ~50 shots x
 // ~110 AprilTag corners (~70,000 pixel observations) in under 5 s on 2 cores,
 // and the cost against the number of observations (several sizes: it should
 // grow linearly).

@@ -1,4 +1,4 @@
-// Side by side with OpenCV (issue 3): on the same simulated AprilTag corners,
+// Side by side with OpenCV: on the same simulated AprilTag corners,
 // per zoom level, cv::calibrateCamera against rtscalib's joint model
 // (InitFromPixels + Refine of all zooms and both faces at once): intrinsics
 // error against the truth, and time. The joint model must be at least as

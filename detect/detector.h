@@ -67,7 +67,8 @@ struct DetectorOptions {
   // (max - min over its 12 x 12 px neighbourhood) is below a threshold; at its
   // default of 5 grey levels, sensor noise alone passes it in flat areas (144
   // samples of Gaussian noise span more than 5 sigma 2 times in 3) and fills
-  // the image with noise blobs that cost 5x the time of the tags. The
+  // the image with noise blobs that cost far more time than the tags
+  // themselves. The
   // threshold is this multiple of the image's own noise sigma
   // (EstimateNoiseSigma), at least 5 (libapriltag's default) and at most
   // `max_segmentation_contrast`. Ten sigma: the span of 144 Gaussian samples

@@ -78,8 +78,8 @@ PointBoardDetection DetectCharuco(const cv::Mat& gray, const TagBoard& board) {
   if (ids.empty()) return out;
   // OpenCV 4.5.4 to 4.12 return the corners 0.5 px right of and below the
   // saddle point (they shift around cornerSubPix and shift back: opencv
-  // issue 25539, fixed by pull request 28380); measured +0.50, +0.49 px here
-  // (tests/detect/point_boards_test.cc). cornerSubPix converges to the
+  // issue 25539, fixed by pull request 28380; tests/detect/point_boards_test.cc
+  // measures the shift). cornerSubPix converges to the
   // saddle in absolute SPEC 2 coordinates whatever its start, so the corners
   // are refined once more here, which is right for every version.
   double square_px = 1e9;
@@ -116,10 +116,11 @@ double SmallestRowStep(const std::vector<cv::Point2f>& grid, int nc) {
 // (i, j) of level l + 1 is centred at (2 i + 0.5, 2 j + 0.5) of level l),
 // down to the last whose shorter side is at least kCoarsestSide pixels.
 // OpenCV's saddle-point search (findChessboardCornersSB) costs time in
-// proportion to the pixels it is given (about 100 ns a pixel: 3 s on a 6000
-// x 4000 photo) and finds boards whose squares are 5 px or more, so a board
-// that fills a good part of the photo is found in a small copy of it: a
-// quarter of the time at half the size. The 61 real photos of OpenCV's,
+// proportion to the pixels it is given (BM_LargePhotoDetect and
+// BM_LargePhotoOpenCv in opencv_bench_side_by_side_benchmark report it per
+// pixel, up to 6000 x 4000 photos) and finds boards whose squares are 5 px
+// or more, so a board that fills a good part of the photo is found in a
+// small copy of it: a quarter of the time at half the size. The 61 real photos of OpenCV's,
 // BoofCV's and ValidationBoof's chessboard sets (640 x 480, squares of 28
 // to 62 px) are all found in their copies of 160 x 120, and give the same
 // corners as a search of the photo itself (below).
@@ -146,17 +147,16 @@ std::vector<cv::Mat> SearchLevels(const cv::Mat& gray) {
 // The coarsest level from the coarsest down to `finest` at which the quick
 // check sees a board, or -1. Most photos of a session show no chessboard
 // (another board, or this one out of view), and there it answers in
-// milliseconds where the search would run through every level. With it the
-// 50 rendered photos of three ChArUco boards and a chessboard are detected
-// in 2.7 s instead of 20.2 s (Release, RenderedPointBoards' own output),
-// every visible corner still found. It keeps every board of OpenCV's 26
+// milliseconds where the search would run through every level, so that a
+// session of several boards (tests/app/rendered_point_boards_test.cc: three
+// ChArUco boards and a chessboard) is detected several times faster, every
+// visible corner still found. It keeps every board of OpenCV's 26
 // sample photos of a real camera
 // (PointBoards.QuickCheckKeepsEveryChessboardOfOpenCvsSamplePhotos). A
 // board whose squares are too small for it at a coarse level is seen at a
 // finer one; level 0, the photo itself, is the check of the whole photo.
-// At coarse levels it costs a fraction of the photo's check: on a noisy
-// 6000 x 4000 photo the check of the photo itself took 100 ms, of its half
-// size 5 ms (fewer specks of noise cross its thresholds).
+// At coarse levels it costs a small fraction of the photo's check: on a
+// noisy photo fewer specks of noise cross its thresholds at half the size.
 int QuickCheck(const std::vector<cv::Mat>& levels, cv::Size size, int finest) {
   for (int l = static_cast<int>(levels.size()) - 1; l >= finest; --l) {
     if (cv::checkChessboard(levels[l], size)) return l;
@@ -167,10 +167,10 @@ int QuickCheck(const std::vector<cv::Mat>& levels, cv::Size size, int finest) {
 // One level: the exhaustive search first; on real photos it misses a few
 // boards that the plain search finds (OpenCV's left11.jpg at full size:
 // blur and a steep view), so that one is tried next. Not the classic quad
-// detector: on a photo without a board it can search for minutes (540 s on
-// 1280 x 960 noise, 9.5 s with its fast check). Without CALIB_CB_ACCURACY:
-// its corners were 0.13 px RMS off on rendered photos and it cost 0.3 s more
-// per 1280 x 960 image; cornerSubPix from either start converges to the same
+// detector: on a photo of noise without a board it can search for minutes,
+// and for seconds even with its fast check. Without CALIB_CB_ACCURACY: with
+// it the corners are farther off on rendered photos than cornerSubPix's and
+// cost more time per image; cornerSubPix from either start converges to the same
 // saddles, 0.06 px RMS (tests/render/point_boards_test.cc, docs/photos.md).
 bool FindGridAt(const cv::Mat& level, cv::Size size, std::vector<cv::Point2f>* grid) {
   grid->clear();

@@ -171,7 +171,8 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample, double 
   DistortionMap m = EmptyMap(cam, supersample);
   if (m.identity) return m;
   auto ideal = [&](double u, double v) { return SolvedIdeal(cam, u, v); };
-  // Exact back-projection of every pixel costs ~0.5 s at 1280 x 960. The map is
+  // Exact back-projection of every pixel is a Newton solve per pixel, far
+  // more than a photo's render (render_benchmark's BM_Render). The map is
   // smooth, so it is solved on a grid of kStep pixels and interpolated
   // bilinearly; every cell is checked at its centre and solved pixel by pixel
   // when interpolation is off by more than kTolerance there (strong or
@@ -254,10 +255,10 @@ DistortionMap BuildDistortionMap(const CameraTool& cam, int supersample, double 
 // bilinearly at p's position in the base image (the ideal map is smooth:
 // its bilinear error over one pixel is ~1e-5 px for the lenses here),
 // scaled and shifted. Pixels whose four base samples are not all there (the
-// image edge, failed back-projections, the canvas cap) are solved. A
-// supersample-2 photo of a refocusing camera took 102-116 CPU-ms with its map
-// solved, 70-71 with it derived (render_benchmark
-// --benchmark_filter=RenderRefocusing; docs/rendering.md). Checked against
+// image edge, failed back-projections, the canvas cap) are solved. Deriving
+// the map is cheaper than solving it for every photo of a refocusing camera
+// (render_benchmark --benchmark_filter=RenderRefocusing times a photo;
+// docs/rendering.md). Checked against
 // solved pixels every kCheckStep pixels: false (the caller solves the map)
 // when one of them is off by more than kTolerance, or when only one of the
 // two has an ideal pixel. Also false for a scale more than kMaxScaleChange

@@ -1,4 +1,4 @@
-// Two calibrations side by side (`rtscalib compare`, issue 10; mrcal's
+// Two calibrations side by side (`rtscalib compare`; mrcal's
 // "differencing"): how differently they project, and how their parameters
 // differ relative to their combined uncertainty.
 //

@@ -1,4 +1,4 @@
-// Projection uncertainty over the image, per zoom (issue 10; mrcal's
+// Projection uncertainty over the image, per zoom (mrcal's
 // "projection uncertainty" maps): how far, at one sigma, the pixel where a
 // point is seen may lie from the model's prediction, because the model's
 // parameters are uncertain.

@@ -604,7 +604,7 @@ CalibrationResult CalibrateModel(const Observations& obs, const CalibrationOptio
   const std::vector<std::string> screening =
       ScreenObservations(obs, options.model.cameras, options.screen);
   result.notes = screening;
-  // Gross errors (issue 11 item 3): rows no instrument could produce are
+  // Gross errors (fit/robust.h, screen/gross.h): rows no instrument could produce are
   // taken out before the extraction; what is left is found by a robust fit
   // from the start, and the calibration starts again without those rows.
   result.gross_rows = FindGrossRows(obs, options.screen.gross_errors);

@@ -178,6 +178,83 @@ bool SolveDistortion(const double* dist, double xd, double yd, double* x_out, do
 
 }  // namespace internal
 
+bool ProjectWithJacobian(const double* intrinsics, const double* d, const double* m,
+                         const double dm_dtau[2][9], const double* point, double* pixel,
+                         double* J) {
+  ProjectionSteps<double> s;
+  if (!ProjectWithTiltMatrix(intrinsics, d, m, point, pixel, &s)) return false;
+  constexpr int kIntrinsicsVar = 3, kDistVar = 3 + kNumIntrinsics;
+  double* ju = J;
+  double* jv = J + kProjectionVars;
+  std::fill(J, J + 2 * kProjectionVars, 0.0);
+  const double fx = intrinsics[0], fy = intrinsics[1];
+  const double x = s.x, y = s.y;
+  // (x', y') <- point.
+  const double iz = 1.0 / point[2];
+  // (x'', y'') <- (x', y'): B, and the coefficients' columns.
+  const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
+  const double iden = 1.0 / (1.0 + d[kK4] * r2 + d[kK5] * r4 + d[kK6] * r6);
+  const double radial = (1.0 + d[kK1] * r2 + d[kK2] * r4 + d[kK3] * r6) * iden;
+  const double radial_r2 = ((d[kK1] + 2.0 * d[kK2] * r2 + 3.0 * d[kK3] * r4) -
+                            radial * (d[kK4] + 2.0 * d[kK5] * r2 + 3.0 * d[kK6] * r4)) *
+                           iden;
+  const double b00 = radial + 2.0 * x * x * radial_r2 + 2.0 * d[kP1] * y + 6.0 * d[kP2] * x +
+                     2.0 * d[kS1] * x + 4.0 * d[kS2] * r2 * x;
+  const double b01 = 2.0 * x * y * radial_r2 + 2.0 * d[kP1] * x + 2.0 * d[kP2] * y +
+                     2.0 * d[kS1] * y + 4.0 * d[kS2] * r2 * y;
+  const double b10 = 2.0 * x * y * radial_r2 + 2.0 * d[kP1] * x + 2.0 * d[kP2] * y +
+                     2.0 * d[kS3] * x + 4.0 * d[kS4] * r2 * x;
+  const double b11 = radial + 2.0 * y * y * radial_r2 + 6.0 * d[kP1] * y + 2.0 * d[kP2] * x +
+                     2.0 * d[kS3] * y + 4.0 * d[kS4] * r2 * y;
+  // pixel <- (x'', y''): A, through the tilt and the intrinsics.
+  const double izt = 1.0 / s.zt, px = s.xt * izt, py = s.yt * izt;
+  const double a00 = fx * (m[0] - px * m[6]) * izt, a01 = fx * (m[1] - px * m[7]) * izt;
+  const double a10 = fy * (m[3] - py * m[6]) * izt, a11 = fy * (m[4] - py * m[7]) * izt;
+  // pixel <- (x', y') = A B, then <- point: dx'/dpoint = (1, 0, -x') / z,
+  // dy'/dpoint = (0, 1, -y') / z.
+  const double c00 = a00 * b00 + a01 * b10, c01 = a00 * b01 + a01 * b11;
+  const double c10 = a10 * b00 + a11 * b10, c11 = a10 * b01 + a11 * b11;
+  ju[0] = c00 * iz;
+  ju[1] = c01 * iz;
+  ju[2] = -(c00 * x + c01 * y) * iz;
+  jv[0] = c10 * iz;
+  jv[1] = c11 * iz;
+  jv[2] = -(c10 * x + c11 * y) * iz;
+  // Intrinsics: u = fx xt / zt + cx, v = fy yt / zt + cy.
+  ju[kIntrinsicsVar + 0] = px;
+  ju[kIntrinsicsVar + 2] = 1.0;
+  jv[kIntrinsicsVar + 1] = py;
+  jv[kIntrinsicsVar + 3] = 1.0;
+  // Distortion coefficients: each moves (x'', y'') by (ex, ey), the pixel by A (ex, ey).
+  auto coefficient = [&](int k, double ex, double ey) {
+    ju[kDistVar + k] = a00 * ex + a01 * ey;
+    jv[kDistVar + k] = a10 * ex + a11 * ey;
+  };
+  const double rad_terms[3] = {r2 * iden, r4 * iden, r6 * iden};
+  coefficient(kK1, x * rad_terms[0], y * rad_terms[0]);
+  coefficient(kK2, x * rad_terms[1], y * rad_terms[1]);
+  coefficient(kK3, x * rad_terms[2], y * rad_terms[2]);
+  coefficient(kK4, -x * radial * rad_terms[0], -y * radial * rad_terms[0]);
+  coefficient(kK5, -x * radial * rad_terms[1], -y * radial * rad_terms[1]);
+  coefficient(kK6, -x * radial * rad_terms[2], -y * radial * rad_terms[2]);
+  coefficient(kP1, 2.0 * x * y, r2 + 2.0 * y * y);
+  coefficient(kP2, r2 + 2.0 * x * x, 2.0 * x * y);
+  coefficient(kS1, r2, 0.0);
+  coefficient(kS2, r4, 0.0);
+  coefficient(kS3, 0.0, r2);
+  coefficient(kS4, 0.0, r4);
+  // The tilt angles move the matrix: (xt, yt, zt) by dm (x'', y'', 1).
+  for (int t = 0; t < 2; ++t) {
+    const double* dm = dm_dtau[t];
+    const double dxt = dm[0] * s.xd + dm[1] * s.yd + dm[2];
+    const double dyt = dm[3] * s.xd + dm[4] * s.yd + dm[5];
+    const double dzt = dm[6] * s.xd + dm[7] * s.yd + dm[8];
+    ju[kDistVar + kTauX + t] = fx * (dxt - px * dzt) * izt;
+    jv[kDistVar + kTauX + t] = fy * (dyt - py * dzt) * izt;
+  }
+  return true;
+}
+
 double MaxTrustedRadius(const double* dist) {
   const RadialPolys polys = MakeRadialPolys(dist);
   const double s = std::min(FirstPositiveRoot(polys.slope), FirstPositiveRoot(polys.den));

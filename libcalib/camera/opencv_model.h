@@ -86,24 +86,66 @@ void DistortNormalized(const T* dist, const T& x, const T& y, T* xd, T* yd) {
         dist[kS4] * r4;
 }
 
-// Projects a point in the camera frame to a pixel. Returns false for points on
-// or behind the image plane (Z <= 0): a cost function must then fail, never
-// zero its residual.
+// The intermediate values of one projection (the formula above), for its
+// Jacobian (ProjectWithJacobian).
 template <typename T>
-bool ProjectToPixel(const T* intrinsics, const T* dist, const T* point, T* pixel) {
+struct ProjectionSteps {
+  T x, y;        // x', y'
+  T xd, yd;      // x'', y''
+  T xt, yt, zt;  // Tilt [x'' y'' 1]
+};
+
+// Projects a point in the camera frame to a pixel, the tilt matrix given:
+// `m` = TiltMatrix(dist[kTauX], dist[kTauY]), which depends on the
+// distortion block only, so that a caller projecting many points with one
+// camera (a cost function's photo) forms it once. Returns false for points
+// on or behind the image plane (Z <= 0): a cost function must then fail,
+// never zero its residual. `steps`, when given, receives the intermediate
+// values.
+template <typename T>
+bool ProjectWithTiltMatrix(const T* intrinsics, const T* dist, const T* m, const T* point,
+                           T* pixel, ProjectionSteps<T>* steps = nullptr) {
   if (!(point[2] > T(0))) return false;
   const T x = point[0] / point[2];
   const T y = point[1] / point[2];
   T xd, yd;
   DistortNormalized(dist, x, y, &xd, &yd);
-  T m[9];
-  TiltMatrix(dist[kTauX], dist[kTauY], m);
   const T xt = m[0] * xd + m[1] * yd + m[2];
   const T yt = m[3] * xd + m[4] * yd + m[5];
   const T zt = m[6] * xd + m[7] * yd + m[8];
   pixel[0] = intrinsics[0] * xt / zt + intrinsics[2];
   pixel[1] = intrinsics[1] * yt / zt + intrinsics[3];
+  if (steps != nullptr) *steps = {x, y, xd, yd, xt, yt, zt};
   return true;
+}
+
+// The variables of ProjectWithJacobian's Jacobian, in its column order: the
+// camera point (3), the intrinsics (4), the distortion (14).
+constexpr int kProjectionVars = 3 + kNumIntrinsics + kNumDistortion;
+
+// ProjectWithTiltMatrix in double with its Jacobian
+// J = d pixel / d(point, intrinsics, distortion), 2 x kProjectionVars,
+// row-major, written out as the chain rule through the formula's steps
+//   pixel <- (xt, yt, zt) <- (x'', y'') <- (x', y') <- point,
+// each a 2 x 2 or 2 x 3 block, each coefficient entering at its step; the
+// tilt angles through dm_dtau[0] = d m / d taux and dm_dtau[1] = d m / d tauy
+// (row-major 3 x 3), which the caller forms with m once per camera. For cost
+// functions that project many points and chain the result onto wide jets:
+// autodiff in kProjectionVars-wide jets does that many times the work of
+// the value at every operation, this a few dozen products per point
+// (joint_refine_benchmark; tests/camera/opencv_model_test.cc checks J
+// against autodiff of ProjectToPixel). False for Z <= 0.
+bool ProjectWithJacobian(const double* intrinsics, const double* dist, const double* m,
+                         const double dm_dtau[2][9], const double* point, double* pixel,
+                         double* J);
+
+// Projects a point in the camera frame to a pixel (ProjectWithTiltMatrix with
+// its tilt matrix formed here); false for Z <= 0.
+template <typename T>
+bool ProjectToPixel(const T* intrinsics, const T* dist, const T* point, T* pixel) {
+  T m[9];
+  TiltMatrix(dist[kTauX], dist[kTauY], m);
+  return ProjectWithTiltMatrix(intrinsics, dist, m, point, pixel);
 }
 
 // Trusted region of the back-projection (docs/camera.md). The radial part of

@@ -424,9 +424,8 @@ struct ShotReprojection {
   bool operator()(const T* intrinsics, const T* distortion, const T* cam_from_ref_q,
                   const T* cam_from_ref_t, T* residuals) const {
     const RigidT<T> cam_from_ref = PoseFromBlocks(cam_from_ref_q, cam_from_ref_t);
-    // ProjectToPixel with its tilt matrix, which depends on the distortion
-    // block only, formed once per shot instead of once per point
-    // (internal::ProjectWithTilt, cost_functions.h; the same formula).
+    // The camera's formula with its tilt matrix, which depends on the
+    // distortion block only, formed once per shot (opencv_model.h).
     T tilt[9];
     TiltMatrix(distortion[kTauX], distortion[kTauY], tilt);
     for (size_t i = 0; i < shot->X.size(); ++i) {
@@ -434,7 +433,7 @@ struct ShotReprojection {
       const Vec3<T> x_cam = cam_from_ref.R * shot->X[i] + cam_from_ref.t;
       T pixel[2];
       // Behind the camera: the evaluation fails and Ceres rejects the step.
-      if (!internal::ProjectWithTilt(intrinsics, distortion, tilt, x_cam.data(), pixel)) {
+      if (!ProjectWithTiltMatrix(intrinsics, distortion, tilt, x_cam.data(), pixel)) {
         return false;
       }
       residuals[2 * i + 0] = pixel[0] - T(shot->uv[i].x());
@@ -688,11 +687,11 @@ ViewsCalibration CalibrateViews(const std::vector<PixelObservation>& pixels, int
   // against 0.0176 px, and step 4 from the former stalls at 4e-6 px). The
   // others are tried only while no start poses every shot within
   // kGoodStartPx: they are for starts that fail, leave shots without a pose
-  // or end far off (the full model's calibrateCamera in a wrong minimum,
-  // 25.8 px on a wide lens with the rational group), and the one without
-  // distortion costs the most (OpenCV's bench photos: 17 ms with the
-  // enabled groups, 13 ms with k1 k2, 56 ms without distortion, whose 30
-  // iterations do not converge).
+  // or end far off (the full model's calibrateCamera can end in a wrong
+  // minimum on a wide lens with the rational group), and the one without
+  // distortion costs the most: its 30 iterations do not converge
+  // (opencv_bench_side_by_side_benchmark times the whole calibration of
+  // OpenCV's sample photos).
   constexpr double kGoodStartPx = 1.0;
   const OpenCvViews views = PlanarViews(shots, width, height, options);
   // One start and its poses, or nothing with *fails saying why.

@@ -34,6 +34,23 @@
 //      object/image points, which limits it to ~1e-5 px; the result here is
 //      consistent with opencv_model.h to rounding.
 //
+// Why its own Ceres problem beside the shared Parameterization
+// (parameterization.h) and residuals (cost_functions.h) of every other fit:
+// the unknowns here are one free camera pose per shot (cam_from_ref) over
+// points known in the reference frame, and no instrument. The
+// Parameterization decides the blocks of an InstrumentModel, in which a
+// shot's camera pose is no block of its own but a function of the chain at
+// the shot's readings (ShotResidual: RefFromFlange(phi, theta) times the
+// zoom's camera tool); its camera-only form (Kinematics::kNone) frees a
+// pose per board and placement, for corners of a TagBoard in the board's
+// frame, not a pose per shot for any known points. This fit gives the chain
+// its start (init_from_pixels.h), so it cannot run through that chain. What
+// it shares is the camera: the residual projects with opencv_model.h's
+// formula and the blocks' manifolds are fit/manifolds.h's. Its solver is
+// its own because the problem is one camera and many independent poses
+// (dense Schur over the camera block, a dense QR finish for the nearly
+// redundant rational group, an absolute RMS tolerance: step 4 above).
+//
 // Valid input: all observations of one zoom level; every shot one image (the
 // same face, zoom, phi, theta on each row). Shots with fewer than
 // `min_points_per_shot` points are excluded and listed in `excluded` (never

@@ -100,130 +100,14 @@ struct IsJet<ceres::Jet<S, N>> : std::true_type {
   static constexpr int kSize = N;
 };
 
-// The projection's own variables: camera point (3), intrinsics (4),
-// distortion (14). The intrinsics and distortion are seeded in these
-// 21-wide jets (LocalCamera) and the tilt matrix is computed in them once
-// per shot; the projection's derivatives are written out in the same
-// variables (ProjectWithTiltLocal) and chained onto the caller's wide jets
-// (ShotResidual below).
-constexpr int kLocalVars = 3 + kNumIntrinsics + kNumDistortion;
-using LocalJet = ceres::Jet<double, kLocalVars>;
-
-// ProjectToPixel with the tilt matrix `m` computed once per shot
-// (it depends on the distortion block only): the same formula, line for line
-// (opencv_model.h). tests/fit/cost_functions_test.cc checks both agree.
-template <typename T>
-bool ProjectWithTilt(const T* intrinsics, const T* dist, const T* m, const T* point, T* pixel) {
-  if (!(point[2] > T(0))) return false;
-  const T x = point[0] / point[2];
-  const T y = point[1] / point[2];
-  T xd, yd;
-  DistortNormalized(dist, x, y, &xd, &yd);
-  const T xt = m[0] * xd + m[1] * yd + m[2];
-  const T yt = m[3] * xd + m[4] * yd + m[5];
-  const T zt = m[6] * xd + m[7] * yd + m[8];
-  pixel[0] = intrinsics[0] * xt / zt + intrinsics[2];
-  pixel[1] = intrinsics[1] * yt / zt + intrinsics[3];
-  return true;
-}
-
-// ProjectWithTilt in the local variables of ShotResidual, with its 2 x 21
-// Jacobian written out instead of carried through 21-wide jets: the
-// variables are the camera point (local 0-2, plain numbers here), the
-// intrinsics (3-6) and the distortion (7-20) as LocalCamera seeds them,
-// and the tilt matrix `m` (computed once per shot in local jets: its
-// derivatives sit in the tau slots 19 and 20). The value is ProjectWithTilt's
-// on the same numbers, operation for operation; the derivatives are the
-// chain rule through the steps of opencv_model.h:
-//   pixel <- (xt, yt, zt) <- (x'', y'') <- (x', y') <- point,
-// each a 2 x 2 or 2 x 3 block, the coefficients entering at their step.
-// An autodiff pass of 21-wide jets does ~21 x the work of the value at
-// every operation; this is a few dozen products per point.
-// tests/fit/cost_functions_test.cc compares the chained Jacobian with plain
-// autodiff through ProjectToPixel and with numeric differences.
-inline bool ProjectWithTiltLocal(const LocalJet* intrinsics, const LocalJet* dist,
-                                 const LocalJet* m, const double* point, LocalJet* pixel) {
-  constexpr int kIntrinsicsVar = 3, kDistVar = 3 + kNumIntrinsics;
-  constexpr int kTauXVar = kDistVar + kTauX, kTauYVar = kDistVar + kTauY;
-  if (!(point[2] > 0.0)) return false;
-  double d[kNumDistortion];
-  for (int i = 0; i < kNumDistortion; ++i) d[i] = dist[i].a;
-  const double fx = intrinsics[0].a, fy = intrinsics[1].a;
-  // The value, as ProjectWithTilt computes it.
-  const double x = point[0] / point[2];
-  const double y = point[1] / point[2];
-  double xd, yd;
-  DistortNormalized(d, x, y, &xd, &yd);
-  const double xt = m[0].a * xd + m[1].a * yd + m[2].a;
-  const double yt = m[3].a * xd + m[4].a * yd + m[5].a;
-  const double zt = m[6].a * xd + m[7].a * yd + m[8].a;
-  pixel[0] = LocalJet(fx * xt / zt + intrinsics[2].a);
-  pixel[1] = LocalJet(fy * yt / zt + intrinsics[3].a);
-
-  // (x', y') <- point.
-  const double iz = 1.0 / point[2];
-  // (x'', y'') <- (x', y'), and the coefficients' columns.
-  const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
-  const double iden = 1.0 / (1.0 + d[kK4] * r2 + d[kK5] * r4 + d[kK6] * r6);
-  const double radial = (1.0 + d[kK1] * r2 + d[kK2] * r4 + d[kK3] * r6) * iden;
-  const double radial_r2 = ((d[kK1] + 2.0 * d[kK2] * r2 + 3.0 * d[kK3] * r4) -
-                            radial * (d[kK4] + 2.0 * d[kK5] * r2 + 3.0 * d[kK6] * r4)) *
-                           iden;
-  const double b00 = radial + 2.0 * x * x * radial_r2 + 2.0 * d[kP1] * y + 6.0 * d[kP2] * x +
-                     2.0 * d[kS1] * x + 4.0 * d[kS2] * r2 * x;
-  const double b01 = 2.0 * x * y * radial_r2 + 2.0 * d[kP1] * x + 2.0 * d[kP2] * y +
-                     2.0 * d[kS1] * y + 4.0 * d[kS2] * r2 * y;
-  const double b10 = 2.0 * x * y * radial_r2 + 2.0 * d[kP1] * x + 2.0 * d[kP2] * y +
-                     2.0 * d[kS3] * x + 4.0 * d[kS4] * r2 * x;
-  const double b11 = radial + 2.0 * y * y * radial_r2 + 6.0 * d[kP1] * y + 2.0 * d[kP2] * x +
-                     2.0 * d[kS3] * y + 4.0 * d[kS4] * r2 * y;
-  // pixel <- (x'', y''): through the tilt and the intrinsics.
-  const double izt = 1.0 / zt, px = xt * izt, py = yt * izt;
-  const double a00 = fx * (m[0].a - px * m[6].a) * izt, a01 = fx * (m[1].a - px * m[7].a) * izt;
-  const double a10 = fy * (m[3].a - py * m[6].a) * izt, a11 = fy * (m[4].a - py * m[7].a) * izt;
-  // pixel <- (x', y') = A B, then <- point: dx'/dpoint = (1, 0, -x') / z,
-  // dy'/dpoint = (0, 1, -y') / z.
-  const double c00 = a00 * b00 + a01 * b10, c01 = a00 * b01 + a01 * b11;
-  const double c10 = a10 * b00 + a11 * b10, c11 = a10 * b01 + a11 * b11;
-  pixel[0].v[0] = c00 * iz;
-  pixel[0].v[1] = c01 * iz;
-  pixel[0].v[2] = -(c00 * x + c01 * y) * iz;
-  pixel[1].v[0] = c10 * iz;
-  pixel[1].v[1] = c11 * iz;
-  pixel[1].v[2] = -(c10 * x + c11 * y) * iz;
-  // Intrinsics: u = fx xt / zt + cx, v = fy yt / zt + cy.
-  pixel[0].v[kIntrinsicsVar + 0] = px;
-  pixel[0].v[kIntrinsicsVar + 2] = 1.0;
-  pixel[1].v[kIntrinsicsVar + 1] = py;
-  pixel[1].v[kIntrinsicsVar + 3] = 1.0;
-  // Distortion coefficients: each moves (x'', y'') by (ex, ey), the pixel by A (ex, ey).
-  auto coefficient = [&](int k, double ex, double ey) {
-    pixel[0].v[kDistVar + k] = a00 * ex + a01 * ey;
-    pixel[1].v[kDistVar + k] = a10 * ex + a11 * ey;
-  };
-  const double rad_terms[3] = {r2 * iden, r4 * iden, r6 * iden};
-  coefficient(kK1, x * rad_terms[0], y * rad_terms[0]);
-  coefficient(kK2, x * rad_terms[1], y * rad_terms[1]);
-  coefficient(kK3, x * rad_terms[2], y * rad_terms[2]);
-  coefficient(kK4, -x * radial * rad_terms[0], -y * radial * rad_terms[0]);
-  coefficient(kK5, -x * radial * rad_terms[1], -y * radial * rad_terms[1]);
-  coefficient(kK6, -x * radial * rad_terms[2], -y * radial * rad_terms[2]);
-  coefficient(kP1, 2.0 * x * y, r2 + 2.0 * y * y);
-  coefficient(kP2, r2 + 2.0 * x * x, 2.0 * x * y);
-  coefficient(kS1, r2, 0.0);
-  coefficient(kS2, r4, 0.0);
-  coefficient(kS3, 0.0, r2);
-  coefficient(kS4, 0.0, r4);
-  // The tilt angles move the matrix: (xt, yt, zt) by dm (x'', y'', 1).
-  for (const int tau : {kTauXVar, kTauYVar}) {
-    const double dxt = m[0].v[tau] * xd + m[1].v[tau] * yd + m[2].v[tau];
-    const double dyt = m[3].v[tau] * xd + m[4].v[tau] * yd + m[5].v[tau];
-    const double dzt = m[6].v[tau] * xd + m[7].v[tau] * yd + m[8].v[tau];
-    pixel[0].v[tau] = fx * (dxt - px * dzt) * izt;
-    pixel[1].v[tau] = fy * (dyt - py * dzt) * izt;
-  }
-  return true;
-}
+// The projection's own variables (kProjectionVars, opencv_model.h): camera
+// point (3), intrinsics (4), distortion (14). ShotResidual forms the tilt
+// matrix once per photo in these jets (LocalCamera seeds the intrinsics and
+// distortion), which gives its derivatives with respect to the tilt angles,
+// and takes each point's projection and Jacobian in the same variables from
+// the camera (ProjectWithJacobian) before chaining them onto the caller's
+// wide jets.
+using LocalJet = ceres::Jet<double, kProjectionVars>;
 
 // Where a parameter jet's derivative lives: DynamicAutoDiffCostFunction seeds
 // each parameter with a unit vector (or zero when its block is constant or
@@ -364,20 +248,19 @@ struct RecordGroupResidual {
 
 // Image observations of one shot (one pointing, one zoom).
 //
-// Speed (docs/refinement.md): the chain ref_from_cam is evaluated once per
-// shot in the caller's jets (width ~40), and so is cam_from_board for each
-// board the shot sees. Per point, only x_cam = cam_from_frame * X (X a plain
-// constant) is formed in those wide jets; the projection (distortion, tilt,
-// intrinsics) is evaluated with its 2 x 21 Jacobian over (x_cam,
-// intrinsics, distortion) written out (ProjectWithTiltLocal), and that
-// Jacobian is chained onto the wide jets:
+// Speed (docs/refinement.md; joint_refine_benchmark measures it): the chain
+// ref_from_cam is evaluated once per shot in the caller's jets (width ~40),
+// and so is cam_from_board for each board the shot sees. Per point, only
+// x_cam = cam_from_frame * X (X a plain constant) is formed in those wide
+// jets; the projection (distortion, tilt, intrinsics) comes with its 2 x 21
+// Jacobian over (x_cam, intrinsics, distortion) from the camera
+// (ProjectWithJacobian, written out there: autodiff in 21-wide local jets
+// makes a joint refinement markedly slower, joint_refine_benchmark), and
+// that Jacobian is chained onto the wide jets:
 //   d pixel = J_pixel_wrt_xcam d x_cam + J_pixel_wrt_intrinsics d intrinsics
 //             + J_pixel_wrt_distortion d distortion.
 // Intrinsics and distortion are seeded unit vectors, so their part is a
-// scatter into one slot each. Projecting in the wide jets cost twice as
-// much, and the written-out Jacobian instead of 21-wide local jets took
-// another quarter off a joint refinement (joint_refine_benchmark
-// --benchmark_filter=FiveIterations/3); the values are identical.
+// scatter into one slot each. The values are the camera's formula's.
 struct ShotResidual {
   struct Point {
     Eigen::Vector3d X;  // reference frame, or the flat board's frame when board >= 0
@@ -497,7 +380,7 @@ struct ShotResidual {
       for (size_t k = 0; k < points.size(); ++k) {
         const Vec3<T> x_cam = in_camera(k);
         T pixel[2];
-        if (!internal::ProjectWithTilt(intrinsics, dist, m, x_cam.data(), pixel)) {
+        if (!ProjectWithTiltMatrix(intrinsics, dist, m, x_cam.data(), pixel)) {
           return false;  // behind the camera: the solver must reject the step
         }
         r[2 * k + 0] = (pixel[0] - T(points[k].uv[0])) * T(inv_sigma);
@@ -509,19 +392,33 @@ struct ShotResidual {
       // Local jets of intrinsics and distortion (variables 3..20, after the
       // camera point); focused intrinsics carry a full product, not a seed.
       const internal::LocalCamera<LocalJet, internal::IsJet<T>::kSize> cam(intrinsics, dist, 3);
-      LocalJet m[9];
-      TiltMatrix(cam.dist[kTauX], cam.dist[kTauY], m);
+      // The tilt matrix and its derivatives with respect to the tilt angles
+      // (local variables 3 + 4 + kTauX and kTauY), once per photo.
+      LocalJet tilt[9];
+      TiltMatrix(cam.dist[kTauX], cam.dist[kTauY], tilt);
+      constexpr int kTauVar = 3 + kNumIntrinsics + kTauX;
+      double m[9], dm_dtau[2][9], k_values[kNumIntrinsics], d_values[kNumDistortion];
+      for (int i = 0; i < 9; ++i) {
+        m[i] = tilt[i].a;
+        dm_dtau[0][i] = tilt[i].v[kTauVar];
+        dm_dtau[1][i] = tilt[i].v[kTauVar + 1];
+      }
+      for (int i = 0; i < kNumIntrinsics; ++i) k_values[i] = cam.intrinsics[i].a;
+      for (int i = 0; i < kNumDistortion; ++i) d_values[i] = cam.dist[i].a;
       for (size_t k = 0; k < points.size(); ++k) {
         const Vec3<T> x_cam = in_camera(k);
-        const double lx[3] = {x_cam[0].a, x_cam[1].a, x_cam[2].a};
-        LocalJet pixel[2];
-        if (!internal::ProjectWithTiltLocal(cam.intrinsics, cam.dist, m, lx, pixel)) return false;
+        const double point[3] = {x_cam[0].a, x_cam[1].a, x_cam[2].a};
+        double value[2], J[2 * kProjectionVars];
+        if (!ProjectWithJacobian(k_values, d_values, m, dm_dtau, point, value, J)) return false;
         for (int c = 0; c < 2; ++c) {
+          const double* row = J + c * kProjectionVars;
+          LocalJet pixel;
+          pixel.a = value[c];
+          for (int i = 0; i < kProjectionVars; ++i) pixel.v[i] = row[i];
           T out;
-          out.a = pixel[c].a;
-          out.v =
-              pixel[c].v[0] * x_cam[0].v + pixel[c].v[1] * x_cam[1].v + pixel[c].v[2] * x_cam[2].v;
-          cam.Chain(pixel[c], &out);
+          out.a = value[c];
+          out.v = row[0] * x_cam[0].v + row[1] * x_cam[1].v + row[2] * x_cam[2].v;
+          cam.Chain(pixel, &out);
           r[2 * k + c] = (out - T(points[k].uv[c])) * T(inv_sigma);
         }
       }

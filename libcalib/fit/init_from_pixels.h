@@ -1,5 +1,5 @@
-// Starting models from image observations alone (issue 3, "initialisation
-// without the truth"): nothing here reads a simulator or a truth.
+// Starting models from image observations alone, initialisation without the
+// truth: nothing here reads a simulator or a truth.
 //
 // Pixels only (no records.csv):
 //   1. per zoom level, intrinsics, the enabled distortion groups and every

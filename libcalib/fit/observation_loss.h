@@ -3,9 +3,8 @@
 // The refinement evaluates one residual block per photo (and per record
 // group): the chain from the base to the camera is differentiated once for
 // all of a photo's corners. Ceres's LossFunction acts on a whole block, so a
-// robust fit used to need one block per observation, which evaluates the
-// chain once per corner (~5-10x the cost of the grouped fit on a session of
-// 20,000 corners). This decorator applies the loss to each observation's
+// robust fit with Ceres's loss alone needs one block per observation, which
+// evaluates the chain once per corner instead of once per photo. This decorator applies the loss to each observation's
 // slice of a grouped block instead: the residual of observation i, r_i
 // (2 numbers for a pixel, 3 for a record, already whitened), becomes
 //

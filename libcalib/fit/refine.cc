@@ -310,8 +310,8 @@ int ClusterRobust(const ceres::CRSMatrix& j, const std::vector<double>& residual
 // ceres::Covariance's DENSE_SVD with null_space_rank = -1 gives it, but
 // from the block-sparse Jacobian: forming J^T J costs m k^2 (k = parameters
 // per residual row, ~40) where the SVD of the dense J costs m n^2 (n = all
-// free parameters): 0.1 s instead of 7 s for 97,000 residuals and 180
-// parameters. J^T J is Jacobi-scaled before the eigen-decomposition so that
+// free parameters), the difference between a fraction of a second and
+// seconds on joint_refine_benchmark's session of many zooms. J^T J is Jacobi-scaled before the eigen-decomposition so that
 // units (pixels, metres, radians) do not decide which directions count as
 // undetermined: eigenvalues below 1e-14 of the largest are dropped and
 // counted in `dropped`.
@@ -640,7 +640,8 @@ std::unique_ptr<ceres::Problem> BuildProblem(const Observations& obs,
 ceres::Solver::Options SolverOptions(const ceres::Problem& problem, const FitOptions& options) {
   ceres::Solver::Options sopt;
   // Dense QR is the most accurate, but costs ~2 m n^2 per iteration (m
-  // residuals, n parameters): 10 s for 7 zooms x 100 shots x 100 corners.
+  // residuals, n parameters), which makes a session of many zooms and
+  // photos unaffordable (joint_refine_benchmark's sessions).
   // The normal equations from the block-sparse Jacobian cost ~m k^2 (k ~ 40
   // parameters per residual block) and are well conditioned here thanks to
   // Ceres's Jacobi scaling; they take over for large problems.

@@ -334,7 +334,9 @@ RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& 
   // 2. The rows flagged at the least-squares solution (grouped residual
   // blocks, the cost of a plain refinement): when none is, the data hold no
   // gross error that a least-squares fit leaves visible, and the robust fit
-  // is skipped (it costs a clean run ~5x: one residual block per row). A
+  // is skipped (it costs a clean run several times a plain fit, one residual
+  // block per row: calibrate_benchmark's BM_CalibrateClean against
+  // BM_CalibrateCleanWithoutGrossErrorHandling). A
   // row whose error least squares hides completely (one that alone decides
   // a parameter) has no redundancy, and the robust fit could not tell it
   // either. Otherwise the Cauchy fit from the start decides.

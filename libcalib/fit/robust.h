@@ -1,4 +1,4 @@
-// Gross errors found by a robust fit (issue 11 item 3; docs/refinement.md,
+// Gross errors found by a robust fit (docs/refinement.md,
 // "Gross errors"). After the screening before the fit (libcalib/screen/gross.h)
 // has taken out what no instrument could produce, the rest is found so:
 //
@@ -10,8 +10,9 @@
 //     with their robust re-weighting). It is skipped when steps 3 and 4 at
 //     the least-squares solution (grouped residual blocks, a plain
 //     refinement's cost) flag no row: the robust fit needs one residual
-//     block per row and costs a clean run ~5x (a million records: 144 s
-//     instead of ~30 s).
+//     block per row and costs a clean run several times a plain one
+//     (calibrate_benchmark: BM_CalibrateClean against
+//     BM_CalibrateCleanWithoutGrossErrorHandling, and BM_MillionRecordsFromFile).
 //  3. Per group (EDM rows, camera rows of a zoom, pixels of a zoom), the
 //     robust sigma of one coordinate: median |r| / median of chi with the
 //     row's dimension (3 for points, 2 for pixels), from the robust

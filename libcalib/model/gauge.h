@@ -2,7 +2,7 @@
 // leave every prediction unchanged (the EDM point and the camera ray at any
 // readings, the pixel of any board corner or estimated point), so that two
 // models fitted in different gauges can be compared, and a truth can be put
-// into the gauge a fit held (issue 9: a photo-only fit against its truth).
+// into the gauge a fit held (a photo-only fit compared with its truth).
 //
 // Reference frame (SPEC 1, SPEC 7). With ref'_from_ref = (R', t'):
 //   base   <- ref'_from_ref * base

@@ -1,4 +1,4 @@
-// Gross errors found before any fit (issue 11 item 3; docs/screening.md):
+// Gross errors found before any fit (docs/screening.md):
 // rows that no instrument could have produced together with the others are
 // taken out, listed with their lines and the numbers that betray them, so
 // that the extraction and the fit start from the rest. What is left is found

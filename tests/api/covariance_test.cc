@@ -1,4 +1,4 @@
-// The full parameter covariance (issue 10, item 1): the fit keeps it
+// The full parameter covariance: the fit keeps it
 // (ModelSigmas::covariance, covariance.yaml beside model.yaml), the API loads
 // it, and with it the predicted pixel uncertainty matches the scatter of the
 // predictions of fits to independent noisy data of one simulated truth,

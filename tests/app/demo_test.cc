@@ -80,7 +80,8 @@ RunSettings* Zoom3Demo::settings_ = nullptr;
 PipelineResult* Zoom3Demo::result_ = nullptr;
 std::filesystem::path Zoom3Demo::work_;
 
-// Issue 4: detected corners against the exact projections, RMS <= 0.1 px,
+// Detected corners against the exact projections, RMS <= 0.1 px (the
+// detector's accuracy requirement, docs/photos.md),
 // with distortion on; nothing visible is lost.
 // The figures draw the residual table at the final model, boards of unknown
 // pose at their estimated poses: arrows per image cell of the fitted points,

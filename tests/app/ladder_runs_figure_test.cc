@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "app/figures.h"
+#include "app/ladder_figures.h"
 
 namespace rtscalib::app {
 namespace {

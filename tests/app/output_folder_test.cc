@@ -507,7 +507,7 @@ class RtscalibBinary : public OutputFolderTest {
   // `prefix`; returns the exit code, stderr in *err. small.yaml is
   // configs/paper.yaml with a coarse grid of records (8 x 4 instead of
   // 24 x 12): what is tested here is the output folder, not the
-  // calibration, and six sanitized runs of the paper's grid took a minute.
+  // calibration, and the paper's grid would make each sanitized run slow.
   int Run(const fs::path& root, const std::string& prefix, std::string* err) {
     const fs::path config = dir_ / "small.yaml";
     if (!fs::exists(config)) {

@@ -1,4 +1,4 @@
-// Per-zoom model generation and `rtscalib predict --pixels` (issue 3), run
+// Per-zoom model generation and `rtscalib predict --pixels`, run
 // in-process: pixels.csv of a 3-zoom instrument seen in both faces (no
 // records) -> `rtscalib --config` (start from the pixels alone, joint fit) ->
 // model.yaml with every zoom's tool, intrinsics and distortion and their

@@ -1,4 +1,4 @@
-// Calibration from rendered ChArUco and chessboard photos (issue 9 item 3):
+// Calibration from rendered ChArUco and chessboard photos:
 // the zoom3 demo's instrument and board places (configs/zoom3.yaml, render
 // settings included) with its four AprilTag boards replaced by three ChArUco
 // boards and one chessboard of unknown pose (estimated), rendered, detected

@@ -1,5 +1,4 @@
-// Uncertainties that hold on rendered and detected photos (issue 10 item 1,
-// issue 9's first "done when"): the zoom3 demo's scene rendered for four
+// Uncertainties that hold on rendered and detected photos: the zoom3 demo's scene rendered for four
 // seeds, its hidden effect put into the model, calibrated (1) as the demo
 // does, with the records, and (2) from the photo folder alone, as a user
 // without a laser tracker would (`data: {shots, targets}`, boards of unknown

@@ -1,4 +1,4 @@
-// Issue 11 item 3: gross errors. 5 % of the rows of one group carry a gross
+// Gross errors. 5 % of the rows of one group carry a gross
 // error (a point or a distance off by 1 cm to 1 km, a wrong face label, a
 // pixel with u and v swapped, a corner of the wrong zoom, a known point off
 // by 1 cm to 1 km); the calibration must list those rows with their lines

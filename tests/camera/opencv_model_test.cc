@@ -419,6 +419,63 @@ TEST(ProjectToPixel, JetDerivativesMatchCentralDifferences) {
   }
 }
 
+// The written-out Jacobian against autodiff of ProjectToPixel: the same
+// derivatives in a different order of operations, so they agree to rounding
+// of entries up to ~1e3 px per unit (1e-9 relative to the largest entry of
+// the row, far below what central differences resolve); the value is the
+// formula's own, bit for bit.
+constexpr double kWrittenOutRelTol = 1e-9;
+
+TEST(ProjectWithJacobian, EqualsAutodiffForEveryDistortionGroupCombination) {
+  constexpr int kN = kProjectionVars;
+  std::mt19937 rng(47);
+  for (int mask = 0; mask <= kAllGroups; ++mask) {
+    const TestCamera cam = RandomCamera(mask, &rng);
+    // The tilt matrix and its derivatives, as a cost function forms them once.
+    JetN<2> tau[2] = {JetN<2>(cam.dist[kTauX], 0), JetN<2>(cam.dist[kTauY], 1)};
+    JetN<2> tilt[9];
+    TiltMatrix(tau[0], tau[1], tilt);
+    double m[9], dm_dtau[2][9];
+    for (int i = 0; i < 9; ++i) {
+      m[i] = tilt[i].a;
+      dm_dtau[0][i] = tilt[i].v[0];
+      dm_dtau[1][i] = tilt[i].v[1];
+    }
+    const std::vector<cv::Point3d> pts = TestPoints(&rng);
+    for (size_t k = 0; k < pts.size(); k += 10) {
+      const double point[3] = {pts[k].x, pts[k].y, pts[k].z};
+      double pixel[2], J[2 * kN];
+      ASSERT_TRUE(ProjectWithJacobian(cam.intrinsics.data(), cam.dist.data(), m, dm_dtau, point,
+                                      pixel, J));
+      double expected[2];
+      ASSERT_TRUE(ProjectToPixel(cam.intrinsics.data(), cam.dist.data(), point, expected));
+      EXPECT_EQ(pixel[0], expected[0]) << GroupsName(mask);
+      EXPECT_EQ(pixel[1], expected[1]) << GroupsName(mask);
+      JetN<kN> jx[kN];
+      for (int j = 0; j < 3; ++j) jx[j] = JetN<kN>(point[j], j);
+      for (int j = 0; j < kNumIntrinsics; ++j) jx[3 + j] = JetN<kN>(cam.intrinsics[j], 3 + j);
+      for (int j = 0; j < kNumDistortion; ++j) jx[7 + j] = JetN<kN>(cam.dist[j], 7 + j);
+      JetN<kN> uv[2];
+      ASSERT_TRUE(ProjectToPixel(jx + 3, jx + 7, jx, uv));
+      for (int i = 0; i < 2; ++i) {
+        const double scale = std::max(1.0, uv[i].v.cwiseAbs().maxCoeff());
+        for (int j = 0; j < kN; ++j) {
+          EXPECT_NEAR(J[i * kN + j], uv[i].v[j], kWrittenOutRelTol * scale)
+              << GroupsName(mask) << " d uv[" << i << "] / d variable " << j;
+        }
+      }
+    }
+  }
+  const double behind[3] = {0.1, 0.2, -1.0};
+  double pixel[2], J[2 * kN];
+  const TestCamera cam = RandomCamera(kAllGroups, &rng);
+  double m[9];
+  TiltMatrix(cam.dist[kTauX], cam.dist[kTauY], m);
+  const double dm_dtau[2][9] = {};
+  EXPECT_FALSE(
+      ProjectWithJacobian(cam.intrinsics.data(), cam.dist.data(), m, dm_dtau, behind, pixel, J));
+}
+
 TEST(PixelToRay, JetDerivativesMatchCentralDifferences) {
   constexpr int kN = 2 + kNumIntrinsics + kNumDistortion;
   std::mt19937 rng(47);

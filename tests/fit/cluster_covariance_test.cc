@@ -5,7 +5,7 @@
 // together) and of its detection (blur, exposure). Here each simulated photo
 // gets such a reading error on top of independent pixel noise. Over several
 // seeds the normalised intrinsics errors (fit - truth) / sigma must have a
-// mean square in [0.5, 2] (issue 10's bounds) with the photo clusters, while
+// mean square in [0.5, 2] (joint_uncertainty_test's bounds) with the photo clusters, while
 // the independent-error covariance, which counts every corner as independent
 // evidence, claims far more than it has (mean square > 4 here).
 #include <gtest/gtest.h>

@@ -2,8 +2,10 @@
 // COLMAP's models_jacobian_test does: ceres::GradientChecker (autodiff against Ridders' numeric
 // differences) on RecordGroupResidual and ShotResidual in both kinematics
 // with kinematic/EDM effects and every distortion group enabled, and the
-// ShotResidual's chained projection Jacobian against plain autodiff through
-// ProjectToPixel.
+// ShotResidual's projection Jacobian (the camera's ProjectWithJacobian)
+// chained onto the wide jets (LocalCamera) against plain autodiff through
+// ProjectToPixel in the wide jets: the same formula (opencv_model.h), so the
+// two agree to rounding, far closer than numeric differences can check.
 #include "libcalib/fit/cost_functions.h"
 
 #include <ceres/gradient_checker.h>

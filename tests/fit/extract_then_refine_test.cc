@@ -1,4 +1,4 @@
-// Issue 2's ground-truth tests of the whole workflow: records of a seeded
+// Ground-truth tests of the whole workflow: records of a seeded
 // random truth -> extraction (Klug Sec. 3) -> refinement (Sec. 4.3) -> held-out
 // predictions compared with the truth. No starting value comes from the truth.
 #include <gtest/gtest.h>
@@ -98,7 +98,7 @@ TEST_P(ExtractThenRefine, NoiseFreeHeldOutPredictionsExact) {
     ASSERT_TRUE(r.valid);
     worst = std::max(worst, r.distance);
   }
-  // Issue 2: held-out points (other angles, distances up to 47 m, other
+  // Held-out points (other angles, distances up to 47 m, other
   // pixels) to 1e-9 m; exact data leave round-off only (~1e-15 m per metre).
   EXPECT_LT(worst, 1e-9);
 }

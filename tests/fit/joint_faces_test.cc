@@ -1,4 +1,4 @@
-// Two faces (issue 3): one joint model fits face-1 and face-2 data (records
+// Two faces: one joint model fits face-1 and face-2 data (records
 // and pixels) to the noise floor; `faces: separate` (one model per face) and
 // the classical two-face check reproduce the truth's collimation, tilting
 // axis and vertical index. Every fit starts from the extraction (records) and

@@ -1,4 +1,4 @@
-// Initialisation without the truth (issue 3): pixels only -> InitFromPixels
+// Initialisation without the truth: pixels only -> InitFromPixels
 // (OpenCV per zoom, closed-form chain) -> joint refinement.
 #include "libcalib/fit/init_from_pixels.h"
 

@@ -1,4 +1,4 @@
-// Consistency of the reported uncertainties (issue 3): over 20 seeds of noisy
+// Consistency of the reported uncertainties: over 20 seeds of noisy
 // pixel data, the normalised errors (fit - truth) / sigma of fx, fy, cx, cy
 // have a mean square between 0.5 and 2 (1 if the sigmas are right).
 #include <gtest/gtest.h>
