@@ -98,9 +98,10 @@ std::string Notice(const std::string& file, const std::vector<const Copy*>& copi
   if (pairs.size() > kListedPairs) {
     out += " and " + std::to_string(pairs.size() - kListedPairs) + " more";
   }
-  out += ". Each copy is taken out before the fit and listed with the gross rows: counted twice, "
-         "a copy would shrink every sigma by up to 1/sqrt(2). If the file was joined to itself, "
-         "remove the copies";
+  out +=
+      ". Each copy is taken out before the fit and listed with the gross rows: counted twice, "
+      "a copy would shrink every sigma by up to 1/sqrt(2). If the file was joined to itself, "
+      "remove the copies";
   return out;
 }
 

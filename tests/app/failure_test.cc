@@ -347,10 +347,11 @@ TEST_F(Failure, RecordsJoinedToThemselvesGetANoticeAndCountOnce) {
   const std::string first_copy = std::to_string(once.size() + 2);
   bool noticed = false;
   for (const auto& note : b["notes"]) {
-    noticed = noticed || note.get<std::string>().find(
-                             "twice.csv: " + n + " rows repeat an earlier row exactly (every "
-                             "column equal): line " + first_copy + " repeats line 2, ") !=
-                             std::string::npos;
+    noticed = noticed ||
+              note.get<std::string>().find("twice.csv: " + n +
+                                           " rows repeat an earlier row exactly (every "
+                                           "column equal): line " +
+                                           first_copy + " repeats line 2, ") != std::string::npos;
   }
   EXPECT_TRUE(noticed) << b["notes"].dump(1);
   size_t copies = 0;
@@ -417,20 +418,18 @@ TEST_F(Failure, NothingToFitNamesTheConfigAndTheFile) {
   for (size_t i = 0; i < 8; ++i) {
     const Record& c = cam[i];
     rows << c.face << "," << c.zoom << "," << c.phi << "," << c.theta << ",s" << i / 4 << ",0,"
-         << i % 4 << "," << c.x.x() << "," << c.x.y() << "," << c.x.z() << "," << c.u << ","
-         << c.v << "\n";
+         << i % 4 << "," << c.x.x() << "," << c.x.y() << "," << c.x.z() << "," << c.u << "," << c.v
+         << "\n";
   }
   Put(pixels, rows.str());
-  const CameraTool& k = truth_.cams[0];
-  std::ostringstream y;
-  y << "model:\n  kinematics: dh\n  cameras:\n    - {width: " << k.width
-    << ", height: " << k.height << ", fx: " << k.intrinsics[0] << ", fy: " << k.intrinsics[1]
-    << ", cx: " << k.intrinsics[2] << ", cy: " << k.intrinsics[3]
-    << "}\nfit:\n  sigmas: {edm_m: 1.0e-5, cam_m: 1.0e-5, pixel_px: 0.5}\n"
-       "  critical_region: {min_zenith_deg: 170, max_zenith_deg: 175}\ndata:\n  pixels: "
-    << pixels.string() << "\n";
-  const fs::path config = dir_ / "critical.yaml";
-  Put(config, y.str());
+  // The fixture's config with the pixels instead of records and a critical
+  // region that holds every row.
+  const fs::path config = Config({}, "critical.csv");
+  std::string text = ReadAll(config);
+  text.replace(text.find("fit:\n"), 5,
+               "fit:\n  critical_region: {min_zenith_deg: 170, max_zenith_deg: 175}\n");
+  text.replace(text.find("  records: "), std::string::npos, "  pixels: " + pixels.string() + "\n");
+  Put(config, text);
   std::string err;
   EXPECT_EQ(RunConfig(config, &err), 1) << err;
   EXPECT_NE(err.find(config.string() + ": nothing to start from: " + pixels.string() +

@@ -195,8 +195,8 @@ TEST(YamlReader, SyntaxErrorsAndBadRoot) {
 // was reported as the config's first missing key (`data`).
 TEST(YamlReader, AFolderIsNamedAsAFolder) {
   const std::string folder = ::testing::TempDir();
-  const InputError e = CatchInputError(
-      [&] { YamlDocument::Load(folder, std::uintmax_t{4} << 20, "a config"); });
+  const InputError e =
+      CatchInputError([&] { YamlDocument::Load(folder, std::uintmax_t{4} << 20, "a config"); });
   EXPECT_EQ(e.file, folder);
   EXPECT_EQ(e.expected, "a config (a YAML file)");
   EXPECT_EQ(e.got, "a folder");
