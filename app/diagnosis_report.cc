@@ -174,8 +174,25 @@ json DiagnosisJson(const CalibrationResult& r) {
   const Diagnosis& d = *r.diagnosis;
   json ranking = json::array();
   for (const RankedEffect& e : d.ranking.entries) ranking.push_back(RankedJson(e));
+  // SPEC 6's one list of what no catalogue effect explains: the harmonics of
+  // phi and theta, then the structure against the session's other variables
+  // (drifts against the record or photo order, trends against the target
+  // distance, fields over the image position). Every entry has SPEC's
+  // `variable`, `harmonic` (0 for a finding that is no harmonic), `amplitude`
+  // and `significant`, and its `kind`.
   json unexplained = json::array();
-  for (const Harmonic& h : d.harmonics.unexplained) unexplained.push_back(HarmonicJson(h));
+  for (const Harmonic& h : d.harmonics.unexplained) {
+    json e = HarmonicJson(h);
+    e["kind"] = "harmonic";
+    unexplained.push_back(e);
+  }
+  for (const StructureFinding& f : d.structure.unexplained) {
+    json e = FindingJson(f);
+    e["harmonic"] = f.probe.kind == ProbeKind::kHarmonic ? f.probe.harmonic : 0;
+    e["amplitude"] = f.size;
+    e["significant"] = true;  // selected on top of the whole catalogue
+    unexplained.push_back(e);
+  }
   json harmonics = json::array();
   for (const Harmonic& h : d.harmonics.before_catalogue) harmonics.push_back(HarmonicJson(h));
   json worst = json::array();
@@ -213,11 +230,7 @@ json DiagnosisJson(const CalibrationResult& r) {
     }
     distortion.push_back(e);
   }
-  json structure_unexplained = json::array(), structure_explained = json::array(),
-       structure_negligible = json::array();
-  for (const StructureFinding& f : d.structure.unexplained) {
-    structure_unexplained.push_back(FindingJson(f));
-  }
+  json structure_explained = json::array(), structure_negligible = json::array();
   for (const StructureFinding& f : d.structure.negligible) {
     structure_negligible.push_back(FindingJson(f));
   }
@@ -240,8 +253,7 @@ json DiagnosisJson(const CalibrationResult& r) {
             {"fit_quality", FitQualityJson(d.fit_quality)},
             {"wild", wild},
             {"structure",
-             {{"unexplained", structure_unexplained},
-              {"explained", structure_explained},
+             {{"explained", structure_explained},
               {"negligible", structure_negligible}}},
             {"negligible_harmonics", negligible_harmonics},
             {"min_gain", d.min_gain},

@@ -98,7 +98,13 @@ PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_
   PipelineResult result;
   result.obs = LoadObservations(settings, work_dir, &result, progress);
   const CalibrationOptions& options = settings.config.calibration;
-  result.calibration = CalibrateModel(result.obs, options, progress);
+  try {
+    result.calibration = CalibrateModel(result.obs, options, progress);
+  } catch (const std::invalid_argument& e) {
+    // The library's rejections of the data and options name the data files
+    // (Observations' sources); the config that chose them is named here.
+    throw std::invalid_argument(settings.config.config_path + ": " + e.what());
+  }
   // The plain diagnosis only reads the calibration: it runs on a second
   // thread while this one computes the uncertainty maps and runs
   // `alongside` (the run draws its figures), which need everything but the

@@ -242,8 +242,18 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
     result.notes.push_back(std::to_string(excluded) +
                            " pixel observation(s) in the critical region not used for the start");
   }
-  if (zooms.empty())
-    throw std::invalid_argument("InitFromPixels: no pixel observations to start from");
+  if (zooms.empty()) {
+    // Which file gave nothing, and why: none given, or all in the critical region.
+    std::ostringstream what;
+    what << "nothing to start from: " << options.source << " gave " << observed.size()
+         << " pixel observations";
+    if (excluded > 0) {
+      what << "; " << excluded << " of them lie in the critical region (zenith angle outside "
+           << "fit.critical_region's " << options.min_zenith_rad * 180 / M_PI << " to "
+           << options.max_zenith_rad * 180 / M_PI << " deg)";
+    }
+    throw std::invalid_argument(what.str());
+  }
   const int num_zooms = zooms.rbegin()->first + 1;
 
   // 1. Per zoom: intrinsics, distortion and shot poses from OpenCV.

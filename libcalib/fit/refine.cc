@@ -796,8 +796,19 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
   const UsedRows rows = SelectRows(obs, options, m.NumZooms(), UnknownZoom::kThrow);
   summary.excluded_critical = rows.excluded_critical;
   if (rows.records.empty() && rows.pixels.empty()) {
-    throw std::invalid_argument(
-        "nothing to fit: every observation is in the critical region or none was given");
+    // Name the files and what became of their rows (SelectRows: the
+    // critical region, zoom levels without a camera).
+    std::ostringstream what;
+    what << "nothing to fit: " << obs.records_source << " gave " << obs.records.size()
+         << " rows and " << obs.pixels_source << " " << obs.pixels.size() << " rows";
+    if (obs.records.empty() && obs.pixels.empty()) {
+      what << " (give data.records, data.pixels or data.shots rows)";
+    } else if (rows.excluded_critical > 0) {
+      what << "; " << rows.excluded_critical << " of them lie in the critical region (zenith "
+           << "angle outside fit.critical_region's " << options.min_zenith_rad * 180 / M_PI
+           << " to " << options.max_zenith_rad * 180 / M_PI << " deg)";
+    }
+    throw std::invalid_argument(what.str());
   }
   const std::vector<ObservationGroup> groups =
       options.loss == RobustLoss::kNone ? GroupObservations(obs, rows)

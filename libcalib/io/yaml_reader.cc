@@ -332,6 +332,13 @@ std::string YamlNode::Dump() const {
 
 YamlDocument YamlDocument::Load(const std::string& path, std::uintmax_t max_bytes,
                                 const std::string& what) {
+  // A folder opens as a stream that reads nothing: it would pass as an
+  // empty document and be reported as its first missing key.
+  std::error_code folder_ec;
+  if (std::filesystem::is_directory(path, folder_ec)) {
+    throw InputError::File(path, 0, "is a folder",
+                           what == "a YAML file" ? what : what + " (a YAML file)", "a folder");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw InputError::File(path, 0, "cannot open file", "a readable YAML file",

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "libcalib/screen/duplicates.h"
+
 namespace rtscalib {
 namespace {
 
@@ -127,13 +129,15 @@ void ScreenSphere(const std::vector<SphereRow>& rows, const std::string& what,
 bool HasReading(const Record&) { return true; }
 bool HasReading(const PixelObservation& p) { return p.has_reading; }
 
+// `skip`: rows already taken out (copies of earlier rows).
 template <typename Row>
-void ScreenFaces(const std::vector<Row>& rows, bool pixel, std::vector<ExcludedRow>* out) {
+void ScreenFaces(const std::vector<Row>& rows, bool pixel, const std::set<int>& skip,
+                 std::vector<ExcludedRow>* out) {
   for (int face : {1, 2}) {
     std::vector<int> bad;
     size_t of_face = 0;
     for (size_t i = 0; i < rows.size(); ++i) {
-      if (rows[i].face != face || !HasReading(rows[i])) continue;
+      if (rows[i].face != face || !HasReading(rows[i]) || skip.count(static_cast<int>(i))) continue;
       ++of_face;
       if (FaceContradictsTheta(face, rows[i].theta)) bad.push_back(static_cast<int>(i));
     }
@@ -163,11 +167,17 @@ bool FewEnoughToBeGross(size_t offending, size_t rows) {
 std::vector<ExcludedRow> FindGrossRows(const Observations& obs, const GrossScreenOptions& options) {
   const std::string problem = options.Check();
   if (!problem.empty()) throw std::invalid_argument(problem);
-  std::vector<ExcludedRow> out;
+  // Copies of earlier rows are taken out whether or not gross rows are
+  // looked for (duplicates.h), and before: a gross row present twice must
+  // not outvote the tests below.
+  std::vector<ExcludedRow> out = FindDuplicateRows(obs);
+  std::set<int> excluded, excluded_pixels;
+  for (const ExcludedRow& e : out) (e.pixel ? excluded_pixels : excluded).insert(e.index);
   if (!options.enabled) return out;
-  ScreenFaces(obs.records, false, &out);
-  std::set<int> excluded;
-  for (const ExcludedRow& e : out) excluded.insert(e.index);
+  ScreenFaces(obs.records, false, excluded, &out);
+  for (const ExcludedRow& e : out) {
+    if (!e.pixel) excluded.insert(e.index);
+  }
   std::vector<SphereRow> edm;
   std::map<int, std::vector<SphereRow>> cam;
   for (int i = 0; i < static_cast<int>(obs.records.size()); ++i) {
@@ -179,7 +189,7 @@ std::vector<ExcludedRow> FindGrossRows(const Observations& obs, const GrossScree
   for (const auto& [zoom, rows] : cam)
     ScreenSphere(rows, "camera row (zoom " + std::to_string(zoom) + ")", obs.records, options,
                  &out);
-  ScreenFaces(obs.pixels, true, &out);
+  ScreenFaces(obs.pixels, true, excluded_pixels, &out);
   std::sort(out.begin(), out.end());
   return out;
 }

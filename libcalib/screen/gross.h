@@ -38,7 +38,8 @@ bool FaceContradictsTheta(int face, double theta);
 // screen.h): at most one in ten of them, and not all.
 bool FewEnoughToBeGross(size_t offending, size_t rows);
 
-// The rows above, in file order (records first). Throws std::invalid_argument
+// Exact copies of earlier rows (duplicates.h, found also with options.enabled
+// false), then the rows above, in file order (records first). Throws std::invalid_argument
 // when options.Check() fails.
 std::vector<ExcludedRow> FindGrossRows(const Observations& obs, const GrossScreenOptions& options);
 

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "libcalib/text/number_text.h"
+#include "libcalib/screen/duplicates.h"
 #include "libcalib/screen/gross.h"
 
 namespace rtscalib {
@@ -399,6 +400,7 @@ ScreenFindings FindDataMistakes(const Observations& obs, const std::vector<Camer
   CheckRecordPoints(obs.records_source, obs.records, gross_rows, &out);
   CheckKnownPoints(obs.pixels_source, obs.pixels, options.max_extent_m, &out);
   CheckTools(obs, &out);
+  for (std::string& notice : DuplicateRowNotices(obs)) out.warnings.push_back(std::move(notice));
   return out;
 }
 

@@ -25,7 +25,8 @@
 //     ScreenOptions::max_missing_zooms (SPEC 2: levels are 0..N-1).
 // Warnings (the data may be legitimate): phi in [2 pi, 4 pi), zoom levels
 // without data below the largest, records with only camera rows or only EDM
-// rows (the other tool is not determined).
+// rows (the other tool is not determined), rows that repeat an earlier row
+// exactly (duplicates.h: taken out before the fit with the gross rows).
 //
 // Each check reports once per file and column, at the first offending line,
 // with the count and the next few lines; all errors come together.

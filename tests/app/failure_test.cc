@@ -329,6 +329,116 @@ TEST_F(Failure, ToolWithoutDataIsNotDeterminedAndPredictRefusesIt) {
       << err;
 }
 
+// A records.csv joined to itself: a notice names the file and the line
+// pairs, the copies are taken out (listed with the gross rows), and the fit
+// is the single file's: the same errors and a-posteriori sigmas (the copies
+// would shrink each sigma by 1/sqrt(2); 1e-9 relative allows for the
+// summation order of a multithreaded fit).
+TEST_F(Failure, RecordsJoinedToThemselvesGetANoticeAndCountOnce) {
+  const std::vector<Record> once = Records();
+  std::vector<Record> twice = once;
+  twice.insert(twice.end(), once.begin(), once.end());
+  std::string err;
+  ASSERT_EQ(RunConfig(Config(once, "once.csv"), &err), 0) << err;
+  const nlohmann::json a = nlohmann::json::parse(ReadAll(root_ / "report.json"));
+  ASSERT_EQ(RunConfig(Config(twice, "twice.csv"), &err), 0) << err;
+  const nlohmann::json b = nlohmann::json::parse(ReadAll(root_ / "report.json"));
+  const std::string n = std::to_string(once.size());
+  const std::string first_copy = std::to_string(once.size() + 2);
+  bool noticed = false;
+  for (const auto& note : b["notes"]) {
+    noticed = noticed ||
+              note.get<std::string>().find("twice.csv: " + n +
+                                           " rows repeat an earlier row exactly (every "
+                                           "column equal): line " +
+                                           first_copy + " repeats line 2, ") != std::string::npos;
+  }
+  EXPECT_TRUE(noticed) << b["notes"].dump(1);
+  size_t copies = 0;
+  for (const auto& g : b["gross_errors"]) {
+    copies += g["reason"].get<std::string>().rfind("an exact copy of line ", 0) == 0;
+  }
+  EXPECT_EQ(copies, once.size());
+  EXPECT_EQ(b["gross_errors"].size(), a["gross_errors"].size() + once.size());
+  EXPECT_EQ(a["final"]["records"]["edm"]["n"], b["final"]["records"]["edm"]["n"]);
+  for (const char* sigma : {"sigma_edm_m", "sigma_cam_m"}) {
+    const double sa = a["fit"][sigma].get<double>(), sb = b["fit"][sigma].get<double>();
+    EXPECT_NEAR(sb, sa, 1e-9 * sa) << sigma;
+  }
+}
+
+// A one-row pixels.csv beside records without camera rows: its zoom's camera
+// comes from the pixels alone, which need shots of at least 4 points; the
+// error names pixels.csv and what was needed, not a failed fit of records.csv.
+TEST_F(Failure, OneRowPixelsCsvIsAnInputErrorNamingIt) {
+  std::vector<Record> edm, cam;
+  for (const Record& r : Records()) (r.tool == Tool::kCam ? cam : edm).push_back(r);
+  ASSERT_FALSE(cam.empty());
+  const Record& c = cam.front();
+  const fs::path pixels = dir_ / "one_row_pixels.csv";
+  std::ostringstream row;
+  row.precision(17);
+  row << "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v\n"
+      << c.face << "," << c.zoom << "," << c.phi << "," << c.theta << ",s1,0,0," << c.x.x() << ","
+      << c.x.y() << "," << c.x.z() << "," << c.u << "," << c.v << "\n";
+  Put(pixels, row.str());
+  const fs::path config = Config(edm, "edm_only.csv");
+  Put(config, ReadAll(config) + "  pixels: " + pixels.string() + "\n");
+  std::string err;
+  EXPECT_EQ(RunConfig(config, &err), 1) << err;
+  EXPECT_NE(err.find(pixels.string() + ": zoom 0 (pixels from line 2)"), std::string::npos) << err;
+  EXPECT_NE(err.find("fewer than min_points_per_shot = 4 points"), std::string::npos) << err;
+  EXPECT_EQ(err.find("non-finite"), std::string::npos) << err;
+  EXPECT_EQ(err.find("edm_only.csv:"), std::string::npos) << err;
+}
+
+// A config path that is a folder: said so, not read as an empty config
+// whose first missing key is `data`.
+TEST_F(Failure, ConfigThatIsAFolderIsNamedAsAFolder) {
+  std::string err;
+  EXPECT_EQ(RunConfig(dir_, &err), 1) << err;
+  EXPECT_NE(err.find(dir_.string() + ": is a folder: expected a config (a YAML file), got 'a "
+                                     "folder'"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("'data'"), std::string::npos) << err;
+}
+
+// Pixels all in the critical region: nothing to start from, said with the
+// config, the file, its row count and the window that took them out.
+TEST_F(Failure, NothingToFitNamesTheConfigAndTheFile) {
+  std::vector<Record> cam;
+  for (const Record& r : Records()) {
+    if (r.tool == Tool::kCam) cam.push_back(r);
+  }
+  const fs::path pixels = dir_ / "critical_pixels.csv";
+  std::ostringstream rows;
+  rows.precision(17);
+  rows << "face,zoom,phi,theta,shot,target,corner,X,Y,Z,u,v\n";
+  for (size_t i = 0; i < 8; ++i) {
+    const Record& c = cam[i];
+    rows << c.face << "," << c.zoom << "," << c.phi << "," << c.theta << ",s" << i / 4 << ",0,"
+         << i % 4 << "," << c.x.x() << "," << c.x.y() << "," << c.x.z() << "," << c.u << "," << c.v
+         << "\n";
+  }
+  Put(pixels, rows.str());
+  // The fixture's config with the pixels instead of records and a critical
+  // region that holds every row.
+  const fs::path config = Config({}, "critical.csv");
+  std::string text = ReadAll(config);
+  text.replace(text.find("fit:\n"), 5,
+               "fit:\n  critical_region: {min_zenith_deg: 170, max_zenith_deg: 175}\n");
+  text.replace(text.find("  records: "), std::string::npos, "  pixels: " + pixels.string() + "\n");
+  Put(config, text);
+  std::string err;
+  EXPECT_EQ(RunConfig(config, &err), 1) << err;
+  EXPECT_NE(err.find(config.string() + ": nothing to start from: " + pixels.string() +
+                     " gave 8 pixel observations; 8 of them lie in the critical region (zenith "
+                     "angle outside fit.critical_region's 170 to 175 deg)"),
+            std::string::npos)
+      << err;
+}
+
 TEST_F(Failure, ExitCodesOfUsageAndInputErrorsAndHelp) {
   std::string err;
   EXPECT_EQ(Run("--no-such-option", &err), 2) << err;

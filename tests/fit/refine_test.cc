@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/model/kinematics.h"
@@ -60,6 +63,40 @@ TEST(Refine, NoiseFreeDhRecoversPredictionsExactly) {
   // 1e-9 m (the goal): residuals of exact data are round-off, ~1e-15 m
   // per unit of distance; the held-out distances reach 47 m.
   EXPECT_LT(MaxHeldOutError(model, o.truth), 1e-9);
+}
+
+// Every row in the critical region: the refusal names the files, their row
+// counts and the window that took the rows out.
+TEST(Refine, NothingToFitNamesTheFilesAndTheCriticalRegion) {
+  SimulationOptions o;
+  o.truth = PaperTruth(1);
+  o.plan = PaperPlanWithGrid();
+  Observations obs = Simulate(o).obs;
+  obs.records_source = "r.csv";
+  obs.pixels_source = "p.csv";
+  FitOptions fo;
+  fo.min_zenith_rad = 170 * M_PI / 180;
+  fo.max_zenith_rad = 175 * M_PI / 180;
+  InstrumentModel model = o.truth;
+  const std::string n = std::to_string(obs.records.size());
+  try {
+    Refine(obs, fo, &model);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "nothing to fit: r.csv gave " + n + " rows and p.csv 0 rows; " + n +
+                  " of them lie in the critical region (zenith angle outside "
+                  "fit.critical_region's 170 to 175 deg)");
+  }
+  obs.records.clear();
+  try {
+    Refine(obs, fo, &model);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "nothing to fit: r.csv gave 0 rows and p.csv 0 rows (give data.records, "
+              "data.pixels or data.shots rows)");
+  }
 }
 
 TEST(Refine, NoiseFreeSphericalRecoversSphericalTruth) {

@@ -191,6 +191,20 @@ TEST(YamlReader, SyntaxErrorsAndBadRoot) {
   EXPECT_EQ(missing.file, "/nonexistent/c.yaml");
 }
 
+// A folder opens as a stream that reads nothing; read as an empty document it
+// was reported as the config's first missing key (`data`).
+TEST(YamlReader, AFolderIsNamedAsAFolder) {
+  const std::string folder = ::testing::TempDir();
+  const InputError e =
+      CatchInputError([&] { YamlDocument::Load(folder, std::uintmax_t{4} << 20, "a config"); });
+  EXPECT_EQ(e.file, folder);
+  EXPECT_EQ(e.expected, "a config (a YAML file)");
+  EXPECT_EQ(e.got, "a folder");
+  EXPECT_THAT(e.what(), HasSubstr("is a folder"));
+  const InputError plain = CatchInputError([&] { YamlDocument::Load(folder); });
+  EXPECT_EQ(plain.expected, "a YAML file");
+}
+
 // yaml-cpp 0.7's LoadAll never returns on this text (the parser hands out
 // empty documents without advancing; found by fuzz/yaml_fuzzer.cc, which ate
 // 24 GB): the reader walks the documents with a bound. yaml-cpp reads the
