@@ -1,4 +1,4 @@
-// The run configuration reader (libcalib/io/config.h). LoadConfig takes a
+// The run configuration reader (libcalib/config/config.h). LoadConfig takes a
 // path, so each input goes through a temporary file. An accepted config must
 // hold finite numbers, pass the option structs' own Check() (the values are
 // promised to be checked where they are read), and DumpConfig's text must load
@@ -15,7 +15,7 @@
 #include <string>
 
 #include "fuzz/fuzz_util.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 #include "libcalib/text/errors.h"
 #include "libcalib/sim/simulator.h"
 

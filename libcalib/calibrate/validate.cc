@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {
@@ -140,12 +141,6 @@ std::vector<std::string> NonFiniteParameters(const InstrumentModel& m) {
     if (IsKinematic(e) && !all_finite(m.EffectValue(e))) out.push_back(Info(e).name);
   }
   return out;
-}
-
-std::string Join(const std::vector<std::string>& items) {
-  std::string s;
-  for (const std::string& i : items) s += (s.empty() ? "" : ", ") + i;
-  return s;
 }
 
 Sigma0 Sigma0Of(const std::vector<RowResidual>& rows, RobustLoss loss) {

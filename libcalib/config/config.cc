@@ -1,4 +1,4 @@
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 #include "libcalib/io/yaml_writer.h"
 
 #include <yaml-cpp/yaml.h>

@@ -1,4 +1,4 @@
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
