@@ -48,7 +48,8 @@ void RequireValid(const RunConfig& c) {
     RequireFiniteCamera(cam, "model.cameras");
   const rtscalib::FitOptions& f = c.calibration.fit;
   for (double x : {f.sigma_edm_m, f.sigma_cam_m, f.sigma_pixel_px, f.loss_scale,
-                   f.translation_bound_m, f.min_zenith_rad, f.max_zenith_rad}) {
+                   f.translation_bound_m, f.critical_region.min_zenith_rad,
+                   f.critical_region.max_zenith_rad}) {
     RequireFinite(x, "a fit option");
   }
   // FitOptions::Check() lives in the fit library (Ceres); its rules, repeated:
@@ -56,7 +57,7 @@ void RequireValid(const RunConfig& c) {
   Require(f.loss_scale > 0, "fit.robust_loss.scale > 0");
   Require(f.max_iterations >= 1, "fit.max_iterations >= 1");
   Require(f.translation_bound_m >= 0, "fit.translation_bound_m >= 0");
-  Require(f.min_zenith_rad < f.max_zenith_rad, "fit.critical_region min < max");
+  Require(f.critical_region.Check().empty(), "fit.critical_region 0 <= min < max <= pi");
   Require(f.num_threads >= 1, "fit.threads >= 1");
   RequireFinite(c.calibration.diagnose.significance, "diagnose.significance");
 

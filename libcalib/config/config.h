@@ -4,9 +4,11 @@
 // This layer sits above every module whose options it fills (calibrate, fit,
 // screen, sim, and api's uncertainty maps) and below the binary; io beneath
 // it gives the strict YAML reader and writer. Every section of libcalib is
-// read and dumped here (config.cc), and only here. A module outside libcalib
-// reads its own section through a ConfigSection (libcalib/io/config_section.h):
-// `render` (render/settings.h).
+// read and dumped in this folder, and only here: `simulate` in
+// simulate_section.h, every other one in config.cc, with the values they
+// share (checked numbers, poses, cameras) in fields.h. A module outside
+// libcalib reads its own section through a ConfigSection
+// (libcalib/io/config_section.h): `render` (render/settings.h).
 //
 // Rules:
 //   - unknown keys anywhere are errors naming the key path, file and line;
