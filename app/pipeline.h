@@ -16,7 +16,7 @@
 #include "app/render_stage.h"
 #include "libcalib/api/uncertainty_map.h"
 #include "libcalib/calibrate/calibrate.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 #include "render/settings.h"

@@ -18,7 +18,7 @@
 #include "app/figures.h"
 #include "app/output_folder.h"
 #include "app/pipeline.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 
 namespace rtscalib::app {
 

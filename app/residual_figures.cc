@@ -60,7 +60,8 @@ Figure ErrorMap(const MapSource& src, const std::vector<ObservationResidual>& ro
       {{"fill", "colour"}, {"title", "rms [" + src.unit + "]"}, {"type", "gradient"}});
   spec["layout"] = Grid(faces.size(), 60, 90);
   const int w = 420, h = 280;
-  const double zmin = fit.min_zenith_rad * kDegPerRad, zmax = fit.max_zenith_rad * kDegPerRad;
+  const double zmin = fit.critical_region.min_zenith_rad * kDegPerRad;
+  const double zmax = fit.critical_region.max_zenith_rad * kDegPerRad;
   for (int face : faces) {
     const std::string data = "face" + std::to_string(face);
     spec["data"].push_back(

@@ -17,7 +17,7 @@
 #include "app/vega.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/fit/parameter_layout.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 #include "libcalib/io/covariance_io.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"

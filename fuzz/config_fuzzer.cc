@@ -1,4 +1,4 @@
-// The run configuration reader (libcalib/io/config.h). LoadConfig takes a
+// The run configuration reader (libcalib/config/config.h). LoadConfig takes a
 // path, so each input goes through a temporary file. An accepted config must
 // hold finite numbers, pass the option structs' own Check() (the values are
 // promised to be checked where they are read), and DumpConfig's text must load
@@ -15,7 +15,7 @@
 #include <string>
 
 #include "fuzz/fuzz_util.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 #include "libcalib/text/errors.h"
 #include "libcalib/sim/simulator.h"
 
@@ -48,7 +48,8 @@ void RequireValid(const RunConfig& c) {
     RequireFiniteCamera(cam, "model.cameras");
   const rtscalib::FitOptions& f = c.calibration.fit;
   for (double x : {f.sigma_edm_m, f.sigma_cam_m, f.sigma_pixel_px, f.loss_scale,
-                   f.translation_bound_m, f.min_zenith_rad, f.max_zenith_rad}) {
+                   f.translation_bound_m, f.critical_region.min_zenith_rad,
+                   f.critical_region.max_zenith_rad}) {
     RequireFinite(x, "a fit option");
   }
   // FitOptions::Check() lives in the fit library (Ceres); its rules, repeated:
@@ -56,7 +57,7 @@ void RequireValid(const RunConfig& c) {
   Require(f.loss_scale > 0, "fit.robust_loss.scale > 0");
   Require(f.max_iterations >= 1, "fit.max_iterations >= 1");
   Require(f.translation_bound_m >= 0, "fit.translation_bound_m >= 0");
-  Require(f.min_zenith_rad < f.max_zenith_rad, "fit.critical_region min < max");
+  Require(f.critical_region.Check().empty(), "fit.critical_region 0 <= min < max <= pi");
   Require(f.num_threads >= 1, "fit.threads >= 1");
   RequireFinite(c.calibration.diagnose.significance, "diagnose.significance");
 

@@ -1,9 +1,9 @@
 // The config's `render` section (docs/config.md): how the run renders the
 // simulated shots and detects the AprilTags in them (app/render_stage.h).
 // The render module reads and checks its own section; the config loader
-// (libcalib/io/config.h) hands it over through a ConfigSection, so an unknown
-// or bad key inside `render:` is an error naming key path, file and line,
-// whether or not the run renders. No VTK here: the binary reads the section
+// (libcalib/config/config.h) hands it over through a ConfigSection
+// (libcalib/io/config_section.h), so an unknown or bad key inside `render:`
+// is an error naming key path, file and line, whether or not the run renders. No VTK here: the binary reads the section
 // even when built without the renderer.
 #pragma once
 
@@ -11,7 +11,7 @@
 
 #include <string>
 
-#include "libcalib/io/config.h"
+#include "libcalib/io/config_section.h"
 #include "libcalib/io/yaml_reader.h"
 
 namespace rtscalib::render {

@@ -26,12 +26,25 @@
 // model knows there only to first order.
 #pragma once
 
+#include <cmath>
+#include <string>
 #include <vector>
 
 #include "libcalib/api/rtscalib.h"
-#include "libcalib/io/uncertainty_map_options.h"
 
 namespace rtscalib {
+
+// What the maps are drawn for: the config's `report.uncertainty_map`
+// (docs/config.md, read by libcalib/config) and the report pass it on as it is.
+struct UncertaintyMapOptions {
+  double range_m = 10.0;    // ray length of the points [m]
+  int cols = 24;            // cells across the image
+  int rows = 18;            // cells down the image
+  double phi = 0.0;         // pointing [rad] (face 1, towards +y)
+  double theta = M_PI / 2;  // zenith angle [rad] (horizontal)
+  // "" when valid, else what is wrong.
+  std::string Check() const;
+};
 
 struct UncertaintyMap {
   int zoom = 0;
@@ -52,9 +65,7 @@ struct UncertaintyMap {
 };
 
 // One map per zoom of `inst` (which must have a parameter covariance: throws
-// std::logic_error otherwise, std::invalid_argument for bad options). The
-// options (UncertaintyMapOptions) are declared in
-// libcalib/io/uncertainty_map_options.h, which the config reads them into.
+// std::logic_error otherwise, std::invalid_argument for bad options).
 std::vector<UncertaintyMap> ProjectionUncertaintyMaps(const CalibratedInstrument& inst,
                                                       const UncertaintyMapOptions& options);
 

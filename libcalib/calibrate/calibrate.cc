@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "libcalib/calibrate/intrinsics.h"
 #include "libcalib/calibrate/validate.h"
 #include "libcalib/extract/intrinsics_from_rays.h"
 #include "libcalib/extract/simplify.h"
@@ -25,36 +26,6 @@
 
 namespace rtscalib {
 namespace {
-
-// Camera rows (or pixels) of a zoom span the image when their pixels cover at
-// least a quarter of its width and height: then the intrinsics are observable.
-bool CamDataSpanImage(const Observations& obs, const InstrumentModel& model, int zoom) {
-  if (zoom >= model.NumZooms()) return false;
-  double umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
-  auto add = [&](double u, double v) {
-    umin = std::min(umin, u);
-    umax = std::max(umax, u);
-    vmin = std::min(vmin, v);
-    vmax = std::max(vmax, v);
-  };
-  for (const Record& r : obs.records) {
-    if (r.tool == Tool::kCam && r.zoom == zoom) add(r.u, r.v);
-  }
-  for (const PixelObservation& p : obs.pixels) {
-    if (p.zoom == zoom) add(p.uv.x(), p.uv.y());
-  }
-  const CameraTool& c = model.cams[zoom];
-  return umax - umin > 0.25 * c.width && vmax - vmin > 0.25 * c.height;
-}
-
-std::set<int> ZoomsInData(const Observations& obs) {
-  std::set<int> z;
-  for (const Record& r : obs.records) {
-    if (r.tool == Tool::kCam) z.insert(r.zoom);
-  }
-  for (const PixelObservation& p : obs.pixels) z.insert(p.zoom);
-  return z;
-}
 
 // `obs` with `records` for its records and, with face 1 or 2, only that face's
 // rows; everything else (the boards, the image sizes, the sources) as in `obs`.
@@ -242,8 +213,7 @@ InitFromPixelsOptions PixelStartOptions(const CalibrationOptions& options,
   }
   io.targets = obs.targets;
   io.source = obs.pixels_source;
-  io.min_zenith_rad = options.fit.min_zenith_rad;
-  io.max_zenith_rad = options.fit.max_zenith_rad;
+  io.critical_region = options.fit.critical_region;
   io.threads = options.fit.num_threads;
   return io;
 }
@@ -254,8 +224,7 @@ void ExtractAndSimplify(const Observations& obs, const CalibrationOptions& optio
                         CalibrationProgress* progress, CalibrationResult* result) {
   progress->Step("extracting the DH model (Klug Sec. 3)");
   ExtractOptions eo;
-  eo.min_zenith_rad = options.fit.min_zenith_rad;
-  eo.max_zenith_rad = options.fit.max_zenith_rad;
+  eo.critical_region = options.fit.critical_region;
   // The extraction's messages name lines; the file is the records'.
   auto extract = [&](const std::vector<CameraTool>& cameras) {
     try {
@@ -345,24 +314,6 @@ InstrumentModel StartModel(const Observations& obs, const CalibrationOptions& op
   return start;
 }
 
-// The intrinsics decision: model.intrinsics fit -> always, fixed -> never,
-// auto -> when every zoom's camera data span the image.
-bool FitIntrinsics(const Observations& obs, const CalibrationOptions& options,
-                   const InstrumentModel& start) {
-  switch (options.model.intrinsics) {
-    case IntrinsicsMode::kFit:
-      return true;
-    case IntrinsicsMode::kFixed:
-      return false;
-    case IntrinsicsMode::kAuto:
-      break;
-  }
-  const std::set<int> zooms = ZoomsInData(obs);
-  bool span = true;
-  for (int z : zooms) span = span && CamDataSpanImage(obs, start, z);
-  return span && !zooms.empty();
-}
-
 // Stage 4's first half: the reduced set's refinement from the start. The
 // sweeps alone never span the image: intrinsics stay as they are there.
 struct ReducedFit {
@@ -375,7 +326,7 @@ ReducedFit RefineReduced(const Observations& reduced_obs, const InstrumentModel&
                          const FitOptions& fo) {
   ReducedFit r;
   r.options = fo;
-  r.options.fit_intrinsics = fo.fit_intrinsics && CamDataSpanImage(reduced_obs, start, 0);
+  r.options.fit_intrinsics = FitIntrinsicsOnReducedSet(fo.fit_intrinsics, reduced_obs, start);
   r.model = start;
   r.fit = Refine(reduced_obs, r.options, &r.model);
   return r;
@@ -530,7 +481,7 @@ std::vector<Record> Prepare(const Observations& obs, const CalibrationOptions& o
     result->table4 = t;
   }
   result->fit_options = options.fit;
-  result->fit_options.fit_intrinsics = FitIntrinsics(obs, options, result->start);
+  result->fit_options.fit_intrinsics = FitIntrinsics(options.model.intrinsics, obs, result->start);
   result->intrinsics_fitted = result->fit_options.fit_intrinsics;
   return reduced;
 }

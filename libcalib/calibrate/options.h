@@ -62,8 +62,9 @@ struct FitChecks {
 
 struct CalibrationOptions {
   ModelSettings model;
-  // fit.fit_intrinsics is not read: model.intrinsics decides it
-  // (CalibrationResult::intrinsics_fitted says what was decided).
+  // fit.fit_intrinsics is not read: Calibrate decides it from model.intrinsics
+  // and the data (FitIntrinsics, libcalib/calibrate/intrinsics.h;
+  // CalibrationResult::intrinsics_fitted says what was decided).
   FitOptions fit;
   DiagnoseOptions diagnose;
   // Checked by Calibrate's screening (ScreenObservations), which rejects

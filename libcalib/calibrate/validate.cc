@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/text/number_text.h"
 
 namespace rtscalib {
 namespace {
@@ -47,7 +48,7 @@ std::vector<RowResidual> Residuals(const Observations& obs, const InstrumentMode
   std::vector<int> record_index;
   for (size_t i = 0; i < obs.records.size(); ++i) {
     const Record& r = obs.records[i];
-    if (InCriticalRegion(r.theta, options.min_zenith_rad, options.max_zenith_rad)) continue;
+    if (options.critical_region.Contains(r.theta)) continue;
     if (r.tool == Tool::kCam && r.zoom >= model.NumZooms()) continue;  // Refine rejects these
     records.push_back(r);
     record_index.push_back(static_cast<int>(i));
@@ -66,7 +67,7 @@ std::vector<RowResidual> Residuals(const Observations& obs, const InstrumentMode
   std::vector<int> pixel_index;
   for (size_t i = 0; i < obs.pixels.size(); ++i) {
     const PixelObservation& p = obs.pixels[i];
-    if (InCriticalRegion(p.theta, options.min_zenith_rad, options.max_zenith_rad)) continue;
+    if (options.critical_region.Contains(p.theta)) continue;
     if (p.zoom >= model.NumZooms()) continue;
     pixels.push_back(p);
     pixel_index.push_back(static_cast<int>(i));
@@ -140,12 +141,6 @@ std::vector<std::string> NonFiniteParameters(const InstrumentModel& m) {
     if (IsKinematic(e) && !all_finite(m.EffectValue(e))) out.push_back(Info(e).name);
   }
   return out;
-}
-
-std::string Join(const std::vector<std::string>& items) {
-  std::string s;
-  for (const std::string& i : items) s += (s.empty() ? "" : ", ") + i;
-  return s;
 }
 
 Sigma0 Sigma0Of(const std::vector<RowResidual>& rows, RobustLoss loss) {
@@ -296,12 +291,12 @@ std::vector<std::string> MarkUndeterminedTools(const Observations& obs, const Fi
   bool edm = false;
   std::vector<bool> zoom(model->NumZooms(), false);
   for (const Record& r : obs.records) {
-    if (InCriticalRegion(r.theta, options.min_zenith_rad, options.max_zenith_rad)) continue;
+    if (options.critical_region.Contains(r.theta)) continue;
     if (r.tool == Tool::kEdm) edm = true;
     if (r.tool == Tool::kCam && r.zoom >= 0 && r.zoom < model->NumZooms()) zoom[r.zoom] = true;
   }
   for (const PixelObservation& p : obs.pixels) {
-    if (InCriticalRegion(p.theta, options.min_zenith_rad, options.max_zenith_rad)) continue;
+    if (options.critical_region.Contains(p.theta)) continue;
     if (p.zoom >= 0 && p.zoom < model->NumZooms()) zoom[p.zoom] = true;
   }
   std::vector<std::string> notes;

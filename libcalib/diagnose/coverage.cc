@@ -55,7 +55,7 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
     it->second.second = std::max(it->second.second, d);
   };
   for (const Record& r : obs.records) {
-    if (InCriticalRegion(r.theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
+    if (fit.critical_region.Contains(r.theta)) continue;
     ++c.records;
     pointing(r.face, r.phi, r.theta);
     if (r.tool == Tool::kEdm) {
@@ -96,7 +96,7 @@ Coverage MeasureCoverage(const Observations& obs, const InstrumentModel& model,
   };
   for (size_t i = 0; i < obs.pixels.size(); ++i) {
     const PixelObservation& p = obs.pixels[i];
-    if (InCriticalRegion(p.theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
+    if (fit.critical_region.Contains(p.theta)) continue;
     ++c.pixels;
     board_view(p);
     c.has_cam = true;

@@ -53,7 +53,7 @@ EquivalentTerms EquivalentSurveyingTerms(const InstrumentModel& dh, const FitOpt
     std::vector<double> dist;
     for (const RecordResidual& r : RecordResiduals(sph, obs.records)) {
       if (r.valid &&
-          !InCriticalRegion(obs.records[r.index].theta, o.min_zenith_rad, o.max_zenith_rad)) {
+          !o.critical_region.Contains(obs.records[r.index].theta)) {
         dist.push_back(r.distance);
       }
     }

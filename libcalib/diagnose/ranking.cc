@@ -87,7 +87,7 @@ GroupRms RmsOfModel(const Observations& observed, const InstrumentModel& model,
   GroupRms g;
   for (const RecordResidual& r : RecordResiduals(model, obs.records)) {
     const Record& rec = obs.records[r.index];
-    if (!r.valid || InCriticalRegion(rec.theta, fit.min_zenith_rad, fit.max_zenith_rad)) continue;
+    if (!r.valid || fit.critical_region.Contains(rec.theta)) continue;
     if (rec.tool == Tool::kEdm) {
       g.edm_ss += r.distance * r.distance;
       ++g.edm_n;
@@ -98,7 +98,7 @@ GroupRms RmsOfModel(const Observations& observed, const InstrumentModel& model,
   }
   for (const PixelResidual& p : PixelResiduals(model, obs.pixels)) {
     if (!p.valid ||
-        InCriticalRegion(obs.pixels[p.index].theta, fit.min_zenith_rad, fit.max_zenith_rad))
+        fit.critical_region.Contains(obs.pixels[p.index].theta))
       continue;
     g.pixels_ss += p.delta.squaredNorm();
     ++g.pixels_n;

@@ -4,7 +4,6 @@
 #include <cstdio>
 
 #include "libcalib/camera/opencv_model.h"
-#include "libcalib/eval/error_measures.h"
 #include "libcalib/model/focus.h"
 #include "libcalib/fit/unknowns.h"
 #include "libcalib/model/kinematics.h"
@@ -43,7 +42,7 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
     o.d = r.d;
     o.u = r.u;
     o.v = r.v;
-    o.critical = InCriticalRegion(r.theta, fit.min_zenith_rad, fit.max_zenith_rad);
+    o.critical = fit.critical_region.Contains(r.theta);
     try {
       Eigen::Vector3d calc, origin;
       if (r.tool == Tool::kEdm) {
@@ -90,7 +89,7 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
     o.theta = p.theta;
     o.u = p.uv.x();
     o.v = p.uv.y();
-    o.critical = InCriticalRegion(p.theta, fit.min_zenith_rad, fit.max_zenith_rad);
+    o.critical = fit.critical_region.Contains(p.theta);
     Eigen::Vector2d pred;
     if (p.zoom >= 0 && p.zoom < model.NumZooms() &&
         PredictPixel(model, p.zoom, p.phi, p.theta, p.X, &pred, focus[i])) {

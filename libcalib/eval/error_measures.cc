@@ -201,9 +201,4 @@ double ScalarisedObjective(const ErrorStats& s, double w_d, double w_s) {
   return w_d * s.mean_m + w_s * s.std_m;
 }
 
-bool InCriticalRegion(double theta, double min_zenith_rad, double max_zenith_rad) {
-  const double z = ZenithOf(theta);
-  return z < min_zenith_rad || z > max_zenith_rad;
-}
-
 }  // namespace rtscalib

@@ -73,7 +73,4 @@ PixelStats EvaluatePixels(const InstrumentModel& model,
 // Klug Eq. 98 scalarised objective w_d * mean + w_s * std over all points.
 double ScalarisedObjective(const ErrorStats& s, double w_d = 1.0, double w_s = 1.0);
 
-// Rows whose zenith angle lies outside [min, max] (SPEC 1 critical regions).
-bool InCriticalRegion(double theta, double min_zenith_rad, double max_zenith_rad);
-
 }  // namespace rtscalib

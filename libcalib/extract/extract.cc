@@ -13,8 +13,9 @@ namespace {
 std::string NoSweepMessage(int joint, const SweepSearch& search, const ExtractOptions& o) {
   std::ostringstream s;
   s << "no joint-" << joint << " sweep found: need at least " << o.min_sweep_points
-    << " usable rows (face 1, zenith in [" << Significant(o.min_zenith_rad * 180 / M_PI, 4) << ", "
-    << Significant(o.max_zenith_rad * 180 / M_PI, 4)
+    << " usable rows (face 1, zenith in ["
+    << Significant(o.critical_region.min_zenith_rad * 180 / M_PI, 4) << ", "
+    << Significant(o.critical_region.max_zenith_rad * 180 / M_PI, 4)
     << "] deg) of one tool, distance and pixel with "
     << (joint == 1 ? "the same theta and different phi" : "the same phi and different theta")
     << " (Klug Sec. 3.1.2: "

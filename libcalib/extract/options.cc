@@ -6,9 +6,8 @@ namespace rtscalib {
 
 std::string ExtractOptions::Check() const {
   std::ostringstream err;
-  if (!(min_zenith_rad >= 0.0 && min_zenith_rad < max_zenith_rad && max_zenith_rad <= M_PI)) {
-    err << "zenith limits must satisfy 0 <= min < max <= pi, got min " << min_zenith_rad << ", max "
-        << max_zenith_rad;
+  if (const std::string region = critical_region.Check(); !region.empty()) {
+    err << region;
   } else if (!(angle_tolerance_rad > 0.0 && angle_tolerance_rad < 0.1)) {
     err << "angle_tolerance_rad must be in (0, 0.1), got " << angle_tolerance_rad;
   } else if (!(distance_tolerance_m > 0.0)) {

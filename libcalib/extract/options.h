@@ -7,6 +7,7 @@
 #include <string>
 
 #include "libcalib/geometry/lines.h"
+#include "libcalib/model/critical_region.h"
 
 namespace rtscalib {
 
@@ -20,10 +21,9 @@ struct ExtractionError : std::runtime_error {
 };
 
 struct ExtractOptions {
-  // Critical regions (SPEC 1, Klug Sec. 5): face-1 rows with a zenith angle
-  // below min or above max are excluded from extraction and counted.
-  double min_zenith_rad = 10.0 * M_PI / 180.0;
-  double max_zenith_rad = 135.0 * M_PI / 180.0;
+  // Face-1 rows in the critical regions are excluded from extraction and
+  // counted (Calibrate passes FitOptions::critical_region).
+  CriticalRegion critical_region;
 
   // Two control readings (or two distances) closer than this are "the same".
   // Above the encoder noise of an RTS (~1e-5 rad, 2"), far below any sensible

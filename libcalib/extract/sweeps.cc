@@ -89,8 +89,7 @@ std::string FormatNumber(double v) {
 
 bool IsUsableForExtraction(const Record& r, const ExtractOptions& options) {
   if (r.face != 1) return false;
-  const double z = ZenithOf(r.theta);
-  return z >= options.min_zenith_rad && z <= options.max_zenith_rad;
+  return !options.critical_region.Contains(r.theta);
 }
 
 double Sweep::Control(const std::vector<Record>& records, int i) const {

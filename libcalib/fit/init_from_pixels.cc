@@ -8,7 +8,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "libcalib/eval/error_measures.h"
 #include "libcalib/model/kinematics.h"
 
 namespace rtscalib {
@@ -134,7 +133,7 @@ std::map<int, std::vector<PixelObservation>> ByZoom(const std::vector<PixelObser
                                                     const InitFromPixelsOptions& o, int* excluded) {
   std::map<int, std::vector<PixelObservation>> out;
   for (const PixelObservation& p : pixels) {
-    if (InCriticalRegion(p.theta, o.min_zenith_rad, o.max_zenith_rad)) {
+    if (o.critical_region.Contains(p.theta)) {
       ++*excluded;
       continue;
     }
@@ -175,7 +174,7 @@ std::string Describe(const ViewsCalibration& v) {
 }  // namespace
 
 std::string InitFromPixelsOptions::Check() const {
-  if (!(min_zenith_rad < max_zenith_rad)) return "min_zenith_rad must be < max_zenith_rad";
+  if (const std::string region = critical_region.Check(); !region.empty()) return region;
   for (size_t z = 0; z < cameras.size(); ++z) {
     if (cameras[z].width <= 0 || cameras[z].height <= 0) {
       return "cameras[" + std::to_string(z) + "] needs a positive image size";

@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "libcalib/fit/calibrate_views.h"
+#include "libcalib/model/critical_region.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 
@@ -56,9 +57,9 @@ struct InitFromPixelsOptions {
   TargetScene targets;
   // The pixels' file (Observations::pixels_source), for messages that name a line.
   std::string source = "pixels";
-  // Observations outside this zenith window are not used (critical regions, SPEC 1).
-  double min_zenith_rad = 10.0 * M_PI / 180.0;
-  double max_zenith_rad = 135.0 * M_PI / 180.0;
+  // Observations in the critical regions are not used (Calibrate passes
+  // FitOptions::critical_region).
+  CriticalRegion critical_region;
   int threads = 1;  // CalibrateViewsOptions::threads
   std::string Check() const;
 };

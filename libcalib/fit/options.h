@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "libcalib/model/critical_region.h"
 #include "libcalib/model/effects.h"
 
 namespace rtscalib {
@@ -59,10 +60,12 @@ struct FitOptions {
   // good to about (1 m ray) x (rotation error of the 1-px triplet, ~1e-2 rad),
   // so the default window is 0.1 m. 0 disables the bounds.
   double translation_bound_m = 0.1;
+  // Whether the cameras' fx, fy, cx, cy are free. Refine fits what it is
+  // told; Calibrate decides it (FitIntrinsics, libcalib/calibrate/intrinsics.h).
   bool fit_intrinsics = false;
-  // Zenith limits outside of which rows are excluded (critical regions, SPEC 1).
-  double min_zenith_rad = 10.0 * M_PI / 180.0;
-  double max_zenith_rad = 135.0 * M_PI / 180.0;
+  // Rows in the critical regions are excluded (libcalib/model/critical_region.h):
+  // the calibration's one region, fit.critical_region.
+  CriticalRegion critical_region;
   int num_threads = 2;
   bool compute_covariance = true;
   // Which observations' errors the covariance lets be correlated

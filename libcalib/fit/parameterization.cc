@@ -10,7 +10,6 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "libcalib/eval/error_measures.h"
 
 namespace rtscalib {
 
@@ -385,7 +384,7 @@ UsedRows SelectRows(const Observations& obs, const FitOptions& options, int num_
   };
   for (size_t i = 0; i < obs.records.size(); ++i) {
     const Record& r = obs.records[i];
-    if (InCriticalRegion(r.theta, options.min_zenith_rad, options.max_zenith_rad)) {
+    if (options.critical_region.Contains(r.theta)) {
       ++rows.excluded_critical;
       continue;
     }
@@ -394,7 +393,7 @@ UsedRows SelectRows(const Observations& obs, const FitOptions& options, int num_
   }
   for (size_t i = 0; i < obs.pixels.size(); ++i) {
     const PixelObservation& p = obs.pixels[i];
-    if (InCriticalRegion(p.theta, options.min_zenith_rad, options.max_zenith_rad)) {
+    if (options.critical_region.Contains(p.theta)) {
       ++rows.excluded_critical;
       continue;
     }

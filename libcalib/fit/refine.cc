@@ -30,8 +30,9 @@ std::string FitOptions::Check() const {
   if (!(loss_scale > 0)) return "fit.robust_loss.scale must be > 0";
   if (max_iterations < 1) return "fit.max_iterations must be >= 1";
   if (translation_bound_m < 0) return "fit.translation_bound_m must be >= 0";
-  if (!(min_zenith_rad < max_zenith_rad))
-    return "fit.critical_region: min_zenith must be < max_zenith";
+  if (const std::string region = critical_region.Check(); !region.empty()) {
+    return "fit.critical_region: " + region;
+  }
   if (num_threads < 1) return "fit.threads must be >= 1";
   return gross_errors.Check();
 }

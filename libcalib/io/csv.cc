@@ -24,12 +24,6 @@ std::string Trim(const std::string& s) {
   return s.substr(b, e - b);
 }
 
-std::string Join(const std::vector<std::string>& items) {
-  std::string out;
-  for (const std::string& s : items) out += (out.empty() ? "" : ", ") + s;
-  return out;
-}
-
 // Splits one line into trimmed fields; quoted fields keep their inner text
 // verbatim.
 std::vector<std::string> SplitFields(const std::string& line, const std::string& file,

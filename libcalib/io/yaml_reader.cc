@@ -41,12 +41,6 @@ std::string ChildOf(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
 }
 
-std::string Join(const std::vector<std::string>& items) {
-  std::string out;
-  for (const std::string& s : items) out += (out.empty() ? "" : ", ") + s;
-  return out;
-}
-
 // A short one-line rendering of a value for "got '...'".
 std::string Brief(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "";

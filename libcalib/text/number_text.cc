@@ -72,6 +72,12 @@ std::string YamlDouble(double x, bool shortest) {
   return shortest ? FormatShortestDouble(x) : FormatDouble(x);
 }
 
+std::string Join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& s : items) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
 std::string Fmt(const char* printf_format, double x) {
   char buf[64];
   std::snprintf(buf, sizeof buf, printf_format, x);

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "libcalib/model/angle_unit.h"
 
@@ -44,5 +45,7 @@ std::string Significant(double x, int digits = 6);
 // text as printf's %.*g, written by std::to_chars without a format string
 // or a locale, for tables of many thousand numbers.
 void AppendSignificant(std::string* out, double x, int digits);
+// "a, b, c": names listed in a message.
+std::string Join(const std::vector<std::string>& items);
 
 }  // namespace rtscalib

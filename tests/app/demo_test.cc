@@ -13,7 +13,7 @@
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/fit/refine.h"
 #include "libcalib/fit/unknowns.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 
 #include "tests/app/figure_checks.h"
 

@@ -20,6 +20,7 @@
 
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/io/records.h"
+#include "libcalib/model/critical_region.h"
 #include "libcalib/sim/simulator.h"
 
 namespace rtscalib {
@@ -165,7 +166,7 @@ class Failure : public ::testing::Test {
       const size_t i = records.size() - 1 - k;
       const Record& r = records[i];
       if (r.tool == tool && r.set == "grid" &&
-          !InCriticalRegion(r.theta, 10 * M_PI / 180, 135 * M_PI / 180))
+          !CriticalRegion().Contains(r.theta))
         return static_cast<int>(i);
     }
     ADD_FAILURE() << "no grid row";

@@ -31,7 +31,7 @@
 #include <string>
 
 #include "app/pipeline.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 #include "libcalib/model/kinematics.h"
 #include "tests/app/held_out.h"
 

@@ -28,7 +28,7 @@
 #include <string>
 
 #include "app/pipeline.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 
 namespace rtscalib::app {
 namespace {

@@ -46,7 +46,7 @@
 #include <string>
 
 #include "app/pipeline.h"
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 #include "libcalib/model/gauge.h"
 #include "libcalib/model/kinematics.h"
 

@@ -20,6 +20,7 @@
 
 #include "libcalib/calibrate/calibrate.h"
 #include "libcalib/eval/error_measures.h"
+#include "libcalib/model/critical_region.h"
 #include "libcalib/screen/gross.h"
 #include "libcalib/sim/simulator.h"
 
@@ -155,7 +156,7 @@ Corrupted Corrupt(Corruption kind, std::uint64_t seed, const InstrumentModel& tr
       // What the truth predicts for the corrupted row against what was seen.
       const std::vector<PixelResidual> moved = PixelResiduals(truth, {p});
       if ((!moved[0].valid || moved[0].delta.norm() > 15 * pixel_sigma) &&
-          !InCriticalRegion(p.theta, 10 * M_PI / 180, 135 * M_PI / 180))
+          !CriticalRegion().Contains(p.theta))
         out.detectable.insert(p.line);
       out.lines.insert(p.line);
     } else {
@@ -175,7 +176,7 @@ Corrupted Corrupt(Corruption kind, std::uint64_t seed, const InstrumentModel& tr
       // them their errors. A face label contradicts every zenith angle but
       // pi (straight down, both faces' border), in the regions or not.
       if (kind == Corruption::kFace ? FaceContradictsTheta(r.face, r.theta)
-                                    : !InCriticalRegion(r.theta, 10 * M_PI / 180, 135 * M_PI / 180))
+                                    : !CriticalRegion().Contains(r.theta))
         out.detectable.insert(r.line);
     }
     ++done;

@@ -51,7 +51,7 @@ int GridRow(const Observations& obs, Tool tool, bool last = false) {
     const int i = last ? n - 1 - k : k;
     const Record& r = obs.records[i];
     if (r.tool == tool && r.set == "grid" &&
-        !InCriticalRegion(r.theta, defaults.min_zenith_rad, defaults.max_zenith_rad)) {
+        !defaults.critical_region.Contains(r.theta)) {
       return i;
     }
   }

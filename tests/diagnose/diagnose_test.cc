@@ -111,8 +111,7 @@ TEST(Diagnose, CountsRowsAndCriticalRegionsLikeTheFit) {
   int used = 0;
   const std::vector<RecordResidual> res = RecordResiduals(s.f.model, obs.records);
   for (size_t i = 0; i < obs.records.size(); ++i) {
-    if (InCriticalRegion(obs.records[i].theta, s.f.options.min_zenith_rad,
-                         s.f.options.max_zenith_rad)) {
+    if (s.f.options.critical_region.Contains(obs.records[i].theta)) {
       ++critical;
       continue;
     }

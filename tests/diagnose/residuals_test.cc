@@ -154,8 +154,8 @@ TEST(ObservationResiduals, CriticalRowsAreMarkedWithTheFitsLimits) {
   // SPEC 1: zenith angles outside [min, max] and their face-2 mirrors.
   const InstrumentModel m = IdealModel(Kinematics::kSpherical, 1, CameraTool{});
   FitOptions fit;
-  fit.min_zenith_rad = 0.3;
-  fit.max_zenith_rad = 2.0;
+  fit.critical_region.min_zenith_rad = 0.3;
+  fit.critical_region.max_zenith_rad = 2.0;
   Observations obs;
   for (double theta : {0.1, 1.0, 2.5}) {
     obs.records.push_back(EdmRecord(m, 1, 0.5, theta, 2.0));
@@ -178,8 +178,8 @@ TEST(ResidualTable, EveryRowAsGivenWithWhatAPictureNeeds) {
   const InstrumentModel m = IdealModel(Kinematics::kSpherical, 1, CameraTool{});
   const auto& k = m.cams[0].intrinsics;  // f = 1000 px, principal point (640, 480)
   FitOptions fit;
-  fit.min_zenith_rad = 0.3;
-  fit.max_zenith_rad = 2.0;
+  fit.critical_region.min_zenith_rad = 0.3;
+  fit.critical_region.max_zenith_rad = 2.0;
   Observations obs;
   obs.records.push_back(EdmRecord(m, 1, 0.5, 1.0, 2.0));
   obs.records.back().x += Eigen::Vector3d(3e-5, 0, 4e-5);  // |r| = 5e-5 m

@@ -50,20 +50,6 @@ TEST(ErrorMeasures, ScalarisedObjectiveIsEq98) {
   EXPECT_NEAR(ScalarisedObjective(s, 2.0, 0.5), 4.25e-3, kRoundOff);
 }
 
-TEST(ErrorMeasures, CriticalRegionsInBothFaces) {
-  // SPEC 1: zenith angles near 0 and beyond the upper limit, and their face-2
-  // mirrors (2 pi - theta), are critical.
-  const double lo = 10 * M_PI / 180, hi = 135 * M_PI / 180, deg = M_PI / 180;
-  EXPECT_TRUE(InCriticalRegion(5 * deg, lo, hi));
-  EXPECT_FALSE(InCriticalRegion(90 * deg, lo, hi));
-  EXPECT_TRUE(InCriticalRegion(140 * deg, lo, hi));
-  EXPECT_TRUE(InCriticalRegion(2 * M_PI - 5 * deg, lo, hi));
-  EXPECT_FALSE(InCriticalRegion(2 * M_PI - 90 * deg, lo, hi));
-  EXPECT_TRUE(InCriticalRegion(2 * M_PI - 140 * deg, lo, hi));
-  EXPECT_FALSE(InCriticalRegion(lo, lo, hi)) << "the limits themselves are usable";
-  EXPECT_FALSE(InCriticalRegion(hi, lo, hi));
-}
-
 // One pose of Klug's plan (EDM at 1 m and 2 m; camera rays of 1 m at the
 // principal point and 1 px off it in u and v) under `m`, noise-free.
 std::vector<Record> OnePose(const InstrumentModel& m, double phi, double theta) {

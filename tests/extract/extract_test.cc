@@ -209,8 +209,8 @@ TEST(ExtractDhModel, ExcludedRowsAreCounted) {
   EXPECT_EQ(r.usable_rows, static_cast<int>(n) - 25);
   // Wider limits keep the theta = 0 pose out (zenith 0 < 1e-3) but take the rest.
   ExtractOptions wide;
-  wide.min_zenith_rad = 1e-3;
-  wide.max_zenith_rad = M_PI;
+  wide.critical_region.min_zenith_rad = 1e-3;
+  wide.critical_region.max_zenith_rad = M_PI;
   const ExtractionResult r2 = ExtractDhModel(records, truth.cams, wide);
   EXPECT_EQ(r2.excluded.critical_zenith, 5);
   EXPECT_EQ(r2.sweeps[1].NumPoints(), 14);
@@ -288,7 +288,7 @@ TEST(ExtractDhModel, EndEffectorOnTheAxisIsAClearError) {
   plan.sweep1_theta = 0.0;
   plan.cam = false;
   ExtractOptions options;
-  options.min_zenith_rad = 0.0;
+  options.critical_region.min_zenith_rad = 0.0;
   try {
     ExtractDhModel(PaperPlanRecords(ideal, plan), {}, options);
     FAIL() << "expected ExtractionError";
@@ -314,7 +314,7 @@ TEST(ExtractDhModel, TinyCircleAroundTheAxisIsOnAxis) {
   plan.sweep1_theta = 0.0;
   plan.cam = false;
   ExtractOptions options;
-  options.min_zenith_rad = 0.0;
+  options.critical_region.min_zenith_rad = 0.0;
   EXPECT_THROW(
       {
         try {
@@ -441,8 +441,8 @@ TEST(ExtractDhModel, CameraRowsWithoutTripletsUseEveryRowGivenIntrinsics) {
 
 TEST(ExtractDhModel, BadOptionsAreRejected) {
   ExtractOptions o;
-  o.min_zenith_rad = 2.0;
-  o.max_zenith_rad = 1.0;
+  o.critical_region.min_zenith_rad = 2.0;
+  o.critical_region.max_zenith_rad = 1.0;
   EXPECT_NE(o.Check(), "");
   EXPECT_THROW(ExtractDhModel({}, {}, o), std::invalid_argument);
   EXPECT_EQ(ExtractOptions().Check(), "");

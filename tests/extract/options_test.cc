@@ -13,8 +13,8 @@ TEST(ExtractOptions, DefaultsAreValid) {
   const ExtractOptions o;
   EXPECT_EQ(o.Check(), "");
   // SPEC 1 critical regions by default: zenith near 0 and beyond 3/4 pi.
-  EXPECT_GT(o.min_zenith_rad, 0.0);
-  EXPECT_NEAR(o.max_zenith_rad, 0.75 * M_PI, 1e-15);
+  EXPECT_GT(o.critical_region.min_zenith_rad, 0.0);
+  EXPECT_NEAR(o.critical_region.max_zenith_rad, 0.75 * M_PI, 1e-15);
   EXPECT_EQ(o.joint1_set_hint, "sweep1");
   EXPECT_EQ(o.joint2_set_hint, "sweep2");
 }
@@ -31,15 +31,19 @@ struct BadCase {
 TEST(ExtractOptions, CheckNamesTheOptionAndTheValue) {
   const std::vector<BadCase> cases = {
       {"min above max",
-       [](ExtractOptions* o) { o->min_zenith_rad = 2.0, o->max_zenith_rad = 1.0; },
+       [](ExtractOptions* o) {
+         o->critical_region.min_zenith_rad = 2.0, o->critical_region.max_zenith_rad = 1.0;
+       },
        {"zenith limits", "min 2", "max 1"}},
       {"negative min",
-       [](ExtractOptions* o) { o->min_zenith_rad = -0.1; },
+       [](ExtractOptions* o) { o->critical_region.min_zenith_rad = -0.1; },
        {"zenith limits", "-0.1"}},
       {"max beyond pi",
-       [](ExtractOptions* o) { o->max_zenith_rad = 4.0; },
+       [](ExtractOptions* o) { o->critical_region.max_zenith_rad = 4.0; },
        {"zenith limits", "max 4"}},
-      {"NaN min", [](ExtractOptions* o) { o->min_zenith_rad = std::nan(""); }, {"zenith limits"}},
+      {"NaN min",
+       [](ExtractOptions* o) { o->critical_region.min_zenith_rad = std::nan(""); },
+       {"zenith limits"}},
       {"angle tolerance 0",
        [](ExtractOptions* o) { o->angle_tolerance_rad = 0.0; },
        {"angle_tolerance_rad", "got 0"}},
@@ -78,8 +82,8 @@ TEST(ExtractOptions, CheckNamesTheOptionAndTheValue) {
 
 TEST(ExtractOptions, BoundaryValuesAreValid) {
   ExtractOptions o;
-  o.min_zenith_rad = 0.0;
-  o.max_zenith_rad = M_PI;
+  o.critical_region.min_zenith_rad = 0.0;
+  o.critical_region.max_zenith_rad = M_PI;
   o.min_sweep_points = 3;
   EXPECT_EQ(o.Check(), "");
 }

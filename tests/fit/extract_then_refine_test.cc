@@ -8,6 +8,7 @@
 #include "libcalib/eval/error_measures.h"
 #include "libcalib/extract/extract.h"
 #include "libcalib/fit/refine.h"
+#include "libcalib/model/critical_region.h"
 #include "libcalib/model/kinematics.h"
 #include "libcalib/sim/simulator.h"
 
@@ -63,7 +64,7 @@ std::vector<Record> HeldOut(const InstrumentModel& truth) {
   plan.grid_pixels_per_axis = 4;
   std::vector<Record> out;
   for (const Record& r : PlanRecords(plan, truth)) {
-    if (!InCriticalRegion(r.theta, 10 * M_PI / 180, 135 * M_PI / 180)) out.push_back(r);
+    if (!CriticalRegion().Contains(r.theta)) out.push_back(r);
   }
   return out;
 }

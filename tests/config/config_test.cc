@@ -1,4 +1,4 @@
-#include "libcalib/io/config.h"
+#include "libcalib/config/config.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -93,7 +93,7 @@ TEST(Config, DocsFullExampleLoadsWithEveryKey) {
   EXPECT_EQ(radial.At(0), (std::vector<int>{kK1, kK2}));
   EXPECT_EQ(radial.At(1), (std::vector<int>{kK1, kK2, kK3}));
   EXPECT_EQ(c.calibration.fit.loss, RobustLoss::kHuber);
-  EXPECT_DOUBLE_EQ(c.calibration.fit.max_zenith_rad, 135 * M_PI / 180);
+  EXPECT_DOUBLE_EQ(c.calibration.fit.critical_region.max_zenith_rad, 135 * M_PI / 180);
   EXPECT_EQ(c.calibration.checks.max_sigma0, 100);
   EXPECT_FALSE(c.calibration.fit.fit_intrinsics);  // auto: the pipeline decides
   ASSERT_TRUE(c.simulate.has_value());
@@ -377,11 +377,13 @@ TEST(Config, TruthEffectsInReportUnits) {
   EXPECT_EQ(links.key, "simulate.truth.links");
 }
 
-TEST(Config, IntrinsicsFitSetsFitOption) {
+TEST(Config, IntrinsicsFitIsReadIntoTheModelSettings) {
   TempDir dir;
   const RunConfig c =
       LoadConfig(dir.Write("run.yaml", std::string(kSimulateOnly) + "model: {intrinsics: fit}\n"));
-  EXPECT_TRUE(c.calibration.fit.fit_intrinsics);
+  EXPECT_EQ(c.calibration.model.intrinsics, IntrinsicsMode::kFit);
+  EXPECT_FALSE(c.calibration.fit.fit_intrinsics)
+      << "Calibrate decides it (FitIntrinsics, libcalib/calibrate/intrinsics.h), not the config";
 }
 
 TEST(Config, BadPlanValues) {
@@ -482,7 +484,8 @@ TEST(Config, DumpLoadsBackToTheSameConfig) {
   EXPECT_EQ(b.calibration.model.cameras[1].distortion, a.calibration.model.cameras[1].distortion);
   EXPECT_EQ(b.calibration.fit.sigma_edm_m, a.calibration.fit.sigma_edm_m);
   EXPECT_EQ(b.calibration.fit.loss, a.calibration.fit.loss);
-  EXPECT_EQ(b.calibration.fit.min_zenith_rad, a.calibration.fit.min_zenith_rad);
+  EXPECT_EQ(b.calibration.fit.critical_region.min_zenith_rad,
+            a.calibration.fit.critical_region.min_zenith_rad);
   EXPECT_EQ(b.simulate->noise.angle_rad, a.simulate->noise.angle_rad);
   EXPECT_EQ(b.simulate->plan.grid_edm_distances, a.simulate->plan.grid_edm_distances);
   EXPECT_EQ(b.simulate->truth.effects, a.simulate->truth.effects);

@@ -1,6 +1,15 @@
 // The run configuration (SPEC 5; every key is documented in docs/config.md):
 // one YAML file -> the library's option structs.
 //
+// This layer sits above every module whose options it fills (calibrate, fit,
+// screen, sim, and api's uncertainty maps) and below the binary; io beneath
+// it gives the strict YAML reader and writer. Every section of libcalib is
+// read and dumped in this folder, and only here: `simulate` in
+// simulate_section.h, every other one in config.cc, with the values they
+// share (checked numbers, poses, cameras) in fields.h. A module outside
+// libcalib reads its own section through a ConfigSection
+// (libcalib/io/config_section.h): `render` (render/settings.h).
+//
 // Rules:
 //   - unknown keys anywhere are errors naming the key path, file and line;
 //   - relative paths are relative to the config file's folder;
@@ -8,22 +17,19 @@
 //     offending key (negative sigmas, zenith limits out of order, effects not
 //     in the catalogue, distortion longer than 14, non-positive image sizes,
 //     fit.threads beyond 4 x the machine's hardware threads, simulated plans
-//     beyond AcquisitionPlan::Check()'s bounds...);
-//   - the `render` section belongs to the render module (render/options.h),
-//     which reads it through a ConfigSection; its keys are checked as strictly.
-// io does not depend on sim or fit code, only on their option structs, so
-// the simulated truth of Klug's instrument (PaperTruth, libcalib/sim) is not
-// built here: `truth_from_paper` tells the caller to build it.
+//     beyond AcquisitionPlan::Check()'s bounds...).
+// The config reads option structs, not the code that uses them: the
+// simulated truth of Klug's instrument (PaperTruth, libcalib/sim) is not
+// built here; `truth_from_paper` tells the caller to build it.
 #pragma once
 
-#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "libcalib/api/uncertainty_map.h"
 #include "libcalib/calibrate/options.h"
-#include "libcalib/io/uncertainty_map_options.h"
-#include "libcalib/io/yaml_reader.h"
+#include "libcalib/io/config_section.h"
 #include "libcalib/model/angle_unit.h"
 #include "libcalib/sim/options.h"
 
@@ -47,9 +53,8 @@ struct RunConfig {
   int detect_jobs = 1;  // detect.jobs: threads detecting the photos
   // The `model`, `fit`, `diagnose` and `screen` sections: the options of the
   // calibration itself (Calibrate, libcalib/calibrate), passed as they are.
-  // model.intrinsics kFit sets calibration.fit.fit_intrinsics; kAuto leaves it
-  // false for Calibrate to decide from the data. fit.max_sigma0 is
-  // calibration.checks.max_sigma0 (libcalib/calibrate/validate.h).
+  // fit.max_sigma0 is calibration.checks.max_sigma0
+  // (libcalib/calibrate/validate.h).
   CalibrationOptions calibration;
   // Present when the config has a `simulate` section. Used only when there
   // are no data files (then it is required).
@@ -62,17 +67,6 @@ struct RunConfig {
   UncertaintyMapOptions uncertainty_map;
   std::string output_dir;          // absolute; default <config_dir>/out
   std::vector<std::string> notes;  // things worth a line in the run log
-};
-
-// A top-level section that belongs to a module outside libcalib (`render`,
-// read by render/options.h). `read` gets the section's node before unknown
-// keys are checked: every key it does not ask for is an error naming key
-// path, file and line, like everywhere else. `dump` gives the section as the
-// module read it (every default written out), or a null node to leave it out.
-struct ConfigSection {
-  std::string key;
-  std::function<void(const YamlNode&)> read;
-  std::function<YAML::Node()> dump;
 };
 
 // Throws InputError for anything wrong with the file (see above). A top-level
