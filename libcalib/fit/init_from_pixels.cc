@@ -248,8 +248,8 @@ InitFromPixelsResult InitFromPixels(const std::vector<PixelObservation>& observe
          << " pixel observations";
     if (excluded > 0) {
       what << "; " << excluded << " of them lie in the critical region (zenith angle outside "
-           << "fit.critical_region's " << options.min_zenith_rad * 180 / M_PI << " to "
-           << options.max_zenith_rad * 180 / M_PI << " deg)";
+           << "fit.critical_region's " << options.critical_region.min_zenith_rad * 180 / M_PI << " to "
+           << options.critical_region.max_zenith_rad * 180 / M_PI << " deg)";
     }
     throw std::invalid_argument(what.str());
   }

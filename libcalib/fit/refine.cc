@@ -806,8 +806,8 @@ FitSummary Refine(const Observations& obs, const FitOptions& options, Instrument
       what << " (give data.records, data.pixels or data.shots rows)";
     } else if (rows.excluded_critical > 0) {
       what << "; " << rows.excluded_critical << " of them lie in the critical region (zenith "
-           << "angle outside fit.critical_region's " << options.min_zenith_rad * 180 / M_PI
-           << " to " << options.max_zenith_rad * 180 / M_PI << " deg)";
+           << "angle outside fit.critical_region's " << options.critical_region.min_zenith_rad * 180 / M_PI
+           << " to " << options.critical_region.max_zenith_rad * 180 / M_PI << " deg)";
     }
     throw std::invalid_argument(what.str());
   }

@@ -75,8 +75,8 @@ TEST(Refine, NothingToFitNamesTheFilesAndTheCriticalRegion) {
   obs.records_source = "r.csv";
   obs.pixels_source = "p.csv";
   FitOptions fo;
-  fo.min_zenith_rad = 170 * M_PI / 180;
-  fo.max_zenith_rad = 175 * M_PI / 180;
+  fo.critical_region.min_zenith_rad = 170 * M_PI / 180;
+  fo.critical_region.max_zenith_rad = 175 * M_PI / 180;
   InstrumentModel model = o.truth;
   const std::string n = std::to_string(obs.records.size());
   try {
