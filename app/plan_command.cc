@@ -1,0 +1,244 @@
+// `rtscalib plan` (SPEC 8, docs/plan.md): the session's shots before it is
+// measured, or the shots to add to an earlier run. Writes plan.csv (the
+// columns of a shots.csv, SPEC 7, the image column left for the user to
+// fill), plan.json and figures/plan.* into the output folder, never
+// replacing a file that exists.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "app/commands.h"
+#include "app/plan_figures.h"
+#include "libcalib/io/config.h"
+#include "libcalib/io/model_io.h"
+#include "libcalib/io/csv.h"
+#include "libcalib/io/records.h"
+#include "libcalib/io/safe_write.h"
+#include "libcalib/plan/session.h"
+#include "libcalib/plan/settings.h"
+#include "libcalib/sim/simulator.h"
+#include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
+#include "render/settings.h"
+
+namespace rtscalib::app {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+json Number(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+
+std::string PlanCsv(const PlanResult& plan, bool placements, bool focus) {
+  std::ostringstream o;
+  o << "# rtscalib plan: take the photos in this order (faces grouped, one walk per\n"
+       "# placement), fill the image column with each photo's file, then calibrate\n"
+       "# with data.shots: plan.csv (docs/plan.md). phi, theta in radians.\n";
+  o << "shot,face,zoom,phi,theta" << (placements ? ",placement" : "")
+    << (focus ? ",focus_distance" : "") << ",image\n";
+  for (const PlanShot& s : plan.shots) {
+    o << s.pointing.name << "," << s.pointing.face << "," << s.pointing.zoom << ","
+      << FormatDouble(s.pointing.phi) << "," << FormatDouble(s.pointing.theta);
+    if (placements) o << "," << s.pointing.placement;
+    if (focus) o << "," << FormatDouble(s.focus_distance);
+    o << ",\n";
+  }
+  return o.str();
+}
+
+json PlanJson(const PlanResult& plan, const PlanOptions& options, const std::string& mode) {
+  json j;
+  j["mode"] = mode;
+  j["goal_met"] = plan.goal_met;
+  j["limits"] = plan.limits;
+  j["shots"] = plan.shots.size();
+  j["candidates"] = plan.candidates;
+  j["max_shots"] = options.max_shots;
+  j["motor_travel_deg"] = plan.motor_travel_rad * 180.0 / M_PI;
+  json goal;
+  for (const auto& [name, sigma] : options.goal.sigmas) goal["sigmas"][name] = sigma;
+  goal["projection_px"] = options.goal.projection_px;
+  j["goal"] = goal;
+  json constants = json::array();
+  for (const PredictedConstant& c : plan.constants) {
+    json e = {{"name", c.name},
+              {"unit", c.unit},
+              {"sigma", Number(c.sigma)},
+              {"determined", c.determined},
+              {"sigma_all_candidates", Number(c.sigma_all_candidates)},
+              {"sigma_without_plan", Number(c.sigma_fixed)}};
+    if (c.goal > 0) e["goal"] = c.goal;
+    constants.push_back(e);
+  }
+  j["constants"] = constants;
+  json proj = json::array();
+  for (const PredictedProjection& p : plan.projection) {
+    json e = {{"zoom", p.zoom}, {"worst_px", Number(p.worst_px)}};
+    if (p.goal_px > 0) e["goal_px"] = p.goal_px;
+    proj.push_back(e);
+  }
+  j["projection"] = proj;
+  json shots = json::array();
+  for (const PlanShot& s : plan.shots) {
+    json e = {{"shot", s.pointing.name},
+              {"face", s.pointing.face},
+              {"zoom", s.pointing.zoom},
+              {"phi", s.pointing.phi},
+              {"theta", s.pointing.theta},
+              {"placement", s.pointing.placement},
+              {"points", s.points},
+              {"determines", s.determines}};
+    if (s.focus_distance > 0) e["focus_distance"] = s.focus_distance;
+    json buys = json::object();
+    for (const auto& [name, sigma] : s.sigma_without) buys[name] = Number(sigma);
+    if (!s.sigma_without.empty()) e["sigma_without_this_shot"] = buys;
+    shots.push_back(e);
+  }
+  j["plan"] = shots;
+  return j;
+}
+
+// Every effect the earlier run's diagnosis ranked as not identifiable, with
+// the value it estimated (report units, NaN when none).
+std::vector<std::pair<Effect, double>> NotIdentifiable(const std::string& report_path) {
+  std::ifstream in(report_path);
+  if (!in) throw InputError::File(report_path, 0, "report", "the run's report.json", "no such file");
+  json r;
+  try {
+    r = json::parse(in);
+  } catch (const json::exception& e) {
+    throw InputError::File(report_path, 0, "report", "JSON", e.what());
+  }
+  std::vector<std::pair<Effect, double>> out;
+  if (!r.contains("diagnosis") || !r["diagnosis"].contains("ranking")) return out;
+  for (const json& e : r["diagnosis"]["ranking"]) {
+    if (!e.is_object() || e.value("identifiable", true)) continue;
+    const std::optional<Effect> effect = EffectFromName(e.value("effect", std::string()));
+    if (!effect || !IsKinematic(*effect)) continue;
+    double value = std::nan("");
+    if (e.contains("value") && e["value"].is_array() && !e["value"].empty() &&
+        e["value"][0].is_number())
+      value = e["value"][0].get<double>();
+    out.push_back({*effect, value});
+  }
+  return out;
+}
+
+}  // namespace
+
+int RunPlan(const PlanArgs& args) {
+  if (args.config.empty() == args.from.empty()) {
+    throw std::invalid_argument("plan: expected exactly one of --config FILE.yaml or --from OUT");
+  }
+  const bool from = !args.from.empty();
+  const std::string config_path =
+      from ? (fs::path(args.from) / "latest" / "config.yaml").string() : args.config;
+  std::error_code ec;
+  if (!fs::exists(config_path, ec)) {
+    throw InputError::File(config_path, 0, "config",
+                           from ? "the run's config.yaml (OUT/latest/config.yaml)" : "a config",
+                           "no such file");
+  }
+  render::RenderSettings render;
+  PlanSettings settings;
+  const std::string config_dir = fs::absolute(config_path).parent_path().string();
+  const RunConfig config = LoadConfig(
+      config_path, {render::RenderConfigSection(&render), PlanConfigSection(&settings, config_dir)});
+  PlanSession session = SessionFromConfig(config, settings);
+  PlanOptions options = settings.options;
+  std::string mode = "plan";
+  std::vector<std::string> added_effects;
+  if (from) {
+    mode = "add to " + args.from;
+    // The earlier run's model is the prior; its observations (the config's
+    // data, or its simulated session) are measured already.
+    const std::string model_path = (fs::path(args.from) / "model.yaml").string();
+    session.prior = ReadModelYaml(model_path);
+    if (!config.records_path.empty()) session.fixed.records = ReadRecords(config.records_path, config.angle_unit).records;
+    if (!config.pixels_path.empty()) {
+      session.fixed.pixels = ReadPixels(config.pixels_path, config.angle_unit).pixels;
+    } else if (config.records_path.empty() && config.simulate) {
+      SimulationOptions sim = *config.simulate;
+      sim.truth = session.prior;
+      sim.noise = NoiseOptions();
+      const Observations obs = Simulate(sim).obs;
+      session.fixed.pixels = obs.pixels;
+      for (PixelObservation& p : session.fixed.pixels) p.X_known = session.board_poses_known;
+    }
+    // The effects the diagnosis could not determine are estimated in the
+    // plan; the goal: each amplitude to a third of the value the ranking
+    // estimated (3 sigma), unless plan.goal names it.
+    for (const auto& [effect, value] : NotIdentifiable((fs::path(args.from) / "report.json").string())) {
+      session.calibration.model.effects.Add(effect);
+      const std::string name = std::string(Info(effect).name) + "." + Info(effect).param_names[0];
+      added_effects.push_back(Info(effect).name);
+      bool named = false;
+      for (const auto& g : options.goal.sigmas) named = named || g.first == name;
+      if (!named) {
+        options.goal.sigmas.push_back(
+            {name, std::isfinite(value) && std::abs(value) > 0 ? std::abs(value) / 3.0 : 1.0});
+      }
+    }
+    if (added_effects.empty() && !args.quiet) {
+      std::cout << "rtscalib plan: the run's diagnosis found no effect it could not determine; "
+                   "planning toward plan.goal alone\n";
+    }
+  }
+  const PlanResult plan = PlanShots(session, options);
+
+  const std::string out_dir = !args.output.empty() ? args.output
+                              : from ? (fs::path(args.from) / "plan").string()
+                                     : config.output_dir;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw WriteError(out_dir, ec.message());
+  for (const char* name : {"plan.csv", "plan.json"}) {
+    if (fs::exists(fs::path(out_dir) / name, ec)) {
+      throw InputError::File((fs::path(out_dir) / name).string(), 0, "output",
+                             "no file of this name (rtscalib does not overwrite files you have)",
+                             "it exists; choose another --output");
+    }
+  }
+  bool placements = false, focus = false;
+  for (const PlanShot& s : plan.shots) {
+    placements = placements || !s.pointing.placement.empty();
+    focus = focus || s.focus_distance > 0;
+  }
+  json j = PlanJson(plan, options, mode);
+  if (from) j["effects_not_identifiable"] = added_effects;
+  std::string note;
+  const std::vector<Figure> figures{PlanFigure(plan)};
+  if (!plan.shots.empty()) {
+    const std::string fig_dir = (fs::path(out_dir) / "figures").string();
+    bool taken = false;
+    for (const char* ext : {".vg.json", ".svg", ".png"})
+      taken = taken || fs::exists(fs::path(fig_dir) / (std::string("plan") + ext), ec);
+    if (!taken) {
+      WriteFigureFiles(figures, fig_dir, &note);
+      j["figures"] = {"figures/plan.vg.json"};
+    }
+  }
+  WriteFileAtomic((fs::path(out_dir) / "plan.csv").string(), PlanCsv(plan, placements, focus),
+                  Existing::kKeep);
+  WriteFileAtomic((fs::path(out_dir) / "plan.json").string(), j.dump(2) + "\n", Existing::kKeep);
+  if (!args.quiet) {
+    std::cout << "rtscalib plan: " << plan.shots.size() << " shots of " << plan.candidates
+              << " candidates; goal " << (plan.goal_met ? "met" : "NOT met") << "\n";
+    for (const std::string& l : plan.limits) std::cout << "  limit: " << l << "\n";
+    for (const PredictedConstant& c : plan.constants) {
+      if (c.goal > 0)
+        std::cout << "  " << c.name << ": sigma " << Significant(c.sigma, 3) << " " << c.unit
+                  << " (goal " << Significant(c.goal, 3) << ")\n";
+    }
+    for (const PredictedProjection& p : plan.projection)
+      std::cout << "  projection zoom " << p.zoom << ": worst " << Significant(p.worst_px, 3)
+                << " px\n";
+    std::cout << "  wrote " << out_dir << "/plan.csv, plan.json"
+              << (note.empty() ? "" : " (" + note + ")") << "\n";
+  }
+  return 0;
+}
+
+}  // namespace rtscalib::app
