@@ -100,7 +100,7 @@ double WorstSigma(double a, double b, double d) {
 }  // namespace
 
 std::string PlanOptions::Check() const {
-  if (max_shots < 1) return "plan.max_shots: expected an integer >= 1";
+  if (max_shots < 0) return "plan.max_shots: expected an integer >= 0";
   if (candidates_per_board < 1) return "plan.candidates_per_board: expected an integer >= 1";
   if (!(fill > 0 && fill <= 1)) return "plan.fill: expected a number in (0, 1]";
   if (faces.empty()) return "plan.faces: expected a non-empty list of 1 and/or 2";
@@ -383,12 +383,51 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     result.constants.push_back(pc);
     constants.push_back(f);
   }
+  // Free parameters that no observation of the pool touches at all (an EDM
+  // effect in a session without EDM rows): estimated, never determined.
+  std::set<std::string> absent;
+  {
+    InstrumentModel copy = model;
+    const Parameterization param(
+        &copy, fit, FactsOf(all, SelectRows(all, fit, model.NumZooms(), UnknownZoom::kSkip)));
+    std::set<Effect> listed;
+    for (const BlockDecision& d : param.Blocks()) {
+      for (const FreeColumn& c : d.columns) {
+        if (column_of.count(c.name) || IsNuisance(c)) continue;
+        std::vector<std::pair<std::string, std::string>> names;  // name, unit
+        if (c.effect && IsKinematic(*c.effect)) {
+          if (!listed.insert(*c.effect).second) continue;
+          const EffectInfo& ie = Info(*c.effect);
+          for (int k = 0; k < ie.num_params; ++k)
+            names.push_back({std::string(ie.name) + "." + ie.param_names[k], ie.report_units[k]});
+        } else {
+          names.push_back({c.name, UnitOfColumn(c)});
+        }
+        for (const auto& [name, unit] : names) {
+          PredictedConstant pc;
+          pc.name = name;
+          pc.unit = unit;
+          pc.determined = false;
+          absent.insert(name);
+          result.constants.push_back(pc);
+        }
+      }
+    }
+  }
   // Goals on constants.
   std::vector<Functional> goals;
+  std::vector<std::string> unreachable;  // goals on constants no observation touches
   for (const auto& [name, sigma] : o.goal.sigmas) {
     int found = -1;
     for (size_t k = 0; k < constants.size(); ++k) {
       if (constants[k].name == name) found = static_cast<int>(k);
+    }
+    if (found < 0 && absent.count(name)) {
+      for (PredictedConstant& pc : result.constants) {
+        if (pc.name == name) pc.goal = sigma;
+      }
+      unreachable.push_back(name);
+      continue;
     }
     if (found < 0) {
       std::string valid;
@@ -696,6 +735,11 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   }
   // What limits an unmet goal.
   result.goal_met = no_goal || met;
+  for (const std::string& name : unreachable) {
+    result.limits.push_back(
+        name + ": these targets cannot determine it (no candidate photo or fixed observation "
+               "depends on it); it needs other observations (e.g. EDM rows for an EDM effect)");
+  }
   for (size_t k = 0; k < goals.size(); ++k) {
     const PredictedConstant& pc = result.constants[goals[k].constant];
     if (!goal_possible[k]) {

@@ -70,7 +70,7 @@ struct PlanOptions {
   PlanGoal goal;
   std::vector<int> faces{1, 2};
   std::vector<int> zooms;  // empty: every zoom of the model
-  int max_shots = 400;     // budget
+  int max_shots = 400;     // budget (0: the prediction of PlanSession::fixed alone)
   // Candidate pointings per usable board, zoom and face (the simulator's
   // stratified pattern, ShotPlan::shots_per_board) and how much of the view
   // the pattern spans (ShotPlan::fill).
