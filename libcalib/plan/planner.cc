@@ -515,14 +515,41 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     a.diagonal().array() += ridge;
     return Eigen::LLT<Eigen::MatrixXd>(a).solve(Eigen::MatrixXd::Identity(q, q)).eval();
   };
-  auto unmet = [&](const Eigen::MatrixXd& cov, std::vector<char>* goal_unmet,
+  // The covariance a fit of the information `a` reports (the
+  // pseudo-inverse, as TangentCovariance), with the directions `a` does not
+  // determine yet: a goal with a part there is not met.
+  struct Pseudo {
+    Eigen::MatrixXd cov, null;
+  };
+  auto exact = [&](const Eigen::MatrixXd& a) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> e(a);
+    const double t = q ? e.eigenvalues()[q - 1] : 0.0;
+    Eigen::VectorXd d = Eigen::VectorXd::Zero(q);
+    std::vector<int> nd;
+    for (int i = 0; i < q; ++i) {
+      if (e.eigenvalues()[i] > kRankTolerance * t) {
+        d[i] = 1.0 / e.eigenvalues()[i];
+      } else {
+        nd.push_back(i);
+      }
+    }
+    Pseudo out;
+    out.cov = e.eigenvectors() * d.asDiagonal() * e.eigenvectors().transpose();
+    out.null = e.eigenvectors()(Eigen::all, nd);
+    return out;
+  };
+  auto in_null = [](const Pseudo& ps, const Eigen::VectorXd& g) {
+    return ps.null.cols() > 0 && (ps.null.transpose() * g).norm() > 1e-6 * g.norm();
+  };
+  auto unmet = [&](const Pseudo& ps, std::vector<char>* goal_unmet,
                    std::vector<char>* cell_unmet) {
+    const Eigen::MatrixXd& cov = ps.cov;
     bool any = false;
     goal_unmet->assign(goals.size(), 0);
     cell_unmet->assign(cells.size(), 0);
     for (size_t k = 0; k < goals.size(); ++k) {
       const double v = g_goals.col(k).dot(cov * g_goals.col(k));
-      (*goal_unmet)[k] = !(v <= 1.0);
+      (*goal_unmet)[k] = !(v <= 1.0) || in_null(ps, g_goals.col(k));
       any = any || (*goal_unmet)[k];
     }
     if (o.goal.projection_px > 0) {
@@ -530,7 +557,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
         const Eigen::VectorXd pa = cov * g_cells.col(k), pb = cov * g_cells.col(k + 1);
         const double s = WorstSigma(g_cells.col(k).dot(pa), g_cells.col(k).dot(pb),
                                     g_cells.col(k + 1).dot(pb));
-        if (!(s <= 1.0)) {
+        if (!(s <= 1.0) || in_null(ps, g_cells.col(k)) || in_null(ps, g_cells.col(k + 1))) {
           (*cell_unmet)[k] = (*cell_unmet)[k + 1] = 1;
           any = true;
         }
@@ -567,7 +594,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   while (static_cast<int>(order.size()) < std::min(o.max_shots, n_cand)) {
     const Eigen::MatrixXd cov = covariance(m, kRidge);
     if (!no_goal) {
-      unmet(cov, &goal_unmet, &cell_unmet);
+      unmet(exact(m), &goal_unmet, &cell_unmet);
       bool left = false;
       for (size_t k = 0; k < goals.size(); ++k) {
         if (!goal_possible[k]) goal_unmet[k] = 0;  // no shot helps: not a target
@@ -629,9 +656,8 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     result.log_det.push_back(log_det(m));
   }
   if (!no_goal && !met) {
-    const Eigen::MatrixXd cov = covariance(m, kRidge);
     bool left = false;
-    unmet(cov, &goal_unmet, &cell_unmet);
+    unmet(exact(m), &goal_unmet, &cell_unmet);
     for (size_t k = 0; k < goals.size(); ++k) left = left || (goal_unmet[k] && goal_possible[k]);
     for (char c : cell_unmet) left = left || c;
     met = !left;
@@ -656,8 +682,8 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
         const int c = order[loss[t].second];
         const Eigen::MatrixXd trial = m - factor[c].l * factor[c].l.transpose();
         std::vector<char> gu, cu;
-        bool left = unmet(covariance(trial, kRidge), &gu, &cu);
-        left = false;
+        unmet(exact(trial), &gu, &cu);
+        bool left = false;
         for (size_t k = 0; k < goals.size(); ++k) left = left || (gu[k] && goal_possible[k]);
         for (char x : cu) left = left || x;
         if (!left) {
@@ -754,6 +780,10 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
                                 " candidate photos give sigma " +
                                 std::to_string(pc.sigma_all_candidates) + " " + pc.unit +
                                 " > goal " + std::to_string(pc.goal));
+      } else if (static_cast<int>(order.size()) < std::min(o.max_shots, n_cand)) {
+        result.limits.push_back(pc.name + ": geometry: no further candidate photo lowers sigma " +
+                                std::to_string(pc.sigma) + " " + pc.unit + " toward the goal " +
+                                std::to_string(pc.goal) + " by a step of the greedy choice");
       } else {
         result.limits.push_back(pc.name + ": budget: max_shots " + std::to_string(o.max_shots) +
                                 " gives sigma " + std::to_string(pc.sigma) + " " + pc.unit +
@@ -765,7 +795,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     for (const PredictedProjection& pp : result.projection) {
       if (pp.worst_px <= pp.goal_px) continue;
       result.limits.push_back("projection zoom " + std::to_string(pp.zoom) + ": " +
-                              (static_cast<int>(order.size()) >= o.max_shots ? "budget" : "geometry") +
+                              (static_cast<int>(order.size()) >= std::min(o.max_shots, n_cand) ? "budget" : "geometry") +
                               ": worst sigma " + std::to_string(pp.worst_px) + " px > goal " +
                               std::to_string(pp.goal_px) + " px");
     }
