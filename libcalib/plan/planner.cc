@@ -180,7 +180,10 @@ Observations SimulatePlannedShots(const PlanSession& session, const std::vector<
   }
   Observations obs = Simulate(sim).obs;
   if (!session.board_poses_known) {
-    for (PixelObservation& p : obs.pixels) p.X_known = false;
+    for (PixelObservation& p : obs.pixels) {
+      p.X_known = false;  // the corner's position is the estimated board's
+      p.X.setZero();
+    }
     for (const auto& [placement, scene] : session.scenes) {
       for (TagBoard b : scene.boards) {
         b.pose_known = false;
@@ -591,9 +594,26 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   };
   bool met = false;
   std::vector<char> goal_unmet, cell_unmet;
+  int min_per_zoom = o.min_shots_per_zoom;
+  if (min_per_zoom < 0) {
+    bool cam_records = false;
+    for (const Record& r : session.fixed.records) cam_records = cam_records || r.tool == Tool::kCam;
+    min_per_zoom = cam_records ? 0 : 8;
+  }
+  std::map<int, int> per_zoom;  // chosen photos per zoom
+  for (int z : zooms) per_zoom[z] = 0;
+  // Zooms below their minimum (only their candidates count while there are).
+  auto short_zooms = [&] {
+    std::set<int> out;
+    for (const auto& [z, n] : per_zoom) {
+      if (n < min_per_zoom) out.insert(z);
+    }
+    return out;
+  };
   while (static_cast<int>(order.size()) < std::min(o.max_shots, n_cand)) {
     const Eigen::MatrixXd cov = covariance(m, kRidge);
-    if (!no_goal) {
+    const std::set<int> below = short_zooms();
+    if (!no_goal && below.empty()) {
       unmet(exact(m), &goal_unmet, &cell_unmet);
       bool left = false;
       for (size_t k = 0; k < goals.size(); ++k) {
@@ -608,7 +628,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     }
     // Weight W = sum of the unmet functionals' outer products (A), or none (D).
     Eigen::MatrixXd w = Eigen::MatrixXd::Zero(q, q);
-    if (!no_goal) {
+    if (!no_goal && below.empty()) {
       for (size_t k = 0; k < goals.size(); ++k) {
         if (goal_unmet[k]) w.noalias() += g_goals.col(k) * g_goals.col(k).transpose();
       }
@@ -616,11 +636,14 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
         if (cell_unmet[k]) w.noalias() += g_cells.col(k) * g_cells.col(k).transpose();
       }
     }
-    const Eigen::MatrixXd pwp = no_goal ? cov : (cov * w * cov).eval();
+    // Below a zoom's minimum: D-optimal among that zoom's candidates.
+    const bool d_step = no_goal || !below.empty();
+    const Eigen::MatrixXd pwp = d_step ? cov : (cov * w * cov).eval();
     // First-order reductions, then the exact ones on the shortlist.
     std::vector<std::pair<double, int>> first;
     for (int c = 0; c < n_cand; ++c) {
       if (chosen[c] || factor[c].l.cols() == 0) continue;
+      if (!below.empty() && !below.count(pool.shots[c].pointing.zoom)) continue;
       const Eigen::MatrixXd& l = factor[c].l;
       first.push_back({(l.transpose() * pwp * l).trace(), c});
     }
@@ -637,7 +660,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
       Eigen::MatrixXd smat = l.transpose() * a;
       smat.diagonal().array() += 1.0;
       double gain;
-      if (no_goal) {
+      if (d_step) {
         gain = 2.0 * Eigen::LLT<Eigen::MatrixXd>(smat).matrixLLT().diagonal().array().log().sum();
       } else {
         gain = (Eigen::LLT<Eigen::MatrixXd>(smat).solve(a.transpose() * w * a)).trace();
@@ -650,6 +673,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     if (best < 0 || !(best_gain > 0)) break;
     chosen[best] = 1;
     order.push_back(best);
+    ++per_zoom[pool.shots[best].pointing.zoom];
     m.noalias() += factor[best].l * factor[best].l.transpose();
     const Eigen::MatrixXd after = covariance(m, kRidge);
     result.criterion.push_back(no_goal ? -log_det(m) : phi_all(after));
@@ -680,6 +704,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
       std::sort(loss.begin(), loss.end());
       for (size_t t = 0; t < std::min<size_t>(loss.size(), 8); ++t) {
         const int c = order[loss[t].second];
+        if (per_zoom[pool.shots[c].pointing.zoom] <= min_per_zoom) continue;
         const Eigen::MatrixXd trial = m - factor[c].l * factor[c].l.transpose();
         std::vector<char> gu, cu;
         unmet(exact(trial), &gu, &cu);
@@ -689,6 +714,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
         if (!left) {
           m = trial;
           chosen[c] = 0;
+          --per_zoom[pool.shots[c].pointing.zoom];
           order.erase(order.begin() + static_cast<long>(loss[t].second));
           removed = true;
           break;

@@ -77,6 +77,12 @@ struct PlanOptions {
   int candidates_per_board = 16;
   double fill = 0.7;
   bool exchange = true;  // the pass that removes shots the goal does not need
+  // Photos per zoom a plan takes at least, whatever the goal: a session
+  // without records starts each zoom's camera from its photos alone
+  // (libcalib/fit/calibrate_views.h, OpenCV's calibrateCamera of several
+  // views of a planar board), which a first-order design does not see; -1
+  // (default) = 8 for a session without camera records, else 0.
+  int min_shots_per_zoom = -1;
   // Where the projection sigma is evaluated (the report's uncertainty maps'
   // options: pointing, range, grid).
   UncertaintyMapOptions projection;

@@ -207,14 +207,6 @@ TEST(PlanSimulation, Zoom3TrackerSessionReportsThePlannedSigmas) {
   CheckSession(s, o, "zoom3 tracker session (configs/plan.yaml, projection 0.03 px)");
 }
 
-TEST(PlanSimulation, OneBoardSessionReportsThePlannedSigmas) {
-  // No records, one board moved to six placements, its poses estimated.
-  const LoadedSession s = LoadSession("one_board.yaml");
-  PlanOptions o = s.settings.options;
-  o.goal.projection_px = 0.1;
-  CheckSession(s, o, "one-board session (configs/one_board.yaml, projection 0.1 px)");
-}
-
 TEST(PlanSimulation, Zoom3DefaultSessionNeedsMorePhotos) {
   CompareWithDefault(LoadSession("plan.yaml"), {0, 1, 2}, "configs/plan.yaml (zoom3)");
 }
