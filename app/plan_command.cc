@@ -12,6 +12,7 @@
 
 #include "app/commands.h"
 #include "app/plan_figures.h"
+#include "libcalib/fit/parameterization.h"
 #include "libcalib/io/config.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/csv.h"
@@ -101,9 +102,9 @@ json PlanJson(const PlanResult& plan, const PlanOptions& options, const std::str
   return j;
 }
 
-// Every effect the earlier run's diagnosis ranked as not identifiable, with
-// the value it estimated (report units, NaN when none).
-std::vector<std::pair<Effect, double>> NotIdentifiable(const std::string& report_path) {
+// Every kinematic effect the earlier run's diagnosis ranked as not
+// identifiable.
+std::vector<Effect> NotIdentifiable(const std::string& report_path) {
   std::ifstream in(report_path);
   if (!in) throw InputError::File(report_path, 0, "report", "the run's report.json", "no such file");
   json r;
@@ -112,17 +113,12 @@ std::vector<std::pair<Effect, double>> NotIdentifiable(const std::string& report
   } catch (const json::exception& e) {
     throw InputError::File(report_path, 0, "report", "JSON", e.what());
   }
-  std::vector<std::pair<Effect, double>> out;
+  std::vector<Effect> out;
   if (!r.contains("diagnosis") || !r["diagnosis"].contains("ranking")) return out;
   for (const json& e : r["diagnosis"]["ranking"]) {
     if (!e.is_object() || e.value("identifiable", true)) continue;
     const std::optional<Effect> effect = EffectFromName(e.value("effect", std::string()));
-    if (!effect || !IsKinematic(*effect)) continue;
-    double value = std::nan("");
-    if (e.contains("value") && e["value"].is_array() && !e["value"].empty() &&
-        e["value"][0].is_number())
-      value = e["value"][0].get<double>();
-    out.push_back({*effect, value});
+    if (effect && IsKinematic(*effect)) out.push_back(*effect);
   }
   return out;
 }
@@ -168,19 +164,17 @@ int RunPlan(const PlanArgs& args) {
       session.fixed.pixels = obs.pixels;
       for (PixelObservation& p : session.fixed.pixels) p.X_known = session.board_poses_known;
     }
-    // The effects the diagnosis could not determine are estimated in the
-    // plan; the goal: each amplitude to a third of the value the ranking
-    // estimated (3 sigma), unless plan.goal names it.
-    for (const auto& [effect, value] : NotIdentifiable((fs::path(args.from) / "report.json").string())) {
+    // The effects the diagnosis could not determine (and the kinematics do
+    // not contain) are estimated in the plan; the goal: each amplitude to 1
+    // in its report unit (1 arcsec, 1 ppm, 1 mm), unless plan.goal names it.
+    for (Effect effect : NotIdentifiable((fs::path(args.from) / "report.json").string())) {
+      if (ContainedInKinematics(session.calibration.model.kinematics, effect)) continue;
       session.calibration.model.effects.Add(effect);
       const std::string name = std::string(Info(effect).name) + "." + Info(effect).param_names[0];
       added_effects.push_back(Info(effect).name);
       bool named = false;
       for (const auto& g : options.goal.sigmas) named = named || g.first == name;
-      if (!named) {
-        options.goal.sigmas.push_back(
-            {name, std::isfinite(value) && std::abs(value) > 0 ? std::abs(value) / 3.0 : 1.0});
-      }
+      if (!named) options.goal.sigmas.push_back({name, 1.0});
     }
     if (added_effects.empty() && !args.quiet) {
       std::cout << "rtscalib plan: the run's diagnosis found no effect it could not determine; "

@@ -55,7 +55,7 @@ BENCHMARK(BM_PlanZoom3Projection)->Unit(benchmark::kMillisecond);
 void BM_PlanZoom3Constants(benchmark::State& state) {
   Loaded l = Load();
   l.options.goal.projection_px = 0;
-  l.options.goal.sigmas = {{"hz_eccentricity.e", 0.012}};
+  l.options.goal.sigmas = {{"hz_eccentricity.e", 0.0125}};
   for (int z = 0; z < 3; ++z) {
     const std::string c = "cam[" + std::to_string(z) + "].";
     l.options.goal.sigmas.push_back({c + "fx", 0.05 * (z + 1)});
