@@ -19,16 +19,16 @@ namespace rtscalib::app {
 RunSettings LoadRunSettings(const std::string& path) {
   RunSettings s;
   const std::string dir = std::filesystem::absolute(path).parent_path().string();
-  s.config = LoadConfig(path, {render::RenderConfigSection(&s.render), PlanConfigSection(&s.plan, dir)});
+  s.config =
+      LoadConfig(path, {render::RenderConfigSection(&s.render), PlanConfigSection(&s.plan, dir)});
   return s;
 }
 
 std::string DumpRunSettings(const RunSettings& settings) {
   render::RenderSettings render = settings.render;
   PlanSettings plan = settings.plan;
-  return DumpConfig(settings.config,
-                    {render::RenderConfigSection(&render),
-                     PlanConfigSection(&plan, settings.config.config_dir)});
+  return DumpConfig(settings.config, {render::RenderConfigSection(&render),
+                                      PlanConfigSection(&plan, settings.config.config_dir)});
 }
 
 Observations LoadObservations(const RunSettings& settings, const std::string& work_dir,

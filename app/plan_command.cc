@@ -14,8 +14,8 @@
 #include "app/plan_figures.h"
 #include "libcalib/fit/parameterization.h"
 #include "libcalib/io/config.h"
-#include "libcalib/io/model_io.h"
 #include "libcalib/io/csv.h"
+#include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/plan/session.h"
@@ -84,14 +84,10 @@ json PlanJson(const PlanResult& plan, const PlanOptions& options, const std::str
   j["projection"] = proj;
   json shots = json::array();
   for (const PlanShot& s : plan.shots) {
-    json e = {{"shot", s.pointing.name},
-              {"face", s.pointing.face},
-              {"zoom", s.pointing.zoom},
-              {"phi", s.pointing.phi},
-              {"theta", s.pointing.theta},
-              {"placement", s.pointing.placement},
-              {"points", s.points},
-              {"determines", s.determines}};
+    json e = {{"shot", s.pointing.name},   {"face", s.pointing.face},
+              {"zoom", s.pointing.zoom},   {"phi", s.pointing.phi},
+              {"theta", s.pointing.theta}, {"placement", s.pointing.placement},
+              {"points", s.points},        {"determines", s.determines}};
     if (s.focus_distance > 0) e["focus_distance"] = s.focus_distance;
     json buys = json::object();
     for (const auto& [name, sigma] : s.sigma_without) buys[name] = Number(sigma);
@@ -106,7 +102,8 @@ json PlanJson(const PlanResult& plan, const PlanOptions& options, const std::str
 // identifiable.
 std::vector<Effect> NotIdentifiable(const std::string& report_path) {
   std::ifstream in(report_path);
-  if (!in) throw InputError::File(report_path, 0, "report", "the run's report.json", "no such file");
+  if (!in)
+    throw InputError::File(report_path, 0, "report", "the run's report.json", "no such file");
   json r;
   try {
     r = json::parse(in);
@@ -141,8 +138,8 @@ int RunPlan(const PlanArgs& args) {
   render::RenderSettings render;
   PlanSettings settings;
   const std::string config_dir = fs::absolute(config_path).parent_path().string();
-  const RunConfig config = LoadConfig(
-      config_path, {render::RenderConfigSection(&render), PlanConfigSection(&settings, config_dir)});
+  const RunConfig config = LoadConfig(config_path, {render::RenderConfigSection(&render),
+                                                    PlanConfigSection(&settings, config_dir)});
   PlanSession session = SessionFromConfig(config, settings);
   PlanOptions options = settings.options;
   std::string mode = "plan";
@@ -153,7 +150,8 @@ int RunPlan(const PlanArgs& args) {
     // data, or its simulated session) are measured already.
     const std::string model_path = (fs::path(args.from) / "model.yaml").string();
     session.prior = ReadModelYaml(model_path);
-    if (!config.records_path.empty()) session.fixed.records = ReadRecords(config.records_path, config.angle_unit).records;
+    if (!config.records_path.empty())
+      session.fixed.records = ReadRecords(config.records_path, config.angle_unit).records;
     if (!config.pixels_path.empty()) {
       session.fixed.pixels = ReadPixels(config.pixels_path, config.angle_unit).pixels;
     } else if (config.records_path.empty() && config.simulate) {
@@ -184,8 +182,8 @@ int RunPlan(const PlanArgs& args) {
   const PlanResult plan = PlanShots(session, options);
 
   const std::string out_dir = !args.output.empty() ? args.output
-                              : from ? (fs::path(args.from) / "plan").string()
-                                     : config.output_dir;
+                              : from               ? (fs::path(args.from) / "plan").string()
+                                                   : config.output_dir;
   fs::create_directories(out_dir, ec);
   if (ec) throw WriteError(out_dir, ec.message());
   for (const char* name : {"plan.csv", "plan.json"}) {

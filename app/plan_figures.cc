@@ -32,11 +32,13 @@ Figure PlanFigure(const PlanResult& plan) {
       {"width", width},
       {"height", height},
       {"padding", 8},
-      {"title", {{"text", f.title},
-                 {"subtitle", "horizontal angle phi against zenith angle theta (readings of each "
-                              "face); colour: what the shot determines most; size: zoom; grey "
-                              "line: the order of measuring, travel " +
-                                  Significant(plan.motor_travel_rad * 180.0 / M_PI, 3) + " deg"}}},
+      {"title",
+       {{"text", f.title},
+        {"subtitle",
+         "horizontal angle phi against zenith angle theta (readings of each "
+         "face); colour: what the shot determines most; size: zoom; grey "
+         "line: the order of measuring, travel " +
+             Significant(plan.motor_travel_rad * 180.0 / M_PI, 3) + " deg"}}},
       {"data", json::array({{{"name", "shots"}, {"values", values}}})},
       {"scales",
        json::array({{{"name", "x"}, {"type", "linear"}, {"domain", {0, 360}}, {"range", "width"}},
@@ -89,7 +91,8 @@ Figure PlanFigure(const PlanResult& plan) {
   f.caption =
       "Where the planned photos point (rtscalib plan, docs/plan.md): each mark is one photo, "
       "coloured by the goal (or constant) whose predicted variance it lowers most.";
-  f.summary = {{"shots", plan.shots.size()}, {"motor_travel_deg", plan.motor_travel_rad * 180 / M_PI}};
+  f.summary = {{"shots", plan.shots.size()},
+               {"motor_travel_deg", plan.motor_travel_rad * 180 / M_PI}};
   return f;
 }
 

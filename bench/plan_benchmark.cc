@@ -26,8 +26,8 @@ Loaded Load() {
   render::RenderSettings render;
   PlanSettings settings;
   const std::string dir = std::string(RTSCALIB_SOURCE_DIR) + "/configs";
-  const RunConfig config = LoadConfig(
-      dir + "/plan.yaml", {render::RenderConfigSection(&render), PlanConfigSection(&settings, dir)});
+  const RunConfig config = LoadConfig(dir + "/plan.yaml", {render::RenderConfigSection(&render),
+                                                           PlanConfigSection(&settings, dir)});
   return {SessionFromConfig(config, settings), settings.options};
 }
 

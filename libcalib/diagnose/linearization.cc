@@ -829,7 +829,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   int num_probe_cols = 0;
   for (const Probe& p : options.probes) num_probe_cols += ProbeSize(p, options.variables);
   LocalJacobian local;
-  EvaluateColumns(&problem, residual_ids, free_blocks, extra_col, options.local_as_base ? std::map<const double*, int>() : LocalUnits(&work),
+  EvaluateColumns(&problem, residual_ids, free_blocks, extra_col,
+                  options.local_as_base ? std::map<const double*, int>() : LocalUnits(&work),
                   num_candidate_cols + num_probe_cols, options.fit.num_threads, &lin, &local);
   // The probes' derivatives need every point's position: the estimated
   // boards' corners where the pixels leave them empty.

@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <set>
@@ -43,7 +44,8 @@ std::string UnitOfColumn(const FreeColumn& c) {
       n.find(".cx") != std::string::npos || n.find(".cy") != std::string::npos)
     return "px";
   if (n.rfind("link", 0) == 0) return n.find(".a") == n.size() - 2 ? "m" : "rad";
-  if (c.effect && *c.effect == Effect::kFocus) return n.find(".kf") != std::string::npos ? "m" : "px m";
+  if (c.effect && *c.effect == Effect::kFocus)
+    return n.find(".kf") != std::string::npos ? "m" : "px m";
   return "1";
 }
 
@@ -361,8 +363,8 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
         std::array<double, 2> a = si, b = si;
         a[j] += h;
         b[j] -= h;
-        f.g[cols[j]] = (ToReportUnits(e, a, zero).value[k] - ToReportUnits(e, b, zero).value[k]) /
-                       (2 * h);
+        f.g[cols[j]] =
+            (ToReportUnits(e, a, zero).value[k] - ToReportUnits(e, b, zero).value[k]) / (2 * h);
       }
       if (!f.g.allFinite()) continue;  // a phase at zero amplitude
       f.constant = static_cast<int>(result.constants.size());
@@ -544,8 +546,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   auto in_null = [](const Pseudo& ps, const Eigen::VectorXd& g) {
     return ps.null.cols() > 0 && (ps.null.transpose() * g).norm() > 1e-6 * g.norm();
   };
-  auto unmet = [&](const Pseudo& ps, std::vector<char>* goal_unmet,
-                   std::vector<char>* cell_unmet) {
+  auto unmet = [&](const Pseudo& ps, std::vector<char>* goal_unmet, std::vector<char>* cell_unmet) {
     const Eigen::MatrixXd& cov = ps.cov;
     bool any = false;
     goal_unmet->assign(goals.size(), 0);
@@ -558,8 +559,8 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     if (o.goal.projection_px > 0) {
       for (size_t k = 0; k + 1 < cells.size(); k += 2) {
         const Eigen::VectorXd pa = cov * g_cells.col(k), pb = cov * g_cells.col(k + 1);
-        const double s = WorstSigma(g_cells.col(k).dot(pa), g_cells.col(k).dot(pb),
-                                    g_cells.col(k + 1).dot(pb));
+        const double s =
+            WorstSigma(g_cells.col(k).dot(pa), g_cells.col(k).dot(pb), g_cells.col(k + 1).dot(pb));
         if (!(s <= 1.0) || in_null(ps, g_cells.col(k)) || in_null(ps, g_cells.col(k + 1))) {
           (*cell_unmet)[k] = (*cell_unmet)[k + 1] = 1;
           any = true;
@@ -723,50 +724,20 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     }
   }
 
-  // Prediction at the chosen set: the pseudo-inverse as the fit's.
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m);
-  Eigen::VectorXd inv = Eigen::VectorXd::Zero(q);
-  const double mtop = q ? eig.eigenvalues()[q - 1] : 0.0;
-  std::vector<int> null_dirs;
-  for (int i = 0; i < q; ++i) {
-    if (eig.eigenvalues()[i] > kRankTolerance * mtop) {
-      inv[i] = 1.0 / eig.eigenvalues()[i];
-    } else {
-      null_dirs.push_back(i);
-    }
-  }
-  const Eigen::MatrixXd cov =
-      eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+  // Prediction at the chosen set and of the fixed data alone: the
+  // pseudo-inverse, as the fit's covariance.
+  const Pseudo chosen_ps = exact(m);
+  const Pseudo fixed_ps = exact(red_fixed);
+  const Eigen::MatrixXd& cov = chosen_ps.cov;
   const Eigen::MatrixXd cov_all = covariance(reduce(info_all), 0.0);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig_fixed(red_fixed);
-  const double ftop = q ? eig_fixed.eigenvalues()[q - 1] : 0.0;
-  for (size_t k = 0; k < constants.size(); ++k) {
-    PredictedConstant& pc = result.constants[constants[k].constant];
-    if (ftop > 0) {
-      const Eigen::VectorXd gk = eig_fixed.eigenvectors().transpose() * g_consts.col(k);
-      double v = 0;
-      bool ok = true;
-      for (int i = 0; i < q; ++i) {
-        if (eig_fixed.eigenvalues()[i] > kRankTolerance * ftop) {
-          v += gk[i] * gk[i] / eig_fixed.eigenvalues()[i];
-        } else if (std::abs(gk[i]) > 1e-6 * gk.norm()) {
-          ok = false;
-        }
-      }
-      if (ok && constants[k].g.norm() > 0) pc.sigma_fixed = std::sqrt(v);
-    }
-  }
   for (size_t k = 0; k < constants.size(); ++k) {
     PredictedConstant& pc = result.constants[constants[k].constant];
     const Eigen::VectorXd gk = g_consts.col(k);
     pc.determined = undetermined_fraction(constants[k].g) <= 1e-6;
-    if (!pc.determined) pc.sigma_fixed = kNaN;
-    double chosen_null = 0;
-    for (int i : null_dirs) chosen_null += std::pow(eig.eigenvectors().col(i).dot(gk), 2);
-    if (pc.determined) {
-      pc.sigma_all_candidates = std::sqrt(gk.dot(cov_all * gk));
-      if (chosen_null <= 1e-12 * gk.squaredNorm()) pc.sigma = std::sqrt(gk.dot(cov * gk));
-    }
+    if (!pc.determined) continue;
+    pc.sigma_all_candidates = std::sqrt(gk.dot(cov_all * gk));
+    if (!in_null(chosen_ps, gk)) pc.sigma = std::sqrt(gk.dot(cov * gk));
+    if (!in_null(fixed_ps, gk)) pc.sigma_fixed = std::sqrt(gk.dot(fixed_ps.cov * gk));
   }
   // Projection per zoom (cells already divided by the goal: multiply back).
   const double proj_unit = o.goal.projection_px > 0 ? o.goal.projection_px : 1.0;
@@ -778,8 +749,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     for (size_t k = 0; k + 1 < cells.size(); k += 2) {
       if (cells[k].zoom != z) continue;
       const Eigen::VectorXd pa = cov * g_cells.col(k), pb = cov * g_cells.col(k + 1);
-      worst = std::max(worst, proj_unit * WorstSigma(g_cells.col(k).dot(pa),
-                                                     g_cells.col(k).dot(pb),
+      worst = std::max(worst, proj_unit * WorstSigma(g_cells.col(k).dot(pa), g_cells.col(k).dot(pb),
                                                      g_cells.col(k + 1).dot(pb)));
     }
     pp.worst_px = worst;
@@ -789,8 +759,9 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   result.goal_met = no_goal || met;
   for (const std::string& name : unreachable) {
     result.limits.push_back(
-        name + ": these targets cannot determine it (no candidate photo or fixed observation "
-               "depends on it); it needs other observations (e.g. EDM rows for an EDM effect)");
+        name +
+        ": these targets cannot determine it (no candidate photo or fixed observation "
+        "depends on it); it needs other observations (e.g. EDM rows for an EDM effect)");
   }
   for (size_t k = 0; k < goals.size(); ++k) {
     const PredictedConstant& pc = result.constants[goals[k].constant];
@@ -821,7 +792,9 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     for (const PredictedProjection& pp : result.projection) {
       if (pp.worst_px <= pp.goal_px) continue;
       result.limits.push_back("projection zoom " + std::to_string(pp.zoom) + ": " +
-                              (static_cast<int>(order.size()) >= std::min(o.max_shots, n_cand) ? "budget" : "geometry") +
+                              (static_cast<int>(order.size()) >= std::min(o.max_shots, n_cand)
+                                   ? "budget"
+                                   : "geometry") +
                               ": worst sigma " + std::to_string(pp.worst_px) + " px > goal " +
                               std::to_string(pp.goal_px) + " px");
     }

@@ -111,7 +111,7 @@ struct PlanSession {
 
 // One photo of the plan.
 struct PlanShot {
-  PlannedShot pointing;      // face, zoom, phi, theta, placement, name
+  PlannedShot pointing;       // face, zoom, phi, theta, placement, name
   double focus_distance = 0;  // [m] the distance the camera focuses at (SPEC 4.1); 0: not used
   int points = 0;             // corners the photo shows at the a-priori model
   // What the shot was chosen for: the goal (or, without a goal, the

@@ -75,11 +75,10 @@ YAML::Node PlanSettingsYaml(const PlanSettings& s) {
 }
 
 ConfigSection PlanConfigSection(PlanSettings* settings, const std::string& config_dir) {
-  return {"plan",
-          [settings, config_dir](const YamlNode& n) {
-            *settings = ReadPlanSettings(n, config_dir);
-          },
-          [settings] { return settings->present ? PlanSettingsYaml(*settings) : YAML::Node(); }};
+  return {
+      "plan",
+      [settings, config_dir](const YamlNode& n) { *settings = ReadPlanSettings(n, config_dir); },
+      [settings] { return settings->present ? PlanSettingsYaml(*settings) : YAML::Node(); }};
 }
 
 }  // namespace rtscalib

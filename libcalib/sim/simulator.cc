@@ -304,7 +304,7 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
       rows.push_back(p);
     }
     data->obs.pixels.insert(data->obs.pixels.end(), rows.begin(), rows.end());
-  data->exact_pixels.insert(data->exact_pixels.end(), exact.begin(), exact.end());
+    data->exact_pixels.insert(data->exact_pixels.end(), exact.begin(), exact.end());
   };
   if (!o.shots.given.empty()) {
     int index = 0;

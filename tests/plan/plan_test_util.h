@@ -21,8 +21,8 @@ inline LoadedSession LoadSession(const std::string& name) {
   LoadedSession s;
   render::RenderSettings render;
   const std::string dir = std::string(RTSCALIB_SOURCE_DIR) + "/configs";
-  s.config = LoadConfig(dir + "/" + name,
-                        {render::RenderConfigSection(&render), PlanConfigSection(&s.settings, dir)});
+  s.config = LoadConfig(dir + "/" + name, {render::RenderConfigSection(&render),
+                                           PlanConfigSection(&s.settings, dir)});
   s.session = SessionFromConfig(s.config, s.settings);
   return s;
 }
