@@ -282,7 +282,9 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
       PlanShot s;
       s.pointing.face = px.face;
       s.pointing.zoom = px.zoom;
-      s.pointing.phi = px.phi;
+      // The reading as the instrument gives it, in [0, 2 pi) (SPEC 1).
+      s.pointing.phi = std::fmod(px.phi, 2.0 * M_PI);
+      if (s.pointing.phi < 0) s.pointing.phi += 2.0 * M_PI;
       s.pointing.theta = px.theta;
       s.pointing.placement = px.placement;
       s.focus_distance = px.focus_distance;
