@@ -24,7 +24,7 @@ std::string Read(const fs::path& p) {
   return s.str();
 }
 
-int Run(const std::string& args, const fs::path& dir, std::string* err) {
+int RunRtscalib(const std::string& args, const fs::path& dir, std::string* err) {
   const fs::path log = dir / "stderr.txt";
   const std::string cmd = std::string("'") + RTSCALIB_BINARY_DIR + "/app/rtscalib' " + args +
                           " > /dev/null 2> '" + log.string() + "'";
@@ -40,8 +40,9 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
   const fs::path out = dir / "plan";
   const std::string config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/plan.yaml";
   std::string err;
-  ASSERT_EQ(
-      Run("plan --quiet --config '" + config + "' --output '" + out.string() + "'", dir, &err), 0)
+  ASSERT_EQ(RunRtscalib("plan --quiet --config '" + config + "' --output '" + out.string() + "'",
+                        dir, &err),
+            0)
       << err;
   const nlohmann::json j = nlohmann::json::parse(Read(out / "plan.json"));
   EXPECT_TRUE(j["goal_met"].get<bool>());
@@ -75,8 +76,9 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
   // A second plan into the same folder: refused, naming the file, the
   // first plan untouched.
   const std::string before = Read(out / "plan.csv");
-  EXPECT_EQ(
-      Run("plan --quiet --config '" + config + "' --output '" + out.string() + "'", dir, &err), 1);
+  EXPECT_EQ(RunRtscalib("plan --quiet --config '" + config + "' --output '" + out.string() + "'",
+                        dir, &err),
+            1);
   EXPECT_NE(err.find("plan.csv"), std::string::npos) << err;
   EXPECT_EQ(Read(out / "plan.csv"), before);
 }
