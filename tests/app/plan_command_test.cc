@@ -58,7 +58,9 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
   int row = 0;
   while (std::getline(csv, line)) {
     if (!line.empty() && line[0] != '#' && line.rfind("shot,", 0) != 0) {
-      line += "photo" + std::to_string(++row) + ".png";
+      const std::string image = "photo" + std::to_string(++row) + ".png";
+      std::ofstream(dir / image) << "";  // the reader checks that the photo exists
+      line += image;
     }
     filled << line << "\n";
   }
