@@ -601,7 +601,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   if (min_per_zoom < 0) {
     bool cam_records = false;
     for (const Record& r : session.fixed.records) cam_records = cam_records || r.tool == Tool::kCam;
-    min_per_zoom = cam_records ? 0 : 8;
+    min_per_zoom = cam_records ? 0 : 16;
   }
   std::map<int, int> per_zoom;  // chosen photos per zoom
   for (int z : zooms) per_zoom[z] = 0;

@@ -81,7 +81,9 @@ struct PlanOptions {
   // without records starts each zoom's camera from its photos alone
   // (libcalib/fit/calibrate_views.h, OpenCV's calibrateCamera of several
   // views of a planar board), which a first-order design does not see; -1
-  // (default) = 8 for a session without camera records, else 0.
+  // (default) = 16 for a session without camera records, else 0 (with 8
+  // per zoom the one-board session of configs/one_board.yaml does not
+  // converge from its start; with 16 it does).
   int min_shots_per_zoom = -1;
   // Where the projection sigma is evaluated (the report's uncertainty maps'
   // options: pointing, range, grid).

@@ -206,6 +206,18 @@ TEST(PlanSimulation, Zoom3TrackerSessionReportsThePlannedSigmas) {
   CheckSession(s, o, "zoom3 tracker session (configs/plan.yaml, projection 0.03 px)");
 }
 
+TEST(PlanSimulation, OneBoardSessionReportsThePlannedSigmas) {
+  // No records, one board moved to six placements, its poses estimated;
+  // at least 16 photos per zoom (PlanOptions::min_shots_per_zoom).
+  // The truth's eccentric horizontal circle (hidden in the demo) is
+  // estimated: a plan predicts the sigmas of a model that fits the data.
+  LoadedSession s = LoadSession("one_board.yaml");
+  s.session.calibration.model.effects.Add(Effect::kHzEccentricity);
+  PlanOptions o = s.settings.options;
+  o.goal.projection_px = 0.1;
+  CheckSession(s, o, "one-board session (configs/one_board.yaml, projection 0.1 px)");
+}
+
 TEST(PlanSimulation, Zoom3DefaultSessionNeedsMorePhotos) {
   CompareWithDefault(LoadSession("plan.yaml"), "configs/plan.yaml (zoom3)");
 }
