@@ -9,6 +9,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "libcalib/io/shots.h"
 
@@ -83,6 +85,55 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
             1);
   EXPECT_NE(err.find("plan.csv"), std::string::npos) << err;
   EXPECT_EQ(Read(out / "plan.csv"), before);
+}
+
+// `--from OUT`: a calibration of configs/plan.yaml's session, then the
+// shots to add. Its diagnosis ranks effects it could not determine
+// (v_eccentricity among them, whose signature these boards and records do
+// not show): plan.json names them and says what limits them.
+TEST(PlanCommand, FromAnEarlierRunNamesWhatItsDiagnosisCouldNotDetermine) {
+  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_from";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path run = dir / "run";
+  const std::string config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/plan.yaml";
+  std::string err;
+  ASSERT_EQ(
+      RunRtscalib("--quiet --config '" + config + "' --output '" + run.string() + "'", dir, &err),
+      0)
+      << err;
+  ASSERT_EQ(RunRtscalib("plan --quiet --from '" + run.string() + "'", dir, &err), 0) << err;
+  const nlohmann::json j = nlohmann::json::parse(Read(run / "plan" / "plan.json"));
+  const nlohmann::json report = nlohmann::json::parse(Read(run / "report.json"));
+  std::vector<std::string> expected;
+  for (const auto& e : report["diagnosis"]["ranking"]) {
+    const std::string name = e["effect"].get<std::string>();
+    if (e.value("identifiable", true)) continue;
+    if (name == "collimation" || name == "tilting_axis" || name == "vertical_index" ||
+        name == "edm_offset")
+      continue;  // contained in the dh kinematics
+    for (const std::string kinematic : {"hz_eccentricity", "v_eccentricity", "hz_scale", "v_scale",
+                                        "axis_wobble", "edm_scale", "edm_cyclic"}) {
+      if (name == kinematic) expected.push_back(name);
+    }
+  }
+  ASSERT_FALSE(expected.empty());
+  EXPECT_EQ(j["effects_not_identifiable"].get<std::vector<std::string>>(), expected);
+  // Every such effect's amplitude is a goal of the plan, and each one that
+  // is not met is named among the limits.
+  for (const std::string& effect : expected) {
+    bool goal = false, met = false;
+    for (const auto& c : j["constants"]) {
+      if (c["name"].get<std::string>().rfind(effect + ".", 0) != 0 || !c.contains("goal")) continue;
+      goal = true;
+      met = c["sigma"].is_number() && c["sigma"].get<double>() <= c["goal"].get<double>();
+    }
+    EXPECT_TRUE(goal) << effect;
+    if (met) continue;
+    bool named = false;
+    for (const auto& l : j["limits"]) named = named || l.get<std::string>().rfind(effect, 0) == 0;
+    EXPECT_TRUE(named) << effect;
+  }
 }
 
 }  // namespace
