@@ -179,7 +179,18 @@ int RunPlan(const PlanArgs& args) {
                    "planning toward plan.goal alone\n";
     }
   }
-  const PlanResult plan = PlanShots(session, options);
+  PlanResult plan;
+  try {
+    plan = PlanShots(session, options);
+  } catch (const std::invalid_argument& e) {
+    // The planner names the plan key ("plan.zooms: ..."): the config's file
+    // with it.
+    const std::string what = e.what();
+    const size_t colon = what.find(": ");
+    if (what.rfind("plan.", 0) != 0 || colon == std::string::npos) throw;
+    throw InputError::Key(config.config_path, what.substr(0, colon), 0, 0,
+                          "a value this session and model allow", what.substr(colon + 2));
+  }
 
   const std::string out_dir = !args.output.empty() ? args.output
                               : from               ? (fs::path(args.from) / "plan").string()
@@ -217,7 +228,11 @@ int RunPlan(const PlanArgs& args) {
   WriteFileAtomic((fs::path(out_dir) / "plan.json").string(), j.dump(2) + "\n", Existing::kKeep);
   if (!args.quiet) {
     std::cout << "rtscalib plan: " << plan.shots.size() << " shots of " << plan.candidates
-              << " candidates; goal " << (plan.goal_met ? "met" : "NOT met") << "\n";
+              << " candidates; "
+              << (options.goal.Empty() ? "no goal: the D-optimal choice of max_shots photos"
+                  : plan.goal_met      ? "goal met"
+                                       : "goal NOT met")
+              << "\n";
     for (const std::string& l : plan.limits) std::cout << "  limit: " << l << "\n";
     for (const PredictedConstant& c : plan.constants) {
       if (c.goal > 0)
