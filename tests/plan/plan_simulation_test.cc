@@ -219,7 +219,7 @@ TEST(PlanSimulation, OneBoardSessionReportsThePlannedSigmas) {
 }
 
 TEST(PlanSimulation, Zoom3DefaultSessionNeedsMorePhotos) {
-  CompareWithDefault(LoadSession("plan.yaml"), "configs/plan.yaml (zoom3)");
+  CompareWithDefault(LoadSession("zoom3.yaml"), "configs/zoom3.yaml");
 }
 
 TEST(PlanSimulation, OneBoardDefaultSessionNeedsMorePhotos) {
