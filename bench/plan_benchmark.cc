@@ -59,7 +59,7 @@ void BM_PlanZoom3Constants(benchmark::State& state) {
   for (int z = 0; z < 3; ++z) {
     const std::string c = "cam[" + std::to_string(z) + "].";
     l.options.goal.sigmas.push_back({c + "fx", 0.05 * (z + 1)});
-    l.options.goal.sigmas.push_back({c + "k1", 0.001 * (z + 1)});
+    l.options.goal.sigmas.push_back({c + "k1", 0.002 * (z + 1) * (z + 1)});
   }
   Run(state, l.options, l.session);
 }
