@@ -1,22 +1,26 @@
 // A plan is right when a calibration of the shots it lists reports the
 // sigmas it predicted (SPEC 8): the planned photos are simulated at the
-// a-priori instrument (libcalib/sim) with the a-priori noise, for several
+// a-priori instrument (libcalib/sim) with the a-priori noise, for four
 // seeds, and calibrated by the real Calibrate.
 //
-// Checks, per session:
-//   - every compared constant's reported sigma within 25 % of plan.json's
-//     (SPEC 8), in every seed;
+// Checks, per session (configs/plan.yaml: tracker records and surveyed
+// boards; configs/one_board.yaml: photos of one moved board only):
+//   - with fit.covariance_clusters: none (the classical covariance, the one
+//     the plan predicts) every compared constant's reported sigma within
+//     25 % of plan.json's in every seed (SPEC 8); with the default `shot`
+//     (cluster-robust, CalibratePlan says why) the mean over the seeds;
 //   - the errors against the truth consistent with the predicted sigmas:
 //     the mean square normalised error (e / sigma_plan)^2 over N = constants
-//     x seeds in [0.5, 2]. For independent errors it is chi^2_N / N, mean 1,
-//     sd sqrt(2 / N) (N >= 100 here: 0.14); the errors of one seed's
-//     constants are correlated, which widens it, hence the bounds at about
-//     +-3.5 sd rather than a chi-square quantile;
+//     x seeds (N >= 100) in [0.5, 2]. For independent errors it is
+//     chi^2_N / N: mean 1, sd sqrt(2 / N) <= 0.14; one seed's constants are
+//     correlated, which widens it, hence bounds at about +-3.5 sd rather
+//     than a chi-square quantile;
 //   - the goal met by the calibration itself (the reported sigmas of the
 //     goal's constants at most the goal x 1.25).
-// And the comparison with today's default session of the same config
-// (simulate.shots: the stratified pattern): the sigmas of that session are
-// the goal, the plan's photo count is printed beside the default's.
+// And the comparison with today's default sessions (configs/zoom3.yaml,
+// configs/one_board.yaml: the simulator's stratified pattern): the default
+// session's predicted sigmas are the goal, the plan's photo count is
+// printed beside the default's.
 #include <gtest/gtest.h>
 
 #include <cmath>
