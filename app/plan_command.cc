@@ -11,13 +11,16 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "app/photo_session.h"
 #include "app/plan_figures.h"
+#include "app/progress.h"
 #include "libcalib/fit/parameterization.h"
 #include "libcalib/io/config.h"
 #include "libcalib/io/csv.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
 #include "libcalib/io/safe_write.h"
+#include "libcalib/io/targets_io.h"
 #include "libcalib/plan/session.h"
 #include "libcalib/plan/settings.h"
 #include "libcalib/sim/simulator.h"
@@ -140,7 +143,13 @@ int RunPlan(const PlanArgs& args) {
   const std::string config_dir = fs::absolute(config_path).parent_path().string();
   const RunConfig config = LoadConfig(config_path, {render::RenderConfigSection(&render),
                                                     PlanConfigSection(&settings, config_dir)});
-  PlanSession session = SessionFromConfig(config, settings);
+  PlanSession session;
+  if (from && !config.simulate) {
+    // A run of real data: the boards are the ones it estimated (below).
+    session.calibration = config.calibration;
+  } else {
+    session = SessionFromConfig(config, settings);
+  }
   PlanOptions options = settings.options;
   std::string mode = "plan";
   std::vector<std::string> added_effects;
@@ -150,17 +159,50 @@ int RunPlan(const PlanArgs& args) {
     // data, or its simulated session) are measured already.
     const std::string model_path = (fs::path(args.from) / "model.yaml").string();
     session.prior = ReadModelYaml(model_path);
-    if (!config.records_path.empty())
+    if (!session.prior.boards.empty()) {
+      // The boards where the run estimated them, in its reference frame.
+      session.scenes.clear();
+      for (const EstimatedBoard& b : session.prior.boards) {
+        TagBoard board = b.board;
+        board.ref_from_board = b.pose.ToRigid();
+        session.scenes[b.placement].boards.push_back(board);
+      }
+      session.board_poses_known = false;
+    } else {
+      // The run estimated no board: its boards' corners were known.
+      session.board_poses_known = true;
+      if (!config.targets_path.empty() && session.scenes.empty())
+        session.scenes[""] = ReadTargets(config.targets_path);
+    }
+    // What the run measured: its data files; a simulated run's records.csv
+    // and pixels.csv (written into its history entry); a photo session's
+    // photos, detected again.
+    const fs::path latest = fs::path(args.from) / "latest";
+    session.fixed = Observations();
+    if (!config.records_path.empty()) {
       session.fixed.records = ReadRecords(config.records_path, config.angle_unit).records;
+    } else if (fs::exists(latest / "records.csv", ec)) {
+      session.fixed.records = ReadRecords((latest / "records.csv").string()).records;
+    }
     if (!config.pixels_path.empty()) {
       session.fixed.pixels = ReadPixels(config.pixels_path, config.angle_unit).pixels;
-    } else if (config.records_path.empty() && config.simulate) {
-      SimulationOptions sim = *config.simulate;
-      sim.truth = session.prior;
-      sim.noise = NoiseOptions();
-      const Observations obs = Simulate(sim).obs;
-      session.fixed.pixels = obs.pixels;
-      for (PixelObservation& p : session.fixed.pixels) p.X_known = session.board_poses_known;
+    } else if (fs::exists(latest / "pixels.csv", ec)) {
+      session.fixed.pixels = ReadPixels((latest / "pixels.csv").string()).pixels;
+    }
+    if (!config.shots_path.empty()) {
+      Progress progress(args.quiet);
+      LoadPhotoSession(config.shots_path, config.targets_path, config.detect_jobs, &session.fixed,
+                       &progress, config.angle_unit);
+    }
+    if (session.fixed.records.empty() && session.fixed.pixels.empty()) {
+      throw InputError::File(args.from, 0, "run",
+                             "a run whose observations can be read again (data files, or a "
+                             "simulated run's records.csv and pixels.csv)",
+                             "none found");
+    }
+    for (int z = 0; z < session.prior.NumZooms(); ++z) {
+      session.fixed.image_sizes.try_emplace(
+          z, ImageSize{session.prior.cams[z].width, session.prior.cams[z].height});
     }
     // The effects the diagnosis could not determine (and the kinematics do
     // not contain) are estimated in the plan; the goal: each amplitude to 1
