@@ -91,4 +91,15 @@ struct ShowArgs {
 };
 int RunShow(const ShowArgs& args);
 
+// `rtscalib plan --config X [--output DIR]` or `rtscalib plan --from OUT`
+// (app/plan_command.cc, SPEC 8, docs/plan.md): the shots to take, plan.csv
+// and plan.json, written without replacing any file that exists.
+struct PlanArgs {
+  std::string config;
+  std::string from;    // an earlier run's output folder: the shots to add
+  std::string output;  // overrides the config's output folder
+  bool quiet = false;
+};
+int RunPlan(const PlanArgs& args);
+
 }  // namespace rtscalib::app

@@ -105,6 +105,17 @@ int main(int argc, char** argv) {
   cm->add_option("--output", cmp.output,
                  "also write compare.txt, compare.json and figures/ into this folder");
 
+  rtscalib::app::PlanArgs plan;
+  CLI::App* pl = app.add_subcommand(
+      "plan", "plan a session before it is measured: the shots that reach the sigmas asked for");
+  pl->add_option("--config", plan.config, "config with a `plan` section (configs/plan.yaml)");
+  pl->add_option("--from", plan.from,
+                 "an earlier run's output folder: propose the shots to add where its diagnosis "
+                 "found an effect it could not determine");
+  pl->add_option("--output", plan.output,
+                 "folder for plan.csv, plan.json and figures/ (default: the config's output)");
+  pl->add_flag("--quiet", plan.quiet, "no summary on stdout");
+
   rtscalib::app::ShowArgs show;
   CLI::App* sh = app.add_subcommand(
       "show", "draw one photo of a run with its corners and residual arrows (photo_<ID>.html/png)");
@@ -128,6 +139,7 @@ int main(int argc, char** argv) {
     if (det->parsed()) return rtscalib::app::RunDetect(detect);
     if (cm->parsed()) return rtscalib::app::RunCompare(cmp);
     if (sh->parsed()) return rtscalib::app::RunShow(show);
+    if (pl->parsed()) return rtscalib::app::RunPlan(plan);
     if (run.config.empty()) {
       std::cerr << app.help();
       return kExitUsage;

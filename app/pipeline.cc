@@ -2,6 +2,7 @@
 
 #include "libcalib/api/uncertainty_map.h"
 
+#include <filesystem>
 #include <future>
 #include <map>
 #include <stdexcept>
@@ -17,13 +18,17 @@ namespace rtscalib::app {
 
 RunSettings LoadRunSettings(const std::string& path) {
   RunSettings s;
-  s.config = LoadConfig(path, {render::RenderConfigSection(&s.render)});
+  const std::string dir = std::filesystem::absolute(path).parent_path().string();
+  s.config =
+      LoadConfig(path, {render::RenderConfigSection(&s.render), PlanConfigSection(&s.plan, dir)});
   return s;
 }
 
 std::string DumpRunSettings(const RunSettings& settings) {
   render::RenderSettings render = settings.render;
-  return DumpConfig(settings.config, {render::RenderConfigSection(&render)});
+  PlanSettings plan = settings.plan;
+  return DumpConfig(settings.config, {render::RenderConfigSection(&render),
+                                      PlanConfigSection(&plan, settings.config.config_dir)});
 }
 
 Observations LoadObservations(const RunSettings& settings, const std::string& work_dir,

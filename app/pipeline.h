@@ -19,6 +19,7 @@
 #include "libcalib/config/config.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
+#include "libcalib/plan/settings.h"
 #include "render/settings.h"
 
 namespace rtscalib::app {
@@ -28,9 +29,12 @@ namespace rtscalib::app {
 struct RunSettings {
   RunConfig config;
   render::RenderSettings render;
+  // The `plan` section (libcalib/plan/settings.h): read so that the config a
+  // session was planned with also calibrates it; the run does not use it.
+  PlanSettings plan;
 };
 // Throws InputError for anything wrong in the file, unknown keys inside
-// `render:` included (whether or not the run renders).
+// `render:` and `plan:` included (whether or not the run renders).
 RunSettings LoadRunSettings(const std::string& path);
 // The effective config as YAML (DumpConfig plus the render section).
 std::string DumpRunSettings(const RunSettings& settings);

@@ -808,7 +808,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   }
   for (int i : rows.pixels) zoom_used[obs.pixels[i].zoom] = true;
 
-  const Parameterization param(&work, options.fit, FactsOf(obs, rows));
+  const Parameterization param(&work, options.fit,
+                               options.facts ? *options.facts : FactsOf(obs, rows));
   const auto extra_col = CandidateColumns(param, options.candidates, zoom_used, &lin.blocks);
   const int num_candidate_cols =
       lin.blocks.empty() ? 0 : lin.blocks.back().first + lin.blocks.back().size;
@@ -828,7 +829,8 @@ Linearization Linearize(const Observations& obs, const InstrumentModel& model,
   int num_probe_cols = 0;
   for (const Probe& p : options.probes) num_probe_cols += ProbeSize(p, options.variables);
   LocalJacobian local;
-  EvaluateColumns(&problem, residual_ids, free_blocks, extra_col, LocalUnits(&work),
+  EvaluateColumns(&problem, residual_ids, free_blocks, extra_col,
+                  options.local_as_base ? std::map<const double*, int>() : LocalUnits(&work),
                   num_candidate_cols + num_probe_cols, options.fit.num_threads, &lin, &local);
   // The probes' derivatives need every point's position: the estimated
   // boards' corners where the pixels leave them empty.

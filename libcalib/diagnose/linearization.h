@@ -51,6 +51,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -150,6 +151,15 @@ struct LinearizeOptions {
   std::vector<Effect> candidates;       // effects not in the model whose columns to add
   std::vector<Probe> probes;
   std::vector<SessionVariable> variables;  // what trend probes refer to
+  // Boards and points of unknown pose or position as base columns instead of
+  // projected out (LocalColumns): a caller that sums the information of
+  // subsets of the rows (the session planner, libcalib/plan) needs their
+  // columns, since a subset's Schur complement is not the whole data's.
+  bool local_as_base = false;
+  // What the data determine (DataFacts), when the rows linearised are not
+  // the session whose parameterisation is meant (the planner's image grid of
+  // known points beside a session without any): the session's facts.
+  std::optional<DataFacts> facts;
 };
 
 // The fit's parameters split in two (Linearization): the global ones that

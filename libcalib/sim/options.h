@@ -57,6 +57,16 @@ struct AcquisitionPlan {
 // board when none does) from a stratified pattern of directions, so that the
 // images are full of tags and together cover the whole image. Shots showing
 // fewer than 8 corners are not taken.
+// One photo at a given pointing (a planned session, libcalib/plan): the
+// simulator takes it as it stands instead of choosing its own.
+struct PlannedShot {
+  int face = 1;
+  int zoom = 0;
+  double phi = 0, theta = 0;  // readings of `face` [rad]
+  std::string placement;      // SPEC 7.1; "" without placements
+  std::string name;           // shot id; "" = the simulator's own numbering
+};
+
 struct ShotPlan {
   int shots_per_board = 4;       // per usable board, zoom and face
   double fill = 0.7;             // fraction of the view (half extent) the pattern is sized by
@@ -67,6 +77,9 @@ struct ShotPlan {
   // an instrument reports its focus or EDM distance), false: it does not
   // (the calibration then computes D from the model).
   bool report_focus_distance = true;
+  // Non-empty: exactly these photos are taken (each showing at least 8
+  // corners; the others are left out), not the stratified pattern above.
+  std::vector<PlannedShot> given;
 };
 
 struct SimulationOptions {

@@ -226,6 +226,112 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
     std::string placement;
     BoardView view;
   };
+  // One photo at (face, zoom, phi, theta) of the boards of `placement`;
+  // `aimed` is the point it is aimed at (where the focus starts).
+  auto take = [&](int face, int zoom, double phi, double theta, const std::string& placement,
+                  const std::string& shot, const Eigen::Vector3d& aimed) {
+    const CameraTool& cam = truth.cams.at(zoom);
+    const std::vector<TargetCorner>& corners = corners_of.at(placement);
+    const Rigid3 ref_from_cam = RefFromCam(truth, zoom, phi, theta);
+    const double trusted_radius = MaxTrustedRadius(cam.distortion.data());
+    // The corners the photo shows, and their exact pixels, with the
+    // camera focused at `distance` (SPEC 4.1; without focus it plays
+    // no role).
+    auto visible = [&](double distance, std::vector<int>* which,
+                       std::vector<Eigen::Vector2d>* uvs) {
+      which->clear();
+      uvs->clear();
+      for (size_t k = 0; k < corners.size(); ++k) {
+        const TargetCorner& c = corners[k];
+        Eigen::Vector2d uv;
+        if (!PredictPixel(truth, zoom, phi, theta, c.X, &uv, distance)) continue;
+        // A corner beyond the lens's trusted radius folds back into the
+        // image under strong barrel distortion; a real lens never shows it.
+        const Eigen::Vector3d x_cam = ref_from_cam.Inverse() * c.X;
+        if (std::hypot(x_cam.x(), x_cam.y()) > trusted_radius * x_cam.z()) continue;
+        const double margin = 2.0;
+        if (uv.x() < margin || uv.y() < margin || uv.x() > cam.width - 1 - margin ||
+            uv.y() > cam.height - 1 - margin) {
+          continue;
+        }
+        which->push_back(static_cast<int>(k));
+        uvs->push_back(uv);
+      }
+    };
+    std::vector<int> shown;
+    std::vector<Eigen::Vector2d> exact;
+    double distance = 0;
+    if (focus) {
+      // The camera focuses on what it shows: D is the distance to the
+      // centroid of the corners in the photo, which themselves depend
+      // on D through the image scale. Start at the aimed board's
+      // centre and repeat until the corners shown no longer change, so
+      // that D is exactly the centroid of the photo's own points (what
+      // a calibration without a reported D computes).
+      distance = (aimed - ref_from_cam.translation).norm();
+      std::vector<int> before;
+      bool stable = false;
+      for (int iteration = 0; iteration < kMaxFocusIterations && !stable; ++iteration) {
+        visible(distance, &shown, &exact);
+        if (shown.empty()) break;
+        stable = iteration > 0 && shown == before;
+        if (stable) break;
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (int k : shown) sum += corners[k].X;
+        distance = (sum / static_cast<double>(shown.size()) - ref_from_cam.translation).norm();
+        before = shown;
+      }
+      if (!stable) return;  // no photo whose focus settles is taken
+    } else {
+      visible(0.0, &shown, &exact);
+    }
+    if (shown.size() < 8) return;  // a shot that shows almost nothing is not taken
+    std::vector<PixelObservation> rows;
+    for (size_t j = 0; j < shown.size(); ++j) {
+      const TargetCorner& c = corners[shown[j]];
+      PixelObservation p;
+      p.face = face;
+      p.zoom = zoom;
+      p.phi = phi;
+      p.theta = theta;
+      p.shot = shot;
+      p.placement = placement;
+      p.focus_distance = focus && o.shots.report_focus_distance ? distance : 0.0;
+      p.target = c.target;
+      p.corner = c.corner;
+      p.X = c.X;
+      p.uv = exact[j] + o.noise.pixel_px * Eigen::Vector2d(normal(rng), normal(rng));
+      rows.push_back(p);
+    }
+    data->obs.pixels.insert(data->obs.pixels.end(), rows.begin(), rows.end());
+    data->exact_pixels.insert(data->exact_pixels.end(), exact.begin(), exact.end());
+  };
+  if (!o.shots.given.empty()) {
+    int index = 0;
+    for (const PlannedShot& g : o.shots.given) {
+      if (!corners_of.count(g.placement)) {
+        throw std::invalid_argument("simulation: planned shot at unknown placement '" +
+                                    g.placement + "'");
+      }
+      // Focus starts at the board centre nearest the line of sight.
+      const Rigid3 ref_from_cam = RefFromCam(truth, g.zoom, g.phi, g.theta);
+      const Eigen::Vector3d axis = ref_from_cam.rotation.col(2);
+      Eigen::Vector3d aimed = ref_from_cam.translation + 10.0 * axis;
+      double best = -2;
+      for (const TagBoard& b : scenes.at(g.placement).boards) {
+        const Eigen::Vector3d to = b.CentreInRef() - ref_from_cam.translation;
+        const double c = axis.dot(to.normalized());
+        if (c > best) {
+          best = c;
+          aimed = b.CentreInRef();
+        }
+      }
+      const std::string name = g.name.empty() ? "planned" + std::to_string(index) : g.name;
+      ++index;
+      take(g.face, g.zoom, g.phi, g.theta, g.placement, name, aimed);
+    }
+    return;
+  }
   int shot_index = 0;
   for (int zoom : o.plan.zooms) {
     const CameraTool& cam = truth.cams.at(zoom);
@@ -257,7 +363,6 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
       for (const PlacedView& placed : views) {
         const BoardView& view = placed.view;
         const TargetScene& scene = scenes.at(placed.placement);
-        const std::vector<TargetCorner>& corners = corners_of.at(placed.placement);
         double phi0, theta0;
         AimAt(origin, scene.boards[view.board].CentreInRef(), &phi0, &theta0);
         // Half range of the aim offsets (angles off the board centre).
@@ -288,79 +393,8 @@ void SimulatePixels(const SimulationOptions& o, std::mt19937_64& rng, SimulatedD
           const std::string shot = (placed.placement.empty() ? "" : placed.placement + "-") + "z" +
                                    std::to_string(zoom) + "f" + std::to_string(face) + "s" +
                                    std::to_string(shot_index++);
-          const Rigid3 ref_from_cam = RefFromCam(truth, zoom, phi, theta);
-          const double trusted_radius = MaxTrustedRadius(cam.distortion.data());
-          // The corners the photo shows, and their exact pixels, with the
-          // camera focused at `distance` (SPEC 4.1; without focus it plays
-          // no role).
-          auto visible = [&](double distance, std::vector<int>* which,
-                             std::vector<Eigen::Vector2d>* uvs) {
-            which->clear();
-            uvs->clear();
-            for (size_t k = 0; k < corners.size(); ++k) {
-              const TargetCorner& c = corners[k];
-              Eigen::Vector2d uv;
-              if (!PredictPixel(truth, zoom, phi, theta, c.X, &uv, distance)) continue;
-              // A corner beyond the lens's trusted radius folds back into the
-              // image under strong barrel distortion; a real lens never shows it.
-              const Eigen::Vector3d x_cam = ref_from_cam.Inverse() * c.X;
-              if (std::hypot(x_cam.x(), x_cam.y()) > trusted_radius * x_cam.z()) continue;
-              const double margin = 2.0;
-              if (uv.x() < margin || uv.y() < margin || uv.x() > cam.width - 1 - margin ||
-                  uv.y() > cam.height - 1 - margin) {
-                continue;
-              }
-              which->push_back(static_cast<int>(k));
-              uvs->push_back(uv);
-            }
-          };
-          std::vector<int> shown;
-          std::vector<Eigen::Vector2d> exact;
-          double distance = 0;
-          if (focus) {
-            // The camera focuses on what it shows: D is the distance to the
-            // centroid of the corners in the photo, which themselves depend
-            // on D through the image scale. Start at the aimed board's
-            // centre and repeat until the corners shown no longer change, so
-            // that D is exactly the centroid of the photo's own points (what
-            // a calibration without a reported D computes).
-            distance = (scene.boards[view.board].CentreInRef() - ref_from_cam.translation).norm();
-            std::vector<int> before;
-            bool stable = false;
-            for (int iteration = 0; iteration < kMaxFocusIterations && !stable; ++iteration) {
-              visible(distance, &shown, &exact);
-              if (shown.empty()) break;
-              stable = iteration > 0 && shown == before;
-              if (stable) break;
-              Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-              for (int k : shown) sum += corners[k].X;
-              distance = (sum / static_cast<double>(shown.size()) - ref_from_cam.translation).norm();
-              before = shown;
-            }
-            if (!stable) continue;  // no photo whose focus settles is taken
-          } else {
-            visible(0.0, &shown, &exact);
-          }
-          if (shown.size() < 8) continue;  // a shot that shows almost nothing is not taken
-          std::vector<PixelObservation> rows;
-          for (size_t j = 0; j < shown.size(); ++j) {
-            const TargetCorner& c = corners[shown[j]];
-            PixelObservation p;
-            p.face = face;
-            p.zoom = zoom;
-            p.phi = phi;
-            p.theta = theta;
-            p.shot = shot;
-            p.placement = placed.placement;
-            p.focus_distance = focus && o.shots.report_focus_distance ? distance : 0.0;
-            p.target = c.target;
-            p.corner = c.corner;
-            p.X = c.X;
-            p.uv = exact[j] + o.noise.pixel_px * Eigen::Vector2d(normal(rng), normal(rng));
-            rows.push_back(p);
-          }
-          data->obs.pixels.insert(data->obs.pixels.end(), rows.begin(), rows.end());
-          data->exact_pixels.insert(data->exact_pixels.end(), exact.begin(), exact.end());
+          take(face, zoom, phi, theta, placed.placement, shot,
+               scene.boards[view.board].CentreInRef());
         }
       }
     }

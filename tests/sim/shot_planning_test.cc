@@ -6,6 +6,8 @@
 
 #include <map>
 #include <set>
+#include <string>
+#include <tuple>
 
 #include "libcalib/model/kinematics.h"
 #include "libcalib/sim/simulator.h"
@@ -202,6 +204,35 @@ TEST(ShotPlanning, ZoomThreeDemoSceneCoversTheImageCorners) {
     o.targets.boards.push_back(board);
   }
   ExpectEveryNinthCovered(o, 1280, 960);
+}
+
+// ShotPlan::given (a planned session, libcalib/plan): photos at given
+// pointings show exactly the corners, at exactly the pixels, that the
+// pattern's own photos at those pointings show.
+TEST(ShotPlanning, GivenPointingsReproduceThePatternsPhotos) {
+  SimulationOptions o = Options(SevenZoomTruth());
+  o.plan.sweeps = false;
+  const SimulatedData pattern = Simulate(o);
+  std::map<std::string, PlannedShot> pointing;
+  for (const PixelObservation& p : pattern.obs.pixels) {
+    pointing[p.shot] = PlannedShot{p.face, p.zoom, p.phi, p.theta, p.placement, p.shot};
+  }
+  ASSERT_GT(pointing.size(), 20u);
+  SimulationOptions g = o;
+  for (const auto& [shot, pt] : pointing) g.shots.given.push_back(pt);
+  const SimulatedData given = Simulate(g);
+  ASSERT_EQ(given.obs.pixels.size(), pattern.obs.pixels.size());
+  std::map<std::tuple<std::string, int, int>, Eigen::Vector2d> uv;
+  for (size_t k = 0; k < pattern.obs.pixels.size(); ++k) {
+    const PixelObservation& p = pattern.obs.pixels[k];
+    uv[{p.shot, p.target, p.corner}] = pattern.exact_pixels[k];
+  }
+  for (size_t k = 0; k < given.obs.pixels.size(); ++k) {
+    const PixelObservation& p = given.obs.pixels[k];
+    const auto it = uv.find({p.shot, p.target, p.corner});
+    ASSERT_NE(it, uv.end()) << p.shot << " " << p.target << " " << p.corner;
+    EXPECT_EQ((it->second - given.exact_pixels[k]).norm(), 0.0);
+  }
 }
 
 }  // namespace

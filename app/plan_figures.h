@@ -1,0 +1,14 @@
+// The figure of a session plan (`rtscalib plan`, docs/plan.md): where the
+// shots point, per face and zoom, coloured by what they determine, joined
+// in the order they are taken. A Vega spec like the run's figures
+// (app/figures.h), written by WriteFigureFiles.
+#pragma once
+
+#include "app/figures.h"
+#include "libcalib/plan/planner.h"
+
+namespace rtscalib::app {
+
+Figure PlanFigure(const PlanResult& plan);
+
+}  // namespace rtscalib::app

@@ -1,0 +1,140 @@
+// `rtscalib plan` as a user runs it (docs/plan.md): the files it writes,
+// plan.csv read back as a shots.csv once its image column is filled, and
+// an existing plan never replaced.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "libcalib/io/shots.h"
+
+namespace rtscalib {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Read(const fs::path& p) {
+  std::ifstream f(p);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+int RunRtscalib(const std::string& args, const fs::path& dir, std::string* err) {
+  const fs::path log = dir / "stderr.txt";
+  const std::string cmd = std::string("'") + RTSCALIB_BINARY_DIR + "/app/rtscalib' " + args +
+                          " > /dev/null 2> '" + log.string() + "'";
+  const int status = std::system(cmd.c_str());
+  *err = Read(log);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
+  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_command";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path out = dir / "plan";
+  const std::string config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/plan.yaml";
+  std::string err;
+  ASSERT_EQ(RunRtscalib("plan --quiet --config '" + config + "' --output '" + out.string() + "'",
+                        dir, &err),
+            0)
+      << err;
+  const nlohmann::json j = nlohmann::json::parse(Read(out / "plan.json"));
+  EXPECT_TRUE(j["goal_met"].get<bool>());
+  const size_t n = j["plan"].size();
+  ASSERT_GT(n, 0u);
+  EXPECT_EQ(j["shots"].get<size_t>(), n);
+  EXPECT_TRUE(fs::exists(out / "figures" / "plan.vg.json"));
+  // The user fills the image column: a shots.csv (SPEC 7) with the plan's
+  // readings in the plan's order.
+  std::istringstream csv(Read(out / "plan.csv"));
+  std::ostringstream filled;
+  std::string line;
+  int row = 0;
+  while (std::getline(csv, line)) {
+    if (!line.empty() && line[0] != '#' && line.rfind("shot,", 0) != 0) {
+      const std::string image = "photo" + std::to_string(++row) + ".png";
+      std::ofstream(dir / image) << "";  // the reader checks that the photo exists
+      line += image;
+    }
+    filled << line << "\n";
+  }
+  const fs::path shots = dir / "shots.csv";
+  std::ofstream(shots) << filled.str();
+  const ShotsFile read = ReadShots(shots.string());
+  ASSERT_EQ(read.shots.size(), n);
+  for (size_t k = 0; k < n; ++k) {
+    EXPECT_EQ(read.shots[k].face, j["plan"][k]["face"].get<int>());
+    EXPECT_EQ(read.shots[k].zoom, j["plan"][k]["zoom"].get<int>());
+    EXPECT_DOUBLE_EQ(read.shots[k].phi, j["plan"][k]["phi"].get<double>());
+    EXPECT_DOUBLE_EQ(read.shots[k].theta, j["plan"][k]["theta"].get<double>());
+    EXPECT_EQ(read.shots[k].image, "photo" + std::to_string(k + 1) + ".png");
+  }
+  // A second plan into the same folder: refused, naming the file, the
+  // first plan untouched.
+  const std::string before = Read(out / "plan.csv");
+  EXPECT_EQ(RunRtscalib("plan --quiet --config '" + config + "' --output '" + out.string() + "'",
+                        dir, &err),
+            1);
+  EXPECT_NE(err.find("plan.csv"), std::string::npos) << err;
+  EXPECT_EQ(Read(out / "plan.csv"), before);
+}
+
+// `--from OUT`: a calibration of configs/plan.yaml's session, then the
+// shots to add. Its diagnosis ranks effects it could not determine
+// (v_eccentricity among them, whose signature these boards and records do
+// not show): plan.json names them and says what limits them.
+TEST(PlanCommand, FromAnEarlierRunNamesWhatItsDiagnosisCouldNotDetermine) {
+  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_from";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path run = dir / "run";
+  const std::string config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/plan.yaml";
+  std::string err;
+  ASSERT_EQ(
+      RunRtscalib("--quiet --config '" + config + "' --output '" + run.string() + "'", dir, &err),
+      0)
+      << err;
+  ASSERT_EQ(RunRtscalib("plan --quiet --from '" + run.string() + "'", dir, &err), 0) << err;
+  const nlohmann::json j = nlohmann::json::parse(Read(run / "plan" / "plan.json"));
+  const nlohmann::json report = nlohmann::json::parse(Read(run / "report.json"));
+  std::vector<std::string> expected;
+  for (const auto& e : report["diagnosis"]["ranking"]) {
+    const std::string name = e["effect"].get<std::string>();
+    if (e.value("identifiable", true)) continue;
+    if (name == "collimation" || name == "tilting_axis" || name == "vertical_index" ||
+        name == "edm_offset")
+      continue;  // contained in the dh kinematics
+    for (const std::string kinematic : {"hz_eccentricity", "v_eccentricity", "hz_scale", "v_scale",
+                                        "axis_wobble", "edm_scale", "edm_cyclic"}) {
+      if (name == kinematic) expected.push_back(name);
+    }
+  }
+  ASSERT_FALSE(expected.empty());
+  EXPECT_EQ(j["effects_not_identifiable"].get<std::vector<std::string>>(), expected);
+  // Every such effect's amplitude is a goal of the plan, and each one that
+  // is not met is named among the limits.
+  for (const std::string& effect : expected) {
+    bool goal = false, met = false;
+    for (const auto& c : j["constants"]) {
+      if (c["name"].get<std::string>().rfind(effect + ".", 0) != 0 || !c.contains("goal")) continue;
+      goal = true;
+      met = c["sigma"].is_number() && c["sigma"].get<double>() <= c["goal"].get<double>();
+    }
+    EXPECT_TRUE(goal) << effect;
+    if (met) continue;
+    bool named = false;
+    for (const auto& l : j["limits"]) named = named || l.get<std::string>().rfind(effect, 0) == 0;
+    EXPECT_TRUE(named) << effect;
+  }
+}
+
+}  // namespace
+}  // namespace rtscalib
