@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "app/vega_spec.h"
 #include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {
@@ -32,13 +33,12 @@ Figure PlanFigure(const PlanResult& plan) {
       {"width", width},
       {"height", height},
       {"padding", 8},
-      {"title",
-       {{"text", f.title},
-        {"subtitle",
-         "horizontal angle phi against zenith angle theta (readings of each "
-         "face); colour: what the shot determines most; size: zoom; grey "
-         "line: the order of measuring, travel " +
-             Significant(plan.motor_travel_rad * 180.0 / M_PI, 3) + " deg"}}},
+      // The title block of every figure (a line per clause of the subtitle).
+      {"title", Chart(f.title,
+                      "horizontal angle phi against zenith angle theta (the readings of "
+                      "each face); colour: what the shot determines most; size: zoom; grey "
+                      "line: the order of measuring, motor travel " +
+                          Significant(plan.motor_travel_rad * 180.0 / M_PI, 3) + " deg")["title"]},
       {"data", json::array({{{"name", "shots"}, {"values", values}}})},
       {"scales",
        json::array({{{"name", "x"}, {"type", "linear"}, {"domain", {0, 360}}, {"range", "width"}},
