@@ -206,6 +206,12 @@ TEST_F(SnapshotCache, WithoutACacheFolderTheFiguresAreDrawnWithoutASnapshot) {
 TEST(VegaRenderer, EndsItsNodeAndRemovesItsFolderWhenItNeverDraws) {
   std::string why;
   if (!Drawable(&why)) GTEST_SKIP() << why;
+  // A temporary folder of this test's own: other tests' renderers, running
+  // in parallel, make and remove their folders in the system's.
+  const fs::path tmp = fs::temp_directory_path() /
+                       ("rtscalib-vega-test-" + std::to_string(::getpid()));
+  fs::create_directories(tmp);
+  const ScopedEnv tmpdir("TMPDIR", tmp.string());
   const std::set<std::string> before = FigureFolders();
   {
     VegaRenderer renderer;  // started; destroyed before node has read the runtime
@@ -216,6 +222,8 @@ TEST(VegaRenderer, EndsItsNodeAndRemovesItsFolderWhenItNeverDraws) {
     EXPECT_TRUE(renderer.Draw({}, &note).empty());  // nothing to draw
   }
   EXPECT_EQ(FigureFolders(), before);
+  std::error_code ec;
+  fs::remove_all(tmp, ec);
 }
 
 }  // namespace
