@@ -300,8 +300,12 @@ RobustFitResult FindGrossErrorsByFit(const Observations& obs, const FitOptions& 
   if (!robust.enabled) return out;
   const UsedRows used = SelectRows(obs, options, model->NumZooms(), UnknownZoom::kThrow);
 
-  // 1. Rows the start cannot evaluate.
-  const std::vector<Row> at_start = RowResiduals(obs, used, *model);
+  // 1. Rows the start cannot evaluate. Boards and points of unknown position
+  // get their starting values first, as the refinement gives them (SPEC 7):
+  // without them their rows have no position to be evaluated at.
+  InstrumentModel seeded = *model;
+  StartUnknowns(obs, used, FactsOf(obs, used), &seeded);
+  const std::vector<Row> at_start = RowResiduals(obs, used, seeded);
   std::vector<ExcludedRow> unusable;
   for (const Row& r : at_start) {
     if (!std::isfinite(r.r)) {

@@ -17,6 +17,7 @@
 
 #include "libcalib/fit/parameterization.h"
 #include "libcalib/fit/refine.h"
+#include "libcalib/fit/robust.h"
 #include "libcalib/fit/unknowns.h"
 #include "libcalib/model/kinematics.h"
 #include "tests/fit/joint_scene.h"
@@ -246,6 +247,32 @@ TEST(UnknownBoards, CostLittleAccuracyAgainstSurveyedBoards) {
   // Both fits agree with the truth within 4 stated sigmas (RMS over 8 values).
   EXPECT_LT(err_s, 4.0 * sig_s);
   EXPECT_LT(err_u, 4.0 * sig_u);
+}
+
+// The gross-error search evaluates its start with the boards' starting poses
+// (as the refinement starts them): every corner of a board of unknown pose
+// can be evaluated there, and a corner moved by 40 px (over 100 sigmas) is
+// found and taken out.
+TEST(UnknownBoards, GrossErrorSearchEvaluatesCornersOfUnknownBoards) {
+  const InstrumentModel truth = Truth();
+  SimulationOptions o = PixelsOnly(truth, 1, 9, kNoisePx);
+  SimulatedData data = Simulate(o);
+  data.obs.records.clear();
+  data.obs.targets = o.targets;
+  ForgetBoardPoses(&data.obs);
+  const int planted = static_cast<int>(data.obs.pixels.size() / 2);
+  data.obs.pixels[planted].uv.x() += 40;
+  InstrumentModel m = PerturbedStart(truth, 9, 1e-3);
+  FitOptions fo;
+  fo.sigma_pixel_px = kNoisePx;
+  GrossErrorOptions robust;
+  const RobustFitResult r = FindGrossErrorsByFit(data.obs, fo, robust, &m, false);
+  for (const std::string& note : r.notes) {
+    EXPECT_EQ(note.find("cannot be evaluated at the start"), std::string::npos) << note;
+  }
+  bool found = false;
+  for (const ExcludedRow& e : r.gross) found |= e.pixel && e.index == planted;
+  EXPECT_TRUE(found) << r.gross.size() << " rows flagged";
 }
 
 // Corners of a target on no board are bad input, named by file and line.
