@@ -59,6 +59,8 @@ th, td { border: 1px solid #d6d6d6; padding: 4px 8px; text-align: left; vertical
 th { background: #f2f2f2; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 td.est { min-width: 210px; }
+td.cfg { min-width: 230px; }
+td.cfg code { word-break: normal; overflow-wrap: anywhere; }
 td.notes { max-width: 300px; font-size: 12px; color: #555; }
 tr.sig td { background: #fff6e0; }
 tr.red td { color: #888; }
@@ -232,7 +234,7 @@ std::string RankingTable(const Diagnosis& d) {
       notes.push_back(Esc(n));
     }
     for (size_t k = 0; k < notes.size(); ++k) o << (k ? "<br>" : "") << notes[k];
-    o << "</td><td><code>" << Esc(r.config_line) << "</code></td></tr>\n";
+    o << "</td><td class=cfg><code>" << Esc(r.config_line) << "</code></td></tr>\n";
   }
   o << "</table><p class=small>Sorted best first: the effects worth adding (significant and "
        "buying at least "

@@ -295,7 +295,11 @@ RankedEffect ScoreEffect(const ColumnBlock& b, const Context& cx) {
   r.wald = t.wald;
   r.p_value = t.p_value;
   const ColumnTest plain = TestColumns(red.r, t_e, red.cluster, lin.num_clusters, red.Rank());
-  r.after = RmsOfWhitened(lin, red.r - plain.fitted);
+  // The fall the effect's columns take out of each group's sum of squares,
+  // from the fit's own residuals: red.r also carries the step the model's own
+  // columns would take with the linearisation's group weights (the fit
+  // weighs by zoom and photo), which no added effect buys.
+  r.after = RmsLess(lin, cx.current, plain.fitted);
   r.linear_after = r.after;
 
   // r regressed on its own derivative gives minus the Gauss-Newton step.
