@@ -58,8 +58,8 @@ td code { word-break: break-all; }
 th, td { border: 1px solid #d6d6d6; padding: 4px 8px; text-align: left; vertical-align: top; }
 th { background: #f2f2f2; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
-td.est { min-width: 210px; }
-td.cfg { min-width: 230px; }
+td.est { min-width: 180px; }
+td.cfg { min-width: 180px; }
 td.cfg code { word-break: normal; overflow-wrap: anywhere; }
 td.notes { max-width: 300px; font-size: 12px; color: #555; }
 tr.sig td { background: #fff6e0; }
