@@ -456,11 +456,16 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   {
     Observations grid;
     for (int z : zooms) {
-      const CameraTool& cam = model.cams[z];
+      // The uncertainty map's own grid (its cell centres, SPEC 2's pixel centre).
+      UncertaintyMap map;
+      map.cols = o.projection.cols;
+      map.rows = o.projection.rows;
+      map.width = model.cams[z].width;
+      map.height = model.cams[z].height;
       for (int r = 0; r < o.projection.rows; ++r) {
         for (int col = 0; col < o.projection.cols; ++col) {
-          const double uu = (col + 0.5) * cam.width / o.projection.cols - 0.5;
-          const double vv = (r + 0.5) * cam.height / o.projection.rows - 0.5;
+          const double uu = map.CellU(col);
+          const double vv = map.CellV(r);
           PixelObservation px;
           px.face = 1;
           px.zoom = z;
