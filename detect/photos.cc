@@ -85,13 +85,17 @@ void KeepBoardTags(const std::vector<TagDetection>& detections, const TargetScen
 
 // The inner corners of the ChArUco and chessboards (point_boards.h), one
 // DetectedTag each (all four corners the same point), merged in id order.
+// `own_placement`: no other photo shares the photo's placement, so that a
+// board of unknown pose has a pose of this photo's alone (CopySearch).
 void KeepPointBoards(const cv::Mat& gray, const TargetScene& targets, int face,
-                     PhotoDetection* photo) {
+                     bool own_placement, PhotoDetection* photo) {
   bool added = false;
   for (size_t b = 0; b < targets.boards.size(); ++b) {
     const TagBoard& board = targets.boards[b];
     if (!board.IsPointBoard()) continue;
-    const PointBoardDetection found = DetectPointBoard(gray, board, face);
+    const CopySearch copies =
+        own_placement && !board.pose_known ? CopySearch::kSkip : CopySearch::kSearch;
+    const PointBoardDetection found = DetectPointBoard(gray, board, face, copies);
     if (found.misoriented) ++photo->misoriented_boards;
     if (found.duplicated) ++photo->duplicate_boards;
     for (const auto& [k, uv] : found.corners) {
@@ -175,6 +179,8 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
   const bool any_tags = !detector_options.families.empty();
 
   const int n = static_cast<int>(shots.shots.size());
+  std::map<std::string, int> photos_of_placement;
+  for (const PhotoShot& shot : shots.shots) ++photos_of_placement[shot.placement];
   PhotoDetectionResult result;
   result.photos.resize(n);
   std::vector<char> done(n, 0);  // one byte per photo: threads write distinct elements
@@ -231,7 +237,9 @@ PhotoDetectionResult DetectPhotos(const ShotsFile& shots, const TargetScene& tar
           }
           KeepBoardTags(detections, targets, options.keep_unrefined, &photo);
         }
-        KeepPointBoards(image.gray, targets, shot.face, &photo);
+        KeepPointBoards(image.gray, targets, shot.face,
+                        shots.has_placements && photos_of_placement.at(shot.placement) == 1,
+                        &photo);
         for (const DetectedTag& tag : photo.tags) {
           photo.corners += targets.boards[tag.board].CornersPerTarget();
         }

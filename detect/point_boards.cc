@@ -215,7 +215,8 @@ bool FindChessboardGrid(const std::vector<cv::Mat>& levels, cv::Size size, int f
   return false;
 }
 
-PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board, int face) {
+PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board, int face,
+                                     CopySearch copies) {
   const int nc = board.cols - 1, nr = board.rows - 1;
   PointBoardDetection out;
   const cv::Size size(nc, nr);
@@ -231,7 +232,7 @@ PointBoardDetection DetectChessboard(const cv::Mat& gray, const TagBoard& board,
   // search costs only the checks, a fraction of the photo's own where the
   // board is large in a large photo.
   const double step = SmallestRowStep(grid, nc);
-  {
+  if (copies == CopySearch::kSearch) {
     std::vector<cv::Point2f> hull_f;
     cv::convexHull(grid, hull_f);
     const cv::Point2f centre = std::accumulate(hull_f.begin(), hull_f.end(), cv::Point2f(0, 0)) *
@@ -323,12 +324,13 @@ std::vector<cv::Mat> CharucoMarkerImages(const TagBoard& board) {
   return out;
 }
 
-PointBoardDetection DetectPointBoard(const cv::Mat& gray, const TagBoard& board, int face) {
+PointBoardDetection DetectPointBoard(const cv::Mat& gray, const TagBoard& board, int face,
+                                     CopySearch copies) {
   switch (board.kind) {
     case BoardKind::kCharuco:
       return DetectCharuco(gray, board);
     case BoardKind::kChessboard:
-      return DetectChessboard(gray, board, face);
+      return DetectChessboard(gray, board, face, copies);
     case BoardKind::kAprilTag:
       break;
   }

@@ -42,10 +42,23 @@ struct PointBoardDetection {
   bool duplicated = false;
 };
 
+// Whether a chessboard's second copy is looked for. It matters where the
+// board's corners are tied to more than the photo: a surveyed board
+// (pose_known), whose corners have world coordinates, and a placement that
+// other photos share, whose one pose the photos hold together; a copy found
+// instead of the board would give them wrong corners. A photo whose
+// placement is its own (a board held by hand, OpenCV's calibration
+// tutorial) gets a pose of its own for whichever copy is found, as in
+// calibrateCamera, and the search, which costs more than finding the board
+// where the board's squares are small (the copy's quick check runs on the
+// photo itself), is skipped.
+enum class CopySearch { kSearch, kSkip };
+
 // `gray` is CV_8UC1; `face` 1 or 2 (chessboard orientation). Throws
 // std::invalid_argument for a ChArUco dictionary OpenCV does not know or
 // one with too few markers for the board.
-PointBoardDetection DetectPointBoard(const cv::Mat& gray, const TagBoard& board, int face);
+PointBoardDetection DetectPointBoard(const cv::Mat& gray, const TagBoard& board, int face,
+                                     CopySearch copies = CopySearch::kSearch);
 
 // OpenCV's predefined ArUco dictionaries by name (DICT_4X4_50, ...) with
 // their numbers of markers.

@@ -370,6 +370,49 @@ TEST(PointBoards, RealChessboardFoundTwiceIsNotUsed) {
   EXPECT_EQ(static_cast<int>(d.corners.size()), b.NumTags());
 }
 
+// The same two copies (left01.jpg beside left02.jpg) as photos of a
+// session: where the photo's placement is its own, the board's pose is
+// the photo's alone and whichever copy is found is used (no second search,
+// CopySearch::kSkip); where two photos share the placement, the copies stay
+// unused, with the warning. The lone board is found either way.
+TEST(PointBoards, SecondCopyIsSearchedWhereThePlacementIsShared) {
+  const cv::Mat first = OpenCvSample("left01.jpg"), second = OpenCvSample("left02.jpg");
+  if (first.empty() || second.empty()) return;
+  const TagBoard b = OpenCvSampleBoard();
+  const PointBoardDetection skipped = DetectPointBoard(Beside(first, second), b, 1,
+                                                       CopySearch::kSkip);
+  EXPECT_FALSE(skipped.duplicated);
+  EXPECT_EQ(static_cast<int>(skipped.corners.size()), b.NumTags());
+
+  const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) /
+                                    ("rtscalib_copies_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  cv::imwrite((dir / "two.png").string(), Beside(first, second));
+  cv::imwrite((dir / "one.png").string(), Beside(first, cv::Mat(second.size(), CV_8UC1,
+                                                                 cv::Scalar(cv::mean(first)[0]))));
+  std::ofstream(dir / "targets.yaml")
+      << "boards:\n  - {type: chessboard, first_id: 0, rows: 7, cols: 10, square_size: 0.025}\n";
+  const TargetScene targets = ReadTargets((dir / "targets.yaml").string());
+  PhotoDetectionOptions options;
+  options.progress = false;
+  auto detect = [&](const std::string& rows) {
+    std::ofstream(dir / "shots.csv") << "face,zoom,phi,theta,image,placement\n" << rows;
+    return DetectPhotos(ReadShots((dir / "shots.csv").string()), targets, options);
+  };
+  const PhotoDetectionResult own = detect("1,0,,,two.png,p1\n1,0,,,one.png,p2\n");
+  EXPECT_EQ(own.photos[0].tags.size(), 54u);
+  EXPECT_EQ(own.photos[0].duplicate_boards, 0);
+  EXPECT_TRUE(own.warnings.empty());
+  const PhotoDetectionResult shared = detect("1,0,,,two.png,p1\n1,0,,,one.png,p1\n");
+  EXPECT_TRUE(shared.photos[0].tags.empty());
+  EXPECT_EQ(shared.photos[0].duplicate_boards, 1);
+  EXPECT_EQ(shared.photos[1].tags.size(), 54u);
+  ASSERT_FALSE(shared.warnings.empty());
+  EXPECT_NE(shared.warnings[0].find("found twice"), std::string::npos) << shared.warnings[0];
+  std::filesystem::remove_all(dir);
+}
+
 TEST(PointBoards, PhotoFolderGivesOneCornerPerTarget) {
   const std::filesystem::path dir =
       std::filesystem::path(::testing::TempDir()) / ("rtscalib_point_boards_" + std::to_string(::getpid()));
