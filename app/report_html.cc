@@ -160,29 +160,14 @@ std::string ValueCell(const RankedEffect& r) {
     return out;
   }
   if (!r.observable || r.redundant) return "-";
-  if (IsKinematic(r.effect)) {
-    for (int k = 0; k < r.value.num; ++k) {
-      out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " +
-             Fmt("%.3g", r.value.value[k]) + " &plusmn; " + Fmt("%.2g", r.value.sigma[k]) + " " +
-             info.report_units[k];
-    }
-    return out;
+  const std::vector<EstimatePart> parts = EstimateParts(r);
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const EstimatePart& p = parts[i];
+    out += (i == 0 ? "" : p.where.empty() ? ", " : "<br>") +
+           (p.where.empty() ? "" : p.where + " ") + p.name + " = " + Fmt("%.3g", p.value) +
+           " &plusmn; " + Fmt("%.2g", p.sigma) + " " + p.unit;
   }
-  if (IsBoardEffect(r.effect)) {
-    for (size_t i = 0; i < r.board_warp.size(); ++i) {
-      const WarpValue& w = r.board_warp[i];
-      out += (i ? "<br>" : "") + std::string("board ") + std::to_string(w.first_id) + " " +
-             w.name + " = " + Fmt("%.3g", w.value * ReportScale(r.effect)) + " &plusmn; " +
-             Fmt("%.2g", w.sigma * ReportScale(r.effect)) + " " + info.report_units[w.index];
-    }
-    return out;
-  }
-  for (size_t i = 0; i < r.focus.size(); ++i) {
-    const FocusValue& f = r.focus[i];
-    out += (i ? "<br>" : "") + std::string("zoom ") + std::to_string(f.zoom) + " " + f.name +
-           " = " + Fmt("%.3g", f.value * kFocusReportScale[f.index]) + " &plusmn; " +
-           Fmt("%.2g", f.sigma * kFocusReportScale[f.index]) + " " + kFocusReportUnits[f.index];
-  }
+  if (!parts.empty()) return out;
   for (size_t i = 0; i < r.distortion.size() && i < 8; ++i) {
     const DistortionValue& d = r.distortion[i];
     out += (i ? "<br>" : "") + std::string("zoom ") + std::to_string(d.zoom) + " " + d.coefficient +

@@ -208,7 +208,10 @@ void ReadFit(const YamlNode& m, FitOptions* out) {
     if (ReadNumber(*region, "max_zenith_deg", &deg, in_range, expected)) {
       limits.max_zenith_rad = deg * kRadPerDeg;
     }
-    if (!(limits.min_zenith_rad < limits.max_zenith_rad)) {
+    // Each limit is in range by now: what CriticalRegion::Check (the rule
+    // the fit applies) still refuses is their order, said in the config's
+    // degrees at the key.
+    if (!limits.Check().empty()) {
       const std::optional<YamlNode> at = region->Find("max_zenith_deg");
       (at ? *at : *region->Find("min_zenith_deg"))
           .Fail("max_zenith_deg > min_zenith_deg (" +

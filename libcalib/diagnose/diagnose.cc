@@ -45,41 +45,20 @@ std::string Change(const GroupRms& a, const GroupRms& b, const char* format = "%
   return out + " rms";
 }
 
+// "board 0: wx = 0.0542 +- 0.021 mm wy = ...; board 1: ..." (per zoom for
+// focus), or "c = ..., i = ..." for a kinematic effect.
 std::string ValueText(const RankedEffect& r) {
-  const EffectInfo& info = Info(r.effect);
-  if (r.effect == Effect::kFocus) {
-    std::string out;
-    int zoom = -1;
-    for (const FocusValue& f : r.focus) {
-      if (f.zoom != zoom) {
-        out += std::string(out.empty() ? "" : "; ") + "zoom " + std::to_string(f.zoom) + ":";
-        zoom = f.zoom;
-      }
-      out += " " + f.name + " = " + Fmt("%.3g", f.value * kFocusReportScale[f.index]) + " +- " +
-             Fmt("%.2g", f.sigma * kFocusReportScale[f.index]) + " " + kFocusReportUnits[f.index];
-    }
-    return out;
-  }
-  if (IsBoardEffect(r.effect)) {
-    std::string out;
-    const double scale = ReportScale(r.effect);
-    int board = -1;
-    for (const WarpValue& w : r.board_warp) {
-      if (w.first_id != board) {
-        out += std::string(out.empty() ? "" : "; ") + "board " + std::to_string(w.first_id) + ":";
-        board = w.first_id;
-      }
-      out += " " + w.name + " = " + Fmt("%.3g", w.value * scale) + " +- " +
-             Fmt("%.2g", w.sigma * scale) + " " + info.report_units[w.index];
-    }
-    return out;
-  }
-  if (!IsKinematic(r.effect)) return "";
   std::string out;
-  for (int k = 0; k < r.value.num; ++k) {
-    out += (k ? ", " : "") + std::string(info.param_names[k]) + " = " +
-           Fmt("%.3g", r.value.value[k]) + " +- " + Fmt("%.2g", r.value.sigma[k]) + " " +
-           info.report_units[k];
+  const std::vector<EstimatePart> parts = EstimateParts(r);
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const EstimatePart& p = parts[i];
+    if (p.where.empty()) {
+      out += i ? ", " : "";
+    } else {
+      if (i == 0 || parts[i - 1].where != p.where) out += (i ? "; " : "") + p.where + ":";
+      out += " ";
+    }
+    out += p.name + " = " + Fmt("%.3g", p.value) + " +- " + Fmt("%.2g", p.sigma) + " " + p.unit;
   }
   return out;
 }

@@ -597,4 +597,28 @@ Ranking RankEffects(const RankingInput& in, const RankingOptions& o) {
   return out;
 }
 
+std::vector<EstimatePart> EstimateParts(const RankedEffect& r) {
+  const EffectInfo& info = Info(r.effect);
+  std::vector<EstimatePart> out;
+  if (r.effect == Effect::kFocus) {
+    for (const FocusValue& f : r.focus) {
+      out.push_back({"zoom " + std::to_string(f.zoom), f.name,
+                     f.value * kFocusReportScale[f.index], f.sigma * kFocusReportScale[f.index],
+                     kFocusReportUnits[f.index]});
+    }
+  } else if (IsBoardEffect(r.effect)) {
+    const double scale = ReportScale(r.effect);
+    for (const WarpValue& w : r.board_warp) {
+      out.push_back({"board " + std::to_string(w.first_id), w.name, w.value * scale,
+                     w.sigma * scale, info.report_units[w.index]});
+    }
+  } else if (IsKinematic(r.effect)) {
+    for (int k = 0; k < r.value.num; ++k) {
+      out.push_back({"", info.param_names[k], r.value.value[k], r.value.sigma[k],
+                     info.report_units[k]});
+    }
+  }
+  return out;
+}
+
 }  // namespace rtscalib

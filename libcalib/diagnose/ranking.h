@@ -174,6 +174,20 @@ struct RankedEffect {
   std::string note;
 };
 
+// One estimated quantity of a ranked effect, in report units: the text
+// report and report.html say the same numbers from these.
+struct EstimatePart {
+  std::string where;  // "zoom 0", "board 12"; "" for the instrument's (kinematic effects)
+  std::string name;   // the parameter, e.g. "c", "wx", "kf"
+  double value = 0, sigma = 0;
+  std::string unit;
+};
+
+// The estimate of a kinematic, board or focus effect (value and sigma per
+// parameter, per board or zoom in that order); empty for the others
+// (distortion groups list their coefficients in RankedEffect::distortion).
+std::vector<EstimatePart> EstimateParts(const RankedEffect& r);
+
 struct Ranking {
   std::vector<RankedEffect> entries;  // best first
   double level = 0;                   // per-effect test level
