@@ -91,17 +91,7 @@ SvgRasterizer::SvgRasterizer() {
       Find(cairo, "cairo_image_surface_get_data", &api.image_surface_get_data, &missing_) &&
       Find(cairo, "cairo_image_surface_get_stride", &api.image_surface_get_stride, &missing_) &&
       Find(cairo, "cairo_surface_destroy", &api.surface_destroy, &missing_);
-  if (!found) return;
-  api_ = &api;
-  // The first drawing of text reads fontconfig's configuration and builds
-  // pango's font map, about 15 ms, which would otherwise fall on the run's
-  // first figure; here it falls where the rasterizer is first asked for
-  // (VegaRenderer: beside the reading of the photos).
-  std::vector<unsigned char> png;
-  std::string error;
-  ToPng(R"(<svg xmlns="http://www.w3.org/2000/svg" width="8" height="8">)"
-        R"(<text x="0" y="6" font-family="sans-serif" font-size="6">u</text></svg>)",
-        &png, &error);
+  if (found) api_ = &api;
 }
 
 bool SvgRasterizer::ToPng(const std::string& svg, std::vector<unsigned char>* png,

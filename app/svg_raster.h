@@ -18,8 +18,7 @@ namespace rtscalib::app {
 
 class SvgRasterizer {
  public:
-  // The process's rasterizer (the libraries are opened and the fonts loaded
-  // at the first call).
+  // The process's rasterizer (the libraries are opened at the first call).
   static const SvgRasterizer& Get();
 
   // "" when the libraries are there, else what is missing (for the note).

@@ -367,16 +367,9 @@ class PngQueue {
       const std::lock_guard<std::mutex> lock(mutex_);
       queue_.push_back(i);
     }
-    wake_.notify_all();
+    wake_.notify_one();
   }
-  // Called once node has answered for every figure: the PNGs still queued
-  // are drawn on a second thread as well (node's core is free now), then
-  // both are waited for.
   void Finish() {
-    {
-      const std::lock_guard<std::mutex> lock(mutex_);
-      if (queue_.size() > 1 && thread_.joinable()) helper_ = std::thread([this] { Run(); });
-    }
     Stop();
     if (failed_) std::rethrow_exception(failed_);
   }
@@ -387,7 +380,6 @@ class PngQueue {
     if (!thread_.joinable()) return;
     Add(kDone);
     thread_.join();
-    if (helper_.joinable()) helper_.join();
   }
   void Run() {
     for (;;) {
@@ -396,25 +388,18 @@ class PngQueue {
         std::unique_lock<std::mutex> lock(mutex_);
         wake_.wait(lock, [this] { return !queue_.empty(); });
         i = queue_.front();
-        if (i == kDone) return;  // left in the queue for the other thread
         queue_.pop_front();
       }
+      if (i == kDone) return;
       RenderedFigure& fig = figures_[i];
       if (!raster_.ToPng(fig.svg, &fig.png, &fig.error)) {
         fig.svg.clear();
         fig.png.clear();
-      } else if (drawn_) {
-        std::exception_ptr failed;
-        {
-          const std::lock_guard<std::mutex> lock(mutex_);
-          failed = failed_;
-        }
-        if (failed) continue;
+      } else if (drawn_ && !failed_) {
         try {
           drawn_(i, fig);
         } catch (...) {
-          const std::lock_guard<std::mutex> lock(mutex_);
-          if (!failed_) failed_ = std::current_exception();
+          failed_ = std::current_exception();
         }
       }
     }
@@ -426,8 +411,8 @@ class PngQueue {
   std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<size_t> queue_;
-  std::exception_ptr failed_;  // guarded by mutex_ while the threads run
-  std::thread thread_, helper_;
+  std::exception_ptr failed_;  // written and read by the drawing thread until it ends
+  std::thread thread_;
 };
 
 }  // namespace
@@ -576,7 +561,7 @@ VegaRenderer::VegaRenderer() : state_(std::make_unique<State>()) {
     std::string missing;
     const std::string& runtime = VegaRuntime(&missing);
     s->node = !FindProgram("node").empty() ? FindProgram("node") : FindProgram("nodejs");
-    const SvgRasterizer& raster = SvgRasterizer::Get();  // opens librsvg, loads the fonts
+    const SvgRasterizer& raster = SvgRasterizer::Get();  // opens librsvg meanwhile
     if (runtime.empty() || s->node.empty() || !raster.missing().empty()) {
       s->missing = runtime.empty() ? "the Vega modules are missing: " + missing
                    : s->node.empty()
