@@ -11,18 +11,13 @@
 
 #include "libcalib/io/model_io.h"
 #include "libcalib/sim/simulator.h"
+#include "tests/app/read_file.h"
 
 namespace rtscalib {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Read(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using testing_files::ReadFile;
 
 class CompareCommand : public ::testing::Test {
  protected:
@@ -37,7 +32,7 @@ class CompareCommand : public ::testing::Test {
     const std::string cmd = std::string("'") + RTSCALIB_BINARY_DIR + "/app/rtscalib' " + args +
                             " > /dev/null 2> '" + log.string() + "'";
     const int status = std::system(cmd.c_str());
-    *err = Read(log);
+    *err = ReadFile(log);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
   fs::path dir_;
@@ -54,7 +49,7 @@ TEST_F(CompareCommand, ExitCodesFilesAndMessages) {
                 &err),
             0)
       << err;
-  const nlohmann::json j = nlohmann::json::parse(Read(out / "compare.json"));
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(out / "compare.json"));
   ASSERT_EQ(j["zooms"].size(), 2u);
   for (const auto& z : j["zooms"]) EXPECT_EQ(z["max_px"].get<double>(), 0.0);
   EXPECT_TRUE(fs::exists(out / "compare.txt"));

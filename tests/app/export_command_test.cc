@@ -11,18 +11,13 @@
 #include "app/commands.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/sim/simulator.h"
+#include "tests/app/read_file.h"
 
 namespace rtscalib {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing_files::ReadFile;
 
 TEST(ExportCommand, WritesEachFormatAndNeverOverwritesWithoutForce) {
   const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "export_command";
@@ -56,10 +51,10 @@ TEST(ExportCommand, WritesEachFormatAndNeverOverwritesWithoutForce) {
       EXPECT_NE(std::string(e.what()).find(last.string()), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
     }
-    EXPECT_EQ(Slurp(last), "mine");
+    EXPECT_EQ(ReadFile(last), "mine");
     args.force = true;
     ASSERT_EQ(app::RunExport(args), 0) << format;
-    EXPECT_NE(Slurp(last), "mine");
+    EXPECT_NE(ReadFile(last), "mine");
   }
   // --out puts the files elsewhere.
   args.format = "urdf";

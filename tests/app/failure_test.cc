@@ -22,18 +22,13 @@
 #include "libcalib/io/records.h"
 #include "libcalib/model/critical_region.h"
 #include "libcalib/sim/simulator.h"
+#include "tests/app/read_file.h"
 
 namespace rtscalib {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string ReadAll(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing_files::ReadFile;
 
 void Put(const fs::path& p, const std::string& text) {
   fs::create_directories(p.parent_path());
@@ -91,7 +86,7 @@ void ExpectFiniteJson(const nlohmann::json& j, const std::string& path,
 void ExpectAllFinite(const fs::path& dir) {
   std::vector<std::string> bad;
   ExpectFiniteYaml(YAML::LoadFile((dir / "model.yaml").string()), "", &bad);
-  ExpectFiniteJson(nlohmann::json::parse(ReadAll(dir / "report.json")), "", &bad);
+  ExpectFiniteJson(nlohmann::json::parse(ReadFile(dir / "report.json")), "", &bad);
   std::string all;
   for (const std::string& b : bad) all += b + "\n";
   EXPECT_TRUE(bad.empty()) << dir << ":\n" << all;
@@ -115,7 +110,7 @@ class Failure : public ::testing::Test {
     const std::string cmd = std::string("'") + RTSCALIB_BINARY_DIR + "/app/rtscalib' " + args +
                             " > /dev/null 2> '" + log.string() + "'";
     const int status = std::system(cmd.c_str());
-    *err = ReadAll(log);
+    *err = ReadFile(log);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
   int RunConfig(const fs::path& config, std::string* err) {
@@ -153,7 +148,7 @@ class Failure : public ::testing::Test {
   // protections of a single fit must hold on their own.
   fs::path ConfigWithoutGrossErrors(const std::vector<Record>& records, const std::string& name) {
     const fs::path config = Config(records, name);
-    std::string text = ReadAll(config);
+    std::string text = ReadFile(config);
     text.replace(text.find("fit:\n"), 5, "fit:\n  gross_errors: {enabled: false}\n");
     Put(config, text + "screen: {gross_errors: {enabled: false}}\n");
     return config;
@@ -203,14 +198,14 @@ TEST_F(Failure, BrokenRowIsAGrossRowListedInTheReport) {
     std::string err;
     ASSERT_EQ(RunConfig(Config(broken, "broken.csv"), &err), 0) << err;
     ExpectAllFinite(root_);
-    const std::string text = ReadAll(root_ / "report.txt");
+    const std::string text = ReadFile(root_ / "report.txt");
     EXPECT_NE(text.find("Gross errors: 1 rows taken out before the fit"), std::string::npos)
         << text;
     EXPECT_NE(text.find((dir_ / "broken.csv").string() + ":" + std::to_string(row + 2) + ": " +
                         (tool == Tool::kEdm ? "EDM row" : "camera row")),
               std::string::npos)
         << text;
-    const nlohmann::json report = nlohmann::json::parse(ReadAll(root_ / "report.json"));
+    const nlohmann::json report = nlohmann::json::parse(ReadFile(root_ / "report.json"));
     ASSERT_EQ(report["gross_errors"].size(), 1u);
     EXPECT_EQ(report["gross_errors"][0]["line"], row + 2);
   }
@@ -223,8 +218,8 @@ TEST_F(Failure, BrokenRowExitsThreeNamesTheRowAndLeavesTheTopAlone) {
   const std::vector<Record> good = Records();
   ASSERT_EQ(RunConfig(Config(good, "good.csv"), &err), 0) << err;
   ExpectAllFinite(root_);
-  const std::string model = ReadAll(root_ / "model.yaml");
-  const std::string report = ReadAll(root_ / "report.json");
+  const std::string model = ReadFile(root_ / "model.yaml");
+  const std::string report = ReadFile(root_ / "report.json");
   const fs::path latest = fs::read_symlink(root_ / "latest");
 
   // A coordinate of 1e308 is caught by the screening before any fit (an input
@@ -252,13 +247,13 @@ TEST_F(Failure, BrokenRowExitsThreeNamesTheRowAndLeavesTheTopAlone) {
               std::string::npos)
         << err;
     EXPECT_EQ(fs::read_symlink(root_ / "latest"), latest);
-    EXPECT_EQ(ReadAll(root_ / "model.yaml"), model);
-    EXPECT_EQ(ReadAll(root_ / "report.json"), report);
+    EXPECT_EQ(ReadFile(root_ / "model.yaml"), model);
+    EXPECT_EQ(ReadFile(root_ / "report.json"), report);
   }
   // Both failed entries say so.
   int failed = 0;
   for (const auto& e : fs::directory_iterator(root_ / "history")) {
-    if (ReadAll(e.path() / "status").rfind("failed: ", 0) == 0) ++failed;
+    if (ReadFile(e.path() / "status").rfind("failed: ", 0) == 0) ++failed;
   }
   EXPECT_EQ(failed, 2);
 }
@@ -285,7 +280,7 @@ TEST_F(Failure, ResidualsFarBeyondTheSigmasExitThreeNamingTheRow) {
 // model "NOT converged" published.
 TEST_F(Failure, NotConvergedExitsThree) {
   const fs::path config = Config(Records(), "records.csv");
-  std::string text = ReadAll(config);
+  std::string text = ReadFile(config);
   text.replace(text.find("fit:\n"), 5, "fit:\n  max_iterations: 1\n");
   Put(config, text);
   std::string err;
@@ -308,10 +303,10 @@ TEST_F(Failure, ToolWithoutDataIsNotDeterminedAndPredictRefusesIt) {
   EXPECT_FALSE(model["edm"]["determined"].as<bool>());
   EXPECT_FALSE(model["edm"]["sigma"]) << "no sigma for a tool that was not estimated";
   EXPECT_TRUE(model["cameras"][0]["flange_from_cam"]["sigma"]);
-  const nlohmann::json report = nlohmann::json::parse(ReadAll(root_ / "report.json"));
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(root_ / "report.json"));
   EXPECT_EQ(report["model"]["edm"]["determined"], false);
   EXPECT_FALSE(report["model"]["edm"].contains("t_sigma"));
-  EXPECT_NE(ReadAll(root_ / "report.txt").find("not determined by the data"), std::string::npos);
+  EXPECT_NE(ReadFile(root_ / "report.txt").find("not determined by the data"), std::string::npos);
 
   const fs::path in = dir_ / "edm_rows.csv";
   WriteRecords(in.string(), {cam[0], edm[0]});
@@ -341,9 +336,9 @@ TEST_F(Failure, RecordsJoinedToThemselvesGetANoticeAndCountOnce) {
   twice.insert(twice.end(), once.begin(), once.end());
   std::string err;
   ASSERT_EQ(RunConfig(Config(once, "once.csv"), &err), 0) << err;
-  const nlohmann::json a = nlohmann::json::parse(ReadAll(root_ / "report.json"));
+  const nlohmann::json a = nlohmann::json::parse(ReadFile(root_ / "report.json"));
   ASSERT_EQ(RunConfig(Config(twice, "twice.csv"), &err), 0) << err;
-  const nlohmann::json b = nlohmann::json::parse(ReadAll(root_ / "report.json"));
+  const nlohmann::json b = nlohmann::json::parse(ReadFile(root_ / "report.json"));
   const std::string n = std::to_string(once.size());
   const std::string first_copy = std::to_string(once.size() + 2);
   bool noticed = false;
@@ -384,7 +379,7 @@ TEST_F(Failure, OneRowPixelsCsvIsAnInputErrorNamingIt) {
       << c.x.y() << "," << c.x.z() << "," << c.u << "," << c.v << "\n";
   Put(pixels, row.str());
   const fs::path config = Config(edm, "edm_only.csv");
-  Put(config, ReadAll(config) + "  pixels: " + pixels.string() + "\n");
+  Put(config, ReadFile(config) + "  pixels: " + pixels.string() + "\n");
   std::string err;
   EXPECT_EQ(RunConfig(config, &err), 1) << err;
   EXPECT_NE(err.find(pixels.string() + ": zoom 0 (pixels from line 2)"), std::string::npos) << err;
@@ -426,7 +421,7 @@ TEST_F(Failure, NothingToFitNamesTheConfigAndTheFile) {
   // The fixture's config with the pixels instead of records and a critical
   // region that holds every row.
   const fs::path config = Config({}, "critical.csv");
-  std::string text = ReadAll(config);
+  std::string text = ReadFile(config);
   text.replace(text.find("fit:\n"), 5,
                "fit:\n  critical_region: {min_zenith_deg: 170, max_zenith_deg: 175}\n");
   text.replace(text.find("  records: "), std::string::npos, "  pixels: " + pixels.string() + "\n");
@@ -450,7 +445,7 @@ TEST_F(Failure, ExitCodesOfUsageAndInputErrorsAndHelp) {
                           log.string() + "' 2>&1";
   const int status = std::system(cmd.c_str());
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
-  const std::string help = ReadAll(log);
+  const std::string help = ReadFile(log);
   EXPECT_NE(help.find("Exit codes"), std::string::npos) << help;
   EXPECT_NE(help.find("3  fit failure"), std::string::npos) << help;
 }

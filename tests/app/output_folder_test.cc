@@ -23,18 +23,13 @@
 #include "app/reports.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/text/errors.h"
+#include "tests/app/read_file.h"
 
 namespace rtscalib::app {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string ReadBytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing_files::ReadFile;
 
 void Put(const fs::path& p, const std::string& text) {
   fs::create_directories(p.parent_path());
@@ -104,14 +99,14 @@ std::string TopRun(const fs::path& root) {
   EXPECT_EQ(latest.rfind("history/", 0), 0u) << latest;
   const std::string run = latest.substr(8);
   for (const std::string& name : OutputFolder::TopFiles()) {
-    EXPECT_EQ(ReadBytes(root / name), Content(name, run)) << name;
+    EXPECT_EQ(ReadFile(root / name), Content(name, run)) << name;
   }
   std::set<std::string> resolving;
   for (const auto& e : fs::directory_iterator(root / "figures")) {
     const std::string f = e.path().filename().string();
     if (!e.is_symlink() || !fs::exists(e.path())) continue;
     resolving.insert(f);
-    EXPECT_EQ(ReadBytes(e.path()), Content(f, run)) << f;
+    EXPECT_EQ(ReadFile(e.path()), Content(f, run)) << f;
   }
   std::set<std::string> of_run;
   for (const auto& e : fs::directory_iterator(root / "history" / run / "figures")) {
@@ -150,7 +145,7 @@ TEST_F(OutputFolderTest, WriterReplacesAFileWholeAndLeavesNoTmp) {
   const fs::path p = dir_ / "report.json";
   WriteFileAtomic(p.string(), "old");
   WriteFileAtomic(p.string(), "new content");
-  EXPECT_EQ(ReadBytes(p), "new content");
+  EXPECT_EQ(ReadFile(p), "new content");
   EXPECT_FALSE(Exists(dir_ / "report.json.tmp"));
 }
 
@@ -167,7 +162,7 @@ TEST_F(OutputFolderTest, WriterFailureNamesTheFileAndTheOsReasonAndKeepsTheOldFi
     EXPECT_NE(std::string(e.what()).find(p.string()), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(std::strerror(EFBIG)), std::string::npos) << e.what();
   }
-  EXPECT_EQ(ReadBytes(p), "the previous good copy");
+  EXPECT_EQ(ReadFile(p), "the previous good copy");
   EXPECT_FALSE(Exists(dir_ / "report.json.tmp"));
 }
 
@@ -191,7 +186,7 @@ TEST_F(OutputFolderTest, WriterWithAPathWriterReportsItsFailureWithErrno) {
   EXPECT_FALSE(Exists(p));
   EXPECT_FALSE(Exists(dir_ / "model.yaml.tmp"));
   WriteFileAtomicWith(p.string(), [](const std::string& tmp) { std::ofstream(tmp) << "ok"; });
-  EXPECT_EQ(ReadBytes(p), "ok");
+  EXPECT_EQ(ReadFile(p), "ok");
 }
 
 TEST_F(OutputFolderTest, WriterFailsOnAMissingFolderAndOnAFolderInTheWay) {
@@ -217,10 +212,10 @@ TEST_F(OutputFolderTest, WriterKeepModeNeverReplacesAnExistingFile) {
   const fs::path p = dir_ / "my.yaml";
   Put(p, "the user's");
   EXPECT_THROW(WriteFileAtomic(p.string(), "ours", Existing::kKeep), WriteError);
-  EXPECT_EQ(ReadBytes(p), "the user's");
+  EXPECT_EQ(ReadFile(p), "the user's");
   EXPECT_FALSE(Exists(dir_ / "my.yaml.tmp"));
   WriteFileAtomic((dir_ / "new.yaml").string(), "ours", Existing::kKeep);
-  EXPECT_EQ(ReadBytes(dir_ / "new.yaml"), "ours");
+  EXPECT_EQ(ReadFile(dir_ / "new.yaml"), "ours");
 }
 
 // --- history and publishing ----------------------------------------------
@@ -233,11 +228,11 @@ TEST_F(OutputFolderTest, TopShowsTheLatestRunAndHistoryKeepsTheEarlierOne) {
   EXPECT_EQ(TopRun(root_), b);
   // a.png was only in run A: its link is gone from figures/, its file kept.
   EXPECT_FALSE(Exists(root_ / "figures" / "a.png"));
-  EXPECT_EQ(ReadBytes(root_ / "history" / a / "figures" / "a.png"), Content("a.png", a));
+  EXPECT_EQ(ReadFile(root_ / "history" / a / "figures" / "a.png"), Content("a.png", a));
   for (const std::string& name : OutputFolder::TopFiles()) {
-    EXPECT_EQ(ReadBytes(root_ / "history" / a / name), Content(name, a));
+    EXPECT_EQ(ReadFile(root_ / "history" / a / name), Content(name, a));
   }
-  const nlohmann::json manifest = nlohmann::json::parse(ReadBytes(root_ / ".rtscalib-published"));
+  const nlohmann::json manifest = nlohmann::json::parse(ReadFile(root_ / ".rtscalib-published"));
   EXPECT_EQ(manifest["run"], b);
 
   const OutputFolder next(root_.string());
@@ -246,7 +241,7 @@ TEST_F(OutputFolderTest, TopShowsTheLatestRunAndHistoryKeepsTheEarlierOne) {
   EXPECT_EQ(next.earlier()[1].name, b);
   EXPECT_EQ(next.earlier()[1].state, RunState::kComplete);
   EXPECT_EQ(next.run().number, 3);
-  EXPECT_EQ(ReadBytes(root_ / "history" / "2024-notes" / "x.txt"), "the user's, not a run");
+  EXPECT_EQ(ReadFile(root_ / "history" / "2024-notes" / "x.txt"), "the user's, not a run");
 }
 
 TEST_F(OutputFolderTest, UsersFilesUnderPublishedNamesStopTheRunBeforeItStarts) {
@@ -261,9 +256,9 @@ TEST_F(OutputFolderTest, UsersFilesUnderPublishedNamesStopTheRunBeforeItStarts) 
     EXPECT_NE(what.find((root_ / "model.yaml").string()), std::string::npos) << what;
     EXPECT_NE(what.find((root_ / "report.txt").string()), std::string::npos) << what;
   }
-  EXPECT_EQ(ReadBytes(root_ / "model.yaml"), "my model");
-  EXPECT_EQ(ReadBytes(root_ / "report.txt"), "my report");
-  EXPECT_EQ(ReadBytes(root_ / "figures" / "notes.txt"), "my notes");
+  EXPECT_EQ(ReadFile(root_ / "model.yaml"), "my model");
+  EXPECT_EQ(ReadFile(root_ / "report.txt"), "my report");
+  EXPECT_EQ(ReadFile(root_ / "figures" / "notes.txt"), "my notes");
   EXPECT_FALSE(Exists(root_ / "history"));  // nothing was written
 }
 
@@ -276,12 +271,12 @@ TEST_F(OutputFolderTest, UsersOtherFilesSurviveRunsAndPublishing) {
   WriteFakeRun(out, kFiguresB);
   out.MarkComplete();
   EXPECT_EQ(out.Publish(), std::vector<std::string>{"c.png"});
-  EXPECT_EQ(ReadBytes(root_ / "README.md"), "my readme");
-  EXPECT_EQ(ReadBytes(root_ / "figures" / "notes.txt"), "my notes");
-  EXPECT_EQ(ReadBytes(root_ / "figures" / "c.png"), "my picture");
-  EXPECT_EQ(ReadBytes(root_ / "figures" / "b.png"), Content("b.png", out.run().name));
-  EXPECT_EQ(ReadBytes(root_ / "model.yaml"), Content("model.yaml", out.run().name));
-  const nlohmann::json manifest = nlohmann::json::parse(ReadBytes(root_ / ".rtscalib-published"));
+  EXPECT_EQ(ReadFile(root_ / "README.md"), "my readme");
+  EXPECT_EQ(ReadFile(root_ / "figures" / "notes.txt"), "my notes");
+  EXPECT_EQ(ReadFile(root_ / "figures" / "c.png"), "my picture");
+  EXPECT_EQ(ReadFile(root_ / "figures" / "b.png"), Content("b.png", out.run().name));
+  EXPECT_EQ(ReadFile(root_ / "model.yaml"), Content("model.yaml", out.run().name));
+  const nlohmann::json manifest = nlohmann::json::parse(ReadFile(root_ / ".rtscalib-published"));
   EXPECT_EQ(manifest["kept_user_files"], nlohmann::json::array({"figures/c.png"}));
 }
 
@@ -293,9 +288,9 @@ TEST_F(OutputFolderTest, AUsersFileAppearingDuringARunIsKeptAndTheOldRunStaysSho
   fs::remove(root_ / "report.html");  // the user replaces rtscalib's link by a file
   Put(root_ / "report.html", "my page");
   EXPECT_THROW(out.Publish(), InputError);
-  EXPECT_EQ(ReadBytes(root_ / "report.html"), "my page");
+  EXPECT_EQ(ReadFile(root_ / "report.html"), "my page");
   EXPECT_EQ(fs::read_symlink(root_ / "latest").string(), "history/" + a);
-  EXPECT_EQ(ReadBytes(root_ / "model.yaml"), Content("model.yaml", a));
+  EXPECT_EQ(ReadFile(root_ / "model.yaml"), Content("model.yaml", a));
 }
 
 TEST_F(OutputFolderTest, PlainCopiesOfAnEarlierVersionAreAdoptedWithoutLoss) {
@@ -319,7 +314,7 @@ TEST_F(OutputFolderTest, PlainCopiesOfAnEarlierVersionAreAdoptedWithoutLoss) {
   steps[0].run();  // adopting: the top still shows the old run, now through latest
   EXPECT_EQ(fs::read_symlink(root_ / "latest").string(), "history/" + old);
   for (const std::string& name : OutputFolder::TopFiles()) {
-    EXPECT_EQ(ReadBytes(root_ / name), Content(name, old));
+    EXPECT_EQ(ReadFile(root_ / name), Content(name, old));
   }
   WriteFakeRun(out, kFiguresB);
   out.MarkComplete();
@@ -327,9 +322,9 @@ TEST_F(OutputFolderTest, PlainCopiesOfAnEarlierVersionAreAdoptedWithoutLoss) {
   EXPECT_EQ(TopRun(root_), out.run().name);
   EXPECT_FALSE(Exists(root_ / "figures" / "a.png"));  // the old copy, not in this run
   for (const std::string& name : OutputFolder::TopFiles()) {
-    EXPECT_EQ(ReadBytes(root_ / "history" / old / name), Content(name, old));
+    EXPECT_EQ(ReadFile(root_ / "history" / old / name), Content(name, old));
   }
-  EXPECT_EQ(ReadBytes(root_ / "history" / old / "figures" / "a.png"), Content("a.png", old));
+  EXPECT_EQ(ReadFile(root_ / "history" / old / "figures" / "a.png"), Content("a.png", old));
 }
 
 TEST_F(OutputFolderTest, ConcurrentProcessesGetDistinctEntries) {
@@ -373,7 +368,7 @@ TEST_F(OutputFolderTest, ConcurrentProcessesGetDistinctEntries) {
     const HistoryEntry& e = after.earlier()[i];
     EXPECT_EQ(e.number, i + 1) << e.name;
     EXPECT_EQ(e.state, RunState::kComplete) << e.name;
-    writers.insert(ReadBytes(fs::path(e.dir) / "who"));
+    writers.insert(ReadFile(fs::path(e.dir) / "who"));
   }
   EXPECT_EQ(writers, pids);  // one entry per process
   const std::string shown = fs::read_symlink(root_ / "latest").string();
@@ -430,7 +425,7 @@ TEST_F(OutputFolderTest, AKillAtAnyStepLeavesOneWholeRunAtTheTopAndIsListedAsKil
     // The manifest at the top names the run the top shows, whatever step
     // the kill came at (it switches with `latest`).
     if (fs::exists(root / ".rtscalib-published")) {
-      const nlohmann::json manifest = nlohmann::json::parse(ReadBytes(root / ".rtscalib-published"));
+      const nlohmann::json manifest = nlohmann::json::parse(ReadFile(root / ".rtscalib-published"));
       EXPECT_EQ(manifest["run"], top) << "killed at step " << kill_at;
     }
 
@@ -527,7 +522,7 @@ class RtscalibBinary : public OutputFolderTest {
                             "/app/rtscalib' --config '" + config.string() + "' --output '" +
                             root.string() + "' --quiet > /dev/null 2> '" + log.string() + "'\"";
     const int status = std::system(cmd.c_str());
-    *err = ReadBytes(log);
+    *err = ReadFile(log);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
 };
@@ -536,7 +531,7 @@ TEST_F(RtscalibBinary, TwoRunsAFullDiskAndAUsersFile) {
   std::string err;
   ASSERT_EQ(Run(root_, "", &err), 0) << err;
   ASSERT_EQ(Run(root_, "", &err), 0) << err;
-  const nlohmann::json report = nlohmann::json::parse(ReadBytes(root_ / "report.json"));
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(root_ / "report.json"));
   const std::string second = report["rtscalib"]["run"];
   EXPECT_EQ(second.substr(0, 4), "002-");
   EXPECT_EQ(fs::read_symlink(root_ / "latest").string(), "history/" + second);
@@ -544,7 +539,7 @@ TEST_F(RtscalibBinary, TwoRunsAFullDiskAndAUsersFile) {
   EXPECT_EQ(report["history"][0]["status"], "complete");
   EXPECT_TRUE(report["history"][0].contains("final"));
   EXPECT_TRUE(fs::exists(root_ / "history" / report["history"][0]["run"] / "model.yaml"));
-  const std::string model = ReadBytes(root_ / "model.yaml");
+  const std::string model = ReadFile(root_ / "model.yaml");
 
   // A full disk (the file size limit gives the same failed writes): a
   // non-zero exit naming the file and the OS reason; the top is untouched;
@@ -553,10 +548,10 @@ TEST_F(RtscalibBinary, TwoRunsAFullDiskAndAUsersFile) {
   EXPECT_NE(err.find("cannot write '" + root_.string() + "/history/003-"), std::string::npos)
       << err;
   EXPECT_NE(err.find(std::strerror(EFBIG)), std::string::npos) << err;
-  EXPECT_EQ(ReadBytes(root_ / "model.yaml"), model);
-  EXPECT_EQ(ReadBytes(root_ / "latest" / "status").substr(0, 8), "complete");
+  EXPECT_EQ(ReadFile(root_ / "model.yaml"), model);
+  EXPECT_EQ(ReadFile(root_ / "latest" / "status").substr(0, 8), "complete");
   ASSERT_EQ(Run(root_, "", &err), 0) << err;
-  const nlohmann::json fourth = nlohmann::json::parse(ReadBytes(root_ / "report.json"));
+  const nlohmann::json fourth = nlohmann::json::parse(ReadFile(root_ / "report.json"));
   ASSERT_EQ(fourth["history"].size(), 3u);
   EXPECT_EQ(fourth["history"][2]["status"], "failed");
 
@@ -568,14 +563,14 @@ TEST_F(RtscalibBinary, TwoRunsAFullDiskAndAUsersFile) {
   Put(mine / "figures" / "notes.txt", "my notes");
   EXPECT_EQ(Run(mine, "", &err), 1);
   EXPECT_NE(err.find((mine / "model.yaml").string()), std::string::npos) << err;
-  EXPECT_EQ(ReadBytes(mine / "model.yaml"), "my model");
-  EXPECT_EQ(ReadBytes(mine / "report.txt"), "my report");
-  EXPECT_EQ(ReadBytes(mine / "figures" / "notes.txt"), "my notes");
+  EXPECT_EQ(ReadFile(mine / "model.yaml"), "my model");
+  EXPECT_EQ(ReadFile(mine / "report.txt"), "my report");
+  EXPECT_EQ(ReadFile(mine / "figures" / "notes.txt"), "my notes");
   // Only figures/notes.txt: the run goes ahead and keeps it.
   fs::remove(mine / "model.yaml");
   fs::remove(mine / "report.txt");
   ASSERT_EQ(Run(mine, "", &err), 0) << err;
-  EXPECT_EQ(ReadBytes(mine / "figures" / "notes.txt"), "my notes");
+  EXPECT_EQ(ReadFile(mine / "figures" / "notes.txt"), "my notes");
   EXPECT_TRUE(fs::exists(mine / "report.html"));
 }
 

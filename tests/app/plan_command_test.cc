@@ -13,25 +13,20 @@
 #include <vector>
 
 #include "libcalib/io/shots.h"
+#include "tests/app/read_file.h"
 
 namespace rtscalib {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Read(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using testing_files::ReadFile;
 
 int RunRtscalib(const std::string& args, const fs::path& dir, std::string* err) {
   const fs::path log = dir / "stderr.txt";
   const std::string cmd = std::string("'") + RTSCALIB_BINARY_DIR + "/app/rtscalib' " + args +
                           " > /dev/null 2> '" + log.string() + "'";
   const int status = std::system(cmd.c_str());
-  *err = Read(log);
+  *err = ReadFile(log);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -46,7 +41,7 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
                         dir, &err),
             0)
       << err;
-  const nlohmann::json j = nlohmann::json::parse(Read(out / "plan.json"));
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(out / "plan.json"));
   EXPECT_TRUE(j["goal_met"].get<bool>());
   const size_t n = j["plan"].size();
   ASSERT_GT(n, 0u);
@@ -54,7 +49,7 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
   EXPECT_TRUE(fs::exists(out / "figures" / "plan.vg.json"));
   // The user fills the image column: a shots.csv (SPEC 7) with the plan's
   // readings in the plan's order.
-  std::istringstream csv(Read(out / "plan.csv"));
+  std::istringstream csv(ReadFile(out / "plan.csv"));
   std::ostringstream filled;
   std::string line;
   int row = 0;
@@ -79,12 +74,12 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
   }
   // A second plan into the same folder: refused, naming the file, the
   // first plan untouched.
-  const std::string before = Read(out / "plan.csv");
+  const std::string before = ReadFile(out / "plan.csv");
   EXPECT_EQ(RunRtscalib("plan --quiet --config '" + config + "' --output '" + out.string() + "'",
                         dir, &err),
             1);
   EXPECT_NE(err.find("plan.csv"), std::string::npos) << err;
-  EXPECT_EQ(Read(out / "plan.csv"), before);
+  EXPECT_EQ(ReadFile(out / "plan.csv"), before);
 }
 
 // `--from OUT`: a calibration of configs/plan.yaml's session, then the
@@ -103,8 +98,8 @@ TEST(PlanCommand, FromAnEarlierRunNamesWhatItsDiagnosisCouldNotDetermine) {
       0)
       << err;
   ASSERT_EQ(RunRtscalib("plan --quiet --from '" + run.string() + "'", dir, &err), 0) << err;
-  const nlohmann::json j = nlohmann::json::parse(Read(run / "plan" / "plan.json"));
-  const nlohmann::json report = nlohmann::json::parse(Read(run / "report.json"));
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(run / "plan" / "plan.json"));
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(run / "report.json"));
   std::vector<std::string> expected;
   for (const auto& e : report["diagnosis"]["ranking"]) {
     const std::string name = e["effect"].get<std::string>();

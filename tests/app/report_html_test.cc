@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "tests/app/read_file.h"
 
 namespace rtscalib::app {
 namespace {
@@ -57,12 +58,7 @@ output: out
   }
   static void TearDownTestSuite() { fs::remove_all(*dir_); }
   static fs::path Out(const std::string& name) { return *dir_ / "out" / name; }
-  static std::string Html() {
-    std::ifstream in(Out("report.html"));
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
+  static std::string Html() { return testing_files::ReadFile(Out("report.html")); }
 
   static fs::path* dir_;
   static int rc_;
