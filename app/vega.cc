@@ -87,15 +87,67 @@ std::string BuildRuntime(std::string* missing) {
 }
 
 // The node side, a server on stdin and stdout: it answers "ready" once the
-// runtime is loaded, then for each line "<i>" draws spec_<i>.json of its
-// folder to fig_<i>.svg (or error_<i>.txt) and answers "<i>", one spec after
-// the other; it ends when its input ends. Node compiles a function's
-// bytecode when it first runs, which for Vega's parser, dataflow and SVG
-// writer costs about as much as drawing a figure: the warm-up specs (the
-// marks, scales, axes, legends, layouts, transforms and expressions the
-// figures use) are drawn before the first figure, in the snapshot when node
-// starts from one (below), else while the server waits for specs.
+// runtime is loaded and the warm-up drawn, then for each line "<i>" draws
+// spec_<i>.json of its folder to fig_<i>.svg (or error_<i>.txt) and
+// answers "<i>", one spec after the other; it ends when its input ends.
+// Node compiles a function's bytecode when it first runs, which for Vega's
+// parser, dataflow and SVG writer costs about as much as drawing a figure,
+// and V8's inline caches learn the shapes of Vega's objects as it runs: the
+// warm-up specs (the marks, scales, axes, legends, layouts, transforms and
+// expressions the figures use) are drawn before the first figure. A
+// snapshot (below) keeps the compiled code but not what the caches learnt,
+// so node started from one draws the warm-up again: a run starts node while
+// it reads its photos, and the seven figures of configs/bench.yaml then take
+// node about 90 ms instead of about 110 ms.
 constexpr const char* kServerScript = R"js(
+// Vega's renderer waits for its images by asking every 10 ms whether they
+// are loaded. Node has no image decoder: the load fails at once (the SVG
+// keeps the image's address) and a figure with a photo sat idle for the
+// 10 ms. Asking again at the next turn of node's event loop gives the same
+// SVG without the wait.
+vega.ResourceLoader.prototype.ready = function() {
+  const loader = this;
+  return new Promise(accept => {
+    (function poll(redraw) {
+      if (!loader.pending()) accept(redraw);
+      else setImmediate(() => poll(true));
+    })(false);
+  });
+};
+// Node has no canvas to measure text with, and Vega then takes every
+// character as 0.8 em wide, about 1.4 times DejaVu Sans's mean: a figure
+// with a long subtitle came out a quarter wider than what it draws, white
+// on the right. The widths here are DejaVu Sans's advances (what
+// fontconfig gives librsvg for sans-serif on Debian), in 1/2048 em, for
+// ASCII 32-126, book and bold; another character counts as a digit.
+const kBookWidths = [
+  651, 821, 942, 1716, 1303, 1946, 1597, 563, 799, 799, 1024, 1716, 651, 739, 651, 690, 1303, 1303,
+  1303, 1303, 1303, 1303, 1303, 1303, 1303, 1303, 690, 690, 1716, 1716, 1716, 1087, 2048, 1401,
+  1405, 1430, 1577, 1294, 1178, 1587, 1540, 604, 604, 1343, 1141, 1767, 1532, 1612, 1235, 1612,
+  1423, 1300, 1251, 1499, 1401, 2025, 1403, 1251, 1403, 799, 690, 799, 1716, 1024, 1024, 1255,
+  1300, 1126, 1300, 1260, 721, 1300, 1298, 569, 569, 1186, 569, 1995, 1298, 1253, 1300, 1300, 842,
+  1067, 803, 1298, 1212, 1675, 1212, 1212, 1075, 1303, 690, 1303, 1716];
+const kBoldWidths = [
+  713, 934, 1067, 1716, 1425, 2052, 1786, 627, 936, 936, 1071, 1716, 778, 850, 778, 748, 1425,
+  1425, 1425, 1425, 1425, 1425, 1425, 1425, 1425, 1425, 819, 819, 1716, 1716, 1716, 1188, 2048,
+  1585, 1561, 1503, 1700, 1399, 1399, 1681, 1714, 762, 762, 1587, 1305, 2038, 1714, 1741, 1501,
+  1741, 1577, 1475, 1397, 1663, 1585, 2259, 1579, 1483, 1485, 936, 748, 936, 1716, 1024, 1024,
+  1382, 1466, 1214, 1466, 1389, 891, 1466, 1458, 702, 702, 1362, 702, 2134, 1458, 1407, 1466, 1466,
+  1010, 1219, 979, 1458, 1335, 1892, 1321, 1335, 1192, 1458, 748, 1458, 1716];
+vega.textMetrics.width = function(item, text) {
+  const t = text == null ? '' : String(text).trim();
+  const size = item.fontSize != null ? +item.fontSize || 0 : 11;
+  const weight = item.fontWeight;
+  const table = weight === 'bold' || weight === 'bolder' || +weight >= 600 ? kBoldWidths
+                                                                          : kBookWidths;
+  let units = 0;
+  for (let i = 0; i < t.length; ++i) {
+    const c = t.charCodeAt(i);
+    units += c >= 32 && c < 127 ? table[c - 32] : table[16];
+  }
+  const width = units * size / 2048;
+  return item.limit > 0 ? Math.min(width, +item.limit) : width;
+};
 async function svg(spec) {
   const view = new vega.View(vega.parse(spec), {renderer: 'none'});
   view.logLevel(vega.Error);
@@ -142,7 +194,9 @@ const kWarmUps = [
     marks: [panel('linear'), panel('log'), panel('sqrt')]},
   {width: 40, height: 30, padding: 5, background: 'white',
     data: [{name: 'cells', values: [{u0: 0, u1: 1, v0: 0, v1: 1, value: 1, inside: true},
-      {u0: 1, u1: 2, v0: 0, v1: 1, value: null, inside: false}]}],
+      {u0: 1, u1: 2, v0: 0, v1: 1, value: null, inside: false}]},
+      {name: 'photo', values: [{url:
+        'data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklEQVR4nGNoAAAAggCBd81ytgAAAABJRU5ErkJggg=='}]}],
     scales: [
       {name: 'u', type: 'linear', domain: [0, 2], range: [0, 40], zero: false, nice: false},
       {name: 'v', type: 'linear', domain: [0, 1], range: [0, 30], zero: false, nice: false},
@@ -152,9 +206,8 @@ const kWarmUps = [
     axes: [{orient: 'bottom', scale: 'k'}, {orient: 'left', scale: 'v', tickCount: 3}],
     legends: [{fill: 'colour', type: 'gradient', title: 's'}],
     marks: [
-      {type: 'image', encode: {enter: {x: {value: 0}, y: {value: 0}, width: {value: 40},
-        height: {value: 30}, aspect: {value: false}, url: {value:
-        'data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklEQVR4nGNoAAAAggCBd81ytgAAAABJRU5ErkJggg=='}}}},
+      {type: 'image', from: {data: 'photo'}, encode: {enter: {x: {value: 0}, y: {value: 0},
+        width: {value: 40}, height: {value: 30}, aspect: {value: false}, url: {field: 'url'}}}},
       {type: 'rect', from: {data: 'cells'}, encode: {enter: {
         x: {scale: 'u', field: 'u0'}, x2: {scale: 'u', field: 'u1'},
         y: {scale: 'v', field: 'v0'}, y2: {scale: 'v', field: 'v1'},
@@ -164,8 +217,9 @@ function warmUp() {
   return kWarmUps.reduce((chain, spec) => chain.then(() => svg(spec)).catch(() => {}),
                          Promise.resolve());
 }
-function serve(dir, before) {
-  let chain = before, pending = '';
+async function serve(dir, before) {
+  await before;
+  let chain = Promise.resolve(), pending = '';
   process.stdout.write('ready\n');
   process.stdin.setEncoding('utf8');
   process.stdin.on('data', d => {
@@ -187,7 +241,7 @@ constexpr const char* kLoadRuntime =
     "(0, eval)(fs.readFileSync(path.join(process.argv[2], 'vega.js'), 'utf8'));\n";
 
 // Node reading the runtime itself: the server on the folder in argv[2],
-// the warm-up drawn while it waits.
+// ready once the warm-up is drawn.
 std::string PlainScript() {
   return std::string(kLoadRuntime) + kServerScript + "serve(process.argv[2], warmUp());\n";
 }
@@ -195,13 +249,13 @@ std::string PlainScript() {
 // The script a start-up snapshot is built from (`node --build-snapshot`):
 // the runtime loaded and the warm-up drawn, then the heap, compiled
 // bytecode included, is written to the snapshot; node started from it
-// serves the folder in its argv[1] (node's argv from a snapshot: node,
-// folder).
+// draws the warm-up again and serves the folder in its argv[1] (node's argv
+// from a snapshot: node, folder).
 std::string SnapshotScript() {
   return std::string(kLoadRuntime) + kServerScript +
          "warmUp();\n"
          "require('v8').startupSnapshot.setDeserializeMainFunction(\n"
-         "    () => serve(process.argv[1], Promise.resolve()));\n";
+         "    () => serve(process.argv[1], warmUp()));\n";
 }
 
 // V8's flags, the same for a snapshot's build and every start from it (V8
@@ -351,8 +405,8 @@ bool BuildSnapshot(const std::string& node, const std::string& runtime, const fs
 // The PNG of each figure handed over by Add, drawn on a thread of its own
 // one after the other, then given to `drawn`; a figure librsvg cannot draw
 // keeps its error and no SVG. Finish (or the destructor) waits for the
-// last; Finish rethrows what `drawn` threw (the figures after it are drawn
-// but not handed over).
+// last; Finish rethrows the first thing `drawn` threw (the figures after it
+// are drawn but not handed over).
 class PngQueue {
  public:
   PngQueue(const SvgRasterizer& raster, std::vector<RenderedFigure>* figures,
@@ -369,49 +423,68 @@ class PngQueue {
     }
     wake_.notify_one();
   }
+  // Called once nothing more is added: the calling thread, which would
+  // only wait, draws PNGs of the queue beside the queue's own thread. While
+  // node drew, the queue's thread kept pace with it on the other core; once
+  // node is done its core is free for the PNGs still waiting.
   void Finish() {
+    Close();
+    Run();
     Stop();
     if (failed_) std::rethrow_exception(failed_);
   }
 
  private:
-  static constexpr size_t kDone = static_cast<size_t>(-1);
+  void Close() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      closed_ = true;
+    }
+    wake_.notify_all();
+  }
   void Stop() {
     if (!thread_.joinable()) return;
-    Add(kDone);
+    Close();
     thread_.join();
   }
   void Run() {
     for (;;) {
-      size_t i = kDone;
+      size_t i = 0;
       {
         std::unique_lock<std::mutex> lock(mutex_);
-        wake_.wait(lock, [this] { return !queue_.empty(); });
+        wake_.wait(lock, [this] { return !queue_.empty() || closed_; });
+        if (queue_.empty()) return;  // closed, and nothing left
         i = queue_.front();
         queue_.pop_front();
       }
-      if (i == kDone) return;
       RenderedFigure& fig = figures_[i];
       if (!raster_.ToPng(fig.svg, &fig.png, &fig.error)) {
         fig.svg.clear();
         fig.png.clear();
-      } else if (drawn_ && !failed_) {
-        try {
-          drawn_(i, fig);
-        } catch (...) {
-          failed_ = std::current_exception();
-        }
+        continue;
+      }
+      if (!drawn_) continue;
+      try {
+        if (!Failed()) drawn_(i, fig);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        if (!failed_) failed_ = std::current_exception();
       }
     }
+  }
+  bool Failed() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return failed_ != nullptr;
   }
 
   const SvgRasterizer& raster_;
   std::vector<RenderedFigure>& figures_;
   const VegaRenderer::Drawn& drawn_;
-  std::mutex mutex_;
+  std::mutex mutex_;  // guards queue_, closed_ and failed_
   std::condition_variable wake_;
   std::deque<size_t> queue_;
-  std::exception_ptr failed_;  // written and read by the drawing thread until it ends
+  bool closed_ = false;
+  std::exception_ptr failed_;
   std::thread thread_;
 };
 
@@ -485,9 +558,13 @@ struct VegaRenderer::State {
     Stop();
     return false;
   }
-  void Stop() {
-    if (socket >= 0) ::close(socket);  // node's input ends: it exits
+  // Node's input ends: it exits (Stop waits for it).
+  void CloseInput() {
+    if (socket >= 0) ::close(socket);
     socket = -1;
+  }
+  void Stop() {
+    CloseInput();
     if (pid > 0) Wait(pid);
     pid = -1;
     received.clear();
@@ -626,9 +703,10 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
   {
     // The PNGs are drawn by one thread of this process, in the order node
     // answers, each while node draws the next SVG: one thread, so that on
-    // two cores node keeps one of its own (the PNGs take about half of
-    // node's time; a thread per PNG had two or three of them, the
-    // diagnosis and the reports' writing share node's core).
+    // two cores node keeps one of its own (the PNGs take about as long as
+    // node's SVGs; a thread per PNG had two or three of them, the
+    // diagnosis and the reports' writing share node's core). Once node is
+    // done, this thread draws beside it.
     PngQueue pngs(raster, &out, drawn);
     std::string line;
   if (s.Send(requests)) {
@@ -647,8 +725,11 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
         pngs.Add(static_cast<size_t>(i));
       }
     }
-    s.Stop();
+    // Node takes about 10 ms to exit (its heap, its threads): the PNGs
+    // still waiting are drawn meanwhile.
+    s.CloseInput();
     pngs.Finish();  // rethrows what `drawn` threw
+    s.Stop();
   }
   if (count < specs.size()) {
     for (size_t i = 0; i < specs.size(); ++i) {

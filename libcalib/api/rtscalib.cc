@@ -350,21 +350,26 @@ Uncertain<N> Propagate(
   const std::vector<LayoutBlock> blocks = ParameterLayout(model);
   std::vector<int> index;  // parameter indices the prediction depends on
   std::vector<Eigen::Matrix<double, N, 1>> columns;
-  // The model without its covariance (N^2 numbers): copied twice per column.
-  InstrumentModel values = model;  // also the read-only copy the accessors need
-  values.sigmas.covariance.resize(0, 0);
+  // One copy of the model without its covariance (N^2 numbers), moved
+  // along each coordinate and put back: LayoutPlus changes only the block's
+  // stored values, so restoring them restores the model exactly.
+  InstrumentModel m = model;
+  m.sigmas.covariance.resize(0, 0);
   for (size_t b = 0; b < blocks.size(); ++b) {
     const int u = blocks[b].use;
     if (!(u == kLayoutShared || u == use)) continue;
+    double* stored = blocks[b].data(m);
+    const std::vector<double> kept(stored, stored + blocks[b].ambient);
     for (int i = 0; i < blocks[b].size; ++i) {
-      const double h = Step(blocks[b].tangent, blocks[b].data(values)[i]);
+      const double h = Step(blocks[b].tangent, kept[i]);
       Eigen::Matrix<double, N, 1> f[2];
       for (int side = 0; side < 2; ++side) {
         double delta[kNumDistortion] = {};  // the largest block
         delta[i] = side == 0 ? h : -h;
-        InstrumentModel m = values;
         LayoutPlus(blocks[b], delta, &m);
-        if (!evaluate(m, &f[side])) {
+        const bool evaluated = evaluate(m, &f[side]);
+        std::copy(kept.begin(), kept.end(), stored);
+        if (!evaluated) {
           throw PredictionError(PredictionFailure::kNonFinite,
                                 "a prediction that stays defined when the model moves by its "
                                 "finite-difference step",
