@@ -114,7 +114,7 @@ Figure PhotoFigure(const std::string& shot, const std::vector<ObservationResidua
     // The photo is a data row, not a constant of the mark: Vega compiles a
     // mark's constants into the code of its encoder, and its expression
     // parser then scans the tens of kilobytes of the data URI character by
-    // character, in node's interpreter about a quarter of the figure's time.
+    // character, a large part of the figure's time in node's interpreter.
     spec["data"].push_back({{"name", "photo"}, {"values", {{{"url", uri}}}}});
     json image = Mark("image", "photo",
                       {{"url", {{"field", "url"}}},

@@ -96,14 +96,14 @@ std::string BuildRuntime(std::string* missing) {
 // warm-up specs (the marks, scales, axes, legends, layouts, transforms and
 // expressions the figures use) are drawn before the first figure. A
 // snapshot (below) keeps the compiled code but not what the caches learnt,
-// so node started from one draws the warm-up again: a run starts node while
-// it reads its photos, and the seven figures of configs/bench.yaml then take
-// node about 90 ms instead of about 110 ms.
+// so node started from one draws the warm-up again, while the run reads its
+// photos (figures_benchmark's BM_BenchFiguresDraw times the figures drawn
+// after such a start).
 constexpr const char* kServerScript = R"js(
 // Vega's renderer waits for its images by asking every 10 ms whether they
 // are loaded. Node has no image decoder: the load fails at once (the SVG
-// keeps the image's address) and a figure with a photo sat idle for the
-// 10 ms. Asking again at the next turn of node's event loop gives the same
+// keeps the image's address) and a figure with a photo would sit idle for
+// the 10 ms. Asking again at the next turn of node's event loop gives the same
 // SVG without the wait.
 vega.ResourceLoader.prototype.ready = function() {
   const loader = this;
@@ -116,8 +116,8 @@ vega.ResourceLoader.prototype.ready = function() {
 };
 // Node has no canvas to measure text with, and Vega then takes every
 // character as 0.8 em wide, about 1.4 times DejaVu Sans's mean: a figure
-// with a long subtitle came out a quarter wider than what it draws, white
-// on the right. The widths here are DejaVu Sans's advances (what
+// with a long subtitle would come out up to a quarter wider than what it
+// draws, white on the right. The widths here are DejaVu Sans's advances (what
 // fontconfig gives librsvg for sans-serif on Debian), in 1/2048 em, for
 // ASCII 32-126, book and bold; another character counts as a digit.
 const kBookWidths = [
@@ -725,7 +725,7 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
         pngs.Add(static_cast<size_t>(i));
       }
     }
-    // Node takes about 10 ms to exit (its heap, its threads): the PNGs
+    // Node takes a while to exit (its heap of tens of megabytes): the PNGs
     // still waiting are drawn meanwhile.
     s.CloseInput();
     pngs.Finish();  // rethrows what `drawn` threw
