@@ -125,56 +125,109 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   }
   figs.push_back(VariablesFigure(rows));
   figs.push_back(Histograms(rows));
+  for (Figure& f : MakeUncertaintyFigures(r)) figs.push_back(std::move(f));
+  return figs;
+}
+
+std::vector<Figure> MakeUncertaintyFigures(const PipelineResult& r) {
+  std::vector<Figure> figs;
   for (const UncertaintyMap& m : r.uncertainty_maps) {
     if (m.determined) {
-      figs.push_back(
-          UncertaintyFigure(m, r.uncertainty_options, c.model.cams[m.zoom], r.full_covariance));
+      figs.push_back(UncertaintyFigure(m, r.uncertainty_options, r.calibration.model.cams[m.zoom],
+                                       r.full_covariance));
     }
   }
   return figs;
 }
 
+FigureFiles::FigureFiles(std::string dir, VegaRenderer* renderer) : dir_(std::move(dir)) {
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (ec) throw WriteError(dir_, ec.message() + " (creating the folder)");
+  if (renderer == nullptr) own_ = std::make_unique<VegaRenderer>();
+  renderer_ = renderer != nullptr ? renderer : own_.get();
+  // Node's drawings are collected on a thread of their own from now on;
+  // each figure's files are written on the thread that drew its PNG, while
+  // node draws the next figure.
+  drawing_ = std::async(std::launch::async, [this] {
+    std::vector<RenderedFigure> drawn = renderer_->Collect(
+        &note_, [this](size_t i, const RenderedFigure& fig) { Write(i, &fig); });
+    drawn_at_ = std::chrono::steady_clock::now();
+    return drawn;
+  });
+}
+
+FigureFiles::~FigureFiles() {
+  if (!drawing_.valid()) return;
+  renderer_->End();
+  drawing_.wait();
+}
+
+void FigureFiles::Add(size_t index, Figure figure) {
+  std::string text = figure.spec.dump();
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    figures_.emplace(index, std::make_pair(std::move(figure), text));
+  }
+  renderer_->Add(index, text);
+}
+
+void FigureFiles::End() { renderer_->End(); }
+
+// The spec's file, and with a drawing its SVG and PNG: a checked write
+// waits for the disk (its fsync, about a millisecond a file here), beside
+// the drawing rather than after it.
+void FigureFiles::Write(size_t index, const RenderedFigure* drawn) {
+  const std::pair<Figure, std::string>* f = nullptr;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    f = &figures_.at(index);
+    if (!spec_written_.insert(index).second) f = nullptr;
+  }
+  if (f == nullptr) return;
+  const fs::path base = fs::path(dir_) / f->first.name;
+  WriteFileAtomic(base.string() + ".vg.json", f->second + "\n");
+  if (drawn == nullptr) return;
+  WriteFileAtomic(base.string() + ".svg", drawn->svg);
+  WriteFileAtomic(base.string() + ".png",
+                  std::string_view(reinterpret_cast<const char*>(drawn->png.data()),
+                                   drawn->png.size()));
+}
+
+std::vector<std::vector<std::string>> FigureFiles::Finish(std::string* note,
+                                                          std::vector<Figure>* figures) {
+  renderer_->End();
+  const std::vector<RenderedFigure> drawn = drawing_.get();
+  *note = note_;
+  std::vector<std::vector<std::string>> written;
+  figures->clear();
+  for (auto& [i, f] : figures_) {
+    if (i != figures->size()) throw std::logic_error("FigureFiles: no figure " +
+                                                     std::to_string(figures->size()));
+    // The specs of figures that were not drawn.
+    Write(i, nullptr);
+    written.push_back({f.first.name + ".vg.json"});
+    if (i < drawn.size() && !drawn[i].png.empty()) {
+      written.back().push_back(f.first.name + ".svg");
+      written.back().push_back(f.first.name + ".png");
+    } else if (i < drawn.size()) {
+      *note += std::string(note->empty() ? "figures: " : "; ") + f.first.name +
+               " has no SVG or PNG (" + drawn[i].error + ")";
+    }
+    figures->push_back(std::move(f.first));
+  }
+  return written;
+}
+
 std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>& figures,
                                                        const std::string& dir, std::string* note,
                                                        VegaRenderer* renderer) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw WriteError(dir, ec.message() + " (creating the folder)");
-  std::vector<json> specs;
-  for (const Figure& f : figures) specs.push_back(f.spec);
-  // The specs go to node first; the .vg.json files are written while it
-  // draws, and each figure's SVG and PNG as soon as its PNG is drawn: a
-  // checked write waits for the disk (its fsync, about a millisecond a file
-  // here), beside the drawing rather than after it.
-  std::future<void> written_specs = std::async(std::launch::async, [&] {
-    for (const Figure& f : figures) {
-      WriteFileAtomic((fs::path(dir) / (f.name + ".vg.json")).string(), f.spec.dump() + "\n");
-    }
-  });
-  const VegaRenderer::Drawn write = [&](size_t i, const RenderedFigure& fig) {
-    WriteFileAtomic((fs::path(dir) / (figures[i].name + ".svg")).string(), fig.svg);
-    WriteFileAtomic(
-        (fs::path(dir) / (figures[i].name + ".png")).string(),
-        std::string_view(reinterpret_cast<const char*>(fig.png.data()), fig.png.size()));
-  };
-  note->clear();
-  const std::vector<RenderedFigure> drawn = renderer != nullptr
-                                                ? renderer->Draw(specs, note, write)
-                                                : RenderFigures(specs, note, write);
-  written_specs.get();
-  std::vector<std::vector<std::string>> written(figures.size());
-  for (size_t i = 0; i < figures.size(); ++i) {
-    written[i].push_back(figures[i].name + ".vg.json");
-    if (i >= drawn.size()) continue;
-    if (drawn[i].png.empty()) {
-      *note += std::string(note->empty() ? "figures: " : "; ") + figures[i].name +
-               " has no SVG or PNG (" + drawn[i].error + ")";
-      continue;
-    }
-    written[i].push_back(figures[i].name + ".svg");
-    written[i].push_back(figures[i].name + ".png");
-  }
-  return written;
+  FigureFiles files(dir, renderer);
+  std::vector<size_t> bytes;
+  for (const Figure& f : figures) bytes.push_back(f.spec.dump().size());
+  for (size_t i : LargestFirst(bytes)) files.Add(i, figures[i]);
+  std::vector<Figure> added;
+  return files.Finish(note, &added);
 }
 
 }  // namespace rtscalib::app

@@ -25,8 +25,15 @@
 // vega_spec.h's blocks; this file chooses and orders them and writes them.
 #pragma once
 
+#include <chrono>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "app/pipeline.h"
@@ -36,14 +43,52 @@
 namespace rtscalib::app {
 
 // `history` = report.json's "history" array (earlier runs, oldest first).
+// The uncertainty figures last (MakeUncertaintyFigures), when the maps are
+// in `result`.
 std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
+std::vector<Figure> MakeUncertaintyFigures(const PipelineResult& result);
 
-// Writes <dir>/<name>.vg.json for each figure and, when the PNG renderer is
-// installed (app/vega.h), <name>.svg and <name>.png; returns the names of
-// the files written per figure (in figure order) and, in *note, why a PNG
-// was not written ("" when every one was). `renderer`: one started earlier
-// (the run starts its own when it has read its config, app/vega.h), else
-// one is started here.
+// The files of figures handed over one at a time (Add), drawn while the
+// next ones are made: <dir>/<name>.vg.json for each figure and, when the
+// PNG renderer is installed (app/vega.h), <name>.svg and <name>.png, each
+// figure's written as soon as its PNG is drawn. `renderer`: one started
+// earlier (the run starts its own when it has read its config, app/vega.h),
+// else one is started here.
+class FigureFiles {
+ public:
+  FigureFiles(std::string dir, VegaRenderer* renderer = nullptr);
+  // Ends the drawing (End) and waits for it when Finish did not.
+  ~FigureFiles();
+  FigureFiles(const FigureFiles&) = delete;
+  FigureFiles& operator=(const FigureFiles&) = delete;
+
+  // Figure `index` of the figures' order (report.json, report.html); node
+  // draws the figures in the order they are added.
+  void Add(size_t index, Figure figure);
+  // No more figures come (Finish says it too).
+  void End();
+  // Waits for the drawing; the names of the files written per figure (by
+  // index) and, in *note, why a PNG was not written ("" when every one
+  // was). *figures: the figures by index. Once.
+  std::vector<std::vector<std::string>> Finish(std::string* note, std::vector<Figure>* figures);
+  // When the last PNG was drawn (after Finish).
+  std::chrono::steady_clock::time_point drawn_at() const { return drawn_at_; }
+
+ private:
+  void Write(size_t index, const RenderedFigure* drawn);
+
+  std::string dir_;
+  std::unique_ptr<VegaRenderer> own_;
+  VegaRenderer* renderer_;
+  std::mutex mutex_;  // guards figures_ and spec_written_
+  std::map<size_t, std::pair<Figure, std::string>> figures_;  // the figure, its spec's text
+  std::set<size_t> spec_written_;
+  std::string note_;
+  std::chrono::steady_clock::time_point drawn_at_;
+  std::future<std::vector<RenderedFigure>> drawing_;
+};
+
+// FigureFiles of `figures` (by index), the largest first.
 std::vector<std::vector<std::string>> WriteFigureFiles(const std::vector<Figure>& figures,
                                                        const std::string& dir, std::string* note,
                                                        VegaRenderer* renderer = nullptr);

@@ -99,7 +99,8 @@ Observations LoadObservations(const RunSettings& settings, const std::string& wo
 }
 
 PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_dir,
-                           Progress* progress, const Alongside& alongside) {
+                           Progress* progress, const Alongside& alongside,
+                           const Alongside& mapped) {
   PipelineResult result;
   result.obs = LoadObservations(settings, work_dir, &result, progress);
   const CalibrationOptions& options = settings.config.calibration;
@@ -111,9 +112,10 @@ PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_
     throw std::invalid_argument(settings.config.config_path + ": " + e.what());
   }
   // The plain diagnosis only reads the calibration: it runs on a second
-  // thread while this one computes the uncertainty maps and runs
-  // `alongside` (the run draws its figures), which need everything but the
-  // diagnosis. The diagnosis prints its progress; `alongside` must not.
+  // thread while this one runs `alongside` (the run draws its figures),
+  // computes the uncertainty maps and runs `mapped`, which need everything
+  // but the diagnosis. The diagnosis prints its progress; `alongside` and
+  // `mapped` must not.
   std::future<CalibrationDiagnosis> diagnosis;
   if (DiagnosisPending(options)) {
     diagnosis = std::async(std::launch::async, [&result, &options, progress] {
@@ -124,12 +126,13 @@ PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_
   // the fit's full covariance.
   const CalibratedInstrument inst(result.calibration.model);
   result.full_covariance = inst.HasFullParameterCovariance();
+  result.uncertainty_options = settings.config.uncertainty_map;
+  if (alongside) alongside(result);
   if (inst.HasParameterCovariance() && inst.NumZooms() > 0) {
     if (progress && !diagnosis.valid()) progress->Step("projection uncertainty maps");
-    result.uncertainty_options = settings.config.uncertainty_map;
     result.uncertainty_maps = ProjectionUncertaintyMaps(inst, result.uncertainty_options);
   }
-  if (alongside) alongside(result);
+  if (mapped) mapped(result);
   // (A future's destructor waits too: an exception from `alongside` leaves
   // only after the diagnosis thread has stopped reading `result`.)
   if (diagnosis.valid()) AddDiagnosis(diagnosis.get(), &result.calibration);

@@ -73,8 +73,11 @@ using Alongside = std::function<void(const PipelineResult&)>;
 // LoadObservations, then Calibrate with the config's options (CalibrateModel,
 // DiagnoseCalibration), then the projection uncertainty maps. `alongside`,
 // when given, runs while the diagnosis does when the diagnosis only reads
-// the calibration (DiagnosisPending); with diagnose.auto, after it.
+// the calibration (DiagnosisPending); with diagnose.auto, after it. It
+// comes before the uncertainty maps, `mapped` after them (the figures'
+// drawing starts before the maps are computed).
 PipelineResult RunPipeline(const RunSettings& settings, const std::string& work_dir,
-                           Progress* progress, const Alongside& alongside = nullptr);
+                           Progress* progress, const Alongside& alongside = nullptr,
+                           const Alongside& mapped = nullptr);
 
 }  // namespace rtscalib::app

@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <future>
 #include <iostream>
+#include <optional>
 
 #include "app/commands.h"
 #include "app/diagnosis_report.h"
@@ -35,34 +35,45 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   // The figures need the calibrated model, its residuals and uncertainty
   // maps but not its diagnosis. Their renderer (node, librsvg: app/vega.h)
   // starts now, beside the reading of the observations, so that node is
-  // waiting when the model is fitted; the specs are made then and drawn on
-  // threads of their own while the diagnosis runs and the model and the
-  // reports are written. report.json and report.html, which list the
-  // figure files, come last: the run ends once its figures are drawn, and
-  // says how long it waited for them.
+  // waiting when the model is fitted; each spec goes to node as soon as it
+  // is made, the uncertainty maps' once the maps are computed, and they are
+  // drawn on threads of their own while the diagnosis runs and the model
+  // and the reports are written. report.json and report.html, which list
+  // the figure files, come last: the run ends once its figures are drawn,
+  // and says how long it waited for them.
   using Clock = std::chrono::steady_clock;
   std::vector<Figure> figures;
   std::vector<std::vector<std::string>> figure_files;
   std::string figures_note;
-  Clock::time_point figures_start, figures_end;
+  Clock::time_point figures_start;
   nlohmann::json history;  // earlier runs, for the figures and report.json
   VegaRenderer renderer;
-  // Declared after everything the drawing thread uses: destroyed (joined)
-  // before them, also when an exception leaves this function.
-  std::future<void> drawing;
+  // Declared after the renderer: ends (waits for) the drawing before it.
+  std::optional<FigureFiles> files;
+  size_t made = 0;
+  std::optional<std::pair<size_t, Figure>> smallest;
   const PipelineResult result = RunPipeline(
       settings, out.run_dir(), &progress,
       [&](const PipelineResult& fitted) {
         figures_start = Clock::now();
         history = HistoryJson(out);
-        figures = MakeFigures(fitted, history);
-        drawing = std::async(std::launch::async, [&] {
-          figure_files =
-              WriteFigureFiles(figures, out.RunFile("figures"), &figures_note, &renderer);
-          figures_end = Clock::now();
-        });
+        std::vector<Figure> first = MakeFigures(fitted, history);
+        made = first.size();
+        std::vector<size_t> bytes;
+        for (const Figure& f : first) bytes.push_back(f.spec.dump().size());
+        const std::vector<size_t> order = LargestFirst(bytes);
+        files.emplace(out.RunFile("figures"), &renderer);
+        // The smallest waits for the uncertainty maps' figures: the last
+        // PNG, drawn after node is done, is then a small one.
+        for (size_t k = 0; k + 1 < order.size(); ++k) files->Add(order[k], first[order[k]]);
+        if (!order.empty()) smallest.emplace(order.back(), std::move(first[order.back()]));
+      },
+      [&](const PipelineResult& mapped) {
+        if (!files) return;
+        for (Figure& f : MakeUncertaintyFigures(mapped)) files->Add(made++, std::move(f));
+        if (smallest) files->Add(smallest->first, std::move(smallest->second));
+        files->End();
       });
-
   progress.Step("writing the model and the reports");
   if (result.simulated) {
     WriteFileAtomicWith(out.RunFile("records.csv"),
@@ -117,9 +128,10 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
                            HistoryText(report.value("history", nlohmann::json::array())) + "\n" +
                            DiagnosisText(result.calibration);
   out.Write("report.txt", text);
-  if (drawing.valid()) {
+  if (files) {
     const Clock::time_point waited = Clock::now();
-    drawing.get();
+    figure_files = files->Finish(&figures_note, &figures);
+    const Clock::time_point figures_end = files->drawn_at();
     char drawn[160];
     std::snprintf(drawn, sizeof drawn,
                   "drew %zu figures in %.2f s, beside the diagnosis and the reports; waited "

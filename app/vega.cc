@@ -23,6 +23,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <set>
+#include <tuple>
 #include <mutex>
 #include <sstream>
 #include <string_view>
@@ -74,6 +77,21 @@ std::string BuildRuntime(std::string* missing) {
     }
     o << "defs['" << m << "']=function(module,exports,require){" << src << "\n};\n";
   }
+  // Vega parses every expression of a spec (each axis's, legend's and
+  // mark's, written out again for every panel and figure) character by
+  // character and generates its code, which no figure changes: the syntax
+  // tree of each expression text, and the code of each tree, are kept and
+  // reused. vega-functions reads both through vega-expression's exports at
+  // each call, and makes its code generator once, when it is loaded: the
+  // wrappers go in before it is. Node's snapshot keeps what its warm-up
+  // parsed.
+  o << "var ve=req('vega-expression'),parse=ve.parseExpression,trees=new Map();"
+       "ve.parseExpression=function(s){var t=trees.get(s);"
+       "if(t===undefined){t=parse(s);trees.set(s,t);}return t;};"
+       "var codegen=ve.codegenExpression;ve.codegenExpression=function(opt){"
+       "var g=codegen(opt),made=new WeakMap(),f=function(t){var c=made.get(t);"
+       "if(c===undefined){c=g(t);made.set(t,c);}return c;};"
+       "for(var k in g)f[k]=g[k];return f;};\n";
   // What the `vega` index module does: register the data transforms, export
   // the parser, the view and the helpers under one name.
   o << "var df=req('vega-dataflow');"
@@ -89,7 +107,8 @@ std::string BuildRuntime(std::string* missing) {
 // The node side, a server on stdin and stdout: it answers "ready" once the
 // runtime is loaded and the warm-up drawn, then for each line "<i>" draws
 // spec_<i>.json of its folder to fig_<i>.svg (or error_<i>.txt) and
-// answers "<i>", one spec after the other; it ends when its input ends.
+// answers "<i>", one spec after the other; a line "end" is answered "end"
+// once every spec before it is drawn; it ends when its input ends.
 // Node compiles a function's bytecode when it first runs, which for Vega's
 // parser, dataflow and SVG writer costs about as much as drawing a figure,
 // and V8's inline caches learn the shapes of Vega's objects as it runs: the
@@ -225,8 +244,13 @@ async function serve(dir, before) {
   process.stdin.on('data', d => {
     pending += d;
     for (let at = pending.indexOf('\n'); at >= 0; at = pending.indexOf('\n')) {
-      const i = Number(pending.slice(0, at));
+      const line = pending.slice(0, at);
       pending = pending.slice(at + 1);
+      if (line === 'end') {
+        chain = chain.then(() => process.stdout.write('end\n'));
+        continue;
+      }
+      const i = Number(line);
       chain = chain.then(() => draw(dir, i)).then(() => process.stdout.write(i + '\n'));
     }
   });
@@ -409,17 +433,17 @@ bool BuildSnapshot(const std::string& node, const std::string& runtime, const fs
 // are drawn but not handed over).
 class PngQueue {
  public:
-  PngQueue(const SvgRasterizer& raster, std::vector<RenderedFigure>* figures,
-           const VegaRenderer::Drawn& drawn)
-      : raster_(raster), figures_(*figures), drawn_(drawn), thread_([this] { Run(); }) {}
+  PngQueue(const SvgRasterizer& raster, const VegaRenderer::Drawn& drawn)
+      : raster_(raster), drawn_(drawn), thread_([this] { Run(); }) {}
   ~PngQueue() { Stop(); }
   PngQueue(const PngQueue&) = delete;
   PngQueue& operator=(const PngQueue&) = delete;
 
-  void Add(size_t i) {
+  // Figure `i`, its SVG in *fig (which stays where it is until Finish).
+  void Add(size_t i, RenderedFigure* fig) {
     {
       const std::lock_guard<std::mutex> lock(mutex_);
-      queue_.push_back(i);
+      queue_.emplace_back(i, fig);
     }
     wake_.notify_one();
   }
@@ -450,14 +474,15 @@ class PngQueue {
   void Run() {
     for (;;) {
       size_t i = 0;
+      RenderedFigure* next = nullptr;
       {
         std::unique_lock<std::mutex> lock(mutex_);
         wake_.wait(lock, [this] { return !queue_.empty() || closed_; });
         if (queue_.empty()) return;  // closed, and nothing left
-        i = queue_.front();
+        std::tie(i, next) = queue_.front();
         queue_.pop_front();
       }
-      RenderedFigure& fig = figures_[i];
+      RenderedFigure& fig = *next;
       if (!raster_.ToPng(fig.svg, &fig.png, &fig.error)) {
         fig.svg.clear();
         fig.png.clear();
@@ -478,11 +503,10 @@ class PngQueue {
   }
 
   const SvgRasterizer& raster_;
-  std::vector<RenderedFigure>& figures_;
   const VegaRenderer::Drawn& drawn_;
   std::mutex mutex_;  // guards queue_, closed_ and failed_
   std::condition_variable wake_;
-  std::deque<size_t> queue_;
+  std::deque<std::pair<size_t, RenderedFigure*>> queue_;
   bool closed_ = false;
   std::exception_ptr failed_;
   std::thread thread_;
@@ -534,7 +558,15 @@ struct VegaRenderer::State {
   pid_t pid = -1;
   int socket = -1;      // our end of node's stdin and stdout
   std::string received;  // node's output not yet read as lines
-  std::future<void> started;
+  std::shared_future<void> started;  // node's start (Add and Collect wait for it)
+  // The specs handed over (Add) and whether End came: Collect, on another
+  // thread, reads them once End has come.
+  std::mutex mutex;
+  std::condition_variable end_came;
+  std::set<size_t> added;
+  bool ended = false;
+
+  bool Ready() const { return missing.empty() && failure.empty() && socket >= 0; }
 
   // Node started with `args` after its path and flags, in `dir`; true once
   // it has answered "ready". A node that ends first (a snapshot it cannot
@@ -670,11 +702,38 @@ const std::string& VegaRenderer::how() {
   return state_->how;
 }
 
-std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>& specs,
-                                               std::string* note, const Drawn& drawn) {
+void VegaRenderer::Add(size_t index, const std::string& spec) {
   State& s = *state_;
   if (s.started.valid()) s.started.get();
-  if (specs.empty()) return {};
+  {
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    if (s.ended || !s.added.insert(index).second) {
+      throw std::logic_error("VegaRenderer::Add: spec " + std::to_string(index) +
+                             (s.ended ? " after End" : " added twice"));
+    }
+  }
+  if (!s.Ready()) return;
+  std::ofstream(s.dir / ("spec_" + std::to_string(index) + ".json"), std::ios::binary) << spec;
+  // A node that has died fails the send; Collect then says why.
+  s.Send(std::to_string(index) + "\n");
+}
+
+void VegaRenderer::End() {
+  State& s = *state_;
+  if (s.started.valid()) s.started.get();
+  const std::lock_guard<std::mutex> lock(s.mutex);
+  if (s.ended) return;
+  // Node answers "end" once it has drawn every spec sent before it. Sent
+  // before `ended` is set: Collect closes node's input only after that.
+  if (s.Ready()) s.Send("end\n");
+  s.ended = true;
+  s.end_came.notify_all();
+}
+
+std::vector<RenderedFigure> VegaRenderer::Collect(std::string* note, const Drawn& drawn) {
+  State& s = *state_;
+  if (s.started.valid()) s.started.get();
+  note->clear();
   if (!s.missing.empty()) {
     *note = "figures: no PNG files written (report.html and figures/*.vg.json have them): " +
             s.missing + "; scripts/install-deps.sh installs it";
@@ -684,22 +743,10 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
     *note = "figures: no PNG files written: " + s.failure;
     return {};
   }
-  std::vector<std::pair<size_t, size_t>> by_size;  // spec's bytes, index
-  for (size_t i = 0; i < specs.size(); ++i) {
-    const std::string text = specs[i].dump();
-    std::ofstream(s.dir / ("spec_" + std::to_string(i) + ".json"), std::ios::binary) << text;
-    by_size.emplace_back(text.size(), i);
-  }
-  // The largest specs first: their SVG files are the largest too, and the
-  // PNG of the last SVG, drawn after node is done, is then a small one.
-  std::stable_sort(by_size.begin(), by_size.end(),
-                   [](const auto& a, const auto& b) { return a.first > b.first; });
   const SvgRasterizer& raster = SvgRasterizer::Get();
-  std::vector<RenderedFigure> out(specs.size());
-  std::vector<char> answered(specs.size(), 0);
-  std::string requests;
-  for (const auto& [bytes, i] : by_size) requests += std::to_string(i) + "\n";
-  size_t count = 0;
+  // Each answer where the PNG thread finds it while later answers come.
+  std::map<size_t, RenderedFigure> answered;
+  bool node_ended = true;
   {
     // The PNGs are drawn by one thread of this process, in the order node
     // answers, each while node draws the next SVG: one thread, so that on
@@ -707,23 +754,28 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
     // node's SVGs; a thread per PNG had two or three of them, the
     // diagnosis and the reports' writing share node's core). Once node is
     // done, this thread draws beside it.
-    PngQueue pngs(raster, &out, drawn);
+    PngQueue pngs(raster, drawn);
     std::string line;
-  if (s.Send(requests)) {
-      while (count < specs.size() && s.ReadLine(&line)) {
-        const int i = std::atoi(line.c_str());
-        if (i < 0 || i >= static_cast<int>(specs.size()) || answered[i]) continue;
-        answered[i] = 1;
-        ++count;
-        RenderedFigure& fig = out[i];
-        fig.svg = ReadText(s.dir / ("fig_" + std::to_string(i) + ".svg"));
-        if (fig.svg.empty()) {
-          fig.error = ReadText(s.dir / ("error_" + std::to_string(i) + ".txt"));
-          if (fig.error.empty()) fig.error = "no SVG written";
-          continue;
-        }
-        pngs.Add(static_cast<size_t>(i));
+    while (s.ReadLine(&line)) {
+      if (line == "end") {
+        node_ended = false;
+        break;
       }
+      const long i = std::strtol(line.c_str(), nullptr, 10);
+      if (i < 0 || answered.count(static_cast<size_t>(i)) != 0) continue;
+      RenderedFigure& fig = answered[static_cast<size_t>(i)];
+      fig.svg = ReadText(s.dir / ("fig_" + std::to_string(i) + ".svg"));
+      if (fig.svg.empty()) {
+        fig.error = ReadText(s.dir / ("error_" + std::to_string(i) + ".txt"));
+        if (fig.error.empty()) fig.error = "no SVG written";
+        continue;
+      }
+      pngs.Add(static_cast<size_t>(i), &fig);
+    }
+    {
+      // Node that ended early: no spec comes after End.
+      std::unique_lock<std::mutex> lock(s.mutex);
+      s.end_came.wait(lock, [&] { return s.ended; });
     }
     // Node takes a while to exit (its heap of tens of megabytes): the PNGs
     // still waiting are drawn meanwhile.
@@ -731,13 +783,49 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
     pngs.Finish();  // rethrows what `drawn` threw
     s.Stop();
   }
-  if (count < specs.size()) {
-    for (size_t i = 0; i < specs.size(); ++i) {
-      if (!answered[i]) out[i].error = "node stopped before drawing it";
+  std::vector<RenderedFigure> out(s.added.empty() ? 0 : *s.added.rbegin() + 1);
+  bool lost = false;
+  for (size_t i = 0; i < out.size(); ++i) {
+    const auto a = answered.find(i);
+    if (a != answered.end()) {
+      out[i] = std::move(a->second);
+    } else if (s.added.count(i) != 0) {
+      out[i].error = "node stopped before drawing it";
+      lost = true;
+    } else {
+      out[i].error = "not handed to the renderer";
     }
+  }
+  if (lost || node_ended) {
     *note = "figures: node failed rendering the specs: " + Tail(s.dir / "log.txt");
   }
   return out;
+}
+
+std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>& specs,
+                                               std::string* note, const Drawn& drawn) {
+  if (specs.empty()) {
+    End();
+    if (state_->started.valid()) state_->started.get();
+    return {};
+  }
+  std::vector<std::string> texts;
+  std::vector<size_t> bytes;
+  for (const nlohmann::json& spec : specs) {
+    texts.push_back(spec.dump());
+    bytes.push_back(texts.back().size());
+  }
+  for (size_t i : LargestFirst(bytes)) Add(i, texts[i]);
+  End();
+  return Collect(note, drawn);
+}
+
+std::vector<size_t> LargestFirst(const std::vector<size_t>& bytes) {
+  std::vector<size_t> order(bytes.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return bytes[a] > bytes[b]; });
+  return order;
 }
 
 std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& specs,

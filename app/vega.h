@@ -90,9 +90,22 @@ class VegaRenderer {
   // could not draw with its `error`; *note says why a figure is missing
   // beyond that (node ended early: its own message). An empty vector and
   // *note saying why when nothing can be drawn (a missing program). Once
-  // per renderer.
+  // per renderer: Add, End and Collect on the calling thread, the largest
+  // spec first.
   std::vector<RenderedFigure> Draw(const std::vector<nlohmann::json>& specs, std::string* note,
                                    const Drawn& drawn = nullptr);
+
+  // The same with the specs handed over one at a time, while the next ones
+  // are made: Add gives node spec `index` (any order; node draws the specs
+  // in the order they come), End says that no more come. Collect, called
+  // once, on a thread of its own from before the first Add or after End,
+  // hands over each drawing as it comes and returns when node has drawn
+  // every spec added before End: one RenderedFigure per index up to the
+  // largest added (indices never added have an error). Add and End come
+  // from one thread.
+  void Add(size_t index, const std::string& spec);  // the spec as JSON text
+  void End();
+  std::vector<RenderedFigure> Collect(std::string* note, const Drawn& drawn = nullptr);
 
   // How node was started ("started from the snapshot <path>", "built the
   // snapshot <path>", "read the runtime (no snapshot...)"); "" when it was
@@ -104,6 +117,12 @@ class VegaRenderer {
  private:
   std::unique_ptr<State> state_;
 };
+
+// The order in which to hand specs to node: the largest first. Their SVG
+// files are the largest too, and the PNG of the last SVG, drawn after node
+// is done, is then a small one.
+// `bytes`: each spec's size as JSON text.
+std::vector<size_t> LargestFirst(const std::vector<size_t>& bytes);
 
 // One VegaRenderer's Draw (node started now).
 std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& specs,

@@ -1,6 +1,7 @@
 // The figures' renderer (app/vega.h): node started ahead of the specs, one
-// SVG after the other, each PNG drawn in this process and handed to the
-// caller as soon as it is drawn; a spec that Vega cannot draw is named by
+// SVG after the other (all at once, or handed over one at a time while node
+// draws), each PNG drawn in this process and handed to the caller as soon
+// as it is drawn; a spec that Vega cannot draw is named by
 // its own error, the others are drawn; a renderer that never draws ends its
 // node and leaves no temporary folder. Node's start-up snapshot is built
 // once into the cache folder and started from after that, with the same
@@ -12,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -20,7 +22,10 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "app/svg_raster.h"
 
@@ -93,6 +98,49 @@ TEST(VegaRenderer, DrawsEachSpecAndNamesTheOneVegaCannotDraw) {
   EXPECT_TRUE(out[1].svg.empty());
   EXPECT_TRUE(out[1].png.empty());
   EXPECT_NE(out[1].error.find("no_such_data"), std::string::npos) << out[1].error;
+}
+
+// Specs handed over one at a time while node draws the earlier ones: the
+// drawings are collected on another thread, in the order node answers,
+// one per index (an index never handed over says so); nothing comes after
+// End.
+TEST(VegaRenderer, DrawsSpecsHandedOverWhileItDrawsAndCollectsThemByIndex) {
+  std::string why;
+  if (!Drawable(&why)) GTEST_SKIP() << why;
+  VegaRenderer renderer;
+  std::string note;
+  std::mutex mutex;
+  std::vector<size_t> handed;  // in the order the PNGs were drawn
+  std::thread collector;
+  std::vector<RenderedFigure> out;
+  collector = std::thread([&] {
+    out = renderer.Collect(&note, [&](size_t i, const RenderedFigure&) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      handed.push_back(i);
+    });
+  });
+  nlohmann::json wide = Bar();
+  wide["width"] = 150;
+  renderer.Add(3, Bar().dump());
+  renderer.Add(0, wide.dump());
+  renderer.End();
+  EXPECT_THROW(renderer.Add(1, Bar().dump()), std::logic_error);
+  collector.join();
+  if (note.find("node is not installed") != std::string::npos) GTEST_SKIP() << note;
+  EXPECT_TRUE(note.empty()) << note;
+  ASSERT_EQ(out.size(), 4u);
+  for (size_t i : {size_t{0}, size_t{3}}) {
+    EXPECT_TRUE(out[i].error.empty()) << out[i].error;
+    const cv::Mat png = cv::imdecode(out[i].png, cv::IMREAD_COLOR);
+    ASSERT_FALSE(png.empty());
+    EXPECT_EQ(png.cols, i == 0 ? 150 : 100);
+  }
+  for (size_t i : {size_t{1}, size_t{2}}) {
+    EXPECT_TRUE(out[i].png.empty());
+    EXPECT_EQ(out[i].error, "not handed to the renderer");
+  }
+  std::sort(handed.begin(), handed.end());
+  EXPECT_EQ(handed, (std::vector<size_t>{0, 3}));
 }
 
 // An environment variable set for one test, the old value back after it.
