@@ -8,7 +8,8 @@
 // is missing). One rsvg-convert process per figure spent most of its time
 // starting (loading its libraries, reading fontconfig's configuration) and
 // compressing with zlib's default level; here the libraries load once per
-// process and the PNG is written by OpenCV at its fastest level.
+// process and the PNG is compressed by libdeflate (OpenCV's writer at
+// zlib's fastest level where libdeflate is missing).
 #pragma once
 
 #include <string>

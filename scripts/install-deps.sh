@@ -22,8 +22,8 @@ packages=(
   chromium
   # figures (app/vega.h): Vega 5's modules, inlined in report.html and run
   # by node for the SVG files; librsvg (loaded by rtscalib, app/svg_raster.h)
-  # draws the PNG files from them
-  libjs-vega nodejs librsvg2-2
+  # draws the PNG files from them, libdeflate compresses them
+  libjs-vega nodejs librsvg2-2 libdeflate0
   # tests/independent: photos from a renderer written from SPEC.md alone
   python3-numpy python3-opencv python3-yaml
   # OpenCV's own sample photos of a real camera (examples/data/left*.jpg):
