@@ -179,6 +179,17 @@ SvgRasterizer::SvgRasterizer() {
   }
 }
 
+void SvgRasterizer::WarmUp() const {
+  static const std::string kLetters =
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"40\" height=\"20\">"
+      "<text x=\"1\" y=\"9\" font-family=\"sans-serif\" font-size=\"10\">Ag</text>"
+      "<text x=\"1\" y=\"19\" font-family=\"sans-serif\" font-size=\"10\" "
+      "font-weight=\"bold\">Ag</text></svg>";
+  std::vector<unsigned char> png;
+  std::string error;
+  ToPng(kLetters, &png, &error);
+}
+
 bool SvgRasterizer::ToPng(const std::string& svg, std::vector<unsigned char>* png,
                           std::string* error) const {
   if (api_ == nullptr) {

@@ -30,6 +30,14 @@ class SvgRasterizer {
   // cairo's message) when it cannot be drawn. Thread-safe.
   bool ToPng(const std::string& svg, std::vector<unsigned char>* png, std::string* error) const;
 
+  // Draws a few letters, book and bold, and throws the PNG away. A
+  // process's first text loads fontconfig's configuration and the fonts,
+  // a thread's first text makes pango's font map of that thread: a
+  // figure's PNG costs markedly more on a new thread, the first one of the
+  // process more still. A thread that will draw figures warms up while it
+  // waits for them.
+  void WarmUp() const;
+
   struct Api;  // the functions found in the libraries (svg_raster.cc)
 
  private:

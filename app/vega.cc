@@ -434,7 +434,10 @@ bool BuildSnapshot(const std::string& node, const std::string& runtime, const fs
 class PngQueue {
  public:
   PngQueue(const SvgRasterizer& raster, const VegaRenderer::Drawn& drawn)
-      : raster_(raster), drawn_(drawn), thread_([this] { Run(); }) {}
+      : raster_(raster), drawn_(drawn), thread_([this] {
+          raster_.WarmUp();  // while node draws the first SVG
+          Run();
+        }) {}
   ~PngQueue() { Stop(); }
   PngQueue(const PngQueue&) = delete;
   PngQueue& operator=(const PngQueue&) = delete;
@@ -671,6 +674,12 @@ VegaRenderer::VegaRenderer() : state_(std::make_unique<State>()) {
     const std::string& runtime = VegaRuntime(&missing);
     s->node = !FindProgram("node").empty() ? FindProgram("node") : FindProgram("nodejs");
     const SvgRasterizer& raster = SvgRasterizer::Get();  // opens librsvg meanwhile
+    // Fontconfig and the fonts are loaded while node starts.
+    std::thread warm_up([&raster] { raster.WarmUp(); });
+    struct Join {
+      std::thread& t;
+      ~Join() { t.join(); }
+    } join{warm_up};
     if (runtime.empty() || s->node.empty() || !raster.missing().empty()) {
       s->missing = runtime.empty() ? "the Vega modules are missing: " + missing
                    : s->node.empty()
