@@ -17,6 +17,16 @@ struct RtscalibOneBlasThread {
     using SetThreads = void (*)(int);
     if (auto set = reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) {
       set(1);
+      // OpenBLAS started its worker threads when it was loaded, before this
+      // runs, and each spins for about a tenth of a second (sched_yield in
+      // a loop) before it sleeps: at a program's start, beside the work
+      // that has begun. With one thread per call they are never used:
+      // they are ended now (OpenBLAS starts them again if a later call
+      // asks for more threads).
+      using Shutdown = int (*)();
+      if (auto end = reinterpret_cast<Shutdown>(::dlsym(RTLD_DEFAULT, "blas_thread_shutdown_"))) {
+        end();
+      }
     }
   }
 };

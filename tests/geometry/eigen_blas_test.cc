@@ -51,9 +51,9 @@ TEST(EigenBlas, ProductsFromFourThreadsAtOnceEqualTheSerialOnes) {
 }
 
 // cmake/blas_threads.cc, compiled into every executable, asks OpenBLAS for
-// one thread per call: the calibration's own threads and CI's two test
-// processes keep the cores busy, and a second BLAS thread would spin
-// against them.
+// one thread per call and ends its worker threads: the calibration's own
+// threads and CI's two test processes keep the cores busy, and a second
+// BLAS thread would spin against them.
 TEST(EigenBlas, OpenBlasRunsEachCallOnItsCallersThread) {
   using GetThreads = int (*)();
   const auto get = reinterpret_cast<GetThreads>(::dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
@@ -70,6 +70,15 @@ TEST(EigenBlas, OpenBlasRunsEachCallOnItsCallersThread) {
     return;
   }
   EXPECT_EQ(get(), 1);
+  // And its worker threads, started when it was loaded, are ended (they
+  // would spin for a tenth of a second at every program's start): this
+  // process runs on its main thread alone.
+  size_t tasks = 0;
+  for (const auto& t : std::filesystem::directory_iterator("/proc/self/task")) {
+    (void)t;
+    ++tasks;
+  }
+  EXPECT_EQ(tasks, 1u);
 }
 
 }  // namespace
