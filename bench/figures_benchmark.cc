@@ -10,7 +10,7 @@
 //       PNG on a thread of its own, up to the last PNG (what a run waits for
 //       after its specs are made). Node's start is outside the timing (a run
 //       starts node while it reads its photos). Counter: figures.
-//   BM_BenchFiguresPng  librsvg and zlib alone: each of the seven SVG files
+//   BM_BenchFiguresPng  librsvg and libdeflate alone: each of the seven SVG files
 //       to its PNG, on a thread that has drawn before. Counter: ms_per_figure.
 //   BM_FirstPngOfAThread  one figure (the largest photo figure) drawn twice
 //       on a new thread: pango's font map, which librsvg's text goes
