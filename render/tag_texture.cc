@@ -80,6 +80,55 @@ void PaintCode(const cv::Mat& code, int x, int y, int ppb, const TagTextureOptio
   scaled.copyTo((*image)(cv::Rect(x, y, scaled.cols, scaled.rows)));
 }
 
+// White paper around the outermost code images when the options leave it
+// to the board: one code bit; an AprilGrid's outer squares lie beyond its
+// code images, so there it is the squares' side (at least a bit).
+double DefaultTagMargin(const TagBoard& board, double bit) {
+  return board.HasCornerSquares() ? std::max(bit, board.spacing) : bit;
+}
+
+// Kalibr's squares (targets.h): one at every crossing of the gaps between
+// the tags, the outer crossings included, from the black edge of the tags
+// on one side to that of the tags on the other. Their inner edges are the
+// tags' black edges, on texel boundaries like them; an outer square's
+// outer edge lies in the margin, `spacing` beyond the tags' edge, to the
+// nearest texel.
+void PaintCornerSquares(const TagBoard& board, const detect::TagFamilyInfo& info,
+                        int margin_bits, int gap_bits, TagTexture* tex,
+                        const TagTextureOptions& options) {
+  const int ppb = tex->pixels_per_bit;
+  const int off = info.border_offset();
+  const int step = (info.total_width + gap_bits) * ppb;
+  // The texel span [lo, hi) of the squares before tag `k` along one axis
+  // (k = 0 .. count, the last after the last tag).
+  auto span = [&](int k, int count, const std::vector<double>& board_at,
+                  const std::vector<double>& texel_at) {
+    const double pitch = board.tag_size + board.spacing;
+    const int black_start = margin_bits * ppb + off * ppb;  // tag 0's black edge
+    const int black = info.width_at_border * ppb;
+    int lo = k > 0 ? black_start + (k - 1) * step + black : 0;
+    int hi = k < count ? black_start + k * step : 0;
+    if (k == 0) {
+      lo = static_cast<int>(std::lround(Interpolate(board_at, texel_at, -board.spacing)));
+    }
+    if (k == count) {
+      hi = static_cast<int>(
+          std::lround(Interpolate(board_at, texel_at, (count - 1) * pitch + board.tag_size +
+                                                          board.spacing)));
+    }
+    return std::make_pair(lo, hi);
+  };
+  for (int r = 0; r <= board.rows; ++r) {
+    const auto [y0, y1] = span(r, board.rows, tex->y_board, tex->y_texel);
+    for (int c = 0; c <= board.cols; ++c) {
+      const auto [x0, x1] = span(c, board.cols, tex->x_board, tex->x_texel);
+      const cv::Rect square = cv::Rect(x0, y0, x1 - x0, y1 - y0) &
+                              cv::Rect(0, 0, tex->image.cols, tex->image.rows);
+      tex->image(square).setTo(options.black);
+    }
+  }
+}
+
 void CheckPointBoard(const TagBoard& board) {
   if (board.rows < 2 || board.cols < 2 || !(board.square_size > 0)) {
     throw std::invalid_argument(
@@ -202,7 +251,7 @@ BoardRect PrintedArea(const TagBoard& board, double margin) {
   }
   const detect::TagFamilyInfo info = detect::GetTagFamilyInfo(board.family, board.border_bits);
   const double bit = board.tag_size / info.width_at_border;
-  const double m = margin < 0 ? bit : margin;
+  const double m = margin < 0 ? DefaultTagMargin(board, bit) : margin;
   const double off = info.border_offset() * bit;
   const double pitch = board.tag_size + board.spacing;
   const double code = info.total_width * bit;
@@ -246,7 +295,7 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
   // A gap is printed as a whole number of white bits; a gap of (almost) zero
   // width lets neighbouring code images touch.
   const int gap_bits = gap < 1e-9 ? 0 : std::max(1, static_cast<int>(std::lround(gap)));
-  const double margin = options.margin < 0 ? bit : options.margin;
+  const double margin = options.margin < 0 ? DefaultTagMargin(board, bit) : options.margin;
   const int margin_bits = static_cast<int>(std::ceil(margin / bit - 1e-9));
 
   const int bits_x = 2 * margin_bits + board.cols * code_bits + (board.cols - 1) * gap_bits;
@@ -267,6 +316,7 @@ TagTexture MakeTagTexture(const TagBoard& board, const TagTextureOptions& option
               margin_bits * ppb + cell.col * step, margin_bits * ppb + cell.row * step, ppb,
               options, &tex.image);
   }
+  if (board.HasCornerSquares()) PaintCornerSquares(board, info, margin_bits, gap_bits, &tex, options);
   return tex;
 }
 

@@ -7,7 +7,11 @@
 // tag first_id + i sits in cell TagBoard::GridOf(i). One code bit is
 // b = tag_size / width_at_border (of the board's border_bits), so the tag's
 // whole code image (tag_family.h) covers [x0 - o b, x0 + tag_size + o b] with
-// o = border_offset. (Kalibr's squares between the tags are not drawn.)
+// o = border_offset. A board of 2-bit tags, Kalibr's AprilGrid, also has
+// its black squares of side `spacing` at every crossing of the gaps, the
+// outer crossings included (TagBoard::HasCornerSquares), each touching the
+// corners of the tags around it; its margin (by default) is as wide as a
+// square.
 //
 // ChArUco and chessboards (docs/photos.md). `rows` x `cols` squares of
 // square_size, square (r, c) = [c s, (c + 1) s] x [r s, (r + 1) s], black when
@@ -69,9 +73,9 @@ struct TagTextureOptions {
   int max_pixels_per_bit = 16;
   int max_texture_size = 8192;
   // White paper around the outermost code images (AprilTag) or the squares
-  // (ChArUco, chessboard) [m]; < 0 = one code bit for AprilTag boards, one
-  // square for point boards (the quiet zone OpenCV's chessboard detector
-  // needs around the outer squares).
+  // (ChArUco, chessboard) [m]; < 0 = one code bit for AprilTag boards (an
+  // AprilGrid's square side, when larger), one square for point boards (the
+  // quiet zone OpenCV's chessboard detector needs around the outer squares).
   double margin = -1;
   unsigned char black = 0;    // ink
   unsigned char white = 255;  // paper

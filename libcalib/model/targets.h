@@ -87,6 +87,9 @@ struct TagBoard {
   std::array<double, 2> warp{0, 0};  // {wx, wy} [m], above
 
   bool IsPointBoard() const { return kind != BoardKind::kAprilTag; }
+  // A board of 2-bit tags is Kalibr's AprilGrid (SPEC 7.2): printed with a
+  // black square at every crossing of the gaps between its tags.
+  bool HasCornerSquares() const { return kind == BoardKind::kAprilTag && border_bits == 2; }
   // Corners per target: 4 for a tag, 1 for a point board's inner corner.
   int CornersPerTarget() const { return IsPointBoard() ? 1 : 4; }
   int NumTags() const { return IsPointBoard() ? (rows - 1) * (cols - 1) : rows * cols; }

@@ -159,6 +159,65 @@ TEST(TagTextureTest, PrintedAreaMatchesTheTexture) {
   EXPECT_NEAR(r.y_max, tex.y_max(), 1e-12);
 }
 
+// Kalibr's AprilGrid (2-bit tags, SPEC 7.2): a black square of side
+// `spacing` at every crossing of the gaps, the outer ones included. At each
+// tag corner the ink is inside the tag and diagonally outside it (the
+// square), the paper along the tag's two edges outside it (the white ring
+// of the code image and the gap); the squares end at the tags' black edges
+// and, outside, `spacing` beyond them, with paper beyond that.
+TEST(TagTextureTest, AprilGridHasKalibrsSquaresAtEveryCrossing) {
+  TagBoard board = Board("tag36h11", 0.024);  // Kalibr's tagSpacing 0.3 of 8 cm tags
+  board.border_bits = 2;
+  ASSERT_TRUE(board.HasCornerSquares());
+  const TagTexture tex = MakeTagTexture(board);
+  const double bit = tex.bit_size;
+  EXPECT_DOUBLE_EQ(bit, 0.008);
+  const double half = 0.25 * bit;  // a quarter bit: well inside a texel run of 16 per bit
+  auto at = [&](double x, double y) {
+    const Eigen::Vector2d t = tex.TexelFromBoard(x, y);
+    return TexelAt(tex, t, 0, 0);
+  };
+  for (int i = 0; i < board.NumTags(); ++i) {
+    const auto corners = board.CornersInBoard(i);
+    // TargetCorner order: 0 bottom-left, 1 bottom-right, 2 top-right, 3 top-left;
+    // (sx, sy) points out of the tag at corner k.
+    const double sx[4] = {-1, +1, +1, -1}, sy[4] = {+1, +1, -1, -1};
+    for (int k = 0; k < 4; ++k) {
+      const double x = corners[k].x(), y = corners[k].y();
+      EXPECT_EQ(at(x - sx[k] * half, y - sy[k] * half), 0) << "inside tag " << i << " corner " << k;
+      EXPECT_EQ(at(x + sx[k] * half, y + sy[k] * half), 0) << "square at tag " << i << " corner " << k;
+      EXPECT_EQ(at(x + sx[k] * half, y - sy[k] * half), 255) << "beside tag " << i << " corner " << k;
+      EXPECT_EQ(at(x - sx[k] * half, y + sy[k] * half), 255) << "beside tag " << i << " corner " << k;
+      // The square's far side: `spacing` out along the diagonal, then paper
+      // (or the next tag's black, inside the board).
+      EXPECT_EQ(at(x + sx[k] * (board.spacing - half), y + sy[k] * (board.spacing - half)), 0)
+          << "square at tag " << i << " corner " << k;
+    }
+  }
+  // Beyond an outer square: paper. (The board's top-left square spans
+  // [-spacing, 0] in x and y.)
+  EXPECT_EQ(at(-board.spacing + half, -board.spacing + half), 0);
+  EXPECT_EQ(at(-board.spacing - half, -board.spacing + half), 255);
+  EXPECT_EQ(at(-board.spacing + half, -board.spacing - half), 255);
+  const BoardRect r = PrintedArea(board);
+  EXPECT_NEAR(r.x_min, tex.x_min(), 1e-12);
+  EXPECT_NEAR(r.y_max, tex.y_max(), 1e-12);
+  EXPECT_LT(r.x_min, -board.spacing);
+  // The tags' own bits (black border and code) are the 2-bit family's.
+  const TagFamilyInfo info = GetTagFamilyInfo(board.family, 2);
+  for (int i = 0; i < board.NumTags(); ++i) {
+    const cv::Mat code = TagCodeImage(board.family, board.first_id + i, 2);
+    const auto corners = board.CornersInBoard(i);
+    for (int row = 0; row < info.width_at_border; ++row) {
+      for (int col = 0; col < info.width_at_border; ++col) {
+        const double x = corners[3].x() + (col + 0.5) * bit, y = corners[3].y() + (row + 0.5) * bit;
+        ASSERT_EQ(at(x, y), code.at<uint8_t>(row + info.border_offset(), col + info.border_offset()))
+            << "tag " << i << " bit " << row << "," << col;
+      }
+    }
+  }
+}
+
 // ChArUco and chessboards (docs/photos.md): square (r, c) is
 // [c s, (c + 1) s] x [r s, (r + 1) s], black when r + c is even.
 TagBoard PointBoard(BoardKind kind, int rows, int cols, double square, double marker = 0) {
