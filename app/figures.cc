@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <future>
 #include <map>
 #include <set>
@@ -26,8 +27,8 @@ constexpr int kWorstPhotosPerZoom = 2;
 
 }  // namespace
 
-std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
-  std::vector<Figure> figs;
+void MakeFigures(const PipelineResult& r, const json& history,
+                 const std::function<void(Figure)>& made) {
   const CalibrationResult& c = r.calibration;
   const std::vector<ObservationResidual>& rows = c.residuals;
 
@@ -41,7 +42,7 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
            s.rms.edm_n ? s.rms.edm_m * 1e3 : NAN, s.rms.cam_n ? s.rms.cam_m * 1e3 : NAN,
            s.rms.pixels_n ? s.rms.pixels_px : NAN});
     }
-    figs.push_back(LadderFigure(rungs, "ladder_stepwise",
+    made(LadderFigure(rungs, "ladder_stepwise",
                                 "The ladder of this run (diagnose --auto)",
                                 "Error of the fitted rows after each effect the forward stepwise "
                                 "search added (rtscalib diagnose --auto)."));
@@ -53,7 +54,7 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
                          {{"edm", {{"rms_m", e.edm.rms_m}, {"n", e.edm.n}}},
                           {"cam", {{"rms_m", e.cam.rms_m}, {"n", e.cam.n}}}}},
                         {"pixels", {{"rms_px", e.pixels.rms_px}, {"n", e.pixels.n}}}};
-    figs.push_back(RunsLadderFigure(history, c.model.effects.Names(), final));
+    made(RunsLadderFigure(history, c.model.effects.Names(), final));
   }
 
   // Maps per tool.
@@ -75,17 +76,17 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   // A camera-only calibration (kinematics none) has no pointings to map.
   if (c.model.kinematics == Kinematics::kNone) pixel_zooms_mapped.clear();
   if (edm) {
-    figs.push_back(ErrorMap({"edm", "EDM points", "mm", 1e3, ObsGroup::kEdm, 0}, rows, faces,
+    made(ErrorMap({"edm", "EDM points", "mm", 1e3, ObsGroup::kEdm, 0}, rows, faces,
                             c.fit_options, model));
   }
   for (int z : cam_zooms) {
-    figs.push_back(
+    made(
         ErrorMap({"cam_zoom" + std::to_string(z), "Camera points, zoom " + std::to_string(z), "mm",
                   1e3, ObsGroup::kCam, z},
                  rows, faces, c.fit_options, model));
   }
   for (int z : pixel_zooms_mapped) {
-    figs.push_back(
+    made(
         ErrorMap({"pixels_zoom" + std::to_string(z), "Image points, zoom " + std::to_string(z),
                   "px", 1.0, ObsGroup::kPixel, z},
                  rows, faces, c.fit_options, model));
@@ -95,7 +96,7 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   std::set<int> image_zooms = pixel_zooms;
   image_zooms.insert(cam_zooms.begin(), cam_zooms.end());
   for (int z : image_zooms) {
-    if (z < c.model.NumZooms()) figs.push_back(ImageResiduals(z, c.model.cams[z], rows));
+    if (z < c.model.NumZooms()) made(ImageResiduals(z, c.model.cams[z], rows));
   }
   std::map<std::string, std::vector<ObservationResidual>> by_shot;
   for (const ObservationResidual& o : rows) {
@@ -118,15 +119,14 @@ std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
     std::sort(shots.rbegin(), shots.rend());
     for (size_t k = 0; k < shots.size() && k < kWorstPhotosPerZoom; ++k) {
       const auto file = files.find(shots[k].second);
-      figs.push_back(PhotoFigure(shots[k].second, by_shot[shots[k].second],
+      made(PhotoFigure(shots[k].second, by_shot[shots[k].second],
                                  file == files.end() ? "" : file->second, c.model.cams[z].width,
                                  c.model.cams[z].height));
     }
   }
-  figs.push_back(VariablesFigure(rows));
-  figs.push_back(Histograms(rows));
-  for (Figure& f : MakeUncertaintyFigures(r)) figs.push_back(std::move(f));
-  return figs;
+  made(VariablesFigure(rows));
+  made(Histograms(rows));
+  for (Figure& f : MakeUncertaintyFigures(r)) made(std::move(f));
 }
 
 std::vector<Figure> MakeUncertaintyFigures(const PipelineResult& r) {

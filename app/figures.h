@@ -26,6 +26,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <future>
 #include <map>
 #include <memory>
@@ -42,10 +43,12 @@
 
 namespace rtscalib::app {
 
-// `history` = report.json's "history" array (earlier runs, oldest first).
-// The uncertainty figures last (MakeUncertaintyFigures), when the maps are
-// in `result`.
-std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
+// Each figure, in their order, handed to `made` as soon as it is made (the
+// run draws it while the next are made). `history` = report.json's
+// "history" array (earlier runs, oldest first). The uncertainty figures
+// last (MakeUncertaintyFigures), when the maps are in `result`.
+void MakeFigures(const PipelineResult& result, const nlohmann::json& history,
+                 const std::function<void(Figure)>& made);
 std::vector<Figure> MakeUncertaintyFigures(const PipelineResult& result);
 
 // The files of figures handed over one at a time (Add), drawn while the

@@ -36,11 +36,11 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   // maps but not its diagnosis. Their renderer (node, librsvg: app/vega.h)
   // starts now, beside the reading of the observations, so that node is
   // waiting when the model is fitted; each spec goes to node as soon as it
-  // is made, the uncertainty maps' once the maps are computed, and they are
-  // drawn on threads of their own while the diagnosis runs and the model
-  // and the reports are written. report.json and report.html, which list
-  // the figure files, come last: the run ends once its figures are drawn,
-  // and says how long it waited for them.
+  // is made, the uncertainty maps' once the maps are computed, and
+  // they are drawn on threads of their own while the diagnosis runs and
+  // the model and the reports are written. report.json and report.html,
+  // which list the figure files, come last: the run ends once its figures
+  // are drawn, and says how long it waited for them.
   using Clock = std::chrono::steady_clock;
   std::vector<Figure> figures;
   std::vector<std::vector<std::string>> figure_files;
@@ -51,27 +51,30 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   // Declared after the renderer: ends (waits for) the drawing before it.
   std::optional<FigureFiles> files;
   size_t made = 0;
-  std::optional<std::pair<size_t, Figure>> smallest;
+  // The histograms (a small figure) wait for the uncertainty maps'
+  // figures: node's last SVG, whose PNG is drawn after node is done, is
+  // then a small one. Every other figure goes to node as soon as it is made.
+  std::optional<std::pair<size_t, Figure>> small;
+  auto hand_over = [&](Figure f) {
+    if (f.section == "histograms" && !small) {
+      small.emplace(made++, std::move(f));
+    } else {
+      files->Add(made++, std::move(f));
+    }
+  };
   const PipelineResult result = RunPipeline(
       settings, out.run_dir(), &progress,
       [&](const PipelineResult& fitted) {
         figures_start = Clock::now();
         history = HistoryJson(out);
-        std::vector<Figure> first = MakeFigures(fitted, history);
-        made = first.size();
-        std::vector<size_t> bytes;
-        for (const Figure& f : first) bytes.push_back(f.spec.dump().size());
-        const std::vector<size_t> order = LargestFirst(bytes);
         files.emplace(out.RunFile("figures"), &renderer);
-        // The smallest waits for the uncertainty maps' figures: the last
-        // PNG, drawn after node is done, is then a small one.
-        for (size_t k = 0; k + 1 < order.size(); ++k) files->Add(order[k], first[order[k]]);
-        if (!order.empty()) smallest.emplace(order.back(), std::move(first[order.back()]));
+        MakeFigures(fitted, history, hand_over);
       },
       [&](const PipelineResult& mapped) {
         if (!files) return;
         for (Figure& f : MakeUncertaintyFigures(mapped)) files->Add(made++, std::move(f));
-        if (smallest) files->Add(smallest->first, std::move(smallest->second));
+        if (small) files->Add(small->first, std::move(small->second));
+        small.reset();
         files->End();
       });
   progress.Step("writing the model and the reports");
