@@ -129,6 +129,12 @@ void MakeFigures(const PipelineResult& r, const json& history,
   for (Figure& f : MakeUncertaintyFigures(r)) made(std::move(f));
 }
 
+std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
+  std::vector<Figure> figs;
+  MakeFigures(r, history, [&](Figure f) { figs.push_back(std::move(f)); });
+  return figs;
+}
+
 std::vector<Figure> MakeUncertaintyFigures(const PipelineResult& r) {
   std::vector<Figure> figs;
   for (const UncertaintyMap& m : r.uncertainty_maps) {

@@ -49,6 +49,8 @@ namespace rtscalib::app {
 // last (MakeUncertaintyFigures), when the maps are in `result`.
 void MakeFigures(const PipelineResult& result, const nlohmann::json& history,
                  const std::function<void(Figure)>& made);
+// The same, all at once.
+std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
 std::vector<Figure> MakeUncertaintyFigures(const PipelineResult& result);
 
 // The files of figures handed over one at a time (Add), drawn while the
