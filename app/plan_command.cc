@@ -143,6 +143,18 @@ int RunPlan(const PlanArgs& args) {
   const std::string config_dir = fs::absolute(config_path).parent_path().string();
   const RunConfig config = LoadConfig(config_path, {render::RenderConfigSection(&render),
                                                     PlanConfigSection(&settings, config_dir)});
+  // The plan chooses an instrument's pointings at the boards' placements.
+  // A camera on its own (model.kinematics: none, SPEC 7.1) does not turn:
+  // every photo of one placement is the same photo, and what would make a
+  // better session, the board's poses, is not what the planner varies.
+  if (config.calibration.model.kinematics == Kinematics::kNone) {
+    throw InputError::Key(
+        config_path, "model.kinematics", 0, 0,
+        "an instrument's kinematics (plan chooses its pointings, phi and theta, at the boards' "
+        "placements; a camera on its own has no pointing to plan: its photos of one placement "
+        "are all the same photo, and its board poses are not planned, docs/plan.md)",
+        "none");
+  }
   PlanSession session;
   if (from && !config.simulate) {
     // A run of real data: the boards are the ones it estimated (below).

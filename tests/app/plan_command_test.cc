@@ -131,5 +131,26 @@ TEST(PlanCommand, FromAnEarlierRunNamesWhatItsDiagnosisCouldNotDetermine) {
   }
 }
 
+// A camera on its own (configs/bench.yaml, model.kinematics: none) has no
+// pointing to plan: every photo of one board placement is the same photo.
+// `plan --from` its run says so, naming the key, and writes no plan.
+TEST(PlanCommand, ACameraOnItsOwnHasNoPointingToPlan) {
+  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_bench";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path run = dir / "run";
+  const std::string config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/bench.yaml";
+  std::string err;
+  ASSERT_EQ(
+      RunRtscalib("--quiet --config '" + config + "' --output '" + run.string() + "'", dir, &err),
+      0)
+      << err;
+  EXPECT_EQ(RunRtscalib("plan --quiet --from '" + run.string() + "'", dir, &err), 1) << err;
+  EXPECT_NE(err.find("model.kinematics"), std::string::npos) << err;
+  EXPECT_NE(err.find("no pointing to plan"), std::string::npos) << err;
+  EXPECT_NE(err.find("got 'none'"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(run / "plan" / "plan.csv"));
+}
+
 }  // namespace
 }  // namespace rtscalib
