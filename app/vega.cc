@@ -837,10 +837,4 @@ std::vector<size_t> LargestFirst(const std::vector<size_t>& bytes) {
   return order;
 }
 
-std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& specs,
-                                          std::string* note, const VegaRenderer::Drawn& drawn) {
-  VegaRenderer renderer;
-  return renderer.Draw(specs, note, drawn);
-}
-
 }  // namespace rtscalib::app

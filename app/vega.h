@@ -124,9 +124,4 @@ class VegaRenderer {
 // `bytes`: each spec's size as JSON text.
 std::vector<size_t> LargestFirst(const std::vector<size_t>& bytes);
 
-// One VegaRenderer's Draw (node started now).
-std::vector<RenderedFigure> RenderFigures(const std::vector<nlohmann::json>& specs,
-                                          std::string* note,
-                                          const VegaRenderer::Drawn& drawn = nullptr);
-
 }  // namespace rtscalib::app
