@@ -126,12 +126,12 @@ void MakeFigures(const PipelineResult& r, const json& history,
   }
   made(VariablesFigure(rows));
   made(Histograms(rows));
-  for (Figure& f : MakeUncertaintyFigures(r)) made(std::move(f));
 }
 
 std::vector<Figure> MakeFigures(const PipelineResult& r, const json& history) {
   std::vector<Figure> figs;
   MakeFigures(r, history, [&](Figure f) { figs.push_back(std::move(f)); });
+  for (Figure& f : MakeUncertaintyFigures(r)) figs.push_back(std::move(f));
   return figs;
 }
 

@@ -43,15 +43,16 @@
 
 namespace rtscalib::app {
 
-// Each figure, in their order, handed to `made` as soon as it is made (the
-// run draws it while the next are made). `history` = report.json's
-// "history" array (earlier runs, oldest first). The uncertainty figures
-// last (MakeUncertaintyFigures), when the maps are in `result`.
+// Each figure but the uncertainty maps', in their order, handed to `made`
+// as soon as it is made (the run draws it while the next are made, and
+// before the maps are computed). `history` = report.json's "history" array
+// (earlier runs, oldest first).
 void MakeFigures(const PipelineResult& result, const nlohmann::json& history,
                  const std::function<void(Figure)>& made);
-// The same, all at once.
-std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
+// The uncertainty maps' figures, which come last.
 std::vector<Figure> MakeUncertaintyFigures(const PipelineResult& result);
+// Every figure, all at once.
+std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
 
 // The files of figures handed over one at a time (Add), drawn while the
 // next ones are made: <dir>/<name>.vg.json for each figure and, when the

@@ -815,7 +815,6 @@ std::vector<RenderedFigure> VegaRenderer::Draw(const std::vector<nlohmann::json>
                                                std::string* note, const Drawn& drawn) {
   if (specs.empty()) {
     End();
-    if (state_->started.valid()) state_->started.get();
     return {};
   }
   std::vector<std::string> texts;

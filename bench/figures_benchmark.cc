@@ -118,13 +118,20 @@ void BM_BenchFiguresDraw(benchmark::State& state) {
 }
 BENCHMARK(BM_BenchFiguresDraw)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
+// The process's rasterizer, or null with the benchmark skipped when
+// librsvg is missing.
+const app::SvgRasterizer* Rasterizer(benchmark::State& state) {
+  const app::SvgRasterizer& raster = app::SvgRasterizer::Get();
+  if (raster.missing().empty()) return &raster;
+  state.SkipWithError(raster.missing().c_str());
+  return nullptr;
+}
+
 void BM_BenchFiguresPng(benchmark::State& state) {
   const BenchFigures& f = Figures();
-  const app::SvgRasterizer& raster = app::SvgRasterizer::Get();
-  if (!raster.missing().empty()) {
-    state.SkipWithError(raster.missing().c_str());
-    return;
-  }
+  const app::SvgRasterizer* found = Rasterizer(state);
+  if (found == nullptr) return;
+  const app::SvgRasterizer& raster = *found;
   std::vector<unsigned char> png;
   std::string error;
   raster.ToPng(f.svgs.back(), &png, &error);  // this thread's font map
@@ -146,11 +153,9 @@ BENCHMARK(BM_BenchFiguresPng)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_FirstPngOfAThread(benchmark::State& state) {
   const BenchFigures& f = Figures();
-  const app::SvgRasterizer& raster = app::SvgRasterizer::Get();
-  if (!raster.missing().empty()) {
-    state.SkipWithError(raster.missing().c_str());
-    return;
-  }
+  const app::SvgRasterizer* found = Rasterizer(state);
+  if (found == nullptr) return;
+  const app::SvgRasterizer& raster = *found;
   double second_s = 0;
   for (auto _ : state) {
     double first = 0, second = 0;

@@ -30,6 +30,22 @@ int RunRtscalib(const std::string& args, const fs::path& dir, std::string* err) 
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// A fresh folder test_tmp/<name> and in it run/, the output of rtscalib
+// run on configs/<config> (the earlier run of `plan --from`).
+fs::path CalibratedRun(const std::string& name, const std::string& config, fs::path* dir) {
+  *dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / name;
+  fs::remove_all(*dir);
+  fs::create_directories(*dir);
+  const fs::path run = *dir / "run";
+  std::string err;
+  EXPECT_EQ(RunRtscalib("--quiet --config '" + std::string(RTSCALIB_SOURCE_DIR) + "/configs/" +
+                            config + "' --output '" + run.string() + "'",
+                        *dir, &err),
+            0)
+      << err;
+  return run;
+}
+
 TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
   const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_command";
   fs::remove_all(dir);
@@ -87,16 +103,10 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
 // (v_eccentricity among them, whose signature these boards and records do
 // not show): plan.json names them and says what limits them.
 TEST(PlanCommand, FromAnEarlierRunNamesWhatItsDiagnosisCouldNotDetermine) {
-  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_from";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const fs::path run = dir / "run";
-  const std::string config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/plan.yaml";
+  fs::path dir;
+  const fs::path run = CalibratedRun("plan_from", "plan.yaml", &dir);
+  ASSERT_FALSE(::testing::Test::HasFailure());
   std::string err;
-  ASSERT_EQ(
-      RunRtscalib("--quiet --config '" + config + "' --output '" + run.string() + "'", dir, &err),
-      0)
-      << err;
   ASSERT_EQ(RunRtscalib("plan --quiet --from '" + run.string() + "'", dir, &err), 0) << err;
   const nlohmann::json j = nlohmann::json::parse(ReadFile(run / "plan" / "plan.json"));
   const nlohmann::json report = nlohmann::json::parse(ReadFile(run / "report.json"));
@@ -135,16 +145,10 @@ TEST(PlanCommand, FromAnEarlierRunNamesWhatItsDiagnosisCouldNotDetermine) {
 // pointing to plan: every photo of one board placement is the same photo.
 // `plan --from` its run says so, naming the key, and writes no plan.
 TEST(PlanCommand, ACameraOnItsOwnHasNoPointingToPlan) {
-  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_bench";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const fs::path run = dir / "run";
-  const std::string config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/bench.yaml";
+  fs::path dir;
+  const fs::path run = CalibratedRun("plan_bench", "bench.yaml", &dir);
+  ASSERT_FALSE(::testing::Test::HasFailure());
   std::string err;
-  ASSERT_EQ(
-      RunRtscalib("--quiet --config '" + config + "' --output '" + run.string() + "'", dir, &err),
-      0)
-      << err;
   EXPECT_EQ(RunRtscalib("plan --quiet --from '" + run.string() + "'", dir, &err), 1) << err;
   EXPECT_NE(err.find("model.kinematics"), std::string::npos) << err;
   EXPECT_NE(err.find("no pointing to plan"), std::string::npos) << err;
