@@ -417,6 +417,16 @@ const std::vector<Component>& Components() {
        [](const ObservationResidual& o) {
          return o.group == ObsGroup::kPixel ? NAN : o.along * 1e3;
        }},
+      // A camera on its own has no horizontal direction or zenith angle
+      // (ObservationResidual::hz): its residuals in pixels instead.
+      {"du", "u error [px] (camera on its own)",
+       [](const ObservationResidual& o) {
+         return o.group == ObsGroup::kPixel && std::isnan(o.hz) ? o.image_delta.x() : NAN;
+       }},
+      {"dv", "v error [px] (camera on its own)",
+       [](const ObservationResidual& o) {
+         return o.group == ObsGroup::kPixel && std::isnan(o.hz) ? o.image_delta.y() : NAN;
+       }},
   };
   return comps;
 }
@@ -435,12 +445,22 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
   json spec = Chart("Residuals against the variables the diagnosis tests",
                     "fitted rows; per bin the mean residual (line) and its 2-sigma band (mean +- "
                     "2 std / sqrt(n)); a mean outside the band around zero is structure");
-  const json series_domain = {SeriesName(ObsGroup::kEdm), SeriesName(ObsGroup::kCam),
-                              SeriesName(ObsGroup::kPixel)};
+  // The legend lists the kinds of observation the session has, each in its
+  // own colour whichever others are there.
+  json series_domain = json::array(), series_range = json::array();
+  for (const auto& [g, colour] : {std::pair{ObsGroup::kEdm, "#1f77b4"},
+                                  std::pair{ObsGroup::kCam, "#ff7f0e"},
+                                  std::pair{ObsGroup::kPixel, "#2ca02c"}}) {
+    if (std::any_of(rows.begin(), rows.end(),
+                    [g = g](const ObservationResidual& o) { return Fitted(o) && o.group == g; })) {
+      series_domain.push_back(SeriesName(g));
+      series_range.push_back(colour);
+    }
+  }
   spec["scales"].push_back({{"name", "group"},
                             {"type", "ordinal"},
                             {"domain", series_domain},
-                            {"range", {"#1f77b4", "#ff7f0e", "#2ca02c"}}});
+                            {"range", series_range}});
   spec["legends"].push_back({{"stroke", "group"},
                              {"fill", "group"},
                              {"title", "observations"},
@@ -584,7 +604,7 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
       "Each row is one variable the diagnosis tests (phi, zenith angle, distance, camera-to-point "
       "distance, image radius), each column one residual component (horizontal direction and "
       "zenith angle in arcseconds for every observation kind, along the ray in millimetres for "
-      "records). A once-per-turn wave against phi is an eccentricity or a wobble, a slope against "
+      "records; u and v in pixels for a camera on its own, whose frame has no vertical). A once-per-turn wave against phi is an eccentricity or a wobble, a slope against "
       "distance a scale error, a trend against the image radius a distortion term the model "
       "lacks. A variable that does not vary in this session and a component without residuals "
       "are left out.";

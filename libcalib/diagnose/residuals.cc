@@ -103,10 +103,20 @@ std::vector<ObservationResidual> ObservationResiduals(const Observations& obs,
       if (FocusedIntrinsics(cam.intrinsics.data(), FocusOf(model, p.zoom), distance, k) &&
           PixelToRay(k, cam.distortion.data(), p.uv.data(), ray_obs) &&
           PixelToRay(k, cam.distortion.data(), pred.data(), ray_pred)) {
-        const Eigen::Matrix3d rot = ref_from_cam.rotation;
-        const Eigen::Vector3d a = rot * Eigen::Vector3d(ray_obs).normalized();
-        const Eigen::Vector3d b = rot * Eigen::Vector3d(ray_pred).normalized();
-        AngularComponents(b, a - b, &o.hz, &o.zenith);
+        // A camera on its own (Kinematics::kNone) has its own frame as the
+        // reference, z along the optical axis: there is no horizontal
+        // direction or zenith angle, and taking that axis for the vertical
+        // would divide the horizontal component by the distance from the
+        // principal point (hundreds of arc seconds for 0.2 px near the
+        // centre). Its residuals are the pixel ones (image_delta).
+        if (model.kinematics == Kinematics::kNone) {
+          o.hz = o.zenith = std::nan("");
+        } else {
+          const Eigen::Matrix3d rot = ref_from_cam.rotation;
+          const Eigen::Vector3d a = rot * Eigen::Vector3d(ray_obs).normalized();
+          const Eigen::Vector3d b = rot * Eigen::Vector3d(ray_pred).normalized();
+          AngularComponents(b, a - b, &o.hz, &o.zenith);
+        }
         o.delta = Eigen::Vector3d(p.uv.x() - pred.x(), p.uv.y() - pred.y(), 0.0);
         o.size = o.delta.norm();
         o.image_delta = p.uv - pred;

@@ -56,8 +56,11 @@ struct ObservationResidual {
   bool critical = false;  // in a critical region (not used by the fit)
   Eigen::Vector3d delta = Eigen::Vector3d::Zero();
   double along = 0;   // [m] (records)
-  double hz = 0;      // [rad]
-  double zenith = 0;  // [rad]
+  // Horizontal-direction and zenith components of the residual [rad] (pixels:
+  // of the camera ray); NaN for a camera on its own (Kinematics::kNone), whose
+  // frame has no vertical.
+  double hz = 0;
+  double zenith = 0;
   double size = 0;    // |delta| [m] or [px]
   // The observed and the predicted value: records x, y, z [m]; pixels u, v, 0 [px].
   Eigen::Vector3d observed = Eigen::Vector3d::Zero();

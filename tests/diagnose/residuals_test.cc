@@ -112,6 +112,32 @@ TEST(ObservationResiduals, PixelRowsInImageAndAngularComponentsPerFace) {
   }
 }
 
+// A camera on its own (Kinematics::kNone): its frame, z along the optical
+// axis, is the reference, so it has no horizontal direction or zenith angle.
+// Taking the optical axis for the vertical would divide the horizontal
+// component by sin(angle off the axis): 0.2 px at 10 px from the principal
+// point of a 1000 px lens would read 0.2 / 10 rad, 4,000", in place of 41".
+// The residual is the pixel one.
+TEST(ObservationResiduals, ACameraOnItsOwnHasPixelResidualsAndNoAngles) {
+  CameraTool cam;
+  const InstrumentModel m = IdealModel(Kinematics::kNone, 1, cam);
+  const auto& k = m.cams[0].intrinsics;
+  Observations obs;
+  PixelObservation p;
+  p.X = Eigen::Vector3d(10.0 / k[0], 0.0, 1.0);  // 10 px right of the principal point at 1 m
+  p.uv = Eigen::Vector2d(k[2] + 10.0 + 0.2, k[3] - 0.1);
+  obs.pixels.push_back(p);
+  const std::vector<ObservationResidual> res = ObservationResiduals(obs, m, FitOptions());
+  ASSERT_EQ(res.size(), 1u);
+  const ObservationResidual& o = res[0];
+  ASSERT_TRUE(o.valid);
+  EXPECT_NEAR(o.image_delta.x(), 0.2, 1e-9);
+  EXPECT_NEAR(o.image_delta.y(), -0.1, 1e-9);
+  EXPECT_NEAR(o.image_radius, std::hypot(10.2, 0.1), 1e-9);
+  EXPECT_TRUE(std::isnan(o.hz));
+  EXPECT_TRUE(std::isnan(o.zenith));
+}
+
 TEST(ObservationResiduals, CameraRecordsAndInvalidRows) {
   const InstrumentModel m = IdealModel(Kinematics::kSpherical, 1, CameraTool{});
   Observations obs;
