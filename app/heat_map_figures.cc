@@ -9,7 +9,7 @@ using nlohmann::json;
 json HeatMapSpec(const std::string& title, const std::string& subtitle, int width, int height,
                  int cols, int rows, const std::vector<double>& value,
                  const std::vector<unsigned char>& inside, const std::string& legend,
-                 const std::vector<Eigen::Vector2d>& hull) {
+                 const std::vector<Eigen::Vector2d>& hull, ColourScale colours) {
   json spec = Chart(title, subtitle);
   int w = 0, h = 0;
   ImageScales(&spec, width, height, &w, &h);
@@ -27,12 +27,13 @@ json HeatMapSpec(const std::string& title, const std::string& subtitle, int widt
     }
   }
   spec["data"].push_back({{"name", "cells"}, {"values", cells}});
-  spec["scales"].push_back({{"name", "colour"},
-                            {"type", "linear"},
-                            {"scheme", "viridis"},
-                            {"domain", {{"data", "cells"}, {"field", "value"}}},
-                            {"zero", true},
-                            {"nice", true}});
+  json colour = {{"name", "colour"},
+                 {"type", colours == ColourScale::kLog ? "log" : "linear"},
+                 {"scheme", "viridis"},
+                 {"domain", {{"data", "cells"}, {"field", "value"}}},
+                 {"nice", true}};
+  if (colours == ColourScale::kLinear) colour["zero"] = true;
+  spec["scales"].push_back(colour);
   spec["legends"].push_back({{"fill", "colour"}, {"title", legend}, {"type", "gradient"}});
   const json tip =
       Tip({{"u", "format((datum.u0 + datum.u1) / 2, '.0f')"},
@@ -82,26 +83,33 @@ Figure UncertaintyFigure(const UncertaintyMap& m, const UncertaintyMapOptions& o
   Figure f;
   f.name = "uncertainty_zoom" + std::to_string(m.zoom);
   f.section = "uncertainty";
-  f.title = "Projection uncertainty, zoom " + std::to_string(m.zoom) + ", point at " +
-            Significant(o.range_m, 3) + " m";
+  f.title = "Projection uncertainty, zoom " + std::to_string(m.zoom) + ", " +
+            (m.up_to_rotation ? std::string("up to the camera's rotation")
+                              : "point at " + Significant(o.range_m, 3) + " m");
   f.spec = HeatMapSpec(
       f.title,
       "1 sigma, worst direction [px]: min " + Significant(m.min_px, 3) + ", median " +
-          Significant(m.median_px, 3) + ", max " + Significant(m.max_px, 3) + "; pointing phi " +
-          Significant(o.phi, 4) + ", theta " + Significant(o.theta, 4) + " rad; " +
-          (full ? "full covariance" : "diagonal approximation (no full covariance)") +
+          Significant(m.median_px, 3) + ", max " + Significant(m.max_px, 3) + "; " +
+          (m.up_to_rotation ? std::string("a camera on its own")
+                            : "pointing phi " + Significant(o.phi, 4) + ", theta " +
+                                  Significant(o.theta, 4) + " rad") +
+          "; " + (full ? "full covariance" : "diagonal approximation (no full covariance)") +
           "; faded and struck through: outside the points' hull (white)",
       m.width, m.height, m.cols, m.rows, m.sigma_px,
       std::vector<unsigned char>(m.inside.begin(), m.inside.end()), "1-sigma [px]",
-      cam.valid_region);
+      cam.valid_region, ColourScale::kLog);
   f.caption =
-      "How far (1 sigma, worst direction, pixels) the pixel where a point at " +
-      Significant(o.range_m, 3) +
-      " m is seen may lie from the model's prediction, from the uncertainty of this zoom's "
-      "intrinsics, distortion and camera tool and of the kinematic chain (first order, J P J^T "
-      "with the fit's full covariance). Cells outside the convex hull of the calibration's image "
-      "points (white outline) are faded and struck through: there the distortion is extrapolated "
-      "and the number is a lower bound at best.";
+      "How far (1 sigma, worst direction, pixels) the pixel where " + MapSubject(m, o) +
+      " is seen may lie from the model's prediction, from the uncertainty of this zoom's " +
+      (m.up_to_rotation
+           ? std::string("intrinsics and distortion, less what a turn of the camera undoes: a "
+                         "camera on its own has no frame but its own, and whatever it is used "
+                         "with (a pose from solvePnP, a board) carries that turn, as in mrcal's "
+                         "projection uncertainty")
+           : std::string("intrinsics, distortion and camera tool and of the kinematic chain")) +
+      " (first order, J P J^T with the fit's full covariance). Cells outside the convex hull of "
+      "the calibration's image points (white outline) are faded and struck through: there the "
+      "distortion is extrapolated and the number is a lower bound at best.";
   f.summary = {{"zoom", m.zoom}, {"max_px", m.max_px}, {"median_px", m.median_px}};
   return f;
 }

@@ -480,11 +480,15 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
         << "</td><td class=num>" << m.cells_outside << " of " << m.cols * m.rows << "</td></tr>\n";
     }
     const UncertaintyMapOptions& u = r.uncertainty_options;
-    o << "</table>\n<p class=small>1 sigma, worst direction, of the pixel where a point at "
-      << Fmt("%g", u.range_m) << " m is seen (camera at phi " << Fmt("%.4g", u.phi) << ", theta "
-      << Fmt("%.4g", u.theta) << " rad), from the "
+    const bool up_to_rotation = r.uncertainty_maps.front().up_to_rotation;
+    o << "</table>\n<p class=small>1 sigma, worst direction, of the pixel where "
+      << Esc(MapSubject(r.uncertainty_maps.front(), u)) << " is seen, from the "
       << (r.full_covariance ? "fit's full covariance" : "sigmas alone (no full covariance)")
-      << " of the zoom's camera and the kinematic chain; hatched cells lie outside the convex "
+      << (up_to_rotation
+              ? " of the camera's intrinsics and distortion, less what a turn of the camera undoes "
+                "(a camera on its own has no other frame)"
+              : " of the zoom's camera and the kinematic chain")
+      << "; hatched cells lie outside the convex "
          "hull of the calibration's image points (extrapolated). docs/output.md tells how to "
          "read the maps.</p>\n"
       << Figures(figs, "uncertainty");

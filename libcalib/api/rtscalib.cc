@@ -342,14 +342,15 @@ double Step(LayoutTangent tangent, double value) {
   return 1e-6 * std::max(1.0, std::abs(value));
 }
 
+// The derivatives of a prediction by the parameters of the blocks it
+// depends on (those of `use` and the shared ones): their indices into the
+// parameter vector and one column each.
 template <int N>
-Uncertain<N> Propagate(
-    const InstrumentModel& model, const Eigen::MatrixXd& covariance, int use,
-    const Eigen::Matrix<double, N, 1>& value,
-    const std::function<bool(const InstrumentModel&, Eigen::Matrix<double, N, 1>*)>& evaluate) {
+void Linearize(
+    const InstrumentModel& model, int use,
+    const std::function<bool(const InstrumentModel&, Eigen::Matrix<double, N, 1>*)>& evaluate,
+    std::vector<int>* index, std::vector<Eigen::Matrix<double, N, 1>>* columns) {
   const std::vector<LayoutBlock> blocks = ParameterLayout(model);
-  std::vector<int> index;  // parameter indices the prediction depends on
-  std::vector<Eigen::Matrix<double, N, 1>> columns;
   // One copy of the model without its covariance (N^2 numbers), moved
   // along each coordinate and put back: LayoutPlus changes only the block's
   // stored values, so restoring them restores the model exactly.
@@ -376,10 +377,20 @@ Uncertain<N> Propagate(
                                 "a failure when '" + blocks[b].name + "' moved");
         }
       }
-      index.push_back(blocks[b].offset + i);
-      columns.push_back((f[0] - f[1]) / (2 * h));
+      index->push_back(blocks[b].offset + i);
+      columns->push_back((f[0] - f[1]) / (2 * h));
     }
   }
+}
+
+template <int N>
+Uncertain<N> Propagate(
+    const InstrumentModel& model, const Eigen::MatrixXd& covariance, int use,
+    const Eigen::Matrix<double, N, 1>& value,
+    const std::function<bool(const InstrumentModel&, Eigen::Matrix<double, N, 1>*)>& evaluate) {
+  std::vector<int> index;
+  std::vector<Eigen::Matrix<double, N, 1>> columns;
+  Linearize<N>(model, use, evaluate, &index, &columns);
   const int n = static_cast<int>(index.size());
   Eigen::Matrix<double, N, Eigen::Dynamic> J(N, n);
   Eigen::MatrixXd P(n, n);
@@ -438,6 +449,24 @@ Uncertain<2> CalibratedInstrument::PixelWithUncertainty(int zoom, double phi, do
                         return PredictPixel(m, zoom, phi, theta, x_ref, out, focus_distance) &&
                                out->allFinite();
                       });
+}
+
+Eigen::Matrix<double, 2, Eigen::Dynamic> CalibratedInstrument::PixelJacobian(
+    int zoom, double phi, double theta, const Eigen::Vector3d& x_ref,
+    double focus_distance) const {
+  Pixel(zoom, phi, theta, x_ref, focus_distance);  // checks the zoom, throws where undefined
+  std::vector<int> index;
+  std::vector<Eigen::Vector2d> columns;
+  Linearize<2>(
+      model_, zoom,
+      [&](const InstrumentModel& m, Eigen::Vector2d* out) {
+        return PredictPixel(m, zoom, phi, theta, x_ref, out, focus_distance) && out->allFinite();
+      },
+      &index, &columns);
+  Eigen::Matrix<double, 2, Eigen::Dynamic> j = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(
+      2, NumParameters());
+  for (size_t a = 0; a < index.size(); ++a) j.col(index[a]) = columns[a];
+  return j;
 }
 
 }  // namespace rtscalib

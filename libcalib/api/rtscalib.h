@@ -170,6 +170,14 @@ class CalibratedInstrument {
                                     const Eigen::Vector3d& x_ref,
                                     double focus_distance = 0) const;
 
+  // The derivatives of Pixel(zoom, phi, theta, x_ref, focus_distance) by
+  // the parameters of ParameterBlocks() (2 x NumParameters(), zero where the
+  // pixel does not depend on one): what PixelWithUncertainty propagates the
+  // covariance with. Needs no covariance.
+  Eigen::Matrix<double, 2, Eigen::Dynamic> PixelJacobian(int zoom, double phi, double theta,
+                                                         const Eigen::Vector3d& x_ref,
+                                                         double focus_distance = 0) const;
+
   // The parameter vector the covariance refers to.
   const std::vector<ParameterBlock>& ParameterBlocks() const { return blocks_; }
   int NumParameters() const;

@@ -20,6 +20,17 @@
 // camera's own parameters count.
 // P is the instrument's (the full covariance when it has one; see
 // CalibratedInstrument::HasFullParameterCovariance).
+// A camera on its own (model.kinematics: none) has no frame but its own:
+// what it measures is used through a pose (solvePnP, a board, another
+// camera) that carries any turn of the camera, so a change of its
+// parameters that a rotation undoes (the principal point against a small
+// turn) moves nothing it measures. Its map, as mrcal's, takes out the
+// rotation that best undoes the parameters' change over the cells inside
+// the valid region: J* = J - J_w A with J_w the pixel's derivatives by a
+// rotation of the point about the camera's centre and A = (sum J_w^T
+// J_w)^-1 sum J_w^T J over those cells; S = J* P J*^T (`up_to_rotation`).
+// Without it the principal point's sigma alone (about a pixel for OpenCV's
+// 13 sample photos) would be the floor of every cell.
 // A cell is `inside` when its centre lies in the zoom's valid region (the
 // convex hull of the calibration's image points, CameraTool::valid_region):
 // outside, the distortion is extrapolated and the map says how little the
@@ -58,11 +69,19 @@ struct UncertaintyMap {
   double min_px = 0, median_px = 0, max_px = 0;
   double inside_median_px = 0, inside_max_px = 0;
   int cells_outside = 0;  // cells whose centre is outside the valid region
+  // A camera on its own (Kinematics::kNone): the pixels' change up to the
+  // camera's rotation that best undoes it inside the valid region (header).
+  bool up_to_rotation = false;
   double Cell(int col, int row) const { return sigma_px[row * cols + col]; }
   // Centre of a cell [px].
   double CellU(int col) const { return (col + 0.5) * width / cols - 0.5; }
   double CellV(int row) const { return (row + 0.5) * height / rows - 0.5; }
 };
+
+// What the map's pixels are of, in a report's words: "a point at 10 m,
+// pointing phi 0, theta 1.571 rad", or for a camera on its own "a
+// direction, up to the camera's rotation".
+std::string MapSubject(const UncertaintyMap& map, const UncertaintyMapOptions& options);
 
 // One map per zoom of `inst` (which must have a parameter covariance: throws
 // std::logic_error otherwise, std::invalid_argument for bad options).

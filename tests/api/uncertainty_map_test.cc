@@ -65,7 +65,47 @@ TEST(UncertaintyMap, CellsArePixelUncertaintiesAtTheRangeAndMarkTheValidRegion) 
     EXPECT_EQ(map.min_px, *std::min_element(values.begin(), values.end()));
     EXPECT_EQ(map.max_px, *std::max_element(values.begin(), values.end()));
     EXPECT_GT(map.max_px, 0.0);
+    EXPECT_FALSE(map.up_to_rotation);
+    EXPECT_EQ(MapSubject(map, o), "a point at 7.5 m, pointing phi 0.4, theta 1.4 rad");
   }
+}
+
+// A camera on its own, 1000 px lens, no distortion, and a covariance of one
+// parameter at a time, 1 px (the block's tangent coordinates are the
+// intrinsics themselves: fx, fy, cx, cy).
+std::vector<UncertaintyMap> CameraOnItsOwn(int parameter) {
+  CameraTool cam;
+  cam.width = 640;
+  cam.height = 480;
+  cam.intrinsics = {1000, 1000, 320, 240};
+  cam.valid_region = {{0, 0}, {639, 0}, {639, 479}, {0, 479}};
+  CalibratedInstrument inst(IdealModel(Kinematics::kNone, 1, cam));
+  const int at = inst.Block("cam[0].intrinsics").offset + parameter;
+  Eigen::MatrixXd p = Eigen::MatrixXd::Zero(inst.NumParameters(), inst.NumParameters());
+  p(at, at) = 1.0;
+  inst.SetParameterCovariance(p);
+  UncertaintyMapOptions o;
+  o.cols = 8;
+  o.rows = 6;
+  return ProjectionUncertaintyMaps(inst, o);
+}
+
+// The principal point moves every pixel alike, as a turn of the camera
+// does up to the second order of the angle off the axis ((u - cx)^2 / f^2
+// <= 0.1 here): up to the camera's rotation it moves next to nothing, where
+// it would be its 1 px sigma in every cell. A focal length scales the image
+// about the principal point, which no turn undoes: |u - cx| / f px per px
+// of fx at the cells farthest from the centre, up to what the fitted turn
+// takes off an image that is not symmetric about its cells (5 %).
+TEST(UncertaintyMap, ACameraOnItsOwnIsMappedUpToItsRotation) {
+  const UncertaintyMap cx = CameraOnItsOwn(2).at(0);
+  EXPECT_TRUE(cx.up_to_rotation);
+  EXPECT_LT(cx.max_px, 0.1);
+  const UncertaintyMap fx = CameraOnItsOwn(0).at(0);
+  const double corner = std::abs(fx.CellU(0) - 320) / 1000;
+  EXPECT_NEAR(fx.Cell(0, 0), corner, 0.05 * corner);
+  EXPECT_NEAR(fx.Cell(7, 5), corner, 0.05 * corner);
+  EXPECT_EQ(MapSubject(fx, {}), "a direction, up to the camera's rotation");
 }
 
 TEST(UncertaintyMap, RefusesBadOptionsAndModelsWithoutCovariance) {

@@ -16,6 +16,8 @@
 // (covariance_clusters: none: independent errors of the fitted sigma) is
 // measured beside it and must fail what the default passes: these photos'
 // errors are not independent (docs/refinement.md, "Sigmas on real photos").
+// The halves' projection differences are held against their projection
+// uncertainty maps too (libcalib/api/uncertainty_map.h).
 //
 // Sets (../shared/real-photos, PROVENANCE.md each): boofcv_sony_chess (13
 // photos), validationboof_bb2_chess left and right (11 each), OpenCV's
@@ -36,6 +38,7 @@
 
 #include "app/photo_session.h"
 #include "libcalib/api/compare.h"
+#include "libcalib/api/uncertainty_map.h"
 #include "libcalib/calibrate/calibrate.h"
 #include "libcalib/diagnose/statistics.h"
 #include "tests/real_photos/real_photos.h"
@@ -50,6 +53,10 @@ constexpr int kRandomSplits = 8;
 struct SplitResult {
   double mean_square = 0;
   double nu = 0;  // effective parameters (compare.h)
+  // Over the cells inside both halves' points: the mean of d^2 / (s_a^2 +
+  // s_b^2), d the halves' projection difference (compare.h, up to the
+  // rotation between them) and s the projection uncertainty maps' sigma.
+  double map_ratio = 0;
 };
 
 // The photos detected through the user's path (shots.csv, targets.yaml,
@@ -159,16 +166,28 @@ InstrumentModel CalibrateHalf(const Observations& all, const std::set<std::strin
 
 SplitResult Split(const Observations& all, const std::set<std::string>& a,
                   const std::set<std::string>& b, const CalibrationOptions& options) {
-  const Comparison c = CompareInstruments(CalibratedInstrument(CalibrateHalf(all, a, options)),
-                                          CalibratedInstrument(CalibrateHalf(all, b, options)));
+  const CalibratedInstrument ia(CalibrateHalf(all, a, options)), ib(CalibrateHalf(all, b, options));
+  const Comparison c = CompareInstruments(ia, ib);
   EXPECT_EQ(c.num_normalised, 9);
-  return {c.mean_square_normalised, c.effective_parameters};
+  const UncertaintyMapOptions map_options;
+  const UncertaintyMap ma = ProjectionUncertaintyMaps(ia, map_options)[0];
+  const UncertaintyMap mb = ProjectionUncertaintyMaps(ib, map_options)[0];
+  const ZoomDifference& d = c.zooms[0];
+  double sum = 0;
+  int n = 0;
+  for (size_t k = 0; k < d.diff_px.size(); ++k) {
+    if (!d.inside[k] || !std::isfinite(d.diff_px[k])) continue;
+    sum += d.diff_px[k] * d.diff_px[k] / (ma.sigma_px[k] * ma.sigma_px[k] + mb.sigma_px[k] * mb.sigma_px[k]);
+    ++n;
+  }
+  return {c.mean_square_normalised, c.effective_parameters, n > 0 ? sum / n : NAN};
 }
 
 struct SetOutcome {
   std::string name;
   SplitResult odd_even[2];   // classical, clustered
   double random_mean[2] = {0, 0};
+  double random_map_ratio[2] = {0, 0};
 };
 
 SetOutcome MeasureSet(const std::string& name, const Observations& obs) {
@@ -188,8 +207,11 @@ SetOutcome MeasureSet(const std::string& name, const Observations& obs) {
     const CalibrationOptions o =
         CameraOnly(mode == 0 ? CovarianceClusters::kNone : CovarianceClusters::kShot);
     out.odd_even[mode] = Split(obs, odd, even, o);
-    for (const auto& [a, b] : halves) out.random_mean[mode] += Split(obs, a, b, o).mean_square;
-    out.random_mean[mode] /= kRandomSplits;
+    for (const auto& [a, b] : halves) {
+      const SplitResult r = Split(obs, a, b, o);
+      out.random_mean[mode] += r.mean_square / kRandomSplits;
+      out.random_map_ratio[mode] += r.map_ratio / kRandomSplits;
+    }
   }
   return out;
 }
@@ -225,18 +247,21 @@ TEST(SplitSigmas, HalvesOfRealPhotoSetsAgreeWithinTheirSigmas) {
   sets.push_back(MeasureSet("yac_d435i_aprilgrid", YacCorners(yac)));
   fs::remove_all(work);
 
-  double q[2] = {0, 0}, nu[2] = {0, 0}, random[2] = {0, 0};
+  double q[2] = {0, 0}, nu[2] = {0, 0}, random[2] = {0, 0}, map_ratio[2] = {0, 0};
   for (const SetOutcome& s : sets) {
     std::cout << s.name << ": odd/even mean square classical " << s.odd_even[0].mean_square
               << ", clustered " << s.odd_even[1].mean_square << " (nu " << s.odd_even[1].nu
               << ", 99 % band " << Band(s.odd_even[1].nu).first << " .. "
               << Band(s.odd_even[1].nu).second << "); " << kRandomSplits
               << " random halves: classical " << s.random_mean[0] << ", clustered "
-              << s.random_mean[1] << "\n";
+              << s.random_mean[1] << "; map ratio classical " << s.random_map_ratio[0]
+              << ", clustered " << s.random_map_ratio[1] << " (odd/even " << s.odd_even[1].map_ratio
+              << ")\n";
     for (int mode = 0; mode < 2; ++mode) {
       q[mode] += s.odd_even[mode].mean_square * s.odd_even[mode].nu;
       nu[mode] += s.odd_even[mode].nu;
       random[mode] += s.random_mean[mode] / sets.size();
+      map_ratio[mode] += s.random_map_ratio[mode] / sets.size();
     }
     const auto [lo, hi] = Band(s.odd_even[1].nu);
     EXPECT_GT(s.odd_even[1].mean_square, lo) << s.name;
@@ -251,6 +276,19 @@ TEST(SplitSigmas, HalvesOfRealPhotoSetsAgreeWithinTheirSigmas) {
   EXPECT_LT(q[1] / nu[1], hi);
   EXPECT_GT(random[1], 0.5);
   EXPECT_LT(random[1], 2.0);
+  // The projection uncertainty maps (up to the camera's rotation,
+  // uncertainty_map.h) against the halves' projection differences: d^2
+  // has the expectation trace(S_a + S_b), between 1 and 2 times the sum of
+  // the maps' worst-direction variances, so the mean ratio lies in [1, 2]
+  // when the maps are right; [0.5, 4] allows the maps' sigma to be 1.4x
+  // too large or too small. Per set it ranges from about 0.2 to 3 (a
+  // lens's structure that the halves see alike or not); the maps without
+  // taking out the rotation, whose floor is the principal point's sigma,
+  // give a few hundredths.
+  std::cout << "projection differences over the maps' sigmas, random halves over the sets: "
+            << "classical " << map_ratio[0] << ", clustered " << map_ratio[1] << "\n";
+  EXPECT_GT(map_ratio[1], 0.5);
+  EXPECT_LT(map_ratio[1], 4.0);
   // The classical covariance claims too much on these photos: the test
   // would fail with it.
   EXPECT_GT(random[0], 2.0);
