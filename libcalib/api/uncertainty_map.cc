@@ -51,7 +51,7 @@ std::string UncertaintyMapOptions::Check() const {
 }
 
 std::string MapSubject(const UncertaintyMap& map, const UncertaintyMapOptions& o) {
-  if (map.up_to_rotation) return "a direction, up to the camera's rotation";
+  if (map.up_to_rotation) return "a direction (up to the camera's rotation)";
   char text[160];
   std::snprintf(text, sizeof(text), "a point at %g m, pointing phi %.4g, theta %.4g rad", o.range_m,
                 o.phi, o.theta);

@@ -80,7 +80,7 @@ struct UncertaintyMap {
 
 // What the map's pixels are of, in a report's words: "a point at 10 m,
 // pointing phi 0, theta 1.571 rad", or for a camera on its own "a
-// direction, up to the camera's rotation".
+// direction (up to the camera's rotation)".
 std::string MapSubject(const UncertaintyMap& map, const UncertaintyMapOptions& options);
 
 // One map per zoom of `inst` (which must have a parameter covariance: throws

@@ -105,7 +105,7 @@ TEST(UncertaintyMap, ACameraOnItsOwnIsMappedUpToItsRotation) {
   const double corner = std::abs(fx.CellU(0) - 320) / 1000;
   EXPECT_NEAR(fx.Cell(0, 0), corner, 0.05 * corner);
   EXPECT_NEAR(fx.Cell(7, 5), corner, 0.05 * corner);
-  EXPECT_EQ(MapSubject(fx, {}), "a direction, up to the camera's rotation");
+  EXPECT_EQ(MapSubject(fx, {}), "a direction (up to the camera's rotation)");
 }
 
 TEST(UncertaintyMap, RefusesBadOptionsAndModelsWithoutCovariance) {
