@@ -99,6 +99,11 @@ struct PlanArgs {
   std::string from;    // an earlier run's output folder: the shots to add
   std::string output;  // overrides the config's output folder
   bool quiet = false;
+  // Goals beside the config's plan.goal (the command line wins for a name
+  // both give): "NAME=SIGMA" in the constant's report unit, and the worst
+  // projection sigma [px] (0: the config's).
+  std::vector<std::string> goals;
+  double projection_px = 0;
 };
 int RunPlan(const PlanArgs& args);
 

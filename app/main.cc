@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "app/commands.h"
+#include "libcalib/text/number_text.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/calibrate/validate.h"
 #include "libcalib/extract/options.h"
@@ -114,6 +115,24 @@ int main(int argc, char** argv) {
                  "found an effect it could not determine");
   pl->add_option("--output", plan.output,
                  "folder for plan.csv, plan.json and figures/ (default: the config's output)");
+  pl->add_option("--goal", plan.goals,
+                 "a constant's sigma to reach, NAME=SIGMA in its report unit (cam[0].fx=0.3, "
+                 "hz_eccentricity.e=1); repeatable; beside the config's plan.goal.sigmas")
+      ->check(CLI::Validator(
+          [](std::string& goal) -> std::string {
+            const size_t eq = goal.find('=');
+            const std::optional<double> sigma =
+                eq == std::string::npos ? std::nullopt
+                                        : rtscalib::ParseFiniteDouble(goal.substr(eq + 1));
+            if (eq == 0 || !sigma || !(*sigma > 0)) {
+              return "expected NAME=SIGMA with a sigma > 0 (cam[0].fx=0.3), got '" + goal + "'";
+            }
+            return "";
+          },
+          "NAME=SIGMA"));
+  pl->add_option("--projection-px", plan.projection_px,
+                 "the worst projection sigma per zoom to reach [px] (plan.goal.projection_px)")
+      ->check(CLI::PositiveNumber);
   pl->add_flag("--quiet", plan.quiet, "no summary on stdout");
 
   rtscalib::app::ShowArgs show;

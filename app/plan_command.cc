@@ -36,18 +36,39 @@ using nlohmann::json;
 
 json Number(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
 
-std::string PlanCsv(const PlanResult& plan, bool placements, bool focus) {
+std::string PlanCsv(const PlanResult& plan, bool placements, bool focus, bool board_poses) {
   std::ostringstream o;
-  o << "# rtscalib plan: take the photos in this order (faces grouped, one walk per\n"
-       "# placement), fill the image column with each photo's file, then calibrate\n"
-       "# with data.shots: plan.csv (docs/plan.md). phi, theta in radians.\n";
+  if (board_poses) {
+    o << "# rtscalib plan: hold the board as each row says (figures/plan.png shows\n"
+         "# where it is seen), fill the image column with each photo's file, then\n"
+         "# calibrate with data.shots: plan.csv (docs/plan.md). board_u_px, board_v_px:\n"
+         "# where the board's centre is seen; distance from the camera; turn about the\n"
+         "# image's vertical (> 0: its right edge nearer), tilt about its horizontal\n"
+         "# (> 0: its bottom edge nearer).\n";
+  } else {
+    o << "# rtscalib plan: take the photos in this order (faces grouped, one walk per\n"
+         "# placement), fill the image column with each photo's file, then calibrate\n"
+         "# with data.shots: plan.csv (docs/plan.md). phi, theta in radians.\n";
+  }
   o << "shot,face,zoom,phi,theta" << (placements ? ",placement" : "")
-    << (focus ? ",focus_distance" : "") << ",image\n";
+    << (focus ? ",focus_distance" : "")
+    << (board_poses ? ",board_u_px,board_v_px,board_distance_m,board_turn_deg,board_tilt_deg"
+                    : "")
+    << ",image\n";
   for (const PlanShot& s : plan.shots) {
-    o << s.pointing.name << "," << s.pointing.face << "," << s.pointing.zoom << ","
-      << FormatDouble(s.pointing.phi) << "," << FormatDouble(s.pointing.theta);
+    o << s.pointing.name << "," << s.pointing.face << "," << s.pointing.zoom << ",";
+    // A camera on its own has no readings (SPEC 7.1: empty).
+    if (!s.board_pose) o << FormatDouble(s.pointing.phi) << "," << FormatDouble(s.pointing.theta);
+    else o << ",";
     if (placements) o << "," << s.pointing.placement;
     if (focus) o << "," << FormatDouble(s.focus_distance);
+    if (board_poses) {
+      // Whole pixels and degrees (+ 0.0: no "-0").
+      auto whole = [](double x) { return Fmt("%.0f", std::round(x) + 0.0); };
+      o << "," << whole(s.board.centre_px.x()) << "," << whole(s.board.centre_px.y()) << ","
+        << Fmt("%.3f", s.board.distance_m) << "," << whole(s.board.turn_deg) << ","
+        << whole(s.board.tilt_deg);
+    }
     o << ",\n";
   }
   return o.str();
@@ -92,6 +113,21 @@ json PlanJson(const PlanResult& plan, const PlanOptions& options, const std::str
               {"theta", s.pointing.theta}, {"placement", s.pointing.placement},
               {"points", s.points},        {"determines", s.determines}};
     if (s.focus_distance > 0) e["focus_distance"] = s.focus_distance;
+    if (s.board_pose) {
+      e["board"] = {{"centre_px", {s.board.centre_px.x(), s.board.centre_px.y()}},
+                    {"distance_m", s.board.distance_m},
+                    {"turn_deg", s.board.turn_deg},
+                    {"tilt_deg", s.board.tilt_deg},
+                    {"cam_from_board",
+                     {{"R", {{s.cam_from_board.rotation(0, 0), s.cam_from_board.rotation(0, 1),
+                              s.cam_from_board.rotation(0, 2)},
+                             {s.cam_from_board.rotation(1, 0), s.cam_from_board.rotation(1, 1),
+                              s.cam_from_board.rotation(1, 2)},
+                             {s.cam_from_board.rotation(2, 0), s.cam_from_board.rotation(2, 1),
+                              s.cam_from_board.rotation(2, 2)}}},
+                      {"t", {s.cam_from_board.translation.x(), s.cam_from_board.translation.y(),
+                             s.cam_from_board.translation.z()}}}}};
+    }
     json buys = json::object();
     for (const auto& [name, sigma] : s.sigma_without) buys[name] = Number(sigma);
     if (!s.sigma_without.empty()) e["sigma_without_this_shot"] = buys;
@@ -143,18 +179,6 @@ int RunPlan(const PlanArgs& args) {
   const std::string config_dir = fs::absolute(config_path).parent_path().string();
   const RunConfig config = LoadConfig(config_path, {render::RenderConfigSection(&render),
                                                     PlanConfigSection(&settings, config_dir)});
-  // The plan chooses an instrument's pointings at the boards' placements.
-  // A camera on its own (model.kinematics: none, SPEC 7.1) does not turn:
-  // every photo of one placement is the same photo, and what would make a
-  // better session, the board's poses, is not what the planner varies.
-  if (config.calibration.model.kinematics == Kinematics::kNone) {
-    throw InputError::Key(
-        config_path, "model.kinematics", 0, 0,
-        "an instrument's kinematics (plan chooses its pointings, phi and theta, at the boards' "
-        "placements; a camera on its own has no pointing to plan: its photos of one placement "
-        "are all the same photo, and its board poses are not planned, docs/plan.md)",
-        "none");
-  }
   PlanSession session;
   if (from && !config.simulate) {
     // A run of real data: the boards are the ones it estimated (below).
@@ -163,6 +187,18 @@ int RunPlan(const PlanArgs& args) {
     session = SessionFromConfig(config, settings);
   }
   PlanOptions options = settings.options;
+  for (const std::string& goal : args.goals) {
+    // NAME=SIGMA, checked by the command line's parser.
+    const size_t eq = goal.find('=');
+    const double sigma = ParseFiniteDouble(goal.substr(eq + 1)).value_or(0);
+    const std::string name = goal.substr(0, eq);
+    auto& sigmas = options.goal.sigmas;
+    sigmas.erase(std::remove_if(sigmas.begin(), sigmas.end(),
+                                [&](const auto& g) { return g.first == name; }),
+                 sigmas.end());
+    sigmas.push_back({name, sigma});
+  }
+  if (args.projection_px > 0) options.goal.projection_px = args.projection_px;
   std::string mode = "plan";
   std::vector<std::string> added_effects;
   if (from) {
@@ -258,10 +294,11 @@ int RunPlan(const PlanArgs& args) {
                              "it exists; choose another --output");
     }
   }
-  bool placements = false, focus = false;
+  bool placements = false, focus = false, board_poses = false;
   for (const PlanShot& s : plan.shots) {
     placements = placements || !s.pointing.placement.empty();
     focus = focus || s.focus_distance > 0;
+    board_poses = board_poses || s.board_pose;
   }
   json j = PlanJson(plan, options, mode);
   if (from) j["effects_not_identifiable"] = added_effects;
@@ -277,7 +314,7 @@ int RunPlan(const PlanArgs& args) {
       j["figures"] = {"figures/plan.vg.json"};
     }
   }
-  WriteFileAtomic((fs::path(out_dir) / "plan.csv").string(), PlanCsv(plan, placements, focus),
+  WriteFileAtomic((fs::path(out_dir) / "plan.csv").string(), PlanCsv(plan, placements, focus, board_poses),
                   Existing::kKeep);
   WriteFileAtomic((fs::path(out_dir) / "plan.json").string(), j.dump(2) + "\n", Existing::kKeep);
   if (!args.quiet) {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "libcalib/geometry/convex_hull.h"
+#include "libcalib/model/kinematics.h"
 
 namespace rtscalib {
 namespace {
@@ -23,24 +24,6 @@ double Median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// The pixel's derivatives by a small rotation w (rad, about the camera's
-// centre: x -> c + (I + [w]x) (x - c)) of the point it sees, by central
-// differences of 1e-6 rad (errors ~1e-12 relative, as the parameters' own).
-Eigen::Matrix<double, 2, 3> RotationJacobian(const CalibratedInstrument& inst, int zoom,
-                                             double phi, double theta, const Eigen::Vector3d& x,
-                                             const Eigen::Vector3d& centre) {
-  constexpr double kStep = 1e-6;
-  Eigen::Matrix<double, 2, 3> j;
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector3d w = Eigen::Vector3d::Unit(k) * kStep;
-    const Eigen::Vector3d r = x - centre;
-    const Eigen::Vector2d plus = inst.Pixel(zoom, phi, theta, centre + r + w.cross(r));
-    const Eigen::Vector2d minus = inst.Pixel(zoom, phi, theta, centre + r - w.cross(r));
-    j.col(k) = (plus - minus) / (2 * kStep);
-  }
-  return j;
-}
-
 }  // namespace
 
 std::string UncertaintyMapOptions::Check() const {
@@ -48,6 +31,42 @@ std::string UncertaintyMapOptions::Check() const {
   if (cols < 1 || rows < 1 || cols > 1000 || rows > 1000) return "cells must be 1..1000 each";
   if (!std::isfinite(phi) || !std::isfinite(theta)) return "phi and theta must be finite";
   return "";
+}
+
+Eigen::Matrix<double, 2, 3> PixelByRotation(const InstrumentModel& model, int zoom, double phi,
+                                            double theta, const Eigen::Vector3d& x_ref) {
+  constexpr double kStep = 1e-6;  // errors ~1e-12 relative, as the parameters' own steps
+  const Eigen::Vector3d centre = RefFromCam(model, zoom, phi, theta).translation;
+  const Eigen::Vector3d r = x_ref - centre;
+  Eigen::Matrix<double, 2, 3> j;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d w = Eigen::Vector3d::Unit(k) * kStep;
+    Eigen::Vector2d plus, minus;
+    if (!PredictPixel(model, zoom, phi, theta, centre + r + w.cross(r), &plus) ||
+        !PredictPixel(model, zoom, phi, theta, centre + r - w.cross(r), &minus)) {
+      throw PredictionError(PredictionFailure::kNonFinite,
+                            "a pixel that stays defined when its point turns by 1e-6 rad",
+                            "a failure");
+    }
+    j.col(k) = (plus - minus) / (2 * kStep);
+  }
+  return j;
+}
+
+void TakeOutRotation(const std::vector<Eigen::Matrix<double, 2, 3>>& by_rotation,
+                     const std::vector<char>& fit, Eigen::MatrixXd* by_parameters) {
+  const bool any = std::find(fit.begin(), fit.end(), 1) != fit.end();
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(3, by_parameters->cols());
+  for (size_t k = 0; k < by_rotation.size(); ++k) {
+    if (any && !fit[k]) continue;
+    normal += by_rotation[k].transpose() * by_rotation[k];
+    rhs += by_rotation[k].transpose() * by_parameters->middleRows(2 * k, 2);
+  }
+  const Eigen::MatrixXd a = normal.ldlt().solve(rhs);
+  for (size_t k = 0; k < by_rotation.size(); ++k) {
+    by_parameters->middleRows(2 * k, 2) -= by_rotation[k] * a;
+  }
 }
 
 std::string MapSubject(const UncertaintyMap& map, const UncertaintyMapOptions& o) {
@@ -94,9 +113,8 @@ std::vector<UncertaintyMap> ProjectionUncertaintyMaps(const CalibratedInstrument
         try {
           const Eigen::Vector3d x = inst.CameraPoint(z, o.phi, o.theta, uv[0], uv[1], o.range_m);
           if (map.up_to_rotation) {
-            const Eigen::Vector3d centre = inst.CameraRay(z, o.phi, o.theta, uv[0], uv[1]).origin;
             by_parameters.push_back(inst.PixelJacobian(z, o.phi, o.theta, x));
-            by_rotation.push_back(RotationJacobian(inst, z, o.phi, o.theta, x, centre));
+            by_rotation.push_back(PixelByRotation(inst.Model(), z, o.phi, o.theta, x));
           } else {
             covariance.push_back(inst.PixelWithUncertainty(z, o.phi, o.theta, x).covariance);
           }
@@ -107,32 +125,20 @@ std::vector<UncertaintyMap> ProjectionUncertaintyMaps(const CalibratedInstrument
       }
     }
     if (map.up_to_rotation && !cells.empty()) {
-      // A camera on its own has no frame but its own: a change of its
-      // parameters that a turn of the camera undoes (the principal point
-      // against a small rotation, most of all) moves no pixel of anything
-      // the camera will measure, since whatever it is used with (a pose
-      // from solvePnP, a board, another camera) carries that turn. As
-      // mrcal's projection uncertainty does, the rotation that best
-      // undoes the parameters' change over the cells inside the points'
-      // hull (all cells when none is) is taken out before the change is
-      // measured: J* = J - J_w A, A = (sum J_w^T J_w)^-1 sum J_w^T J.
-      // A camera has no distance to translate by here, so the rotation is
-      // all of it.
-      Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-      Eigen::Matrix<double, 3, Eigen::Dynamic> rhs =
-          Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, inst.NumParameters());
-      bool any_inside = false;
-      for (int cell : cells) any_inside = any_inside || map.inside[cell];
+      // A camera on its own (header): the rotation that best undoes the
+      // parameters' change over the cells inside the points' hull is
+      // taken out. A camera has no distance to translate by here, so the
+      // rotation is all of it.
+      Eigen::MatrixXd j(2 * cells.size(), inst.NumParameters());
+      std::vector<char> fit(cells.size());
       for (size_t k = 0; k < cells.size(); ++k) {
-        if (any_inside && !map.inside[cells[k]]) continue;
-        normal += by_rotation[k].transpose() * by_rotation[k];
-        rhs += by_rotation[k].transpose() * by_parameters[k];
+        j.middleRows(2 * k, 2) = by_parameters[k];
+        fit[k] = map.inside[cells[k]];
       }
-      const Eigen::Matrix<double, 3, Eigen::Dynamic> a = normal.ldlt().solve(rhs);
+      TakeOutRotation(by_rotation, fit, &j);
       const Eigen::MatrixXd& p = inst.ParameterCovariance();
       for (size_t k = 0; k < cells.size(); ++k) {
-        const Eigen::Matrix<double, 2, Eigen::Dynamic> j = by_parameters[k] - by_rotation[k] * a;
-        covariance.push_back(j * p * j.transpose());
+        covariance.push_back(j.middleRows(2 * k, 2) * p * j.middleRows(2 * k, 2).transpose());
       }
     }
     std::vector<double> all, inside;

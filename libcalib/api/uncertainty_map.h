@@ -78,6 +78,21 @@ struct UncertaintyMap {
   double CellV(int row) const { return (row + 0.5) * height / rows - 0.5; }
 };
 
+// The derivatives of the pixel at which zoom `zoom` of `model` sees x_ref
+// by a small rotation w [rad] of that point about the camera's centre (x ->
+// c + (I + [w]x)(x - c)): 2 x 3, central differences of 1e-6 rad. Throws
+// PredictionError where the pixel is not defined.
+Eigen::Matrix<double, 2, 3> PixelByRotation(const InstrumentModel& model, int zoom, double phi,
+                                            double theta, const Eigen::Vector3d& x_ref);
+
+// Takes out of the pixels' derivatives by the parameters the rotation that
+// best undoes them (the header's J* = J - J_w A): rows 2k, 2k + 1 of
+// `by_parameters` (any number of columns) are cell k's, `by_rotation[k]` its
+// PixelByRotation; A is fitted over the cells with `fit[k]` (all cells
+// when none has).
+void TakeOutRotation(const std::vector<Eigen::Matrix<double, 2, 3>>& by_rotation,
+                     const std::vector<char>& fit, Eigen::MatrixXd* by_parameters);
+
 // What the map's pixels are of, in a report's words: "a point at 10 m,
 // pointing phi 0, theta 1.571 rad", or for a camera on its own "a
 // direction (up to the camera's rotation)".

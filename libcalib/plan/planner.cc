@@ -119,6 +119,19 @@ std::string PlanOptions::Check() const {
   return projection.Check();
 }
 
+namespace {
+
+// `m` as a camera on its own: no kinematics, its frame the reference
+// (IdealModel's base and camera tool).
+InstrumentModel CameraOnItsOwn(InstrumentModel m) {
+  m.kinematics = Kinematics::kNone;
+  m.base = PoseBlock();
+  for (CameraTool& cam : m.cams) cam.flange_from_cam = PoseBlock();
+  return m;
+}
+
+}  // namespace
+
 InstrumentModel PlanningModel(const PlanSession& session) {
   const ModelSettings& ms = session.calibration.model;
   InstrumentModel m = session.prior;
@@ -135,6 +148,7 @@ InstrumentModel PlanningModel(const PlanSession& session) {
     if (IsKinematic(e) && !effects.Has(e)) m.EffectValue(e) = {0.0, 0.0};
   }
   m.effects = effects;
+  if (m.kinematics == Kinematics::kNone) m = CameraOnItsOwn(m);
   if (m.effects.Has(Effect::kFocus) && !session.prior.effects.Has(Effect::kFocus)) {
     for (CameraTool& cam : m.cams) cam.focus.fill(0.0);
   }
@@ -158,6 +172,49 @@ InstrumentModel PlanningModel(const PlanSession& session) {
   return m;
 }
 
+namespace {
+
+// The session's first board (a camera on its own plans its poses), or null.
+const TagBoard* FirstBoard(const PlanSession& session) {
+  for (const auto& [placement, scene] : session.scenes) {
+    if (!scene.boards.empty()) return &scene.boards.front();
+  }
+  return nullptr;
+}
+
+// The scene of a board held at `cam_from_board`, its pose to be estimated.
+TargetScene HeldBoard(const TagBoard& board, const Rigid3& cam_from_board) {
+  TargetScene scene;
+  scene.boards.push_back(board);
+  scene.boards.back().ref_from_board = cam_from_board;
+  scene.boards.back().pose_known = false;
+  return scene;
+}
+
+// The scenes `shots` are taken of: the session's, and for a shot with a
+// board pose (a camera on its own) its own placement with the session's
+// first board there, in place of the session's board placements that no
+// shot uses.
+PlacedScenes ScenesOfShots(const PlanSession& session, const std::vector<PlanShot>& shots) {
+  PlacedScenes out;
+  std::set<std::string> used;
+  bool posed = false;
+  for (const PlanShot& s : shots) {
+    used.insert(s.pointing.placement);
+    if (!s.board_pose) continue;
+    posed = true;
+    const TagBoard* board = FirstBoard(session);
+    if (!board) throw std::invalid_argument("SimulatePlannedShots: a board pose without a board");
+    out[s.pointing.placement] = HeldBoard(*board, s.cam_from_board);
+  }
+  for (const auto& [placement, scene] : session.scenes) {
+    if (!posed || used.count(placement)) out.emplace(placement, scene);
+  }
+  return out;
+}
+
+}  // namespace
+
 Observations SimulatePlannedShots(const PlanSession& session, const std::vector<PlanShot>& shots,
                                   double pixel_sigma_px, std::uint64_t seed) {
   SimulationOptions sim;
@@ -175,18 +232,22 @@ Observations SimulatePlannedShots(const PlanSession& session, const std::vector<
   }
   sim.plan.faces.assign(faces.begin(), faces.end());
   sim.plan.zooms.assign(zooms.begin(), zooms.end());
-  if (session.scenes.size() == 1 && session.scenes.begin()->first.empty()) {
-    sim.targets = session.scenes.begin()->second;
+  const PlacedScenes scenes = ScenesOfShots(session, shots);
+  if (scenes.size() == 1 && scenes.begin()->first.empty()) {
+    sim.targets = scenes.begin()->second;
   } else {
-    sim.placements = session.scenes;
+    sim.placements = scenes;
   }
   Observations obs = Simulate(sim).obs;
-  if (!session.board_poses_known) {
+  const bool posed =
+      std::any_of(shots.begin(), shots.end(), [](const PlanShot& s) { return s.board_pose; });
+  if (posed) sim.truth = CameraOnItsOwn(sim.truth);
+  if (!session.board_poses_known || posed) {
     for (PixelObservation& p : obs.pixels) {
       p.X_known = false;  // the corner's position is the estimated board's
       p.X.setZero();
     }
-    for (const auto& [placement, scene] : session.scenes) {
+    for (const auto& [placement, scene] : scenes) {
       for (TagBoard b : scene.boards) {
         b.pose_known = false;
         bool seen = false;
@@ -202,8 +263,12 @@ namespace {
 
 // The candidate pool: the simulator's pattern, dense and without jitter, at
 // the planning model, noise-free.
+// A camera on its own: one photo per candidate pose (`poses`), face 1;
+// a chessboard's photo only where the board is whole in it (OpenCV finds
+// no part of one).
 Observations CandidatePixels(const PlanSession& session, const InstrumentModel& model,
-                             const PlanOptions& o, const std::vector<int>& zooms) {
+                             const PlanOptions& o, const std::vector<int>& zooms,
+                             const std::map<std::string, CandidatePose>& poses) {
   SimulationOptions sim;
   sim.truth = model;
   sim.plan.sweeps = false;
@@ -214,12 +279,33 @@ Observations CandidatePixels(const PlanSession& session, const InstrumentModel& 
   sim.shots.shots_per_board = o.candidates_per_board;
   sim.shots.fill = o.fill;
   sim.shots.pointing_jitter = 0;
-  if (session.scenes.size() == 1 && session.scenes.begin()->first.empty()) {
+  if (!poses.empty()) {
+    sim.plan.faces = {1};
+    for (const auto& [placement, pose] : poses) {
+      PlannedShot shot;
+      shot.zoom = pose.zoom;
+      shot.theta = M_PI / 2;
+      shot.placement = placement;
+      shot.name = placement;
+      sim.shots.given.push_back(shot);
+      sim.placements[placement] = session.scenes.at(placement);
+    }
+  } else if (session.scenes.size() == 1 && session.scenes.begin()->first.empty()) {
     sim.targets = session.scenes.begin()->second;
   } else {
     sim.placements = session.scenes;
   }
   Observations obs = Simulate(sim).obs;
+  if (!poses.empty() && FirstBoard(session)->kind == BoardKind::kChessboard) {
+    std::map<std::string, int> shown;
+    for (const PixelObservation& p : obs.pixels) ++shown[p.shot];
+    const int whole = FirstBoard(session)->NumTags();
+    obs.pixels.erase(std::remove_if(obs.pixels.begin(), obs.pixels.end(),
+                                    [&](const PixelObservation& p) {
+                                      return shown[p.shot] < whole;
+                                    }),
+                     obs.pixels.end());
+  }
   for (PixelObservation& p : obs.pixels) {
     p.X_known = session.board_poses_known;
     p.shot = "candidate " + p.shot;
@@ -235,28 +321,55 @@ struct Pool {
 
 }  // namespace
 
-PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
+PlanResult PlanShots(const PlanSession& given, const PlanOptions& o) {
   const std::string msg = o.Check();
   if (!msg.empty()) throw std::invalid_argument(msg);
-  const InstrumentModel model = PlanningModel(session);
   std::vector<int> zooms = o.zooms;
   if (zooms.empty()) {
-    for (int z = 0; z < model.NumZooms(); ++z) zooms.push_back(z);
+    for (int z = 0; z < given.prior.NumZooms(); ++z) zooms.push_back(z);
   }
   for (int z : zooms) {
-    if (z >= model.NumZooms()) {
+    if (z >= given.prior.NumZooms()) {
       throw std::invalid_argument("plan.zooms: zoom " + std::to_string(z) +
                                   " is not in the a-priori model (it has " +
-                                  std::to_string(model.NumZooms()) + " zoom levels)");
+                                  std::to_string(given.prior.NumZooms()) + " zoom levels)");
     }
   }
+  // A camera on its own: the board's candidate poses, each a placement; of
+  // the session's own placements those of the photos it has (an earlier
+  // run's) stay, the rest only lent their board.
+  const bool camera_only = given.calibration.model.kinematics == Kinematics::kNone;
+  PlanSession session = given;
+  std::map<std::string, CandidatePose> poses;
+  if (camera_only) {
+    const TagBoard* board = FirstBoard(given);
+    if (!board) {
+      throw std::invalid_argument(
+          "plan: a camera on its own plans where a board is held: the session has no board");
+    }
+    const InstrumentModel camera = PlanningModel(given);
+    std::set<std::string> measured;
+    for (const PixelObservation& p : given.fixed.pixels) measured.insert(p.placement);
+    for (auto it = session.scenes.begin(); it != session.scenes.end();) {
+      it = measured.count(it->first) ? std::next(it) : session.scenes.erase(it);
+    }
+    session.fixed.records.clear();  // a camera on its own has no readings to record
+    session.board_poses_known = false;
+    for (int z : zooms) {
+      for (CandidatePose& c : CandidateBoardPoses(camera, z, *board)) {
+        session.scenes[c.placement] = HeldBoard(*board, c.cam_from_board);
+        poses[c.placement] = c;
+      }
+    }
+  }
+  const InstrumentModel model = PlanningModel(session);
   FitOptions fit = session.calibration.fit;
   fit.fit_intrinsics = session.calibration.model.intrinsics != IntrinsicsMode::kFixed;
 
   // Observations: the fixed ones, then every candidate photo.
   Observations all = session.fixed;
   const size_t fixed_pixels = all.pixels.size();
-  const Observations candidates = CandidatePixels(session, model, o, zooms);
+  const Observations candidates = CandidatePixels(session, model, o, zooms, poses);
   all.pixels.insert(all.pixels.end(), candidates.pixels.begin(), candidates.pixels.end());
   if (candidates.pixels.empty() && session.fixed.records.empty() && fixed_pixels == 0) {
     throw std::invalid_argument(
@@ -288,6 +401,13 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
       s.pointing.theta = px.theta;
       s.pointing.placement = px.placement;
       s.focus_distance = px.focus_distance;
+      if (const auto pose = poses.find(px.placement); pose != poses.end()) {
+        s.pointing.phi = 0;  // a camera on its own: no reading
+        s.board_pose = true;
+        s.cam_from_board = pose->second.cam_from_board;
+        s.board = pose->second.words;
+        s.board_outline = BoardOutline(model, px.zoom, *FirstBoard(session), s.cam_from_board);
+      }
       it = candidate_of.insert({px.shot, static_cast<int>(pool.shots.size())}).first;
       pool.shots.push_back(s);
       pool.rows.emplace_back();
@@ -308,8 +428,33 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   const Eigen::MatrixXd info_fixed = Information(lin.base, pool.fixed_rows);
   std::vector<Eigen::MatrixXd> info(n_cand);
   Eigen::MatrixXd info_all = info_fixed;
+  // A camera on its own: a candidate's board pose is its own placement's,
+  // estimated from that photo alone, so what the photo tells of the rest
+  // is its information with the pose eliminated (the Schur complement,
+  // exact); the pose columns are then empty and drop out of the design as
+  // undetermined directions that no goal asks for, which keeps its size to
+  // the camera's parameters (and the poses of photos taken already).
+  std::map<std::string, std::vector<int>> pose_columns;  // placement -> its board's columns
+  if (camera_only) {
+    for (int j = 0; j < p; ++j) {
+      const std::string& name = lin.base_names[j];
+      const size_t at = name.find('@');
+      if (name.rfind("board[", 0) != 0 || at == std::string::npos) continue;
+      const size_t end = name.find_first_of("/]", at);
+      pose_columns[name.substr(at + 1, end - at - 1)].push_back(j);
+    }
+  }
   for (int c = 0; c < n_cand; ++c) {
     info[c] = Information(lin.base, pool.rows[c]);
+    const auto own = pose_columns.find(pool.shots[c].pointing.placement);
+    if (own != pose_columns.end() && pool.shots[c].board_pose) {
+      const std::vector<int>& k = own->second;
+      const Eigen::MatrixXd b = info[c](Eigen::all, k);
+      const Eigen::MatrixXd pose = info[c](k, k);
+      info[c] -= b * pose.completeOrthogonalDecomposition().pseudoInverse() * b.transpose();
+      info[c](Eigen::all, k).setZero();
+      info[c](k, Eigen::all).setZero();
+    }
     info_all += info[c];
   }
   Eigen::VectorXd scale(p);
@@ -455,6 +600,7 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   std::vector<Functional> cells;
   {
     Observations grid;
+    std::vector<int> point_of_cell;  // per functional: its point in `grid`
     for (int z : zooms) {
       // The uncertainty map's own grid (its cell centres, SPEC 2's pixel centre).
       UncertaintyMap map;
@@ -507,6 +653,31 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
         }
         if (o.goal.projection_px > 0) f.g /= o.goal.projection_px;
         cells.push_back(f);
+        point_of_cell.push_back(row.index);
+      }
+    }
+    if (camera_only) {
+      // Up to the camera's rotation, as its uncertainty map (over every
+      // cell: where the photos will fall is what is being planned).
+      for (int z : zooms) {
+        std::vector<size_t> first;  // functionals k, k + 1: one grid point's u and v
+        std::vector<Eigen::Matrix<double, 2, 3>> by_rotation;
+        for (size_t k = 0; k + 1 < cells.size(); k += 2) {
+          if (cells[k].zoom != z) continue;
+          const PixelObservation& px = grid.pixels[point_of_cell[k]];
+          first.push_back(k);
+          by_rotation.push_back(PixelByRotation(model, z, px.phi, px.theta, px.X));
+        }
+        Eigen::MatrixXd g(2 * first.size(), p);
+        for (size_t i = 0; i < first.size(); ++i) {
+          g.row(2 * i) = cells[first[i]].g.transpose();
+          g.row(2 * i + 1) = cells[first[i] + 1].g.transpose();
+        }
+        TakeOutRotation(by_rotation, {}, &g);
+        for (size_t i = 0; i < first.size(); ++i) {
+          cells[first[i]].g = g.row(2 * i).transpose();
+          cells[first[i] + 1].g = g.row(2 * i + 1).transpose();
+        }
       }
     }
   }
@@ -608,8 +779,15 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     for (const Record& r : session.fixed.records) cam_records = cam_records || r.tool == Tool::kCam;
     min_per_zoom = cam_records ? 0 : 16;
   }
-  std::map<int, int> per_zoom;  // chosen photos per zoom
+  // Photos per zoom: those measured already, then the chosen ones.
+  std::map<int, int> per_zoom;
   for (int z : zooms) per_zoom[z] = 0;
+  {
+    std::set<std::pair<int, std::string>> measured;
+    for (const PixelObservation& p : session.fixed.pixels) {
+      if (per_zoom.count(p.zoom) && measured.insert({p.zoom, p.shot}).second) ++per_zoom[p.zoom];
+    }
+  }
   // Zooms below their minimum (only their candidates count while there are).
   auto short_zooms = [&] {
     std::set<int> out;
@@ -751,6 +929,8 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
   for (int z : zooms) {
     PredictedProjection pp;
     pp.zoom = z;
+    pp.width = model.cams[z].width;
+    pp.height = model.cams[z].height;
     pp.goal_px = o.goal.projection_px;
     double worst = 0;
     for (size_t k = 0; k + 1 < cells.size(); k += 2) {
@@ -799,7 +979,9 @@ PlanResult PlanShots(const PlanSession& session, const PlanOptions& o) {
     for (const PredictedProjection& pp : result.projection) {
       if (pp.worst_px <= pp.goal_px) continue;
       result.limits.push_back("projection zoom " + std::to_string(pp.zoom) + ": " +
-                              (static_cast<int>(order.size()) >= std::min(o.max_shots, n_cand)
+                              // Every candidate taken: more photos of these do not help.
+                              (static_cast<int>(order.size()) >= o.max_shots &&
+                                       static_cast<int>(order.size()) < n_cand
                                    ? "budget"
                                    : "geometry") +
                               ": worst sigma " + std::to_string(pp.worst_px) + " px > goal " +

@@ -24,6 +24,12 @@
 // a-priori model, denser and without jitter: for every zoom, face and
 // usable board of every placement, `candidates_per_board` pointings that put
 // the board over the whole image, each a photo that shows >= 8 corners.
+// A camera on its own (model.kinematics: none) does not turn: its
+// candidates are poses of the session's first board (board_poses.h), each a
+// placement of its own with one photo, the board's pose estimated.
+// A zoom's projection sigma is then taken up to the camera's rotation, as
+// its uncertainty map is (over every cell of the grid: where the photos
+// will fall is what is being planned).
 //
 // Design (Atkinson, Donev & Tobias, "Optimum Experimental Designs", ch. 10-12):
 // greedy sequential A-optimality toward the goal. Each step takes the
@@ -53,6 +59,7 @@
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 #include "libcalib/model/targets.h"
+#include "libcalib/plan/board_poses.h"
 #include "libcalib/sim/options.h"
 
 namespace rtscalib {
@@ -116,6 +123,13 @@ struct PlanShot {
   PlannedShot pointing;       // face, zoom, phi, theta, placement, name
   double focus_distance = 0;  // [m] the distance the camera focuses at (SPEC 4.1); 0: not used
   int points = 0;             // corners the photo shows at the a-priori model
+  // A camera on its own (board_poses.h): where the board is held for this
+  // photo (its own placement), in the camera's frame and in words, and its
+  // outline in the image at the a-priori camera.
+  bool board_pose = false;
+  Rigid3 cam_from_board;
+  BoardPoseInWords board;
+  std::vector<Eigen::Vector2d> board_outline;
   // What the shot was chosen for: the goal (or, without a goal, the
   // parameter group) whose variance it reduced most, relatively.
   std::string determines;
@@ -140,6 +154,7 @@ struct PredictedConstant {
 
 struct PredictedProjection {
   int zoom = 0;
+  int width = 0, height = 0;  // the zoom's image [px]
   double worst_px = 0;  // over the grid of PlanOptions::projection
   double goal_px = 0;
 };
@@ -172,7 +187,9 @@ InstrumentModel PlanningModel(const PlanSession& session);
 
 // The observations of photos at `shots` as the simulator takes them at
 // `model` (exact pixels, noise `pixel_sigma_px` with `seed`), board corners
-// with X empty when the poses are not known: what the tests calibrate.
+// with X empty when the poses are not known: what the tests calibrate. A
+// shot with a board pose (a camera on its own) shows the session's first
+// board there.
 Observations SimulatePlannedShots(const PlanSession& session, const std::vector<PlanShot>& shots,
                                   double pixel_sigma_px, std::uint64_t seed);
 

@@ -141,19 +141,58 @@ TEST(PlanCommand, FromAnEarlierRunNamesWhatItsDiagnosisCouldNotDetermine) {
   }
 }
 
-// A camera on its own (configs/bench.yaml, model.kinematics: none) has no
-// pointing to plan: every photo of one board placement is the same photo.
-// `plan --from` its run says so, naming the key, and writes no plan.
-TEST(PlanCommand, ACameraOnItsOwnHasNoPointingToPlan) {
+// A camera on its own (configs/bench.yaml, model.kinematics: none) does not
+// turn: `plan --from` its run says where to hold the board for the photos
+// to add (docs/plan.md), toward the goals given on the command line.
+// plan.csv, its image column filled, reads as a shots.csv with empty
+// readings and one placement per photo; a goal that is not NAME=SIGMA is
+// a usage error.
+TEST(PlanCommand, ACameraOnItsOwnIsToldWhereToHoldTheBoard) {
   fs::path dir;
   const fs::path run = CalibratedRun("plan_bench", "bench.yaml", &dir);
   ASSERT_FALSE(::testing::Test::HasFailure());
   std::string err;
-  EXPECT_EQ(RunRtscalib("plan --quiet --from '" + run.string() + "'", dir, &err), 1) << err;
-  EXPECT_NE(err.find("model.kinematics"), std::string::npos) << err;
-  EXPECT_NE(err.find("no pointing to plan"), std::string::npos) << err;
-  EXPECT_NE(err.find("got 'none'"), std::string::npos) << err;
-  EXPECT_FALSE(fs::exists(run / "plan" / "plan.csv"));
+  ASSERT_EQ(RunRtscalib("plan --quiet --from '" + run.string() +
+                            "' --goal 'cam[0].fx=0.2' --projection-px 0.3",
+                        dir, &err),
+            0)
+      << err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(run / "plan" / "plan.json"));
+  EXPECT_TRUE(j["goal_met"].get<bool>());
+  EXPECT_DOUBLE_EQ(j["goal"]["sigmas"]["cam[0].fx"].get<double>(), 0.2);
+  const size_t n = j["plan"].size();
+  ASSERT_GT(n, 0u);
+  for (const nlohmann::json& shot : j["plan"]) {
+    ASSERT_TRUE(shot.contains("board")) << shot.dump();
+    EXPECT_GT(shot["board"]["distance_m"].get<double>(), 0.1);
+  }
+  EXPECT_TRUE(fs::exists(run / "plan" / "figures" / "plan.png"));
+  std::istringstream csv(ReadFile(run / "plan" / "plan.csv"));
+  std::ostringstream filled;
+  std::string line;
+  int row = 0;
+  while (std::getline(csv, line)) {
+    if (!line.empty() && line[0] != '#') {
+      if (line.rfind("shot,", 0) == 0) {
+        EXPECT_NE(line.find("board_distance_m"), std::string::npos) << line;
+      } else {
+        const std::string image = "photo" + std::to_string(++row) + ".png";
+        std::ofstream(dir / image) << "";
+        line += image;
+      }
+    }
+    filled << line << "\n";
+  }
+  const fs::path shots = dir / "shots.csv";
+  std::ofstream(shots) << filled.str();
+  const ShotsFile read = ReadShots(shots.string());
+  ASSERT_EQ(read.shots.size(), n);
+  for (size_t k = 0; k < n; ++k) {
+    EXPECT_FALSE(read.shots[k].has_reading);
+    EXPECT_EQ(read.shots[k].placement, j["plan"][k]["placement"].get<std::string>());
+  }
+  EXPECT_EQ(RunRtscalib("plan --quiet --from '" + run.string() + "' --goal fx", dir, &err), 2);
+  EXPECT_NE(err.find("NAME=SIGMA"), std::string::npos) << err;
 }
 
 }  // namespace

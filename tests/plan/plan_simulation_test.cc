@@ -222,6 +222,70 @@ TEST(PlanSimulation, OneBoardSessionReportsThePlannedSigmas) {
   CheckSession(s, o, "one-board session (configs/one_board.yaml, projection 0.1 px)");
 }
 
+// A camera on its own (model.kinematics: none): a camera like OpenCV's
+// sample photos' (configs/bench.yaml: 640 x 480, strong barrel distortion)
+// and its 9 x 6 inner-corner chessboard of 25 mm. The plan says where to
+// hold the board (board_poses.h); the photos simulated there, calibrated,
+// report the planned sigmas, and the goal is met.
+TEST(PlanSimulation, ACameraOnItsOwnReportsThePlannedSigmasWithTheBoardWhereThePlanHoldsIt) {
+  LoadedSession s;
+  PlanSession& session = s.session;
+  CameraTool cam;
+  cam.width = 640;
+  cam.height = 480;
+  cam.intrinsics = {533, 533, 342, 234};
+  cam.distortion[kK1] = -0.28;
+  cam.distortion[kK2] = 0.07;
+  session.prior = IdealModel(Kinematics::kNone, 1, cam);
+  session.prior.effects.Add(Effect::kRadialDistortion);
+  session.prior.effects.Add(Effect::kTangentialDistortion);
+  session.calibration.model.kinematics = Kinematics::kNone;
+  session.calibration.model.effects = session.prior.effects;
+  session.calibration.model.intrinsics = IntrinsicsMode::kFit;
+  session.calibration.fit.sigma_pixel_px = 0.1;
+  TagBoard board;
+  board.kind = BoardKind::kChessboard;
+  board.rows = 7;
+  board.cols = 10;
+  board.square_size = 0.025;
+  board.pose_known = false;
+  session.scenes[""].boards = {board};
+  session.board_poses_known = false;
+  PlanOptions o;
+  // Projection: every candidate together gives 0.31 px at the image's
+  // corners, where no whole board reaches (plan.json's limit says so).
+  o.goal.sigmas = {{"cam[0].fx", 0.3}};
+  o.goal.projection_px = 0.4;
+  const PlanResult plan = PlanShots(session, o);
+  for (const std::string& l : plan.limits) std::printf("  limit: %s\n", l.c_str());
+  ASSERT_TRUE(plan.goal_met);
+  std::set<std::string> placements;
+  for (const PlanShot& shot : plan.shots) {
+    EXPECT_TRUE(shot.board_pose);
+    EXPECT_EQ(shot.pointing.face, 1);
+    EXPECT_TRUE(placements.insert(shot.pointing.placement).second) << "one photo per placement";
+    // Every inner corner of the chessboard in the photo (OpenCV finds it
+    // whole only), and its printed outline inside the image.
+    EXPECT_EQ(shot.points, 54) << shot.pointing.placement;
+    ASSERT_EQ(shot.board_outline.size(), 4u);
+    for (const Eigen::Vector2d& p : shot.board_outline) {
+      EXPECT_TRUE(p.x() >= 0 && p.y() >= 0 && p.x() <= 639 && p.y() <= 479) << p.transpose();
+    }
+  }
+  // At least 16 photos: the camera starts from them alone.
+  EXPECT_GE(plan.shots.size(), 16u);
+  const Check c = CalibratePlan(s, plan, 4, {0}, CovarianceClusters::kNone);
+  std::printf(
+      "a camera on its own, fx 0.3 px and projection 0.4 px: %zu planned photos of %d "
+      "candidates, %d constant-seeds, MSNE %.3f, reported/planned sigma worst %.3f\n",
+      plan.shots.size(), plan.candidates, c.constants, c.msne, c.worst_ratio);
+  // 9 constants x 4 seeds, correlated within a seed: chi^2_36 / 36 has sd
+  // 0.24; [0.3, 2.5] is about 3 sd either way.
+  EXPECT_EQ(c.constants, 36);
+  EXPECT_GE(c.msne, 0.3);
+  EXPECT_LE(c.msne, 2.5);
+}
+
 TEST(PlanSimulation, Zoom3DefaultSessionNeedsMorePhotos) {
   CompareWithDefault(LoadSession("zoom3.yaml"), "configs/zoom3.yaml");
 }
