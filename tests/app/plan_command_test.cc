@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -46,6 +47,32 @@ fs::path CalibratedRun(const std::string& name, const std::string& config, fs::p
   return run;
 }
 
+// plan.csv with its image column filled as a user fills it (an empty file
+// photo<k>.png per row in `dir`, the reader checks that it exists),
+// written to dir/shots.csv; `header` sees the column names.
+fs::path FilledShotsCsv(const fs::path& plan_csv, const fs::path& dir,
+                        const std::function<void(const std::string&)>& header) {
+  std::istringstream csv(ReadFile(plan_csv));
+  std::ostringstream filled;
+  std::string line;
+  int row = 0;
+  while (std::getline(csv, line)) {
+    if (!line.empty() && line[0] != '#') {
+      if (line.rfind("shot,", 0) == 0) {
+        header(line);
+      } else {
+        const std::string image = "photo" + std::to_string(++row) + ".png";
+        std::ofstream(dir / image) << "";
+        line += image;
+      }
+    }
+    filled << line << "\n";
+  }
+  const fs::path shots = dir / "shots.csv";
+  std::ofstream(shots) << filled.str();
+  return shots;
+}
+
 TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
   const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_command";
   fs::remove_all(dir);
@@ -65,21 +92,8 @@ TEST(PlanCommand, WritesAPlanThatReadsAsAShotsCsvAndNeverReplacesIt) {
   EXPECT_TRUE(fs::exists(out / "figures" / "plan.vg.json"));
   // The user fills the image column: a shots.csv (SPEC 7) with the plan's
   // readings in the plan's order.
-  std::istringstream csv(ReadFile(out / "plan.csv"));
-  std::ostringstream filled;
-  std::string line;
-  int row = 0;
-  while (std::getline(csv, line)) {
-    if (!line.empty() && line[0] != '#' && line.rfind("shot,", 0) != 0) {
-      const std::string image = "photo" + std::to_string(++row) + ".png";
-      std::ofstream(dir / image) << "";  // the reader checks that the photo exists
-      line += image;
-    }
-    filled << line << "\n";
-  }
-  const fs::path shots = dir / "shots.csv";
-  std::ofstream(shots) << filled.str();
-  const ShotsFile read = ReadShots(shots.string());
+  const ShotsFile read =
+      ReadShots(FilledShotsCsv(out / "plan.csv", dir, [](const std::string&) {}).string());
   ASSERT_EQ(read.shots.size(), n);
   for (size_t k = 0; k < n; ++k) {
     EXPECT_EQ(read.shots[k].face, j["plan"][k]["face"].get<int>());
@@ -167,25 +181,10 @@ TEST(PlanCommand, ACameraOnItsOwnIsToldWhereToHoldTheBoard) {
     EXPECT_GT(shot["board"]["distance_m"].get<double>(), 0.1);
   }
   EXPECT_TRUE(fs::exists(run / "plan" / "figures" / "plan.png"));
-  std::istringstream csv(ReadFile(run / "plan" / "plan.csv"));
-  std::ostringstream filled;
-  std::string line;
-  int row = 0;
-  while (std::getline(csv, line)) {
-    if (!line.empty() && line[0] != '#') {
-      if (line.rfind("shot,", 0) == 0) {
-        EXPECT_NE(line.find("board_distance_m"), std::string::npos) << line;
-      } else {
-        const std::string image = "photo" + std::to_string(++row) + ".png";
-        std::ofstream(dir / image) << "";
-        line += image;
-      }
-    }
-    filled << line << "\n";
-  }
-  const fs::path shots = dir / "shots.csv";
-  std::ofstream(shots) << filled.str();
-  const ShotsFile read = ReadShots(shots.string());
+  const ShotsFile read =
+      ReadShots(FilledShotsCsv(run / "plan" / "plan.csv", dir, [](const std::string& header) {
+        EXPECT_NE(header.find("board_distance_m"), std::string::npos) << header;
+      }).string());
   ASSERT_EQ(read.shots.size(), n);
   for (size_t k = 0; k < n; ++k) {
     EXPECT_FALSE(read.shots[k].has_reading);

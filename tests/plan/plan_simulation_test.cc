@@ -32,6 +32,7 @@
 #include "libcalib/calibrate/calibrate.h"
 #include "libcalib/plan/planner.h"
 #include "libcalib/sim/simulator.h"
+#include "tests/calibrate/camera_only_session.h"
 #include "tests/plan/plan_test_util.h"
 
 namespace rtscalib::testing_plan {
@@ -230,26 +231,14 @@ TEST(PlanSimulation, OneBoardSessionReportsThePlannedSigmas) {
 TEST(PlanSimulation, ACameraOnItsOwnReportsThePlannedSigmasWithTheBoardWhereThePlanHoldsIt) {
   LoadedSession s;
   PlanSession& session = s.session;
-  CameraTool cam;
-  cam.width = 640;
-  cam.height = 480;
-  cam.intrinsics = {533, 533, 342, 234};
-  cam.distortion[kK1] = -0.28;
-  cam.distortion[kK2] = 0.07;
-  session.prior = IdealModel(Kinematics::kNone, 1, cam);
+  session.prior = IdealModel(Kinematics::kNone, 1, testing_camera_only::TrueCamera());
   session.prior.effects.Add(Effect::kRadialDistortion);
   session.prior.effects.Add(Effect::kTangentialDistortion);
   session.calibration.model.kinematics = Kinematics::kNone;
   session.calibration.model.effects = session.prior.effects;
   session.calibration.model.intrinsics = IntrinsicsMode::kFit;
   session.calibration.fit.sigma_pixel_px = 0.1;
-  TagBoard board;
-  board.kind = BoardKind::kChessboard;
-  board.rows = 7;
-  board.cols = 10;
-  board.square_size = 0.025;
-  board.pose_known = false;
-  session.scenes[""].boards = {board};
+  session.scenes[""].boards = {testing_camera_only::Chessboard()};
   session.board_poses_known = false;
   PlanOptions o;
   // Projection: every candidate together gives 0.31 px at the image's
