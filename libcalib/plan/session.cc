@@ -1,6 +1,7 @@
 #include "libcalib/plan/session.h"
 
 #include "libcalib/io/model_io.h"
+#include "libcalib/io/targets_io.h"
 #include "libcalib/sim/simulator.h"
 #include "libcalib/text/errors.h"
 
@@ -20,6 +21,18 @@ PlanSession SessionFromConfig(const RunConfig& config, const PlanSettings& setti
   s.prior = settings.prior_model.empty() ? sim.truth : ReadModelYaml(settings.prior_model);
   s.calibration = config.calibration;
   s.scenes = sim.Scenes();
+  if (!settings.board.empty()) {
+    // The board a camera on its own is held at, as the calibration will
+    // read it (any board of a targets.yaml, a chessboard too).
+    if (config.calibration.model.kinematics != Kinematics::kNone) {
+      throw InputError::Key(config.config_path, "plan.board", 0, 0,
+                            "a camera on its own (model.kinematics: none), whose board poses "
+                            "are planned; an instrument's boards are simulate's",
+                            settings.board);
+    }
+    s.scenes.clear();
+    s.scenes[""] = ReadTargets(settings.board);
+  }
   s.board_poses_known =
       settings.board_poses_known ? *settings.board_poses_known : sim.placements.empty();
   // The records the session takes anyway (exact: only their Jacobian counts).

@@ -44,13 +44,16 @@ PlanSettings ReadPlanSettings(const YamlNode& section, const std::string& config
     if (v != "known" && v != "unknown") n->FailChoice({"known", "unknown"});
     s.board_poses_known = v == "known";
   }
-  std::string prior;
-  if (section.Read("prior_model", &prior) && !prior.empty()) {
-    const std::filesystem::path path(prior);
-    s.prior_model = (path.is_absolute() ? path : std::filesystem::path(config_dir) / path)
-                        .lexically_normal()
-                        .string();
-  }
+  auto read_path = [&](const char* key, std::string* out) {
+    std::string text;
+    if (!section.Read(key, &text) || text.empty()) return;
+    const std::filesystem::path path(text);
+    *out = (path.is_absolute() ? path : std::filesystem::path(config_dir) / path)
+               .lexically_normal()
+               .string();
+  };
+  read_path("prior_model", &s.prior_model);
+  read_path("board", &s.board);
   return s;
 }
 
@@ -71,6 +74,7 @@ YAML::Node PlanSettingsYaml(const PlanSettings& s) {
   n["exchange"] = o.exchange;
   if (s.board_poses_known) n["board_poses"] = *s.board_poses_known ? "known" : "unknown";
   if (!s.prior_model.empty()) n["prior_model"] = s.prior_model;
+  if (!s.board.empty()) n["board"] = s.board;
   return n;
 }
 

@@ -17,6 +17,8 @@
 //     board_poses: known         # known | unknown (default: unknown with
 //                                # simulate.placements, known with simulate.targets)
 //     prior_model: model.yaml    # a previous calibration (default: simulate.truth)
+//     board: targets.yaml        # a camera on its own: the board to hold, the first
+//                                # of this targets.yaml (default: simulate's first)
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -35,6 +37,7 @@ struct PlanSettings {
   PlanOptions options;
   std::optional<bool> board_poses_known;  // unset: from the simulate section
   std::string prior_model;                // absolute path, "" = simulate.truth
+  std::string board;                      // absolute path of a targets.yaml, "" = simulate's
 };
 
 // Reads the `plan` section at `section`; relative paths are relative to

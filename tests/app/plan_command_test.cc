@@ -155,6 +155,42 @@ TEST(PlanCommand, FromAnEarlierRunNamesWhatItsDiagnosisCouldNotDetermine) {
   }
 }
 
+// configs/plan_camera.yaml: a camera planned from scratch, its board a
+// chessboard from a targets.yaml (plan.board): the goal met, every photo a
+// board pose of its own.
+TEST(PlanCommand, ACameraIsPlannedFromScratchWithItsChessboard) {
+  const fs::path dir = fs::path(RTSCALIB_BINARY_DIR) / "test_tmp" / "plan_camera";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string err;
+  ASSERT_EQ(RunRtscalib("plan --quiet --config '" + std::string(RTSCALIB_SOURCE_DIR) +
+                            "/configs/plan_camera.yaml' --output '" + (dir / "plan").string() + "'",
+                        dir, &err),
+            0)
+      << err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(dir / "plan" / "plan.json"));
+  EXPECT_TRUE(j["goal_met"].get<bool>());
+  ASSERT_GE(j["plan"].size(), 16u);  // a camera starting from its photos alone
+  for (const nlohmann::json& shot : j["plan"]) {
+    EXPECT_TRUE(shot.contains("board")) << shot.dump();
+    EXPECT_EQ(shot["points"].get<int>(), 54);  // the chessboard whole
+  }
+  // An instrument's boards are its simulate section's: plan.board is refused
+  // there, by name.
+  std::string instrument = ReadFile(fs::path(RTSCALIB_SOURCE_DIR) / "configs" / "plan.yaml");
+  const size_t at = instrument.find("\nplan:\n");
+  ASSERT_NE(at, std::string::npos);
+  instrument.insert(at + 7, "  board: " + std::string(RTSCALIB_SOURCE_DIR) +
+                                "/configs/bench/targets.yaml\n");
+  std::ofstream(dir / "instrument.yaml") << instrument;
+  EXPECT_EQ(RunRtscalib("plan --quiet --config '" + (dir / "instrument.yaml").string() +
+                            "' --output '" + (dir / "refused").string() + "'",
+                        dir, &err),
+            1);
+  EXPECT_NE(err.find("plan.board"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir / "refused" / "plan.csv"));
+}
+
 // A camera on its own (configs/bench.yaml, model.kinematics: none) does not
 // turn: `plan --from` its run says where to hold the board for the photos
 // to add (docs/plan.md), toward the goals given on the command line.

@@ -41,7 +41,8 @@ TEST(PlanSettings, ReadsEveryKey) {
       "  fill: 0.5\n"
       "  exchange: false\n"
       "  board_poses: unknown\n"
-      "  prior_model: earlier/model.yaml\n");
+      "  prior_model: earlier/model.yaml\n"
+      "  board: boards/targets.yaml\n");
   ASSERT_EQ(s.options.goal.sigmas.size(), 2u);
   EXPECT_EQ(s.options.goal.sigmas[0].first, "hz_eccentricity.e");
   EXPECT_EQ(s.options.goal.sigmas[1].second, 0.2);
@@ -55,6 +56,7 @@ TEST(PlanSettings, ReadsEveryKey) {
   ASSERT_TRUE(s.board_poses_known.has_value());
   EXPECT_FALSE(*s.board_poses_known);
   EXPECT_EQ(s.prior_model, "/cfg/earlier/model.yaml");
+  EXPECT_EQ(s.board, "/cfg/boards/targets.yaml");
   EXPECT_TRUE(s.present);
 }
 
