@@ -4,6 +4,9 @@
 // so that a surveyor can re-plan on site.
 //   BM_PlanZoom3Projection  goal: worst projection sigma 0.03 px per zoom
 //   BM_PlanZoom3Constants   goal: hz_eccentricity.e and every zoom's fx, k1
+//   BM_PlanCameraOnItsOwn   configs/plan_camera.yaml: where to hold a
+//       chessboard for a camera on its own (its candidate poses, fx 0.3 px,
+//       projection 0.4 px)
 #include <benchmark/benchmark.h>
 
 #include <string>
@@ -22,12 +25,12 @@ struct Loaded {
   PlanOptions options;
 };
 
-Loaded Load() {
+Loaded Load(const std::string& name = "plan.yaml") {
   render::RenderSettings render;
   PlanSettings settings;
   const std::string dir = std::string(RTSCALIB_SOURCE_DIR) + "/configs";
-  const RunConfig config = LoadConfig(dir + "/plan.yaml", {render::RenderConfigSection(&render),
-                                                           PlanConfigSection(&settings, dir)});
+  const RunConfig config = LoadConfig(dir + "/" + name, {render::RenderConfigSection(&render),
+                                                         PlanConfigSection(&settings, dir)});
   return {SessionFromConfig(config, settings), settings.options};
 }
 
@@ -64,6 +67,12 @@ void BM_PlanZoom3Constants(benchmark::State& state) {
   Run(state, l.options, l.session);
 }
 BENCHMARK(BM_PlanZoom3Constants)->Unit(benchmark::kMillisecond);
+
+void BM_PlanCameraOnItsOwn(benchmark::State& state) {
+  const Loaded l = Load("plan_camera.yaml");
+  Run(state, l.options, l.session);
+}
+BENCHMARK(BM_PlanCameraOnItsOwn)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace rtscalib
