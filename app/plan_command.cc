@@ -137,18 +137,43 @@ json PlanJson(const PlanResult& plan, const PlanOptions& options, const std::str
   return j;
 }
 
-// Every kinematic effect the earlier run's diagnosis ranked as not
-// identifiable.
-std::vector<Effect> NotIdentifiable(const std::string& report_path) {
+json ReadReport(const std::string& report_path) {
   std::ifstream in(report_path);
   if (!in)
     throw InputError::File(report_path, 0, "report", "the run's report.json", "no such file");
-  json r;
   try {
-    r = json::parse(in);
+    return json::parse(in);
   } catch (const json::exception& e) {
     throw InputError::File(report_path, 0, "report", "JSON", e.what());
   }
+}
+
+// The noise the earlier run's data showed: its a-posteriori sigmas
+// (report.json fit.sigma_*), where they are larger than the config's
+// a-priori ones. The photos to add will be as noisy as those taken: a plan
+// with the a-priori sigma of a detector that does better on rendered
+// corners than on these photos would promise sigmas the next run does not
+// report. Returns what it took, for plan.json.
+json TakeObservedSigmas(const json& report, FitOptions* fit) {
+  json taken = json::object();
+  if (!report.contains("fit")) return taken;
+  const json& f = report["fit"];
+  for (const auto& [key, sigma] : {std::pair{"sigma_pixel_px", &fit->sigma_pixel_px},
+                                   std::pair{"sigma_cam_m", &fit->sigma_cam_m},
+                                   std::pair{"sigma_edm_m", &fit->sigma_edm_m}}) {
+    if (!f.contains(key) || !f[key].is_number()) continue;
+    const double observed = f[key].get<double>();
+    if (std::isfinite(observed) && observed > *sigma) {
+      taken[key] = {{"a_priori", *sigma}, {"observed", observed}};
+      *sigma = observed;
+    }
+  }
+  return taken;
+}
+
+// Every kinematic effect the earlier run's diagnosis ranked as not
+// identifiable.
+std::vector<Effect> NotIdentifiable(const json& r) {
   std::vector<Effect> out;
   if (!r.contains("diagnosis") || !r["diagnosis"].contains("ranking")) return out;
   for (const json& e : r["diagnosis"]["ranking"]) {
@@ -201,6 +226,7 @@ int RunPlan(const PlanArgs& args) {
   if (args.projection_px > 0) options.goal.projection_px = args.projection_px;
   std::string mode = "plan";
   std::vector<std::string> added_effects;
+  json observed_sigmas = json::object();
   if (from) {
     mode = "add to " + args.from;
     // The earlier run's model is the prior; its observations (the config's
@@ -255,7 +281,9 @@ int RunPlan(const PlanArgs& args) {
     // The effects the diagnosis could not determine (and the kinematics do
     // not contain) are estimated in the plan; the goal: each amplitude to 1
     // in its report unit (1 arcsec, 1 ppm, 1 mm), unless plan.goal names it.
-    for (Effect effect : NotIdentifiable((fs::path(args.from) / "report.json").string())) {
+    const json report = ReadReport((fs::path(args.from) / "report.json").string());
+    observed_sigmas = TakeObservedSigmas(report, &session.calibration.fit);
+    for (Effect effect : NotIdentifiable(report)) {
       if (ContainedInKinematics(session.calibration.model.kinematics, effect)) continue;
       session.calibration.model.effects.Add(effect);
       const std::string name = std::string(Info(effect).name) + "." + Info(effect).param_names[0];
@@ -294,14 +322,18 @@ int RunPlan(const PlanArgs& args) {
                              "it exists; choose another --output");
     }
   }
-  bool placements = false, focus = false, board_poses = false;
+  // A camera on its own: where to hold the board, also in a plan of no shot.
+  const bool board_poses = config.calibration.model.kinematics == Kinematics::kNone;
+  bool placements = board_poses, focus = false;
   for (const PlanShot& s : plan.shots) {
     placements = placements || !s.pointing.placement.empty();
     focus = focus || s.focus_distance > 0;
-    board_poses = board_poses || s.board_pose;
   }
   json j = PlanJson(plan, options, mode);
-  if (from) j["effects_not_identifiable"] = added_effects;
+  if (from) {
+    j["effects_not_identifiable"] = added_effects;
+    j["observed_sigmas"] = observed_sigmas;
+  }
   std::string note;
   const std::vector<Figure> figures{PlanFigure(plan)};
   if (!plan.shots.empty()) {

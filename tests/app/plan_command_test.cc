@@ -210,6 +210,11 @@ TEST(PlanCommand, ACameraOnItsOwnIsToldWhereToHoldTheBoard) {
   const nlohmann::json j = nlohmann::json::parse(ReadFile(run / "plan" / "plan.json"));
   EXPECT_TRUE(j["goal_met"].get<bool>());
   EXPECT_DOUBLE_EQ(j["goal"]["sigmas"]["cam[0].fx"].get<double>(), 0.2);
+  // The photos to add are as noisy as the run's: its a-posteriori pixel
+  // sigma (above bench.yaml's a-priori 0.1 px on these photos).
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(run / "report.json"));
+  EXPECT_GT(report["fit"]["sigma_pixel_px"].get<double>(), 0.1);
+  EXPECT_EQ(j["observed_sigmas"]["sigma_pixel_px"]["observed"], report["fit"]["sigma_pixel_px"]);
   const size_t n = j["plan"].size();
   ASSERT_GT(n, 0u);
   for (const nlohmann::json& shot : j["plan"]) {
