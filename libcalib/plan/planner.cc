@@ -238,10 +238,11 @@ Observations SimulatePlannedShots(const PlanSession& session, const std::vector<
   } else {
     sim.placements = scenes;
   }
-  Observations obs = Simulate(sim).obs;
+  // Board poses are in the camera's frame: the truth as a camera on its own.
   const bool posed =
       std::any_of(shots.begin(), shots.end(), [](const PlanShot& s) { return s.board_pose; });
   if (posed) sim.truth = CameraOnItsOwn(sim.truth);
+  Observations obs = Simulate(sim).obs;
   if (!session.board_poses_known || posed) {
     for (PixelObservation& p : obs.pixels) {
       p.X_known = false;  // the corner's position is the estimated board's

@@ -231,7 +231,13 @@ TEST(PlanSimulation, OneBoardSessionReportsThePlannedSigmas) {
 TEST(PlanSimulation, ACameraOnItsOwnReportsThePlannedSigmasWithTheBoardWhereThePlanHoldsIt) {
   LoadedSession s;
   PlanSession& session = s.session;
-  session.prior = IdealModel(Kinematics::kNone, 1, testing_camera_only::TrueCamera());
+  // The a-priori camera of an instrument's truth (a config's simulate.truth):
+  // planned and simulated as a camera on its own, whose frame is the
+  // reference, whatever base and camera tool the truth has.
+  session.prior = PaperTruth(1);
+  const PoseBlock tool = session.prior.cams[0].flange_from_cam;
+  session.prior.cams[0] = testing_camera_only::TrueCamera();
+  session.prior.cams[0].flange_from_cam = tool;
   session.prior.effects.Add(Effect::kRadialDistortion);
   session.prior.effects.Add(Effect::kTangentialDistortion);
   session.calibration.model.kinematics = Kinematics::kNone;
