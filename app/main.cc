@@ -5,11 +5,11 @@
 #include <stdexcept>
 
 #include "app/commands.h"
-#include "libcalib/text/number_text.h"
-#include "libcalib/io/safe_write.h"
 #include "libcalib/calibrate/validate.h"
 #include "libcalib/extract/options.h"
+#include "libcalib/io/safe_write.h"
 #include "libcalib/text/errors.h"
+#include "libcalib/text/number_text.h"
 
 namespace {
 

@@ -52,14 +52,15 @@ std::string PlanCsv(const PlanResult& plan, bool placements, bool focus, bool bo
   }
   o << "shot,face,zoom,phi,theta" << (placements ? ",placement" : "")
     << (focus ? ",focus_distance" : "")
-    << (board_poses ? ",board_u_px,board_v_px,board_distance_m,board_turn_deg,board_tilt_deg"
-                    : "")
+    << (board_poses ? ",board_u_px,board_v_px,board_distance_m,board_turn_deg,board_tilt_deg" : "")
     << ",image\n";
   for (const PlanShot& s : plan.shots) {
     o << s.pointing.name << "," << s.pointing.face << "," << s.pointing.zoom << ",";
     // A camera on its own has no readings (SPEC 7.1: empty).
-    if (!s.board_pose) o << FormatDouble(s.pointing.phi) << "," << FormatDouble(s.pointing.theta);
-    else o << ",";
+    if (!s.board_pose)
+      o << FormatDouble(s.pointing.phi) << "," << FormatDouble(s.pointing.theta);
+    else
+      o << ",";
     if (placements) o << "," << s.pointing.placement;
     if (focus) o << "," << FormatDouble(s.focus_distance);
     if (board_poses) {
@@ -119,14 +120,16 @@ json PlanJson(const PlanResult& plan, const PlanOptions& options, const std::str
                     {"turn_deg", s.board.turn_deg},
                     {"tilt_deg", s.board.tilt_deg},
                     {"cam_from_board",
-                     {{"R", {{s.cam_from_board.rotation(0, 0), s.cam_from_board.rotation(0, 1),
-                              s.cam_from_board.rotation(0, 2)},
-                             {s.cam_from_board.rotation(1, 0), s.cam_from_board.rotation(1, 1),
-                              s.cam_from_board.rotation(1, 2)},
-                             {s.cam_from_board.rotation(2, 0), s.cam_from_board.rotation(2, 1),
-                              s.cam_from_board.rotation(2, 2)}}},
-                      {"t", {s.cam_from_board.translation.x(), s.cam_from_board.translation.y(),
-                             s.cam_from_board.translation.z()}}}}};
+                     {{"R",
+                       {{s.cam_from_board.rotation(0, 0), s.cam_from_board.rotation(0, 1),
+                         s.cam_from_board.rotation(0, 2)},
+                        {s.cam_from_board.rotation(1, 0), s.cam_from_board.rotation(1, 1),
+                         s.cam_from_board.rotation(1, 2)},
+                        {s.cam_from_board.rotation(2, 0), s.cam_from_board.rotation(2, 1),
+                         s.cam_from_board.rotation(2, 2)}}},
+                      {"t",
+                       {s.cam_from_board.translation.x(), s.cam_from_board.translation.y(),
+                        s.cam_from_board.translation.z()}}}}};
     }
     json buys = json::object();
     for (const auto& [name, sigma] : s.sigma_without) buys[name] = Number(sigma);
@@ -158,9 +161,9 @@ json TakeObservedSigmas(const json& report, FitOptions* fit) {
   json taken = json::object();
   if (!report.contains("fit")) return taken;
   const json& f = report["fit"];
-  for (const auto& [key, sigma] : {std::pair{"sigma_pixel_px", &fit->sigma_pixel_px},
-                                   std::pair{"sigma_cam_m", &fit->sigma_cam_m},
-                                   std::pair{"sigma_edm_m", &fit->sigma_edm_m}}) {
+  for (const auto& [key, sigma] :
+       {std::pair{"sigma_pixel_px", &fit->sigma_pixel_px},
+        std::pair{"sigma_cam_m", &fit->sigma_cam_m}, std::pair{"sigma_edm_m", &fit->sigma_edm_m}}) {
     if (!f.contains(key) || !f[key].is_number()) continue;
     const double observed = f[key].get<double>();
     if (std::isfinite(observed) && observed > *sigma) {
@@ -346,8 +349,8 @@ int RunPlan(const PlanArgs& args) {
       j["figures"] = {"figures/plan.vg.json"};
     }
   }
-  WriteFileAtomic((fs::path(out_dir) / "plan.csv").string(), PlanCsv(plan, placements, focus, board_poses),
-                  Existing::kKeep);
+  WriteFileAtomic((fs::path(out_dir) / "plan.csv").string(),
+                  PlanCsv(plan, placements, focus, board_poses), Existing::kKeep);
   WriteFileAtomic((fs::path(out_dir) / "plan.json").string(), j.dump(2) + "\n", Existing::kKeep);
   if (!args.quiet) {
     std::cout << "rtscalib plan: " << plan.shots.size() << " shots of " << plan.candidates

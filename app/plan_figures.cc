@@ -64,8 +64,8 @@ Figure BoardPosesFigure(const PlanResult& plan) {
                       {"distance", s.board.distance_m},
                       {"determines", determines}});
   }
-  spec["data"] = json::array({{{"name", "outlines"}, {"values", outlines}},
-                              {{"name", "labels"}, {"values", labels}}});
+  spec["data"] = json::array(
+      {{{"name", "outlines"}, {"values", outlines}}, {{"name", "labels"}, {"values", labels}}});
   spec["layout"] = Grid(plan.projection.size(), 20, 20);
   for (const PredictedProjection& z : plan.projection) {
     json panel = {{"type", "group"}, {"title", "zoom " + std::to_string(z.zoom)}};
@@ -75,26 +75,27 @@ Figure BoardPosesFigure(const PlanResult& plan) {
     panel.erase("width");
     panel.erase("height");
     const std::string zoom = std::to_string(z.zoom);
-    panel["data"] = json::array(
-        {{{"name", "outline_" + zoom},
-          {"source", "outlines"},
-          {"transform", {{{"type", "filter"}, {"expr", "datum.zoom == " + zoom}}}}},
-         {{"name", "label_" + zoom},
-          {"source", "labels"},
-          {"transform", {{{"type", "filter"}, {"expr", "datum.zoom == " + zoom}}}}}});
+    panel["data"] =
+        json::array({{{"name", "outline_" + zoom},
+                      {"source", "outlines"},
+                      {"transform", {{{"type", "filter"}, {"expr", "datum.zoom == " + zoom}}}}},
+                     {{"name", "label_" + zoom},
+                      {"source", "labels"},
+                      {"transform", {{{"type", "filter"}, {"expr", "datum.zoom == " + zoom}}}}}});
     // Each outline clipped to the image: a tag board may reach beyond it
     // (its photo shows part of it).
     auto parent = [](const char* size) { return json{{"field", {{"group", size}}}}; };
-    json each = {{"type", "group"},
-                 {"from", {{"facet", {{"name", "one_" + zoom}, {"data", "outline_" + zoom},
-                                      {"groupby", "order"}}}}},
-                 {"clip", true},
-                 {"encode", {{"enter", {{"width", parent("width")}, {"height", parent("height")}}}}},
-                 {"marks", json::array({Mark("line", "one_" + zoom,
-                                             {{"x", Field("u", "u")},
-                                              {"y", Field("v", "v")},
-                                              {"stroke", Field("colour", "determines")},
-                                              {"strokeWidth", {{"value", 1.5}}}})})}};
+    json each = {
+        {"type", "group"},
+        {"from",
+         {{"facet", {{"name", "one_" + zoom}, {"data", "outline_" + zoom}, {"groupby", "order"}}}}},
+        {"clip", true},
+        {"encode", {{"enter", {{"width", parent("width")}, {"height", parent("height")}}}}},
+        {"marks", json::array({Mark("line", "one_" + zoom,
+                                    {{"x", Field("u", "u")},
+                                     {"y", Field("v", "v")},
+                                     {"stroke", Field("colour", "determines")},
+                                     {"strokeWidth", {{"value", 1.5}}}})})}};
     const json tip = Tip({{"photos", "datum.text"},
                           {"distance [m]", "format(datum.distance, '.2f')"},
                           {"determines", "datum.determines"}});

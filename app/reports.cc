@@ -475,7 +475,8 @@ json ReportJson(const RunConfig& config, const PipelineResult& r, const OutputFo
     const UncertaintyMapOptions& o = r.uncertainty_options;
     json zooms = json::array();
     for (const UncertaintyMap& m : r.uncertainty_maps) {
-      json z = {{"zoom", m.zoom}, {"determined", m.determined}, {"up_to_rotation", m.up_to_rotation}};
+      json z = {
+          {"zoom", m.zoom}, {"determined", m.determined}, {"up_to_rotation", m.up_to_rotation}};
       if (m.determined) {
         // Summary keys without a value (no cell inside a valid region, as
         // for records-only data) are left out, never null.
@@ -915,8 +916,8 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   if (!r.uncertainty_maps.empty()) {
     const UncertaintyMapOptions& u = r.uncertainty_options;
     o << "Projection uncertainty (1 sigma, worst direction, px) of "
-      << MapSubject(r.uncertainty_maps.front(), u) << ", " << u.cols << "x" << u.rows
-      << " cells, " << (r.full_covariance ? "full covariance" : "diagonal approximation") << ":\n";
+      << MapSubject(r.uncertainty_maps.front(), u) << ", " << u.cols << "x" << u.rows << " cells, "
+      << (r.full_covariance ? "full covariance" : "diagonal approximation") << ":\n";
     o << "  zoom      min   median      max   inside: median      max   cells outside\n";
     for (const UncertaintyMap& m : r.uncertainty_maps) {
       if (!m.determined) {

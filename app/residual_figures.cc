@@ -448,19 +448,17 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
   // The legend lists the kinds of observation the session has, each in its
   // own colour whichever others are there.
   json series_domain = json::array(), series_range = json::array();
-  for (const auto& [g, colour] : {std::pair{ObsGroup::kEdm, "#1f77b4"},
-                                  std::pair{ObsGroup::kCam, "#ff7f0e"},
-                                  std::pair{ObsGroup::kPixel, "#2ca02c"}}) {
+  for (const auto& [g, colour] :
+       {std::pair{ObsGroup::kEdm, "#1f77b4"}, std::pair{ObsGroup::kCam, "#ff7f0e"},
+        std::pair{ObsGroup::kPixel, "#2ca02c"}}) {
     if (std::any_of(rows.begin(), rows.end(),
                     [g = g](const ObservationResidual& o) { return Fitted(o) && o.group == g; })) {
       series_domain.push_back(SeriesName(g));
       series_range.push_back(colour);
     }
   }
-  spec["scales"].push_back({{"name", "group"},
-                            {"type", "ordinal"},
-                            {"domain", series_domain},
-                            {"range", series_range}});
+  spec["scales"].push_back(
+      {{"name", "group"}, {"type", "ordinal"}, {"domain", series_domain}, {"range", series_range}});
   spec["legends"].push_back({{"stroke", "group"},
                              {"fill", "group"},
                              {"title", "observations"},
@@ -604,7 +602,8 @@ Figure VariablesFigure(const std::vector<ObservationResidual>& rows) {
       "Each row is one variable the diagnosis tests (phi, zenith angle, distance, camera-to-point "
       "distance, image radius), each column one residual component (horizontal direction and "
       "zenith angle in arcseconds for every observation kind, along the ray in millimetres for "
-      "records; u and v in pixels for a camera on its own, whose frame has no vertical). A once-per-turn wave against phi is an eccentricity or a wobble, a slope against "
+      "records; u and v in pixels for a camera on its own, whose frame has no vertical). A "
+      "once-per-turn wave against phi is an eccentricity or a wobble, a slope against "
       "distance a scale error, a trend against the image radius a distortion term the model "
       "lacks. A variable that does not vary in this session and a component without residuals "
       "are left out.";

@@ -29,8 +29,8 @@ Loaded Load(const std::string& name = "plan.yaml") {
   render::RenderSettings render;
   PlanSettings settings;
   const std::string dir = std::string(RTSCALIB_SOURCE_DIR) + "/configs";
-  const RunConfig config = LoadConfig(dir + "/" + name, {render::RenderConfigSection(&render),
-                                                         PlanConfigSection(&settings, dir)});
+  const RunConfig config = LoadConfig(
+      dir + "/" + name, {render::RenderConfigSection(&render), PlanConfigSection(&settings, dir)});
   return {SessionFromConfig(config, settings), settings.options};
 }
 

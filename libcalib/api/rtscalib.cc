@@ -452,8 +452,7 @@ Uncertain<2> CalibratedInstrument::PixelWithUncertainty(int zoom, double phi, do
 }
 
 Eigen::Matrix<double, 2, Eigen::Dynamic> CalibratedInstrument::PixelJacobian(
-    int zoom, double phi, double theta, const Eigen::Vector3d& x_ref,
-    double focus_distance) const {
+    int zoom, double phi, double theta, const Eigen::Vector3d& x_ref, double focus_distance) const {
   Pixel(zoom, phi, theta, x_ref, focus_distance);  // checks the zoom, throws where undefined
   std::vector<int> index;
   std::vector<Eigen::Vector2d> columns;
@@ -463,8 +462,8 @@ Eigen::Matrix<double, 2, Eigen::Dynamic> CalibratedInstrument::PixelJacobian(
         return PredictPixel(m, zoom, phi, theta, x_ref, out, focus_distance) && out->allFinite();
       },
       &index, &columns);
-  Eigen::Matrix<double, 2, Eigen::Dynamic> j = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(
-      2, NumParameters());
+  Eigen::Matrix<double, 2, Eigen::Dynamic> j =
+      Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, NumParameters());
   for (size_t a = 0; a < index.size(); ++a) j.col(index[a]) = columns[a];
   return j;
 }

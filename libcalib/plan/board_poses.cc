@@ -39,8 +39,8 @@ std::vector<CandidatePose> CandidateBoardPoses(const InstrumentModel& model, int
   const double w = board.Width(), h = board.Height();
   const Eigen::Vector3d centre_in_board(w / 2, h / 2, 0);
   const double turn = kBoardTurnDeg * kRadPerDeg;
-  const Eigen::Matrix3d orientations[] = {
-      Eigen::Matrix3d::Identity(), Ry(turn), Ry(-turn), Rx(-turn), Rx(turn)};
+  const Eigen::Matrix3d orientations[] = {Eigen::Matrix3d::Identity(), Ry(turn), Ry(-turn),
+                                          Rx(-turn), Rx(turn)};
   std::vector<CandidatePose> out;
   for (double span : kBoardSpans) {
     // At distance d the board is fx w / d pixels wide.
@@ -93,9 +93,8 @@ std::vector<Eigen::Vector2d> BoardOutline(const InstrumentModel& model, int zoom
                                           const TagBoard& board, const Rigid3& cam_from_board) {
   std::vector<Eigen::Vector2d> out;
   const double w = board.Width(), h = board.Height();
-  for (const Eigen::Vector3d& corner :
-       {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(w, 0, 0), Eigen::Vector3d(w, h, 0),
-        Eigen::Vector3d(0, h, 0)}) {
+  for (const Eigen::Vector3d& corner : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(w, 0, 0),
+                                        Eigen::Vector3d(w, h, 0), Eigen::Vector3d(0, h, 0)}) {
     Eigen::Vector2d uv;
     if (PredictPixel(model, zoom, kPhi, kTheta, cam_from_board * corner, &uv)) out.push_back(uv);
   }

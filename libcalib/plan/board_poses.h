@@ -31,9 +31,9 @@ constexpr double kBoardTurnDeg = 35.0;
 // A board pose in words a person holding the board can follow.
 struct BoardPoseInWords {
   Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();  // where the board's centre is seen
-  double distance_m = 0;  // camera to the board's centre
-  double turn_deg = 0;    // about the image's vertical; > 0: its right edge nearer the camera
-  double tilt_deg = 0;    // about the image's horizontal; > 0: its bottom edge nearer
+  double distance_m = 0;                                // camera to the board's centre
+  double turn_deg = 0;  // about the image's vertical; > 0: its right edge nearer the camera
+  double tilt_deg = 0;  // about the image's horizontal; > 0: its bottom edge nearer
 };
 
 struct CandidatePose {

@@ -301,11 +301,10 @@ Observations CandidatePixels(const PlanSession& session, const InstrumentModel& 
     std::map<std::string, int> shown;
     for (const PixelObservation& p : obs.pixels) ++shown[p.shot];
     const int whole = FirstBoard(session)->NumTags();
-    obs.pixels.erase(std::remove_if(obs.pixels.begin(), obs.pixels.end(),
-                                    [&](const PixelObservation& p) {
-                                      return shown[p.shot] < whole;
-                                    }),
-                     obs.pixels.end());
+    obs.pixels.erase(
+        std::remove_if(obs.pixels.begin(), obs.pixels.end(),
+                       [&](const PixelObservation& p) { return shown[p.shot] < whole; }),
+        obs.pixels.end());
   }
   for (PixelObservation& p : obs.pixels) {
     p.X_known = session.board_poses_known;
@@ -979,14 +978,14 @@ PlanResult PlanShots(const PlanSession& given, const PlanOptions& o) {
   if (o.goal.projection_px > 0) {
     for (const PredictedProjection& pp : result.projection) {
       if (pp.worst_px <= pp.goal_px) continue;
-      result.limits.push_back("projection zoom " + std::to_string(pp.zoom) + ": " +
-                              // Every candidate taken: more photos of these do not help.
-                              (static_cast<int>(order.size()) >= o.max_shots &&
-                                       static_cast<int>(order.size()) < n_cand
-                                   ? "budget"
-                                   : "geometry") +
-                              ": worst sigma " + std::to_string(pp.worst_px) + " px > goal " +
-                              std::to_string(pp.goal_px) + " px");
+      result.limits.push_back(
+          "projection zoom " + std::to_string(pp.zoom) + ": " +
+          // Every candidate taken: more photos of these do not help.
+          (static_cast<int>(order.size()) >= o.max_shots && static_cast<int>(order.size()) < n_cand
+               ? "budget"
+               : "geometry") +
+          ": worst sigma " + std::to_string(pp.worst_px) + " px > goal " +
+          std::to_string(pp.goal_px) + " px");
     }
   }
   if (!result.limits.empty()) result.goal_met = false;

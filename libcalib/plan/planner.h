@@ -54,8 +54,8 @@
 #include <utility>
 #include <vector>
 
-#include "libcalib/calibrate/options.h"
 #include "libcalib/api/uncertainty_map.h"
+#include "libcalib/calibrate/options.h"
 #include "libcalib/model/instrument.h"
 #include "libcalib/model/observations.h"
 #include "libcalib/model/targets.h"

@@ -180,8 +180,8 @@ TEST(PlanCommand, ACameraIsPlannedFromScratchWithItsChessboard) {
   std::string instrument = ReadFile(fs::path(RTSCALIB_SOURCE_DIR) / "configs" / "plan.yaml");
   const size_t at = instrument.find("\nplan:\n");
   ASSERT_NE(at, std::string::npos);
-  instrument.insert(at + 7, "  board: " + std::string(RTSCALIB_SOURCE_DIR) +
-                                "/configs/bench/targets.yaml\n");
+  instrument.insert(
+      at + 7, "  board: " + std::string(RTSCALIB_SOURCE_DIR) + "/configs/bench/targets.yaml\n");
   std::ofstream(dir / "instrument.yaml") << instrument;
   EXPECT_EQ(RunRtscalib("plan --quiet --config '" + (dir / "instrument.yaml").string() +
                             "' --output '" + (dir / "refused").string() + "'",
@@ -224,8 +224,8 @@ TEST(PlanCommand, ACameraOnItsOwnIsToldWhereToHoldTheBoard) {
   EXPECT_TRUE(fs::exists(run / "plan" / "figures" / "plan.png"));
   const ShotsFile read =
       ReadShots(FilledShotsCsv(run / "plan" / "plan.csv", dir, [](const std::string& header) {
-        EXPECT_NE(header.find("board_distance_m"), std::string::npos) << header;
-      }).string());
+                  EXPECT_NE(header.find("board_distance_m"), std::string::npos) << header;
+                }).string());
   ASSERT_EQ(read.shots.size(), n);
   for (size_t k = 0; k < n; ++k) {
     EXPECT_FALSE(read.shots[k].has_reading);

@@ -54,9 +54,8 @@ TEST(VariablesFigure, ACameraOnItsOwnIsDrawnInPixelsAndItsLegendListsImagePoints
   const Figure f = VariablesFigure(CameraOnItsOwn());
   // phi and theta do not vary; no angles: u and v in pixels against the
   // camera-to-point distance and the image radius.
-  EXPECT_EQ(PanelsWithData(f),
-            (std::set<std::string>{"target_distance_du", "target_distance_dv", "image_radius_du",
-                                   "image_radius_dv"}));
+  EXPECT_EQ(PanelsWithData(f), (std::set<std::string>{"target_distance_du", "target_distance_dv",
+                                                      "image_radius_du", "image_radius_dv"}));
   const json& scale = GroupScale(f);
   EXPECT_EQ(scale.at("domain"), json::array({"image points"}));
   EXPECT_EQ(scale.at("range"), json::array({"#2ca02c"}));

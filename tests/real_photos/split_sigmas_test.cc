@@ -177,7 +177,8 @@ SplitResult Split(const Observations& all, const std::set<std::string>& a,
   int n = 0;
   for (size_t k = 0; k < d.diff_px.size(); ++k) {
     if (!d.inside[k] || !std::isfinite(d.diff_px[k])) continue;
-    sum += d.diff_px[k] * d.diff_px[k] / (ma.sigma_px[k] * ma.sigma_px[k] + mb.sigma_px[k] * mb.sigma_px[k]);
+    sum += d.diff_px[k] * d.diff_px[k] /
+           (ma.sigma_px[k] * ma.sigma_px[k] + mb.sigma_px[k] * mb.sigma_px[k]);
     ++n;
   }
   return {c.mean_square_normalised, c.effective_parameters, n > 0 ? sum / n : NAN};
