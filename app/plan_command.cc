@@ -151,25 +151,23 @@ json ReadReport(const std::string& report_path) {
   }
 }
 
-// The noise the earlier run's data showed: its a-posteriori sigmas
-// (report.json fit.sigma_*), where they are larger than the config's
-// a-priori ones. The photos to add will be as noisy as those taken: a plan
-// with the a-priori sigma of a detector that does better on rendered
-// corners than on these photos would promise sigmas the next run does not
-// report. Returns what it took, for plan.json.
-json TakeObservedSigmas(const json& report, FitOptions* fit) {
+// The pixel noise the earlier run's photos showed: its a-posteriori pixel
+// sigma (report.json fit.sigma_pixel_px), where it is larger than the
+// config's a-priori one. The photos to add, of the same camera, boards and
+// detector, will be as noisy as those taken: a plan with an a-priori sigma
+// that the detector does not reach on these photos would promise sigmas
+// the next run does not report. The records keep their a-priori sigmas
+// (the tracker's own accuracy); a run whose model lacks an effect fits
+// them worse than that, and the diagnosis says which effect to add first.
+// Returns what it took, for plan.json.
+json TakeObservedPixelSigma(const json& report, FitOptions* fit) {
   json taken = json::object();
-  if (!report.contains("fit")) return taken;
-  const json& f = report["fit"];
-  for (const auto& [key, sigma] :
-       {std::pair{"sigma_pixel_px", &fit->sigma_pixel_px},
-        std::pair{"sigma_cam_m", &fit->sigma_cam_m}, std::pair{"sigma_edm_m", &fit->sigma_edm_m}}) {
-    if (!f.contains(key) || !f[key].is_number()) continue;
-    const double observed = f[key].get<double>();
-    if (std::isfinite(observed) && observed > *sigma) {
-      taken[key] = {{"a_priori", *sigma}, {"observed", observed}};
-      *sigma = observed;
-    }
+  if (!report.contains("fit") || !report["fit"].contains("sigma_pixel_px")) return taken;
+  const json& observed = report["fit"]["sigma_pixel_px"];
+  if (observed.is_number() && std::isfinite(observed.get<double>()) &&
+      observed.get<double>() > fit->sigma_pixel_px) {
+    taken["sigma_pixel_px"] = {{"a_priori", fit->sigma_pixel_px}, {"observed", observed}};
+    fit->sigma_pixel_px = observed.get<double>();
   }
   return taken;
 }
@@ -285,7 +283,7 @@ int RunPlan(const PlanArgs& args) {
     // not contain) are estimated in the plan; the goal: each amplitude to 1
     // in its report unit (1 arcsec, 1 ppm, 1 mm), unless plan.goal names it.
     const json report = ReadReport((fs::path(args.from) / "report.json").string());
-    observed_sigmas = TakeObservedSigmas(report, &session.calibration.fit);
+    observed_sigmas = TakeObservedPixelSigma(report, &session.calibration.fit);
     for (Effect effect : NotIdentifiable(report)) {
       if (ContainedInKinematics(session.calibration.model.kinematics, effect)) continue;
       session.calibration.model.effects.Add(effect);
