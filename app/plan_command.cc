@@ -295,7 +295,7 @@ int RunPlan(const PlanArgs& args) {
     }
     if (added_effects.empty() && !args.quiet) {
       std::cout << "rtscalib plan: the run's diagnosis found no effect it could not determine; "
-                   "planning toward plan.goal alone\n";
+                   "planning toward the goal alone\n";
     }
   }
   PlanResult plan;

@@ -201,6 +201,10 @@ TEST(PlanCommand, ACameraOnItsOwnIsToldWhereToHoldTheBoard) {
   fs::path dir;
   const fs::path run = CalibratedRun("plan_bench", "bench.yaml", &dir);
   ASSERT_FALSE(::testing::Test::HasFailure());
+  // The run's report, whose photos leave the image's corners empty, names
+  // the command.
+  EXPECT_NE(ReadFile(run / "report.txt").find("rtscalib plan --from " + run.string()),
+            std::string::npos);
   std::string err;
   ASSERT_EQ(RunRtscalib("plan --quiet --from '" + run.string() +
                             "' --goal 'cam[0].fx=0.2' --projection-px 0.3",
