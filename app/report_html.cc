@@ -468,6 +468,28 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     << " rows in the critical regions excluded. " << Esc(FitSigmasText(r.calibration.fit, !r.obs.records.empty()))
     << "</p>\n";
 
+  const Coverage& cov = r.calibration.coverage;
+  if (!cov.images.empty()) {
+    o << "<h2 id=\"coverage\">Image coverage</h2>\n<table><tr><th>zoom</th><th>image "
+         "px</th><th>points</th><th>image covered</th><th>farthest point, of the "
+         "half-diagonal</th><th>corners</th></tr>\n";
+    for (const ImageCoverage& c : cov.images) {
+      o << "<tr><td>" << c.zoom << "</td><td class=num>" << c.width << " x " << c.height
+        << "</td><td class=num>" << c.points << "</td><td class=num>"
+        << Fmt("%.0f", 100 * c.covered_fraction) << " %</td><td class=num>"
+        << Fmt("%.0f", 100 * cov.corner_fraction[c.zoom]) << " %</td><td>"
+        << (c.corners_covered ? "covered" : "<b>NOT covered</b>") << "</td></tr>\n";
+    }
+    o << "</table>\n";
+    if (!r.calibration.coverage_warnings.empty()) {
+      o << "<ul>";
+      for (const std::string& w : r.calibration.coverage_warnings) o << "<li>" << Esc(w) << "</li>";
+      o << "</ul>\n";
+    }
+    if (const std::string hint = PlanHint(config, r); !hint.empty()) {
+      o << "<p>" << Esc(hint) << "</p>\n";
+    }
+  }
   if (!r.uncertainty_maps.empty()) {
     o << "<h2 id=\"uncertainty\">Projection uncertainty</h2>\n<table><tr><th>zoom</th><th>min "
          "px</th><th>median px</th><th>max px</th><th>max inside the points' hull px</th><th>cells "

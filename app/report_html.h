@@ -6,6 +6,8 @@
 //   error maps
 //   tables: ranking of the missing effects, structure outside the catalogue,
 //           outliers, final errors, fit
+//   image coverage (its warnings, the plan command that fills the gaps),
+//   projection uncertainty
 //   image residuals, the worst photos, residuals against the variables,
 //   histograms
 // The same figures are files in the run's figures/ folder (WriteFigureFiles).

@@ -696,6 +696,20 @@ std::string GrossRowsText(const PipelineResult& r) {
 }
 
 // ---------------------------------------------------------------------------
+std::string PlanHint(const RunConfig& config, const PipelineResult& r) {
+  // The photos that fill the gaps: the planner's, toward the worst
+  // projection sigma the points' hull has now, over the whole image.
+  double inside_max = 0;
+  for (const UncertaintyMap& m : r.uncertainty_maps) {
+    if (std::isfinite(m.inside_max_px)) inside_max = std::max(inside_max, m.inside_max_px);
+  }
+  if (r.calibration.coverage_warnings.empty() || !(inside_max > 0)) return "";
+  return "The photos to add (where to hold the board, or where to point): rtscalib plan --from " +
+         config.output_dir + " --projection-px " + Fmt("%.2g", inside_max) +
+         " (the worst projection sigma inside the points' hull now, over the whole image; "
+         "docs/plan.md)";
+}
+
 std::string ReportText(const RunConfig& config, const PipelineResult& r) {
   std::ostringstream o;
   auto stats = [](const ErrorStats& s) {
@@ -910,19 +924,7 @@ std::string ReportText(const RunConfig& config, const PipelineResult& r) {
           << "\n";
       }
       for (const std::string& w : r.calibration.coverage_warnings) o << "  WARNING: " << w << "\n";
-      // The photos that fill the gaps: the planner's, toward the worst
-      // projection sigma the points' hull has now, over the whole image.
-      double inside_max = 0;
-      for (const UncertaintyMap& m : r.uncertainty_maps) {
-        if (std::isfinite(m.inside_max_px)) inside_max = std::max(inside_max, m.inside_max_px);
-      }
-      if (!r.calibration.coverage_warnings.empty() && inside_max > 0) {
-        o << "  The photos to add (where to hold the board, or where to point): rtscalib plan "
-             "--from "
-          << config.output_dir << " --projection-px " << Fmt("%.2g", inside_max)
-          << " (the worst projection sigma inside the points' hull now, over the whole image; "
-             "docs/plan.md)\n";
-      }
+      if (const std::string hint = PlanHint(config, r); !hint.empty()) o << "  " << hint << "\n";
       o << "\n";
     }
   }

@@ -28,6 +28,11 @@ std::string StrongCorrelationsText(const FitSummary& fit);
 // covariance treats correlated errors, one sentence for report.txt and
 // report.html; `records` false leaves out the EDM and camera-record sigmas.
 std::string FitSigmasText(const FitSummary& fit, bool records = true);
+// Where the calibration's points leave the image's corners empty
+// (coverage warnings): the `rtscalib plan --from` command that proposes the
+// photos to add, one sentence for report.txt and report.html; empty
+// otherwise.
+std::string PlanHint(const RunConfig& config, const PipelineResult& result);
 // The estimated board poses (SPEC 7, one per board and placement, SPEC
 // 7.1) with their sigmas, a line each; empty when there are none.
 std::string BoardsText(const InstrumentModel& model);

@@ -108,6 +108,16 @@ TEST_F(ReportRun, HtmlIsSelfContainedAndReadsTopDown) {
   EXPECT_LT(verdict, maps);
   EXPECT_LT(maps, ranking);
   EXPECT_NE(html.find("model.effects: [hz_eccentricity]"), std::string::npos);
+  // The image coverage with report.json's warnings, before the maps of
+  // projection uncertainty.
+  const size_t coverage = html.find("id=\"coverage\"");
+  ASSERT_NE(coverage, std::string::npos);
+  EXPECT_LT(coverage, html.find("id=\"uncertainty\""));
+  for (const nlohmann::json& w : (*report_)["coverage"]["warnings"]) {
+    const std::string text = w.get<std::string>();
+    const std::string plain = text.substr(0, std::min<size_t>(text.find_first_of("<>&\"'"), 40));
+    EXPECT_NE(html.find(plain, coverage), std::string::npos) << text;
+  }
   // The figures: Vega specs drawn by the runtime inlined in the page.
   EXPECT_NE(html.find("new vega.View"), std::string::npos);
   const nlohmann::json& figures = (*report_)["figures"]["list"];
