@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 #include <string>
 #include <tuple>
 
@@ -130,81 +131,80 @@ Figure PlanFigure(const PlanResult& plan) {
   f.section = "plan";
   f.title = "The planned shots: " + std::to_string(plan.shots.size()) + " photos";
   json values = json::array();
+  std::set<int> faces;
   int order = 0;
   for (const PlanShot& s : plan.shots) {
-    const double phi_deg = s.pointing.phi * 180.0 / M_PI;
+    faces.insert(s.pointing.face);
     values.push_back({{"order", ++order},
-                      {"phi", phi_deg},
+                      {"phi", s.pointing.phi * 180.0 / M_PI},
                       {"theta", s.pointing.theta * 180.0 / M_PI},
-                      {"face", "face " + std::to_string(s.pointing.face)},
-                      {"zoom", s.pointing.zoom},
+                      {"face", s.pointing.face},
+                      {"zoom", "zoom " + std::to_string(s.pointing.zoom)},
                       {"placement", s.pointing.placement},
                       {"determines", s.determines.empty() ? "-" : s.determines}});
   }
-  const int width = 640, height = 360;
-  f.spec = {
-      {"$schema", "https://vega.github.io/schema/vega/v5.json"},
-      {"width", width},
-      {"height", height},
-      {"padding", 8},
-      // The title block of every figure (a line per clause of the subtitle).
-      {"title", Chart(f.title,
-                      "horizontal angle phi against zenith angle theta (the readings of "
-                      "each face); colour: what the shot determines most; size: zoom; grey "
-                      "line: the order of measuring, motor travel " +
-                          Significant(plan.motor_travel_rad * 180.0 / M_PI, 3) + " deg")["title"]},
-      {"data", json::array({{{"name", "shots"}, {"values", values}}})},
-      {"scales",
-       json::array({{{"name", "x"}, {"type", "linear"}, {"domain", {0, 360}}, {"range", "width"}},
-                    {{"name", "y"},
-                     {"type", "linear"},
-                     {"domain", {0, 360}},
-                     {"range", "height"},
-                     {"zero", false}},
-                    {{"name", "colour"},
-                     {"type", "ordinal"},
-                     {"domain", {{"data", "shots"}, {"field", "determines"}}},
-                     {"range", {{"scheme", "category20"}}}},
-                    {{"name", "shape"},
-                     {"type", "ordinal"},
-                     {"domain", {"face 1", "face 2"}},
-                     {"range", {"circle", "triangle-up"}}},
-                    {{"name", "size"},
-                     {"type", "linear"},
-                     {"domain", {{"data", "shots"}, {"field", "zoom"}}},
-                     {"range", {40, 200}},
-                     {"zero", false}}})},
-      {"axes", json::array({{{"orient", "bottom"}, {"scale", "x"}, {"title", "phi [deg]"}},
-                            {{"orient", "left"}, {"scale", "y"}, {"title", "theta [deg]"}}})},
-      {"legends", json::array({{{"fill", "colour"}, {"title", "determines"}},
-                               {{"shape", "shape"}, {"title", "face"}}})},
-      {"marks",
-       json::array(
-           {{{"type", "line"},
-             {"from", {{"data", "shots"}}},
-             {"encode",
-              {{"enter",
-                {{"x", {{"scale", "x"}, {"field", "phi"}}},
-                 {"y", {{"scale", "y"}, {"field", "theta"}}},
-                 {"stroke", {{"value", "#bbbbbb"}}},
-                 {"strokeWidth", {{"value", 1}}}}}}}},
-            {{"type", "symbol"},
-             {"from", {{"data", "shots"}}},
-             {"encode",
-              {{"enter",
-                {{"x", {{"scale", "x"}, {"field", "phi"}}},
-                 {"y", {{"scale", "y"}, {"field", "theta"}}},
-                 {"fill", {{"scale", "colour"}, {"field", "determines"}}},
-                 {"shape", {{"scale", "shape"}, {"field", "face"}}},
-                 {"size", {{"scale", "size"}, {"field", "zoom"}}},
-                 {"opacity", {{"value", 0.8}}},
-                 {"tooltip",
-                  {{"signal",
-                    "{'shot': datum.order, 'zoom': datum.zoom, 'face': datum.face, "
-                    "'placement': datum.placement, 'determines': datum.determines}"}}}}}}}}})}};
+  if (faces.empty()) faces.insert(1);
+  json spec = Chart(f.title,
+                    "the readings of each photo, one panel per face: horizontal angle phi "
+                    "against zenith angle theta (the zenith at the top); colour: what the shot "
+                    "determines most; shape: zoom; grey line: the order of measuring, motor "
+                    "travel " +
+                        Significant(plan.motor_travel_rad * 180.0 / M_PI, 3) + " deg");
+  spec["data"] = json::array({{{"name", "shots"}, {"values", values}}});
+  spec["scales"] = json::array({{{"name", "colour"},
+                                 {"type", "ordinal"},
+                                 {"domain", {{"data", "shots"}, {"field", "determines"}}},
+                                 {"range", {{"scheme", "category20"}}}},
+                                {{"name", "shape"},
+                                 {"type", "ordinal"},
+                                 {"domain", {{"data", "shots"}, {"field", "zoom"}}},
+                                 {"range", {"circle", "square", "triangle-up", "diamond", "cross",
+                                            "triangle-down", "wedge"}}}});
+  spec["legends"] = json::array({{{"fill", "colour"}, {"title", "determines"}},
+                                 {{"shape", "shape"}, {"title", "zoom"}}});
+  spec["layout"] = Grid(faces.size(), 20, 70);
+  const json tip = Tip({{"shot", "datum.order"},
+                        {"zoom", "datum.zoom"},
+                        {"placement", "datum.placement"},
+                        {"determines", "datum.determines"}});
+  for (int face : faces) {
+    // A face's readings: theta in [0, 180] in face 1, [180, 360] in face 2,
+    // the zenith (0, or 360 in face 2) at the top either way.
+    const std::string name = "face_" + std::to_string(face);
+    json panel = {{"type", "group"},
+                  {"title", "face " + std::to_string(face)},
+                  {"encode", {{"enter", {{"width", {{"value", 420}}}, {"height", {{"value", 240}}}}}}},
+                  {"data", json::array({{{"name", name},
+                                         {"source", "shots"},
+                                         {"transform",
+                                          {{{"type", "filter"},
+                                            {"expr", "datum.face == " + std::to_string(face)}}}}}})},
+                  {"scales",
+                   json::array({Linear("x", {0, 360}, {0, 420}),
+                                Linear("y", face == 2 ? json{360, 180} : json{0, 180}, {0, 240})})},
+                  {"axes", json::array({Axis("bottom", "x", "phi [deg]"),
+                                        Axis("left", "y", "theta [deg]")})}};
+    panel["marks"] = json::array(
+        {Mark("line", name,
+              {{"x", Field("x", "phi")},
+               {"y", Field("y", "theta")},
+               {"stroke", {{"value", "#bbbbbb"}}},
+               {"strokeWidth", {{"value", 1}}}}),
+         Mark("symbol", name,
+              {{"x", Field("x", "phi")},
+               {"y", Field("y", "theta")},
+               {"fill", Field("colour", "determines")},
+               {"shape", Field("shape", "zoom")},
+               {"size", {{"value", 70}}},
+               {"opacity", {{"value", 0.85}}},
+               {"tooltip", tip}})});
+    spec["marks"].push_back(panel);
+  }
+  f.spec = spec;
   f.caption =
-      "Where the planned photos point (rtscalib plan, docs/plan.md): each mark is one photo, "
-      "coloured by the goal (or constant) whose predicted variance it lowers most.";
+      "Where the planned photos point (rtscalib plan, docs/plan.md), one panel per face: each "
+      "mark is one photo at its readings, coloured by the goal (or constant) whose predicted "
+      "variance it lowers most, joined in the order of measuring.";
   f.summary = {{"shots", plan.shots.size()},
                {"motor_travel_deg", plan.motor_travel_rad * 180 / M_PI}};
   return f;

@@ -1,7 +1,8 @@
 // The figure of a session plan (`rtscalib plan`, docs/plan.md): where the
-// shots point, per face and zoom, coloured by what they determine, joined
-// in the order they are taken. A Vega spec like the run's figures
-// (app/figures.h), written by WriteFigureFiles.
+// shots point, a panel per face, a shape per zoom, coloured by what they
+// determine, joined in the order they are taken; for a camera on its own,
+// where the board is held, its outline in the image of each zoom. A Vega
+// spec like the run's figures (app/figures.h), written by WriteFigureFiles.
 #pragma once
 
 #include "app/figures.h"
