@@ -151,17 +151,18 @@ Figure PlanFigure(const PlanResult& plan) {
                     "travel " +
                         Significant(plan.motor_travel_rad * 180.0 / M_PI, 3) + " deg");
   spec["data"] = json::array({{{"name", "shots"}, {"values", values}}});
-  spec["scales"] = json::array({{{"name", "colour"},
-                                 {"type", "ordinal"},
-                                 {"domain", {{"data", "shots"}, {"field", "determines"}}},
-                                 {"range", {{"scheme", "category20"}}}},
-                                {{"name", "shape"},
-                                 {"type", "ordinal"},
-                                 {"domain", {{"data", "shots"}, {"field", "zoom"}}},
-                                 {"range", {"circle", "square", "triangle-up", "diamond", "cross",
-                                            "triangle-down", "wedge"}}}});
-  spec["legends"] = json::array({{{"fill", "colour"}, {"title", "determines"}},
-                                 {{"shape", "shape"}, {"title", "zoom"}}});
+  spec["scales"] = json::array(
+      {{{"name", "colour"},
+        {"type", "ordinal"},
+        {"domain", {{"data", "shots"}, {"field", "determines"}}},
+        {"range", {{"scheme", "category20"}}}},
+       {{"name", "shape"},
+        {"type", "ordinal"},
+        {"domain", {{"data", "shots"}, {"field", "zoom"}}},
+        {"range",
+         {"circle", "square", "triangle-up", "diamond", "cross", "triangle-down", "wedge"}}}});
+  spec["legends"] = json::array(
+      {{{"fill", "colour"}, {"title", "determines"}}, {{"shape", "shape"}, {"title", "zoom"}}});
   spec["layout"] = Grid(faces.size(), 20, 70);
   const json tip = Tip({{"shot", "datum.order"},
                         {"zoom", "datum.zoom"},
@@ -171,33 +172,33 @@ Figure PlanFigure(const PlanResult& plan) {
     // A face's readings: theta in [0, 180] in face 1, [180, 360] in face 2,
     // the zenith (0, or 360 in face 2) at the top either way.
     const std::string name = "face_" + std::to_string(face);
-    json panel = {{"type", "group"},
-                  {"title", "face " + std::to_string(face)},
-                  {"encode", {{"enter", {{"width", {{"value", 420}}}, {"height", {{"value", 240}}}}}}},
-                  {"data", json::array({{{"name", name},
-                                         {"source", "shots"},
-                                         {"transform",
-                                          {{{"type", "filter"},
-                                            {"expr", "datum.face == " + std::to_string(face)}}}}}})},
-                  {"scales",
-                   json::array({Linear("x", {0, 360}, {0, 420}),
+    json panel = {
+        {"type", "group"},
+        {"title", "face " + std::to_string(face)},
+        {"encode", {{"enter", {{"width", {{"value", 420}}}, {"height", {{"value", 240}}}}}}},
+        {"data",
+         json::array(
+             {{{"name", name},
+               {"source", "shots"},
+               {"transform",
+                {{{"type", "filter"}, {"expr", "datum.face == " + std::to_string(face)}}}}}})},
+        {"scales", json::array({Linear("x", {0, 360}, {0, 420}),
                                 Linear("y", face == 2 ? json{360, 180} : json{0, 180}, {0, 240})})},
-                  {"axes", json::array({Axis("bottom", "x", "phi [deg]"),
-                                        Axis("left", "y", "theta [deg]")})}};
-    panel["marks"] = json::array(
-        {Mark("line", name,
-              {{"x", Field("x", "phi")},
-               {"y", Field("y", "theta")},
-               {"stroke", {{"value", "#bbbbbb"}}},
-               {"strokeWidth", {{"value", 1}}}}),
-         Mark("symbol", name,
-              {{"x", Field("x", "phi")},
-               {"y", Field("y", "theta")},
-               {"fill", Field("colour", "determines")},
-               {"shape", Field("shape", "zoom")},
-               {"size", {{"value", 70}}},
-               {"opacity", {{"value", 0.85}}},
-               {"tooltip", tip}})});
+        {"axes",
+         json::array({Axis("bottom", "x", "phi [deg]"), Axis("left", "y", "theta [deg]")})}};
+    panel["marks"] = json::array({Mark("line", name,
+                                       {{"x", Field("x", "phi")},
+                                        {"y", Field("y", "theta")},
+                                        {"stroke", {{"value", "#bbbbbb"}}},
+                                        {"strokeWidth", {{"value", 1}}}}),
+                                  Mark("symbol", name,
+                                       {{"x", Field("x", "phi")},
+                                        {"y", Field("y", "theta")},
+                                        {"fill", Field("colour", "determines")},
+                                        {"shape", Field("shape", "zoom")},
+                                        {"size", {{"value", 70}}},
+                                        {"opacity", {{"value", 0.85}}},
+                                        {"tooltip", tip}})});
     spec["marks"].push_back(panel);
   }
   f.spec = spec;
