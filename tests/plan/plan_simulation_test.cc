@@ -29,6 +29,7 @@
 #include <random>
 #include <set>
 
+#include "libcalib/api/uncertainty_map.h"
 #include "libcalib/calibrate/calibrate.h"
 #include "libcalib/plan/planner.h"
 #include "libcalib/sim/simulator.h"
@@ -227,7 +228,8 @@ TEST(PlanSimulation, OneBoardSessionReportsThePlannedSigmas) {
 // sample photos' (configs/bench.yaml: 640 x 480, strong barrel distortion)
 // and its 9 x 6 inner-corner chessboard of 25 mm. The plan says where to
 // hold the board (board_poses.h); the photos simulated there, calibrated,
-// report the planned sigmas, and the goal is met.
+// report the planned sigmas, the goal is met, and the calibration's
+// projection uncertainty map has the plan's worst sigma.
 TEST(PlanSimulation, ACameraOnItsOwnReportsThePlannedSigmasWithTheBoardWhereThePlanHoldsIt) {
   LoadedSession s;
   PlanSession& session = s.session;
@@ -274,6 +276,22 @@ TEST(PlanSimulation, ACameraOnItsOwnReportsThePlannedSigmasWithTheBoardWhereTheP
       "a camera on its own, fx 0.3 px and projection 0.4 px: %zu planned photos of %d "
       "candidates, %d constant-seeds, MSNE %.3f, reported/planned sigma worst %.3f\n",
       plan.shots.size(), plan.candidates, c.constants, c.msne, c.worst_ratio);
+  {
+    // The plan's worst projection sigma is the calibration's map's worst
+    // (up to the camera's rotation, with the classical covariance the plan
+    // predicts). 10 %: the map fits its rotation over the points' hull, the
+    // plan over the whole image, and the calibrated camera is not the prior
+    // (measured: 1 %).
+    const Observations obs = SimulatePlannedShots(session, plan.shots, 0.1, 7);
+    CalibrationOptions options = session.calibration;
+    options.diagnose.enabled = false;
+    options.fit.covariance_clusters = CovarianceClusters::kNone;
+    const CalibrationResult result = Calibrate(obs, options);
+    const UncertaintyMap map =
+        ProjectionUncertaintyMaps(CalibratedInstrument(result.model), o.projection).at(0);
+    EXPECT_TRUE(map.up_to_rotation);
+    EXPECT_NEAR(map.max_px, plan.projection.at(0).worst_px, 0.1 * plan.projection.at(0).worst_px);
+  }
   // 9 constants x 4 seeds, correlated within a seed: chi^2_36 / 36 has sd
   // 0.24; [0.3, 2.5] is about 3 sd either way.
   EXPECT_EQ(c.constants, 36);
