@@ -974,10 +974,23 @@ std::string StrongCorrelationsText(const FitSummary& fit) {
   // parameter order, such a pair moved every pair after it out of the
   // list or into it. Ties (|rho| = 1.000 to three decimals, typical of a
   // camera's rotation against its principal point) in parameter order.
-  // Board poses of many placements each correlate with the principal point
-  // (as in any camera calibration); report.json lists every pair.
+  // The pairs with an estimated board pose are counted on one line, not
+  // listed: each placement's pose correlates with the principal point (in
+  // any calibration from boards of unknown pose), and a session of many
+  // placements has hundreds of such pairs that would hide the pairs among
+  // the model's own parameters. report.json lists every pair.
   constexpr size_t kListed = 16;
-  std::vector<std::pair<std::string, double>> pairs = fit.strong_correlations;
+  std::vector<std::pair<std::string, double>> pairs;
+  size_t with_boards = 0;
+  double boards_max = 0;
+  for (const auto& p : fit.strong_correlations) {
+    if (p.first.find("board[") == std::string::npos) {
+      pairs.push_back(p);
+    } else {
+      ++with_boards;
+      boards_max = std::max(boards_max, std::abs(p.second));
+    }
+  }
   std::stable_sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
     return std::round(1e3 * std::abs(a.second)) > std::round(1e3 * std::abs(b.second));
   });
@@ -988,6 +1001,13 @@ std::string StrongCorrelationsText(const FitSummary& fit) {
   if (pairs.size() > kListed) {
     o << "  ... and " << pairs.size() - kListed
       << " more pairs (report.json fit.strong_correlations)\n";
+  }
+  if (with_boards > 0) {
+    o << "  " << with_boards << " pair(s) with an estimated board pose, |rho| up to "
+      << Fmt("%.3f", boards_max)
+      << ": where a board stands trades with what moves its image alike (the principal "
+         "point, a camera's rotation), as in any calibration from boards of unknown pose "
+         "(report.json fit.strong_correlations lists them)\n";
   }
   return o.str();
 }

@@ -21,8 +21,9 @@ std::string ReportText(const RunConfig& config, const PipelineResult& result);
 // report.txt and report.html; empty when there are none.
 std::string GrossRowsText(const PipelineResult& result);
 // The pairs of fitted parameters with |rho| > 0.95 (FitSummary::
-// strong_correlations), the strongest 16 a line each, for report.txt;
-// empty when there are none.
+// strong_correlations), the strongest 16 among the model's own a line each
+// and those with an estimated board pose counted on one line, for
+// report.txt; empty when there are none.
 std::string StrongCorrelationsText(const FitSummary& fit);
 // The refinement's a-posteriori sigmas (pixels per zoom) and how the
 // covariance treats correlated errors, one sentence for report.txt and

@@ -58,5 +58,28 @@ TEST(StrongCorrelationsText, ListsTheStrongestFirstSoAPairAtTheThresholdMovesNoO
   EXPECT_EQ(StrongCorrelationsText(FitSummary()), "");
 }
 
+// A camera calibrated from boards of unknown pose: each placement's pose
+// correlates with the principal point. Those pairs are counted on one line,
+// and the pairs among the camera's own parameters are all listed, weaker
+// as they are.
+TEST(StrongCorrelationsText, CountsThePairsWithBoardPosesOnOneLine) {
+  FitSummary fit;
+  for (int i = 0; i < 40; ++i) {
+    fit.strong_correlations.push_back(
+        {"cam[0].intrinsics[2] ~ board[0@p" + std::to_string(i) + "/z0].t[0]", -0.9995});
+  }
+  fit.strong_correlations.push_back({"cam[0].intrinsics[0] ~ cam[0].intrinsics[1]", 0.982});
+  fit.strong_correlations.push_back({"cam[0].distortion[1] ~ cam[0].distortion[4]", -0.961});
+  const std::string text = StrongCorrelationsText(fit);
+  const std::vector<std::string> listed = ListedPairs(text);
+  ASSERT_EQ(listed.size(), 2u) << text;
+  EXPECT_EQ(listed[0], "  cam[0].intrinsics[0] ~ cam[0].intrinsics[1]  rho = +0.982");
+  EXPECT_EQ(listed[1], "  cam[0].distortion[1] ~ cam[0].distortion[4]  rho = -0.961");
+  EXPECT_NE(text.find("40 pair(s) with an estimated board pose, |rho| up to 1.000"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("board[0@p"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace rtscalib::app
