@@ -57,10 +57,10 @@ std::string PlanCsv(const PlanResult& plan, bool placements, bool focus, bool bo
   for (const PlanShot& s : plan.shots) {
     o << s.pointing.name << "," << s.pointing.face << "," << s.pointing.zoom << ",";
     // A camera on its own has no readings (SPEC 7.1: empty).
-    if (!s.board_pose)
-      o << FormatDouble(s.pointing.phi) << "," << FormatDouble(s.pointing.theta);
-    else
+    if (board_poses)
       o << ",";
+    else
+      o << FormatDouble(s.pointing.phi) << "," << FormatDouble(s.pointing.theta);
     if (placements) o << "," << s.pointing.placement;
     if (focus) o << "," << FormatDouble(s.focus_distance);
     if (board_poses) {
