@@ -152,9 +152,9 @@ FigureFiles::FigureFiles(std::string dir, VegaRenderer* renderer) : dir_(std::mo
   if (ec) throw WriteError(dir_, ec.message() + " (creating the folder)");
   if (renderer == nullptr) own_ = std::make_unique<VegaRenderer>();
   renderer_ = renderer != nullptr ? renderer : own_.get();
-  // Node's drawings are collected on a thread of their own from now on;
-  // each figure's files are written on the thread that drew its PNG, while
-  // node draws the next figure.
+  // The drawings are collected on a thread of their own from now on; each
+  // figure's files are written on the thread that drew its PNG, while the
+  // next figures are made and drawn.
   drawing_ = std::async(std::launch::async, [this] {
     std::vector<RenderedFigure> drawn = renderer_->Collect(
         &note_, [this](size_t i, const RenderedFigure& fig) { Write(i, &fig); });
@@ -171,11 +171,14 @@ FigureFiles::~FigureFiles() {
 
 void FigureFiles::Add(size_t index, Figure figure) {
   std::string text = figure.spec.dump();
+  const nlohmann::json* spec = nullptr;
   {
     const std::lock_guard<std::mutex> lock(mutex_);
-    figures_.emplace(index, std::make_pair(std::move(figure), text));
+    auto [at, added] = figures_.emplace(index, std::make_pair(std::move(figure), text));
+    if (!added) throw std::logic_error("FigureFiles: figure " + std::to_string(index) + " twice");
+    spec = &at->second.first.spec;  // stays in the map's node until Finish
   }
-  renderer_->Add(index, text);
+  renderer_->Add(index, *spec);
 }
 
 void FigureFiles::End() { renderer_->End(); }

@@ -68,8 +68,8 @@ class FigureFiles {
   FigureFiles(const FigureFiles&) = delete;
   FigureFiles& operator=(const FigureFiles&) = delete;
 
-  // Figure `index` of the figures' order (report.json, report.html); node
-  // draws the figures in the order they are added.
+  // Figure `index` of the figures' order (report.json, report.html); the
+  // figures are drawn in the order they are added.
   void Add(size_t index, Figure figure);
   // No more figures come (Finish says it too).
   void End();

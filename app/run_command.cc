@@ -33,10 +33,10 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   if (args.diagnose) config.calibration.diagnose.enabled = true;
   if (args.diagnose_auto) config.calibration.diagnose.auto_add = true;
   // The figures need the calibrated model, its residuals and uncertainty
-  // maps but not its diagnosis. Their renderer (node, librsvg: app/vega.h)
-  // starts now, beside the reading of the observations, so that node is
-  // waiting when the model is fitted; each spec goes to node as soon as it
-  // is made, the uncertainty maps' once the maps are computed, and
+  // maps but not its diagnosis. Their renderer (app/vega.h) starts now,
+  // beside the reading of the observations, so that its threads wait with
+  // librsvg loaded when the model is fitted; each spec goes to it as soon as
+  // it is made, the uncertainty maps' once the maps are computed, and
   // they are drawn on threads of their own while the diagnosis runs and
   // the model and the reports are written. report.json and report.html,
   // which list the figure files, come last: the run ends once its figures
@@ -52,8 +52,8 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   std::optional<FigureFiles> files;
   size_t made = 0;
   // The histograms (a small figure) wait for the uncertainty maps'
-  // figures: node's last SVG, whose PNG is drawn after node is done, is
-  // then a small one. Every other figure goes to node as soon as it is made.
+  // figures: the last figure drawn, which the run's end waits for, is then
+  // a small one. Every other figure is drawn as soon as it is made.
   std::optional<std::pair<size_t, Figure>> small;
   auto hand_over = [&](Figure f) {
     if (f.section == "histograms" && !small) {

@@ -13,27 +13,12 @@
 // `require('vega-util')` answered from the registry). The same text runs in
 // the browser (inlined in report.html) and in node (the PNG files).
 //
-// PNG files: node runs the runtime headless (renderer "none", View.toSVG) on
-// every spec in one process, librsvg draws each SVG in this process
-// (svg_raster.h) while node draws the next. Without node, the Vega modules
-// or librsvg, the run still writes the specs and report.html (which draws
-// them in the browser) and says which program is missing; it never fails
-// for it.
-//
-// Node's start: node starts, then reads and compiles the runtime, and the
-// first figures cost more than later ones while node compiles the code they
-// run. A start-up snapshot (node's --build-snapshot: the heap after the
-// runtime is loaded and a few warm-up specs are drawn, their compiled code
-// included) holds both: node starts from it barely slower than its own
-// start, and draws the first figure as fast as the next
-// (opencv_bench_side_by_side_benchmark's run of configs/bench.yaml includes
-// its figures). It is built once, by the first
-// renderer that finds it missing (about half a second, on the renderer's
-// own thread), into the user's cache folder (VegaSnapshotPath), and named
-// after everything it depends on (node's binary, its flags, the runtime
-// and the scripts), so that a changed node or runtime gets a snapshot of
-// its own. A snapshot node cannot read is removed and node reads the
-// runtime as without one; a run never fails for the snapshot.
+// Files: each figure's SVG is drawn from its spec in this process
+// (vega_svg.h, by Vega's rules, the part of Vega the figures use), and its
+// PNG from that SVG by librsvg (svg_raster.h), on a few threads of their own
+// while the run goes on. Without librsvg the run writes the SVG files and
+// says so; without the Vega modules report.html cannot draw its figures and
+// says so. A run never fails for either.
 #pragma once
 
 #include <functional>
@@ -58,69 +43,53 @@ struct RenderedFigure {
   std::string error;
 };
 
-// Node's start-up snapshot of the Vega runtime for the node program at
-// `node` (a path): vega-<hash>.blob in $XDG_CACHE_HOME/rtscalib, else in
-// ~/.cache/rtscalib; "" when neither variable is set or node or the runtime
-// is missing. The file may not exist yet.
-std::string VegaSnapshotPath(const std::string& node);
-
-// The SVG and PNG drawing of figures, started before the figures exist.
-// Node's start (from the snapshot, built first when missing) and the
-// opening of librsvg happen on a thread of their own from the constructor
-// on: a run starts its renderer when it has read its config, and Draw()
-// finds node waiting for specs. Node then draws one SVG after the other
-// (its start is paid once per run) and this process draws each one's PNG on
-// a thread of its own as soon as node has written it, while node draws the
-// next.
+// The SVG and PNG drawing of figures, started before the figures exist:
+// librsvg is opened and each drawing thread's fonts are loaded from the
+// constructor on, while the run reads its photos and fits. Each figure is
+// drawn as soon as it is added, on one of `threads` threads, and handed to
+// Collect's callback on that thread.
 class VegaRenderer {
  public:
-  VegaRenderer();
-  // Ends node (if Draw did not) and removes its temporary folder.
+  explicit VegaRenderer(size_t threads = 2);
+  // Ends the drawing (End) and waits for the threads.
   ~VegaRenderer();
+  // Waits until every thread has opened librsvg and loaded its fonts (a
+  // run need not: its first figure waits for it if it must).
+  void WaitUntilReady();
   VegaRenderer(const VegaRenderer&) = delete;
   VegaRenderer& operator=(const VegaRenderer&) = delete;
 
-  // Called with a figure's index and its SVG and PNG as soon as the PNG is
-  // drawn, on the thread that drew it (several at once): the run writes
-  // the files there, while node draws the next spec. What it throws, Draw
-  // throws.
+  // Called with a figure's index and its SVG and PNG as soon as they are
+  // drawn, on the thread that drew them (several at once): the run writes
+  // the files there. What it throws, Collect throws.
   using Drawn = std::function<void(size_t, const RenderedFigure&)>;
 
-  // SVG and PNG of each spec (in order), each figure that Vega or librsvg
-  // could not draw with its `error`; *note says why a figure is missing
-  // beyond that (node ended early: its own message). An empty vector and
-  // *note saying why when nothing can be drawn (a missing program). Once
-  // per renderer: Add, End and Collect on the calling thread, the largest
-  // spec first.
+  // SVG and PNG of each spec (in order); a figure that could not be drawn
+  // has its `error` (a spec outside vega_svg.h's part of Vega, librsvg's
+  // message); *note says what is missing for every figure (librsvg). Once
+  // per renderer, on the calling thread, the largest spec first.
   std::vector<RenderedFigure> Draw(const std::vector<nlohmann::json>& specs, std::string* note,
                                    const Drawn& drawn = nullptr);
 
   // The same with the specs handed over one at a time, while the next ones
-  // are made: Add gives node spec `index` (any order; node draws the specs
-  // in the order they come), End says that no more come. Collect, called
-  // once, on a thread of its own from before the first Add or after End,
-  // hands over each drawing as it comes and returns when node has drawn
-  // every spec added before End: one RenderedFigure per index up to the
-  // largest added (indices never added have an error). Add and End come
-  // from one thread.
-  void Add(size_t index, const std::string& spec);  // the spec as JSON text
+  // are made: Add gives spec `index` (any order; `spec` stays where it is
+  // until Collect returns), End says that no more come. Collect, called
+  // once, returns when every spec added before End is drawn: one
+  // RenderedFigure per index up to the largest added (indices never added
+  // have an error). `drawn` is called from the moment Collect is called
+  // (figures drawn before wait for it). Add and End come from one thread.
+  void Add(size_t index, const nlohmann::json& spec);
   void End();
   std::vector<RenderedFigure> Collect(std::string* note, const Drawn& drawn = nullptr);
 
-  // How node was started ("started from the snapshot <path>", "built the
-  // snapshot <path>", "read the runtime (no snapshot...)"); "" when it was
-  // not (Draw's note says why). Waits for the start.
-  const std::string& how();
-
-  struct State;  // vega.cc: node's process, its folder, what is missing
+  struct State;  // vega.cc: the threads and their queue
 
  private:
   std::unique_ptr<State> state_;
 };
 
-// The order in which to hand specs to node: the largest first. Their SVG
-// files are the largest too, and the PNG of the last SVG, drawn after node
-// is done, is then a small one.
+// The order in which to hand specs to the renderer: the largest first,
+// which take longest to draw, so that the last one drawn is a small one.
 // `bytes`: each spec's size as JSON text.
 std::vector<size_t> LargestFirst(const std::vector<size_t>& bytes);
 

@@ -5,11 +5,14 @@
 // of runs). One run of the config in this process, before the benchmarks,
 // writes their Vega specs and SVG files; the benchmarks draw them again.
 //
-//   BM_BenchFiguresDraw  app::VegaRenderer::Draw of the seven specs: node
-//       drawing the SVGs one after the other while this process draws each
-//       PNG on a thread of its own, up to the last PNG (what a run waits for
-//       after its specs are made). Node's start is outside the timing (a run
-//       starts node while it reads its photos). Counter: figures.
+//   BM_BenchFiguresDraw  app::VegaRenderer::Draw of the seven specs: each
+//       spec's SVG (app/vega_svg.h) and its PNG (librsvg) on the renderer's
+//       two threads, up to the last PNG (what a run waits for after its
+//       specs are made). The threads' start (librsvg opened, fonts loaded)
+//       is outside the timing: a run starts them while it reads its photos.
+//       Counter: figures.
+//   BM_BenchFiguresSvg  app::vega::DrawSvg alone: the seven specs to SVG on
+//       one thread. Counter: ms_per_figure.
 //   BM_BenchFiguresPng  librsvg and libdeflate alone: each of the seven SVG files
 //       to its PNG, on a thread that has drawn before. Counter: ms_per_figure.
 //   BM_FirstPngOfAThread  one figure (the largest photo figure) drawn twice
@@ -36,6 +39,7 @@
 #include "app/commands.h"
 #include "app/svg_raster.h"
 #include "app/vega.h"
+#include "app/vega_svg.h"
 #include "bench/quiet_stdout.h"
 
 namespace rtscalib::bench {
@@ -99,15 +103,12 @@ void BM_BenchFiguresDraw(benchmark::State& state) {
   for (auto _ : state) {
     state.PauseTiming();
     auto renderer = std::make_unique<app::VegaRenderer>();
-    if (renderer->how().empty()) {
-      state.SkipWithError("node or librsvg is missing");
-      return;
-    }
+    renderer->WaitUntilReady();
     state.ResumeTiming();
     std::string note;
     const std::vector<app::RenderedFigure> drawn = renderer->Draw(f.specs, &note);
     state.PauseTiming();
-    renderer.reset();  // node's end, the folder's removal
+    renderer.reset();  // the threads' end
     state.ResumeTiming();
     if (!note.empty() || drawn.size() != f.specs.size()) {
       state.SkipWithError(("figures not drawn: " + note).c_str());
@@ -117,6 +118,19 @@ void BM_BenchFiguresDraw(benchmark::State& state) {
   state.counters["figures"] = static_cast<double>(f.specs.size());
 }
 BENCHMARK(BM_BenchFiguresDraw)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+void BM_BenchFiguresSvg(benchmark::State& state) {
+  const BenchFigures& f = Figures();
+  double seconds = 0;
+  for (auto _ : state) {
+    const Clock::time_point t = Clock::now();
+    for (const nlohmann::json& spec : f.specs) benchmark::DoNotOptimize(app::vega::DrawSvg(spec));
+    seconds += std::chrono::duration<double>(Clock::now() - t).count();
+  }
+  state.counters["ms_per_figure"] =
+      1e3 * seconds / static_cast<double>(state.iterations() * f.specs.size());
+}
+BENCHMARK(BM_BenchFiguresSvg)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The process's rasterizer, or null with the benchmark skipped when
 // librsvg is missing.
