@@ -237,7 +237,8 @@ std::vector<double> Ticks(double start, double stop, double count) {
   return ticks;
 }
 
-// d3's linearish nice(count).
+// d3's linearish nice(count): the domain changes only once the tick step
+// has settled (a domain of zero width keeps its ends).
 void NiceLinear(double* d0, double* d1, double count) {
   double start = *d0, stop = *d1;
   const bool reverse = stop < start;
@@ -245,7 +246,11 @@ void NiceLinear(double* d0, double* d1, double count) {
   double prestep = kNaN;
   for (int i = 0; i < 10; ++i) {
     const double step = TickIncrement(start, stop, count);
-    if (step == prestep) break;
+    if (step == prestep) {
+      *d0 = reverse ? stop : start;
+      *d1 = reverse ? start : stop;
+      return;
+    }
     if (step > 0) {
       start = std::floor(start / step) * step;
       stop = std::ceil(stop / step) * step;
@@ -253,13 +258,10 @@ void NiceLinear(double* d0, double* d1, double count) {
       start = std::ceil(start * step) / step;
       stop = std::floor(stop * step) / step;
     } else {
-      break;
+      return;
     }
     prestep = step;
   }
-  if (reverse) std::swap(start, stop);
-  *d0 = start;
-  *d1 = stop;
 }
 
 // ---------------------------------------------------------------------------
@@ -1122,6 +1124,15 @@ Layer Drawer::DrawGroup(const json& mark, const Scope& scope, const json& datum,
   const double w = e.Num("width", datum, 0), h = e.Num("height", datum, 0);
   Scope child(&scope, w, h);
   Layer inner = DrawScope(mark, &child, false);
+  // The group's own rectangle (its frame), under its content.
+  const std::string fill = e.Str("fill", datum, ""), stroke = e.Str("stroke", datum, "");
+  if (!fill.empty() || !stroke.empty()) {
+    inner.svg = "<rect x=\"0\" y=\"0\" width=\"" + Num(w) + "\" height=\"" + Num(h) + "\"" +
+                Paint("fill", fill, e.Num("fillOpacity", datum, 1)) +
+                (stroke.empty() ? std::string() : Paint("stroke", stroke, 1)) + "/>" + inner.svg;
+    inner.box.Add(0, 0);
+    inner.box.Add(w, h);
+  }
   if (mark.value("clip", false)) {
     Layer clipped;
     clipped.svg = "<g clip-path=\"url(#" + child.ClipId(&defs_, &clips_) + ")\">" + inner.svg +
@@ -1206,10 +1217,17 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
     for (size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + Num(Number(v[i], 0));
     return s + "\"";
   };
-  auto xy_span = [&](const json& d, const char* a, const char* a2, const char* size, double* lo,
-                     double* hi) {
+  // A rect's or image's extent along one axis: from x to x2, from x over
+  // its width, or its width about the centre xc.
+  auto xy_span = [&](const json& d, const char* a, const char* a2, const char* size,
+                     const char* centre, double* lo, double* hi) {
     double v = e.Num(a, d, kNaN), v2 = e.Num(a2, d, kNaN);
     const double s = e.Num(size, d, kNaN);
+    if (e.Has(centre)) {
+      const double c = e.Num(centre, d, kNaN);
+      v = c - s / 2;
+      v2 = c + s / 2;
+    }
     if (!std::isfinite(v2) && std::isfinite(s)) v2 = v + s;
     *lo = std::min(v, v2);
     *hi = std::max(v, v2);
@@ -1217,8 +1235,8 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
   if (type == "rect") {
     for (const json* d : rows) {
       double x0, x1, y0, y1;
-      xy_span(*d, "x", "x2", "width", &x0, &x1);
-      xy_span(*d, "y", "y2", "height", &y0, &y1);
+      xy_span(*d, "x", "x2", "width", "xc", &x0, &x1);
+      xy_span(*d, "y", "y2", "height", "yc", &y0, &y1);
       if (!std::isfinite(x0 + x1 + y0 + y1)) continue;
       const std::string fill = painted ? e.Str("fill", *d, "") : kDefaultColour;
       const std::string stroke = e.Str("stroke", *d, "");
@@ -1341,8 +1359,8 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
   } else if (type == "image") {
     for (const json* d : rows) {
       double x0, x1, y0, y1;
-      xy_span(*d, "x", "x2", "width", &x0, &x1);
-      xy_span(*d, "y", "y2", "height", &y0, &y1);
+      xy_span(*d, "x", "x2", "width", "xc", &x0, &x1);
+      xy_span(*d, "y", "y2", "height", "yc", &y0, &y1);
       const std::string url = e.Str("url", *d, "");
       if (!std::isfinite(x0 + x1 + y0 + y1) || url.empty()) continue;
       const json aspect = e.Get("aspect", *d);
