@@ -70,8 +70,7 @@ std::string BuildRuntime(std::string* missing) {
   // tree of each expression text, and the code of each tree, are kept and
   // reused. vega-functions reads both through vega-expression's exports at
   // each call, and makes its code generator once, when it is loaded: the
-  // wrappers go in before it is. Node's snapshot keeps what its warm-up
-  // parsed.
+  // wrappers go in before it is.
   o << "var ve=req('vega-expression'),parse=ve.parseExpression,trees=new Map();"
        "ve.parseExpression=function(s){var t=trees.get(s);"
        "if(t===undefined){t=parse(s);trees.set(s,t);}return t;};"

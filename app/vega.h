@@ -4,14 +4,14 @@
 // because Debian packages it (libjs-vega: the browser modules, no network
 // at run time), because one spec gives both pictures a person needs (SVG in
 // report.html, crisp at any zoom, with tooltips naming shot, target and
-// value; PNG files through the same spec headless), and because the spec is
+// value; SVG and PNG files drawn from the same spec), and because the spec is
 // plain data that anyone can re-plot (docs/output.md, "Figures").
 //
 // Debian ships Vega as separate UMD modules, not one bundle; their
 // browser-global fallback overwrites `vega` per module, so VegaRuntime()
 // joins them through a small CommonJS registry instead (each module's
-// `require('vega-util')` answered from the registry). The same text runs in
-// the browser (inlined in report.html) and in node (the PNG files).
+// `require('vega-util')` answered from the registry). The text is inlined in
+// report.html (and run by node in the tests, against vega_svg.h).
 //
 // Files: each figure's SVG is drawn from its spec in this process
 // (vega_svg.h, by Vega's rules, the part of Vega the figures use), and its

@@ -13,8 +13,8 @@
 //       detection and calibration, and `x_opencv` = rtscalib's time /
 //       OpenCV's. Threads, the same for both sides: T = 1, OpenCV's thread
 //       pool off (cv::setNumThreads(1)), its photos one after the other,
-//       rtscalib's detection with one job (its diagnosis, figures and node
-//       still run beside the main thread); T = 2, OpenCV's photos split
+//       rtscalib's detection with one job (its diagnosis and figures still
+//       run beside the main thread); T = 2, OpenCV's photos split
 //       over its thread pool of 2 threads (cv::parallel_for_; OpenCV's own
 //       parallel loops inside a photo then run in that photo's thread), and
 //       rtscalib's detection with 2 jobs (bench.yaml's detect.jobs), which
