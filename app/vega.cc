@@ -145,7 +145,9 @@ struct VegaRenderer::State {
       RenderedFigure fig;
       try {
         fig.svg = vega::DrawSvg(*spec);
-      } catch (const vega::SubsetError& e) {
+      } catch (const std::exception& e) {
+        // Outside the drawn part of Vega (SubsetError), or a malformed spec
+        // (nlohmann's type errors): this figure has no files, the run goes on.
         fig.error = e.what();
       }
       if (!fig.svg.empty() && raster != nullptr && !raster->ToPng(fig.svg, &fig.png, &fig.error)) {

@@ -44,16 +44,18 @@ TEST(VegaRenderer, DrawsEachSpecAndNamesTheOneItCannotDraw) {
   VegaRenderer renderer;
   nlohmann::json broken = Bar();
   broken["marks"][0]["from"] = {{"data", "no_such_data"}};
+  nlohmann::json malformed = Bar();
+  malformed["width"] = "wide";  // a spec Vega would refuse too
   std::string note;
   std::mutex mutex;
   std::multiset<size_t> handed;  // figures handed over as soon as drawn
   const std::vector<RenderedFigure> out =
-      renderer.Draw({Bar(), broken, Bar()}, &note, [&](size_t i, const RenderedFigure& fig) {
+      renderer.Draw({Bar(), broken, Bar(), malformed}, &note, [&](size_t i, const RenderedFigure& fig) {
         EXPECT_FALSE(fig.png.empty());
         const std::lock_guard<std::mutex> lock(mutex);
         handed.insert(i);
       });
-  ASSERT_EQ(out.size(), 3u) << note;
+  ASSERT_EQ(out.size(), 4u) << note;
   EXPECT_TRUE(note.empty()) << note;
   EXPECT_EQ(handed, (std::multiset<size_t>{0, 2}));
   for (size_t i : {size_t{0}, size_t{2}}) {
@@ -69,6 +71,8 @@ TEST(VegaRenderer, DrawsEachSpecAndNamesTheOneItCannotDraw) {
   EXPECT_TRUE(out[1].svg.empty());
   EXPECT_TRUE(out[1].png.empty());
   EXPECT_NE(out[1].error.find("no_such_data"), std::string::npos) << out[1].error;
+  EXPECT_TRUE(out[3].svg.empty());
+  EXPECT_NE(out[3].error.find("must be number"), std::string::npos) << out[3].error;
 }
 
 // Specs handed over one at a time while the earlier ones are drawn: the
@@ -118,8 +122,8 @@ TEST(VegaRenderer, EndsItsThreadsWhenItNeverDraws) {
     VegaRenderer renderer;  // destroyed while its threads load librsvg
   }
   {
+    const nlohmann::json bar = Bar();  // outlives the renderer, as Add asks
     VegaRenderer renderer;
-    const nlohmann::json bar = Bar();
     renderer.Add(0, bar);  // drawn, never collected
   }
   VegaRenderer renderer;
