@@ -237,31 +237,36 @@ std::vector<double> Ticks(double start, double stop, double count) {
   return ticks;
 }
 
-// d3's linearish nice(count): the domain changes only once the tick step
-// has settled (a domain of zero width keeps its ends).
+// d3-scale 3's linearish nice(count), the one Debian's Vega bundles: two
+// passes of the tick step (the floating point of its second pass decides,
+// as in the browser: [0, 0.139] becomes [0, 0.15]). A domain of zero width
+// keeps its ends.
 void NiceLinear(double* d0, double* d1, double count) {
   double start = *d0, stop = *d1;
   const bool reverse = stop < start;
   if (reverse) std::swap(start, stop);
-  double prestep = kNaN;
-  for (int i = 0; i < 10; ++i) {
-    const double step = TickIncrement(start, stop, count);
-    if (step == prestep) {
-      *d0 = reverse ? stop : start;
-      *d1 = reverse ? start : stop;
-      return;
-    }
-    if (step > 0) {
-      start = std::floor(start / step) * step;
-      stop = std::ceil(stop / step) * step;
-    } else if (step < 0) {
-      start = std::ceil(start * step) / step;
-      stop = std::floor(stop * step) / step;
-    } else {
-      return;
-    }
-    prestep = step;
+  double step = TickIncrement(start, stop, count);
+  if (step > 0) {
+    start = std::floor(start / step) * step;
+    stop = std::ceil(stop / step) * step;
+    step = TickIncrement(start, stop, count);
+  } else if (step < 0) {
+    start = std::ceil(start * step) / step;
+    stop = std::floor(stop * step) / step;
+    step = TickIncrement(start, stop, count);
   }
+  if (step > 0) {
+    start = std::floor(start / step) * step;
+    stop = std::ceil(stop / step) * step;
+  } else if (step < 0) {
+    start = std::ceil(start * step) / step;
+    stop = std::floor(stop * step) / step;
+  } else {
+    return;
+  }
+  if (!std::isfinite(start) || !std::isfinite(stop)) return;
+  *d0 = reverse ? stop : start;
+  *d1 = reverse ? start : stop;
 }
 
 // ---------------------------------------------------------------------------
@@ -631,7 +636,8 @@ void DrawText(Layer* l, double x, double y, const std::string& raw, const TextSt
             Escape(text) + "</text>";
   // The box: the text's rectangle about its anchor, rotated.
   const double left = s.align == "center" ? -w / 2 : s.align == "right" ? -w : 0;
-  const double top = dy - 0.79 * s.size;
+  // Vega's text bounds: from round(0.8 size) above the alphabetic baseline.
+  const double top = dy - std::round(0.8 * s.size);
   const double a = s.angle * M_PI / 180, c = std::cos(a), sn = std::sin(a);
   for (double px : {left, left + w}) {
     for (double py : {top, top + s.size}) l->box.Add(x + c * px - sn * py, y + sn * px + c * py);
@@ -990,6 +996,10 @@ void Drawer::ReadData(const json& spec, Scope* scope) {
 
 void Drawer::ReadScales(const json& spec, Scope* scope) {
   if (!spec.contains("scales")) return;
+  // A range "width" or "height" is the spec's own size (Vega's width and
+  // height signals), in a group too.
+  const Scope* root = scope;
+  while (root->parent() != nullptr) root = root->parent();
   for (const json& s : spec["scales"]) {
     auto values = [scope](const json& d) {
       std::vector<const json*> out;
@@ -1015,7 +1025,7 @@ void Drawer::ReadScales(const json& spec, Scope* scope) {
       return out;
     };
     scope->AddScale(s.at("name").get<std::string>(),
-                    std::make_unique<Scale>(s, values, scope->width(), scope->height()));
+                    std::make_unique<Scale>(s, values, root->width(), root->height()));
   }
 }
 
@@ -1553,7 +1563,11 @@ Layer Drawer::DrawLegend(const json& legend, const Scope& scope) {
       const double ly = y + (1 - f) * kGradientLength;
       if (last - ly < label.size + 1) continue;
       last = ly;
-      DrawText(&l, kGradientThickness + kGradientLabelOffset, ly, text[i], label);
+      // Vega keeps the end labels within the gradient's length.
+      TextStyle end = label;
+      if (f < 1e-9) end.baseline = "bottom";
+      if (f > 1 - 1e-9) end.baseline = "top";
+      DrawText(&l, kGradientThickness + kGradientLabelOffset, ly, text[i], end);
     }
     return l;
   }
@@ -1571,10 +1585,12 @@ Layer Drawer::DrawLegend(const json& legend, const Scope& scope) {
     s.fill = fill ? Text(fill->Map(values[i])) : "";
     s.stroke = stroke ? Text(stroke->Map(values[i])) : fill ? "" : kAxisColour;
     s.stroke_width = kLegendSymbolStrokeWidth;
-    const double d = std::sqrt(s.size);
-    const double h = std::max(d, label.size);
-    DrawSymbol(&l, x + d / 2, y + h / 2, s);
-    DrawText(&l, x + d + kLegendLabelOffset, y + h / 2, text[i], label);
+    // Vega's entry: the symbol's box (its stroke included) then the label,
+    // an entry as tall as the larger of the two.
+    const double d = std::sqrt(s.size) + 2;
+    const double h = std::max(d, label.size + 4);
+    DrawSymbol(&l, x + d / 2, y + d / 2, s);
+    DrawText(&l, x + d + kLegendLabelOffset, y + d / 2, text[i], label);
     if (horizontal) {
       x += d + kLegendLabelOffset + TextWidth(text[i], label.size, false) + kLegendColumnPadding;
     } else {
@@ -1615,8 +1631,9 @@ void Drawer::DrawTitle(const json& title, Layer* l, bool top) {
   }
   (void)top;
   const Box b = l->box.empty() ? Box{0, 0, 0, 0} : l->box;
-  const double height =
-      size + (subtitle.empty() ? 0 : kSubtitlePadding + sub_size * subtitle.size());
+  // Vega's line height of text of several lines: its font size + 2.
+  const double line = sub_size + 2;
+  const double height = size + (subtitle.empty() ? 0 : kSubtitlePadding + line * subtitle.size());
   const double y = b.y1 - offset - height;
   const double x = anchor == "start" ? b.x1 : anchor == "end" ? b.x2 : (b.x1 + b.x2) / 2;
   TextStyle ts;
@@ -1629,7 +1646,7 @@ void Drawer::DrawTitle(const json& title, Layer* l, bool top) {
   ts.size = sub_size;
   ts.bold = false;
   for (size_t i = 0; i < subtitle.size(); ++i) {
-    DrawText(&t, x, y + size + kSubtitlePadding + sub_size * i, subtitle[i], ts);
+    DrawText(&t, x, y + size + kSubtitlePadding + line * i, subtitle[i], ts);
   }
   l->Append(t, 0, 0);
 }
@@ -1663,7 +1680,12 @@ std::string DrawSvg(const json& spec) {
   if (spec.contains("padding") && !spec["padding"].is_number()) Refuse("padding " + spec["padding"].dump());
   Box b = l.box;
   if (b.empty()) b = {0, 0, 0, 0};
-  const double w = std::ceil(b.x2 - b.x1 + 2 * pad), h = std::ceil(b.y2 - b.y1 + 2 * pad);
+  // Vega's "pad": the spec's size, grown by what the content reaches beyond
+  // it on each side (each rounded up), and the padding.
+  const double sw = spec.value("width", 0.0), sh = spec.value("height", 0.0);
+  const double left = std::ceil(std::max(0.0, -b.x1)), top = std::ceil(std::max(0.0, -b.y1));
+  const double w = left + sw + std::ceil(std::max(0.0, b.x2 - sw)) + 2 * pad;
+  const double h = top + sh + std::ceil(std::max(0.0, b.y2 - sh)) + 2 * pad;
   const std::string background = spec.value("background", "");
   std::string svg =
       "<svg xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\" "
@@ -1674,8 +1696,8 @@ std::string DrawSvg(const json& spec) {
     svg += "<rect width=\"" + Num(w) + "\" height=\"" + Num(h) + "\" fill=\"" + Escape(background) +
            "\"/>";
   }
-  svg += "<g transform=\"translate(" + Num(std::round(pad - b.x1)) + "," +
-         Num(std::round(pad - b.y1)) + ")\">" + l.svg + "</g></svg>\n";
+  svg += "<g transform=\"translate(" + Num(pad + left) + "," + Num(pad + top) + ")\">" + l.svg +
+         "</g></svg>\n";
   return svg;
 }
 
