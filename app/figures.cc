@@ -13,7 +13,7 @@
 #include "app/ladder_figures.h"
 #include "app/photo_figure.h"
 #include "app/residual_figures.h"
-#include "app/vega.h"
+#include "app/plot/vega.h"
 #include "libcalib/io/safe_write.h"
 
 namespace rtscalib::app {

@@ -1,4 +1,4 @@
-// The pictures of a run, as Vega specs (app/vega.h draws them: SVG in
+// The pictures of a run, as Vega specs (app/plot/vega.h draws them: SVG in
 // report.html, PNG files beside it). Every plotted number comes from the
 // calibration's own tables: the residual table (CalibrationResult::residuals,
 // one row per observation at the final model, boards of unknown pose at their
@@ -22,7 +22,7 @@
 // The figures themselves: residual_figures.h (maps, image, variables,
 // histograms), photo_figure.h, ladder_figures.h, heat_map_figures.h
 // (uncertainty, and `rtscalib compare`'s difference), all built from
-// vega_spec.h's blocks; this file chooses and orders them and writes them.
+// plot/vega_spec.h's blocks; this file chooses and orders them and writes them.
 #pragma once
 
 #include <chrono>
@@ -38,8 +38,8 @@
 #include <vector>
 
 #include "app/pipeline.h"
-#include "app/vega.h"
-#include "app/vega_spec.h"
+#include "app/plot/vega.h"
+#include "app/plot/vega_spec.h"
 
 namespace rtscalib::app {
 
@@ -56,9 +56,9 @@ std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::js
 
 // The files of figures handed over one at a time (Add), drawn while the
 // next ones are made: <dir>/<name>.vg.json for each figure and, when the
-// PNG renderer is installed (app/vega.h), <name>.svg and <name>.png, each
+// PNG renderer is installed (app/plot/vega.h), <name>.svg and <name>.png, each
 // figure's written as soon as its PNG is drawn. `renderer`: one started
-// earlier (the run starts its own when it has read its config, app/vega.h),
+// earlier (the run starts its own when it has read its config, app/plot/vega.h),
 // else one is started here.
 class FigureFiles {
  public:

@@ -1,4 +1,4 @@
-// Heat maps over a camera's image, as Vega specs (vega_spec.h): the
+// Heat maps over a camera's image, as Vega specs (plot/vega_spec.h): the
 // projection uncertainty of a zoom (libcalib/api/uncertainty_map.h) and the
 // projection difference of a zoom between two models (`rtscalib compare`,
 // libcalib/api/compare.h).
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "app/vega_spec.h"
+#include "app/plot/vega_spec.h"
 #include "libcalib/api/compare.h"
 #include "libcalib/api/uncertainty_map.h"
 #include "libcalib/model/instrument.h"

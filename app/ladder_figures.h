@@ -1,6 +1,6 @@
 // The ladder: the error per observation group across rungs (this run's
 // forward stepwise search, `diagnose --auto`) or across the runs of the
-// output folder, as Vega specs (vega_spec.h).
+// output folder, as Vega specs (plot/vega_spec.h).
 #pragma once
 
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "app/vega_spec.h"
+#include "app/plot/vega_spec.h"
 
 namespace rtscalib::app {
 

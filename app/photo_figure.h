@@ -1,6 +1,6 @@
 // One photo of a run with its observed corners and scaled residual arrows
 // (report.html's worst photos, `rtscalib show --shot ID`), as a Vega spec
-// (vega_spec.h).
+// (plot/vega_spec.h).
 #pragma once
 
 #include <map>
@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "app/pipeline.h"
-#include "app/vega_spec.h"
+#include "app/plot/vega_spec.h"
 #include "libcalib/diagnose/residuals.h"
 
 namespace rtscalib::app {

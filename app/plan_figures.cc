@@ -6,7 +6,7 @@
 #include <string>
 #include <tuple>
 
-#include "app/vega_spec.h"
+#include "app/plot/vega_spec.h"
 #include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {

@@ -8,7 +8,7 @@
 #include <string_view>
 
 #include "app/reports.h"
-#include "app/vega.h"
+#include "app/plot/vega.h"
 #include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {
@@ -86,7 +86,7 @@ std::string Img(const Figure& f) {
          "</figcaption></figure>\n";
 }
 
-// The Vega runtime (app/vega.h) and the script that draws every figure of
+// The Vega runtime (app/plot/vega.h) and the script that draws every figure of
 // the page as SVG; each figure says when it is drawn (data-rendered: the
 // number of SVG elements, data-marks: the items of its data marks) or why not
 // (data-error), for the checks of scripts/render-report.sh.

@@ -1,5 +1,5 @@
 // report.html: one self-contained page (no external files: the figures are
-// Vega specs drawn as SVG by the Vega runtime inlined in the page, app/vega.h)
+// Vega specs drawn as SVG by the Vega runtime inlined in the page, app/plot/vega.h)
 // that a person reads top-down:
 //   verdict (how good the model is, what to add next, the config line)
 //   the ladder (this run's stepwise rungs, the runs in the output folder)

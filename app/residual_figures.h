@@ -1,6 +1,6 @@
 // The figures of a calibration's residual table (CalibrationResult::residuals,
 // one row per observation at the final model, boards of unknown pose at their
-// estimates), as Vega specs (vega_spec.h): where on the sphere of pointings
+// estimates), as Vega specs (plot/vega_spec.h): where on the sphere of pointings
 // the model fails, where in the image, against which variable, and how the
 // residuals are distributed. Nothing here predicts or fits.
 #pragma once
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "app/vega_spec.h"
+#include "app/plot/vega_spec.h"
 #include "libcalib/diagnose/residuals.h"
 #include "libcalib/fit/options.h"
 #include "libcalib/model/instrument.h"

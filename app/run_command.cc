@@ -14,7 +14,7 @@
 #include "app/progress.h"
 #include "app/report_html.h"
 #include "app/reports.h"
-#include "app/vega.h"
+#include "app/plot/vega.h"
 #include "libcalib/io/safe_write.h"
 #include "libcalib/fit/parameter_layout.h"
 #include "libcalib/config/config.h"
@@ -33,7 +33,7 @@ int RunInto(const RunArgs& args, RunSettings settings, OutputFolder& out, Progre
   if (args.diagnose) config.calibration.diagnose.enabled = true;
   if (args.diagnose_auto) config.calibration.diagnose.auto_add = true;
   // The figures need the calibrated model, its residuals and uncertainty
-  // maps but not its diagnosis. Their renderer (app/vega.h) starts now,
+  // maps but not its diagnosis. Their renderer (app/plot/vega.h) starts now,
   // beside the reading of the observations, so that its threads wait with
   // librsvg loaded when the model is fitted; each spec goes to it as soon as
   // it is made, the uncertainty maps' once the maps are computed, and

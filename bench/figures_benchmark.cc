@@ -6,7 +6,7 @@
 // writes their Vega specs and SVG files; the benchmarks draw them again.
 //
 //   BM_BenchFiguresDraw  app::VegaRenderer::Draw of the seven specs: each
-//       spec's SVG (app/vega_svg.h) and its PNG (librsvg) on the renderer's
+//       spec's SVG (app/plot/vega_svg.h) and its PNG (librsvg) on the renderer's
 //       two threads, up to the last PNG (what a run waits for after its
 //       specs are made). The threads' start (librsvg opened, fonts loaded)
 //       is outside the timing: a run starts them while it reads its photos.
@@ -37,9 +37,9 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/svg_raster.h"
-#include "app/vega.h"
-#include "app/vega_svg.h"
+#include "app/plot/svg_raster.h"
+#include "app/plot/vega.h"
+#include "app/plot/vega_svg.h"
 #include "bench/quiet_stdout.h"
 
 namespace rtscalib::bench {

@@ -20,9 +20,9 @@ packages=(
   xvfb xauth libgl1-mesa-dri libglx-mesa0 mesa-utils
   # headless browser: scripts/render-report.sh checks report.html in it
   chromium
-  # figures (app/vega.h): Vega 5's modules, inlined in report.html (and run
+  # figures (app/plot/vega.h): Vega 5's modules, inlined in report.html (and run
   # by node in tests/app/vega_svg_test.cc, against rtscalib's own SVG
-  # drawing); librsvg (loaded by rtscalib, app/svg_raster.h) draws the PNG
+  # drawing); librsvg (loaded by rtscalib, app/plot/svg_raster.h) draws the PNG
   # files from the SVG files, libdeflate compresses them
   libjs-vega nodejs librsvg2-2 libdeflate0
   # tests/independent: photos from a renderer written from SPEC.md alone

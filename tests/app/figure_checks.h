@@ -14,7 +14,7 @@
 
 #include "app/figures.h"
 #include "app/reports.h"
-#include "app/vega_svg.h"
+#include "app/plot/vega_svg.h"
 
 namespace rtscalib::app::testing_figures {
 
@@ -89,7 +89,7 @@ inline std::vector<Figure> CheckFiguresAgainstResidualFile(const PipelineResult&
   int image_figures = 0, photo_figures = 0;
   for (const Figure& f : figs) {
     SCOPED_TRACE(f.name);
-    // Its files are drawn in process (app/vega_svg.h), which refuses a spec
+    // Its files are drawn in process (app/plot/vega_svg.h), which refuses a spec
     // beyond the part of Vega it draws: every figure the run makes is in it.
     EXPECT_NO_THROW(vega::DrawSvg(f.spec));
     if (f.section == "image") {

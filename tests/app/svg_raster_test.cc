@@ -1,5 +1,5 @@
-// The figures' PNG files: an SVG drawn by librsvg in process (app/svg_raster.h).
-#include "app/svg_raster.h"
+// The figures' PNG files: an SVG drawn by librsvg in process (app/plot/svg_raster.h).
+#include "app/plot/svg_raster.h"
 
 #include <gtest/gtest.h>
 

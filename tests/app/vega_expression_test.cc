@@ -1,4 +1,4 @@
-// The Vega expression subset and d3-format (app/vega_expression.h): the
+// The Vega expression subset and d3-format (app/plot/vega_expression.h): the
 // expressions the figures' specs use, JavaScript's operators and Vega's
 // functions, what lies outside the subset, and d3-format's numbers.
 //
@@ -6,7 +6,7 @@
 // the vega-format module of Debian's libjs-vega 5.22.1 (the Vega rtscalib
 // runs; defaultLocale().format(spec)(x)), the expressions as JavaScript with
 // vega-functions' definitions of isValid, toString, toNumber, join.
-#include "app/vega_expression.h"
+#include "app/plot/vega_expression.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The figures' SVG drawn from their Vega specs in process (app/vega_svg.h),
+// The figures' SVG drawn from their Vega specs in process (app/plot/vega_svg.h),
 // in two parts.
 //
 // VegaSvg: small hand-written specs whose picture Vega's rules fix: d3's
@@ -19,7 +19,7 @@
 // Vega modules are a test dependency (scripts/install-deps.sh installs
 // them): without them the comparison fails rather than skips, since
 // otherwise a drawer that parts from Vega would go unnoticed.
-#include "app/vega_svg.h"
+#include "app/plot/vega_svg.h"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -40,8 +40,8 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/vega.h"
-#include "app/vega_expression.h"
+#include "app/plot/vega.h"
+#include "app/plot/vega_expression.h"
 #include "tests/app/read_file.h"
 
 namespace rtscalib::app {

@@ -1,9 +1,9 @@
-// The figures' renderer (app/vega.h): each spec drawn as SVG and PNG on
+// The figures' renderer (app/plot/vega.h): each spec drawn as SVG and PNG on
 // the renderer's threads (all at once, or handed over one at a time while
 // the next are made), each handed to the caller as soon as it is drawn; a
 // spec outside the drawn part of Vega is named by its own error, the
 // others are drawn; a renderer that never draws ends its threads.
-#include "app/vega.h"
+#include "app/plot/vega.h"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "app/svg_raster.h"
+#include "app/plot/svg_raster.h"
 
 namespace rtscalib::app {
 namespace {

@@ -1,4 +1,4 @@
-#include "app/vega_spec.h"
+#include "app/plot/vega_spec.h"
 
 #include <algorithm>
 

@@ -1,7 +1,7 @@
-#include "app/vega.h"
+#include "app/plot/vega.h"
 
-#include "app/svg_raster.h"
-#include "app/vega_svg.h"
+#include "app/plot/svg_raster.h"
+#include "app/plot/vega_svg.h"
 
 #include <algorithm>
 #include <condition_variable>

@@ -1,4 +1,4 @@
-#include "app/vega_expression.h"
+#include "app/plot/vega_expression.h"
 
 #include <algorithm>
 #include <cctype>

@@ -1,4 +1,4 @@
-#include "app/vega_svg.h"
+#include "app/plot/vega_svg.h"
 
 #include <algorithm>
 #include <array>
@@ -22,7 +22,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 [[noreturn]] void Refuse(const std::string& what) {
-  throw SubsetError("Vega spec: " + what + " (outside the part of Vega that app/vega_svg.h draws)");
+  throw SubsetError("Vega spec: " + what + " (outside the part of Vega that app/plot/vega_svg.h draws)");
 }
 
 // ---------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-#include "app/svg_raster.h"
+#include "app/plot/svg_raster.h"
 
 #include <dlfcn.h>
 

@@ -8,7 +8,7 @@
 // A spec that uses a part of Vega outside this subset is not drawn wrongly:
 // the parse throws SubsetError naming the part.
 //
-// Numbers follow the Vega that rtscalib runs (app/vega.h: Debian's
+// Numbers follow the Vega that rtscalib runs (app/plot/vega.h: Debian's
 // libjs-vega 5.22.1 in /usr/share/javascript/vega). Its vega-format bundles
 // d3-format 1.4.5's locale, whose minus sign is the ASCII hyphen-minus "-"
 // (checked in node: format(-3.5, '.1f') is "-3.5"), where upstream

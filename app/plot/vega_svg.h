@@ -1,6 +1,6 @@
 // The figures' SVG files, drawn from their Vega specs in this process.
 //
-// report.html draws each figure with Vega itself (app/vega.h: the browser
+// report.html draws each figure with Vega itself (app/plot/vega.h: the browser
 // runs the spec). The files beside it (figures/<name>.svg, and the PNG that
 // librsvg draws from the SVG, svg_raster.h) are drawn here from the same
 // spec, by the same rules: the same scales (d3's linear, sqrt, log, point
@@ -28,7 +28,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "app/vega_expression.h"
+#include "app/plot/vega_expression.h"
 
 namespace rtscalib::app::vega {
 

@@ -1,4 +1,4 @@
-// The building blocks of the run's figures as Vega 5 specs (app/vega.h draws
+// The building blocks of the run's figures as Vega 5 specs (app/plot/vega.h draws
 // them): a figure record, the chart with its title, linear scales, axes,
 // marks, grid layouts, tooltips, lines per series, image-shaped panels with
 // their pixel scales, residual arrows and the reference arrow. Every figure
