@@ -12,8 +12,8 @@
 #include "app/heat_map_figures.h"
 #include "app/ladder_figures.h"
 #include "app/photo_figure.h"
-#include "app/residual_figures.h"
 #include "app/plot/vega.h"
+#include "app/residual_figures.h"
 #include "libcalib/io/safe_write.h"
 
 namespace rtscalib::app {

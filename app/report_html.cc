@@ -7,8 +7,8 @@
 #include <stdexcept>
 #include <string_view>
 
-#include "app/reports.h"
 #include "app/plot/vega.h"
+#include "app/reports.h"
 #include "libcalib/text/number_text.h"
 
 namespace rtscalib::app {

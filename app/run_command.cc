@@ -11,16 +11,16 @@
 #include "app/figures.h"
 #include "app/output_folder.h"
 #include "app/pipeline.h"
+#include "app/plot/vega.h"
 #include "app/progress.h"
 #include "app/report_html.h"
 #include "app/reports.h"
-#include "app/plot/vega.h"
-#include "libcalib/io/safe_write.h"
-#include "libcalib/fit/parameter_layout.h"
 #include "libcalib/config/config.h"
+#include "libcalib/fit/parameter_layout.h"
 #include "libcalib/io/covariance_io.h"
 #include "libcalib/io/model_io.h"
 #include "libcalib/io/records.h"
+#include "libcalib/io/safe_write.h"
 
 namespace rtscalib::app {
 namespace {

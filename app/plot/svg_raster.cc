@@ -102,7 +102,8 @@ bool DeflatePng(const SvgRasterizer::Api& a, const unsigned char* bgrx, int stri
   const unsigned char signature[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   png->insert(png->end(), std::begin(signature), std::end(signature));
   auto be32 = [&](std::uint32_t v) {
-    for (int shift = 24; shift >= 0; shift -= 8) png->push_back(static_cast<unsigned char>(v >> shift));
+    for (int shift = 24; shift >= 0; shift -= 8)
+      png->push_back(static_cast<unsigned char>(v >> shift));
   };
   // A chunk: its length, type and data, and the CRC of type and data.
   auto chunk = [&](const char* type, const unsigned char* data, std::size_t size) {

@@ -118,7 +118,7 @@ struct VegaRenderer::State {
   Drawn on_drawn;
   std::exception_ptr failed;  // the first thing on_drawn threw
   std::vector<std::thread> workers;
-  size_t busy = 0;  // figures being drawn
+  size_t busy = 0;   // figures being drawn
   size_t ready = 0;  // threads that have warmed up
 
   // One worker: warms up librsvg's text on its thread while the figures
@@ -236,8 +236,10 @@ std::vector<RenderedFigure> VegaRenderer::Collect(std::string* note, const Drawn
   note->clear();
   const SvgRasterizer& raster = SvgRasterizer::Get();
   if (!raster.missing().empty()) {
-    *note = "figures: no PNG files written (the SVG files, report.html and figures/*.vg.json "
-            "have them): " + raster.missing() + "; scripts/install-deps.sh installs it";
+    *note =
+        "figures: no PNG files written (the SVG files, report.html and figures/*.vg.json "
+        "have them): " +
+        raster.missing() + "; scripts/install-deps.sh installs it";
   }
   std::vector<RenderedFigure> out(s.added.empty() ? 0 : *s.added.rbegin() + 1);
   for (size_t i = 0; i < out.size(); ++i) {

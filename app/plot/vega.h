@@ -38,7 +38,7 @@ std::string VegaModuleDir();
 const std::string& VegaRuntime(std::string* missing = nullptr);
 
 struct RenderedFigure {
-  std::string svg;  // empty when this spec failed: `error` says why
+  std::string svg;                 // empty when this spec failed: `error` says why
   std::vector<unsigned char> png;  // empty when svg is
   std::string error;
 };

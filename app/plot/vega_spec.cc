@@ -48,8 +48,7 @@ json Chart(const std::string& title, const std::string& subtitle) {
           {"marks", json::array()}};
 }
 
-json Linear(const std::string& name, const json& domain, const json& range, bool nice,
-            bool zero) {
+json Linear(const std::string& name, const json& domain, const json& range, bool nice, bool zero) {
   return {{"name", name},   {"type", "linear"}, {"domain", domain},
           {"range", range}, {"nice", nice},     {"zero", zero}};
 }

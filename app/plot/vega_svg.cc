@@ -22,7 +22,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 [[noreturn]] void Refuse(const std::string& what) {
-  throw SubsetError("Vega spec: " + what + " (outside the part of Vega that app/plot/vega_svg.h draws)");
+  throw SubsetError("Vega spec: " + what +
+                    " (outside the part of Vega that app/plot/vega_svg.h draws)");
 }
 
 // ---------------------------------------------------------------------------
@@ -73,11 +74,20 @@ std::string Escape(const std::string& s) {
   out.reserve(s.size());
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -164,14 +174,17 @@ std::string Piecewise(const std::vector<Rgb>& colours, double t) {
 // discrete ones as their colours.
 std::vector<Rgb> SchemeStops(const std::string& packed) {
   std::vector<Rgb> out;
-  for (size_t i = 0; i + 6 <= packed.size(); i += 6) out.push_back(ColourOf("#" + packed.substr(i, 6)));
+  for (size_t i = 0; i + 6 <= packed.size(); i += 6)
+    out.push_back(ColourOf("#" + packed.substr(i, 6)));
   return out;
 }
 
 const char* ContinuousScheme(const std::string& name) {
   if (name == "viridis") {
-    return "440154470e61481a6c482575472f7d443a834144873d4e8a39568c35608d31688e2d708e2a788e27818e2388"
-           "8e21918d1f988b1fa08822a8842ab07f35b77943bf7154c56866cc5d7ad1518fd744a5db36bcdf27d2e21be9"
+    return "440154470e61481a6c482575472f7d443a834144873d4e8a39568c35608d31688e2d708e2a788e27818e238"
+           "8"
+           "8e21918d1f988b1fa08822a8842ab07f35b77943bf7154c56866cc5d7ad1518fd744a5db36bcdf27d2e21be"
+           "9"
            "e51afde725";
   }
   return nullptr;
@@ -338,8 +351,8 @@ std::string Scale::ColourAt(double t) const { return Piecewise(stops_, t); }
 
 Scale::Scale(const json& spec, const std::function<std::vector<const json*>(const json&)>& values,
              double width, double height) {
-  static const std::set<std::string> kKeys = {"name",  "type",    "domain",   "range",
-                                              "nice",  "zero",    "clamp",    "reverse",
+  static const std::set<std::string> kKeys = {"name",   "type",    "domain",   "range",
+                                              "nice",   "zero",    "clamp",    "reverse",
                                               "scheme", "padding", "exponent", "round"};
   for (const auto& [k, v] : spec.items()) {
     if (!kKeys.count(k)) Refuse("scale property '" + k + "'");
@@ -424,8 +437,8 @@ Scale::Scale(const json& spec, const std::function<std::vector<const json*>(cons
     } else if (s == "category") {
       scheme = "tableau10";
     } else if (s == "symbol") {
-      r = {"circle",        "square",         "triangle-up",  "cross",
-           "diamond",       "triangle-right", "triangle-down", "triangle-left"};
+      r = {"circle",  "square",         "triangle-up",   "cross",
+           "diamond", "triangle-right", "triangle-down", "triangle-left"};
     } else {
       Refuse("scale range '" + s + "' (scale '" + name_ + "')");
     }
@@ -526,9 +539,9 @@ std::vector<std::string> Scale::Labels(const std::vector<json>& ticks, double co
                                        const std::string& specifier) const {
   std::vector<std::string> out;
   if (discrete()) {
-    for (const json& v : ticks) out.push_back(specifier.empty() || !v.is_number()
-                                                  ? Text(v)
-                                                  : Format(v.get<double>(), specifier));
+    for (const json& v : ticks)
+      out.push_back(specifier.empty() || !v.is_number() ? Text(v)
+                                                        : Format(v.get<double>(), specifier));
     return out;
   }
   if (type_ == "log") {
@@ -684,8 +697,18 @@ std::string SymbolPath(const std::string& shape, double size, double* radius) {
   }
   if (shape == "cross") {
     const double s = r / 2.5;
-    return poly({{-r, -s}, {-r, s}, {-s, s}, {-s, r}, {s, r}, {s, s}, {r, s}, {r, -s}, {s, -s},
-                 {s, -r}, {-s, -r}, {-s, -s}});
+    return poly({{-r, -s},
+                 {-r, s},
+                 {-s, s},
+                 {-s, r},
+                 {s, r},
+                 {s, s},
+                 {r, s},
+                 {r, -s},
+                 {s, -s},
+                 {s, -r},
+                 {-s, -r},
+                 {-s, -s}});
   }
   if (shape == "stroke") return "M" + Num(-r) + ",0L" + Num(r) + ",0";
   if (shape == "circle") return "";
@@ -709,8 +732,8 @@ void DrawSymbol(Layer* l, double x, double y, const SymbolStyle& s) {
   }
   if (s.opacity != 1) paint += " opacity=\"" + Num(s.opacity) + "\"";
   if (d.empty()) {
-    l->svg += "<circle cx=\"" + Num(x) + "\" cy=\"" + Num(y) + "\" r=\"" + Num(r) + "\"" + paint +
-              "/>";
+    l->svg +=
+        "<circle cx=\"" + Num(x) + "\" cy=\"" + Num(y) + "\" r=\"" + Num(r) + "\"" + paint + "/>";
   } else {
     l->svg += "<path transform=\"translate(" + Num(x) + "," + Num(y) + ")" +
               (s.angle != 0 ? " rotate(" + Num(s.angle) + ")" : std::string()) + "\" d=\"" + d +
@@ -753,9 +776,7 @@ class Scope {
     }
     Refuse("data '" + name + "' that no scope defines");
   }
-  void AddScale(const std::string& name, std::unique_ptr<Scale> s) {
-    scales_[name] = std::move(s);
-  }
+  void AddScale(const std::string& name, std::unique_ptr<Scale> s) { scales_[name] = std::move(s); }
   const Scale& ScaleNamed(const std::string& name) const {
     for (const Scope* s = this; s != nullptr; s = s->parent_) {
       auto it = s->scales_.find(name);
@@ -861,7 +882,9 @@ class Channel {
     }
     if (!scale_fn_) {
       const Scope* s = &scope;
-      scale_fn_ = [s](const std::string& name, const json& v) { return s->ScaleNamed(name).Map(v); };
+      scale_fn_ = [s](const std::string& name, const json& v) {
+        return s->ScaleNamed(name).Map(v);
+      };
     }
     return rule;
   }
@@ -892,15 +915,23 @@ class Channel {
 class Encoding {
  public:
   Encoding(const json& mark, const Scope& scope) {
-    static const std::set<std::string> kDrawn = {
-        "x",          "y",          "x2",          "y2",           "width",
-        "height",     "xc",         "yc",          "fill",         "stroke",
-        "strokeWidth", "opacity",   "fillOpacity", "strokeOpacity", "strokeDash",
-        "size",       "shape",      "angle",       "text",         "align",
-        "baseline",   "fontSize",   "fontWeight",  "font",         "dx",
-        "dy",         "url",        "aspect",      "limit",        "interpolate"};
-    static const std::set<std::string> kInteractive = {"tooltip", "description", "aria", "cursor",
-                                                       "href", "ariaRole", "ariaRoleDescription"};
+    static const std::set<std::string> kDrawn = {"x",           "y",
+                                                 "x2",          "y2",
+                                                 "width",       "height",
+                                                 "xc",          "yc",
+                                                 "fill",        "stroke",
+                                                 "strokeWidth", "opacity",
+                                                 "fillOpacity", "strokeOpacity",
+                                                 "strokeDash",  "size",
+                                                 "shape",       "angle",
+                                                 "text",        "align",
+                                                 "baseline",    "fontSize",
+                                                 "fontWeight",  "font",
+                                                 "dx",          "dy",
+                                                 "url",         "aspect",
+                                                 "limit",       "interpolate"};
+    static const std::set<std::string> kInteractive = {
+        "tooltip", "description", "aria", "cursor", "href", "ariaRole", "ariaRoleDescription"};
     if (!mark.contains("encode")) return;
     for (const auto& [set, enc] : mark["encode"].items()) {
       if (set != "enter" && set != "update") Refuse("encode set '" + set + "'");
@@ -1007,7 +1038,8 @@ void Drawer::ReadScales(const json& spec, Scope* scope) {
         for (const json* r : scope->Data(data)) out.push_back(&Member(*r, field));
       };
       for (const auto& [k, v] : d.items()) {
-        if (k != "data" && k != "field" && k != "fields") Refuse("scale domain property '" + k + "'");
+        if (k != "data" && k != "field" && k != "fields")
+          Refuse("scale domain property '" + k + "'");
       }
       if (d.contains("field")) {
         add(d.at("data").get<std::string>(), d["field"].get<std::string>());
@@ -1031,8 +1063,8 @@ void Drawer::ReadScales(const json& spec, Scope* scope) {
 
 Layer Drawer::DrawScope(const json& spec, Scope* scope, bool top) {
   static const std::set<std::string> kKeys = {
-      "$schema", "autosize", "background", "padding", "width", "height", "data",
-      "scales",  "axes",     "legends",    "marks",   "title", "layout", "type",
+      "$schema", "autosize", "background", "padding", "width", "height",     "data",
+      "scales",  "axes",     "legends",    "marks",   "title", "layout",     "type",
       "encode",  "from",     "name",       "clip",    "style", "description"};
   for (const auto& [k, v] : spec.items()) {
     if (!kKeys.count(k)) Refuse("property '" + k + "'");
@@ -1104,8 +1136,8 @@ Layer Drawer::DrawScope(const json& spec, Scope* scope, bool top) {
       const std::string orient = lg.value("orient", "right");
       Layer legend = DrawLegend(lg, *scope);
       if (orient == "right") {
-        l.Append(legend, (content.empty() ? scope->width() : content.x2) + kLegendOffset -
-                             legend.box.x1,
+        l.Append(legend,
+                 (content.empty() ? scope->width() : content.x2) + kLegendOffset - legend.box.x1,
                  right_y - legend.box.y1);
         right_y += legend.box.y2 - legend.box.y1 + kLegendMargin;
       } else if (orient == "top") {
@@ -1145,8 +1177,8 @@ Layer Drawer::DrawGroup(const json& mark, const Scope& scope, const json& datum,
   }
   if (mark.value("clip", false)) {
     Layer clipped;
-    clipped.svg = "<g clip-path=\"url(#" + child.ClipId(&defs_, &clips_) + ")\">" + inner.svg +
-                  "</g>";
+    clipped.svg =
+        "<g clip-path=\"url(#" + child.ClipId(&defs_, &clips_) + ")\">" + inner.svg + "</g>";
     clipped.box = inner.box;
     clipped.box.x1 = std::max(clipped.box.x1, 0.0);
     clipped.box.y1 = std::max(clipped.box.y1, 0.0);
@@ -1158,9 +1190,9 @@ Layer Drawer::DrawGroup(const json& mark, const Scope& scope, const json& datum,
 }
 
 void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
-  static const std::set<std::string> kKeys = {"type",  "from",  "encode", "marks", "scales",
-                                              "axes",  "data",  "title",  "clip",  "name",
-                                              "style", "role",  "legends", "interactive"};
+  static const std::set<std::string> kKeys = {"type",  "from", "encode",  "marks",      "scales",
+                                              "axes",  "data", "title",   "clip",       "name",
+                                              "style", "role", "legends", "interactive"};
   for (const auto& [k, v] : mark.items()) {
     if (!kKeys.count(k)) Refuse("mark property '" + k + "'");
   }
@@ -1311,7 +1343,8 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
         d += (i ? "L" : "M") + Num(top[i].first) + "," + Num(top[i].second);
       }
       if (type == "area") {
-        for (size_t i = base.size(); i-- > 0;) d += "L" + Num(base[i].first) + "," + Num(base[i].second);
+        for (size_t i = base.size(); i-- > 0;)
+          d += "L" + Num(base[i].first) + "," + Num(base[i].second);
         d += "Z";
       }
       top.clear();
@@ -1398,10 +1431,10 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
 
 void Drawer::DrawAxis(const json& axis, const Scope& scope, Layer* out) {
   static const std::set<std::string> kKeys = {
-      "orient",        "scale",     "title",       "tickCount",  "labelFontSize",
-      "titleFontSize", "grid",      "labelAngle",  "labelAlign", "labelLimit",
-      "format",        "domain",    "ticks",       "labels",     "zindex",
-      "labelBaseline", "titlePadding", "labelPadding", "offset", "tickSize", "values"};
+      "orient", "scale",      "title",      "tickCount",     "labelFontSize", "titleFontSize",
+      "grid",   "labelAngle", "labelAlign", "labelLimit",    "format",        "domain",
+      "ticks",  "labels",     "zindex",     "labelBaseline", "titlePadding",  "labelPadding",
+      "offset", "tickSize",   "values"};
   for (const auto& [k, v] : axis.items()) {
     if (!kKeys.count(k)) Refuse("axis property '" + k + "'");
   }
@@ -1466,8 +1499,9 @@ void Drawer::DrawAxis(const json& axis, const Scope& scope, Layer* out) {
     ts.angle = axis.value("labelAngle", 0.0);
     ts.align = axis.value("labelAlign",
                           vertical ? (orient == "left" ? "right" : "left") : std::string("center"));
-    ts.baseline = axis.value("labelBaseline", vertical ? std::string("middle")
-                                                       : orient == "bottom" ? "top" : "bottom");
+    ts.baseline = axis.value("labelBaseline", vertical             ? std::string("middle")
+                                              : orient == "bottom" ? "top"
+                                                                   : "bottom");
     Layer labels_layer;
     for (size_t i = 0; i < ticks.size(); ++i) {
       const double p = s.Position(ticks[i]);
@@ -1504,8 +1538,8 @@ void Drawer::DrawAxis(const json& axis, const Scope& scope, Layer* out) {
 }
 
 Layer Drawer::DrawLegend(const json& legend, const Scope& scope) {
-  static const std::set<std::string> kKeys = {"fill",  "stroke", "shape",     "size",
-                                              "title", "type",   "orient",    "direction",
+  static const std::set<std::string> kKeys = {"fill",   "stroke",     "shape",   "size",
+                                              "title",  "type",       "orient",  "direction",
                                               "format", "symbolType", "columns", "opacity"};
   for (const auto& [k, v] : legend.items()) {
     if (!kKeys.count(k)) Refuse("legend property '" + k + "'");
@@ -1532,7 +1566,8 @@ Layer Drawer::DrawLegend(const json& legend, const Scope& scope) {
   label.size = kAxisLabelSize;
   label.baseline = "middle";
 
-  const bool gradient = legend.value("type", main->discrete() ? "symbol" : "gradient") == "gradient";
+  const bool gradient =
+      legend.value("type", main->discrete() ? "symbol" : "gradient") == "gradient";
   if (gradient) {
     if (main->discrete() || !main->colours()) Refuse("gradient legend of a non-colour scale");
     const std::string id = "gradient" + std::to_string(++clips_);
@@ -1608,9 +1643,8 @@ void Drawer::DrawTitle(const json& title, Layer* l, bool top) {
   if (title.is_string()) {
     text = title.get<std::string>();
   } else {
-    static const std::set<std::string> kKeys = {"text",   "subtitle",         "fontSize",
-                                                "anchor", "subtitleFontSize", "offset",
-                                                "orient", "frame"};
+    static const std::set<std::string> kKeys = {
+        "text", "subtitle", "fontSize", "anchor", "subtitleFontSize", "offset", "orient", "frame"};
     for (const auto& [k, v] : title.items()) {
       if (!kKeys.count(k)) Refuse("title property '" + k + "'");
     }
@@ -1677,7 +1711,8 @@ std::string DrawSvg(const json& spec) {
   Drawer drawer;
   Layer l = drawer.DrawSpec(spec);
   const double pad = spec.contains("padding") ? Number(spec["padding"], 0) : 0;
-  if (spec.contains("padding") && !spec["padding"].is_number()) Refuse("padding " + spec["padding"].dump());
+  if (spec.contains("padding") && !spec["padding"].is_number())
+    Refuse("padding " + spec["padding"].dump());
   Box b = l.box;
   if (b.empty()) b = {0, 0, 0, 0};
   // Vega's "pad": the spec's size, grown by what the content reaches beyond

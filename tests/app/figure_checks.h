@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "app/figures.h"
-#include "app/reports.h"
 #include "app/plot/vega_svg.h"
+#include "app/reports.h"
 
 namespace rtscalib::app::testing_figures {
 

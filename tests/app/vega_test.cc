@@ -49,8 +49,8 @@ TEST(VegaRenderer, DrawsEachSpecAndNamesTheOneItCannotDraw) {
   std::string note;
   std::mutex mutex;
   std::multiset<size_t> handed;  // figures handed over as soon as drawn
-  const std::vector<RenderedFigure> out =
-      renderer.Draw({Bar(), broken, Bar(), malformed}, &note, [&](size_t i, const RenderedFigure& fig) {
+  const std::vector<RenderedFigure> out = renderer.Draw(
+      {Bar(), broken, Bar(), malformed}, &note, [&](size_t i, const RenderedFigure& fig) {
         EXPECT_FALSE(fig.png.empty());
         const std::lock_guard<std::mutex> lock(mutex);
         handed.insert(i);
