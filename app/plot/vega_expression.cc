@@ -927,7 +927,6 @@ enum class Fn : uint8_t {
   kPow,
   kLog,
   kExp,
-  kSign,
   kClamp,
   kIsNaN,
   kIsFinite,
@@ -971,7 +970,7 @@ constexpr FunctionInfo kFunctions[] = {
     {"ceil", Fn::kCeil, 1, 1},         {"min", Fn::kMin, 0, -1},
     {"max", Fn::kMax, 0, -1},          {"pow", Fn::kPow, 2, 2},
     {"log", Fn::kLog, 1, 1},           {"exp", Fn::kExp, 1, 1},
-    {"sign", Fn::kSign, 1, 1},         {"clamp", Fn::kClamp, 3, 3},
+    {"clamp", Fn::kClamp, 3, 3},
     {"isNaN", Fn::kIsNaN, 1, 1},       {"isFinite", Fn::kIsFinite, 1, 1},
     {"isValid", Fn::kIsValid, 1, 1},   {"isNumber", Fn::kIsNumber, 1, 1},
     {"isString", Fn::kIsString, 1, 1}, {"toString", Fn::kToString, 1, 1},
@@ -1729,10 +1728,6 @@ Value Call(const Ast& n, const Context& c) {
       return Number(std::log(NumberArg(n, 0, c)));
     case Fn::kExp:
       return Number(std::exp(NumberArg(n, 0, c)));
-    case Fn::kSign: {
-      const double x = NumberArg(n, 0, c);
-      return Number(std::isnan(x) || x == 0 ? x : x > 0 ? 1.0 : -1.0);
-    }
     case Fn::kClamp: {  // Vega: Math.max(lo, Math.min(hi, x))
       const double x = NumberArg(n, 0, c), lo = NumberArg(n, 1, c), hi = NumberArg(n, 2, c);
       if (std::isnan(x) || std::isnan(lo) || std::isnan(hi)) return Number(kNaN);

@@ -101,8 +101,7 @@ std::string Format(double x, const std::string& specifier, std::string_view minu
 // LN10 LOG2E LOG10E PI SQRT1_2 SQRT2 MIN_VALUE MAX_VALUE; the functions scale(name, v),
 // format(v, spec), abs, sqrt, round, floor, ceil, min, max (any count), pow, log, exp, clamp,
 // isNaN, isFinite, isValid, isNumber, isString, toString, toNumber, length, join, upper,
-// lower, if(c, a, b), and sign (Math.sign: not one of Vega's functions, a spec drawn by Vega
-// cannot use it).
+// lower, if(c, a, b): Vega's own, so that a spec drawn here is one Vega draws.
 //
 // Differences from JavaScript, where a figure's data cannot tell: a missing member is null
 // (JavaScript's undefined: so datum.missing + 1 is 1, not NaN, and datum.missing === null is
