@@ -1003,5 +1003,65 @@ TEST(VegaSvgAgainstVega, FiguresOfASimulatedInstrument) {
   }
 }
 
+// The specs of the figures in `dir` (a folder of figures/*.vg.json), by name.
+std::vector<std::pair<std::string, json>> FiguresIn(const fs::path& dir) {
+  std::vector<fs::path> files;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+    const std::string f = e.path().filename().string();
+    if (f.size() > 8 && f.compare(f.size() - 8, 8, ".vg.json") == 0) files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<std::pair<std::string, json>> out;
+  for (const fs::path& p : files) {
+    const std::string f = p.filename().string();
+    out.emplace_back(f.substr(0, f.size() - 8), json::parse(ReadFile(p)));
+  }
+  return out;
+}
+
+// The figures of the other commands: `rtscalib plan` of an instrument (its
+// readings per face, a legend of colours and one of shapes) and of a camera
+// on its own (where to hold the board: outlines faceted per photo, clipped
+// to the image), and `rtscalib compare`'s projection difference of two
+// calibrations (a colour scale of zero width: two runs of one config).
+TEST(VegaSvgAgainstVega, FiguresOfThePlanAndCompareCommands) {
+  const fs::path dir = FreshDir("commands");
+  std::vector<std::pair<std::string, json>> figures;
+  for (const char* config : {"plan.yaml", "plan_camera.yaml"}) {
+    PlanArgs args;
+    args.config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/" + config;
+    args.output = (dir / config).string();
+    args.quiet = true;
+    ASSERT_EQ(RunPlan(args), 0) << config;
+    for (auto& [name, spec] : FiguresIn(dir / config / "figures")) {
+      figures.emplace_back(std::string(config) + "_" + name, std::move(spec));
+    }
+  }
+  RunArgs run;
+  run.config = std::string(RTSCALIB_SOURCE_DIR) + "/configs/bench.yaml";
+  run.quiet = true;
+  for (const char* out : {"a", "b"}) {
+    run.output = (dir / out).string();
+    ASSERT_EQ(RunCalibration(run), 0);
+  }
+  CompareArgs compare;
+  compare.a = (dir / "a" / "latest" / "model.yaml").string();
+  compare.b = (dir / "b" / "latest" / "model.yaml").string();
+  compare.output = (dir / "compare").string();
+  ASSERT_EQ(RunCompare(compare), 0);
+  for (auto& [name, spec] : FiguresIn(dir / "compare" / "figures")) {
+    figures.emplace_back("compare_" + name, std::move(spec));
+  }
+  const std::vector<std::string> names = Names(figures);
+  EXPECT_TRUE(Has(names, "plan.yaml_plan")) << Listed(names);
+  EXPECT_TRUE(Has(names, "plan_camera.yaml_plan")) << Listed(names);
+  EXPECT_TRUE(Has(names, "compare_compare_zoom0")) << Listed(names);
+  ExpectAllSameAsVega(figures, "commands_vega");
+  if (!::testing::Test::HasFailure()) {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+}
+
 }  // namespace
 }  // namespace rtscalib::app
