@@ -35,6 +35,7 @@ constexpr const char* kGridColour = "#ddd";
 constexpr double kLegendOffset = 18, kLegendMargin = 8, kLegendTitlePadding = 5;
 constexpr double kLegendLabelOffset = 4, kLegendRowPadding = 2, kLegendColumnPadding = 10;
 constexpr double kLegendSymbolSize = 100, kLegendSymbolStrokeWidth = 1.5;
+constexpr double kLegendLabelLimit = 160, kLegendTitleLimit = 180;
 constexpr double kGradientLength = 200, kGradientThickness = 16, kGradientLabelOffset = 2;
 constexpr double kTitleOffset = 4, kSubtitlePadding = 3;
 constexpr const char* kDefaultColour = "#4c78a8";
@@ -1552,6 +1553,7 @@ Layer Drawer::DrawLegend(const json& legend, const Scope& scope) {
     ts.size = kAxisTitleSize;
     ts.bold = true;
     ts.baseline = "top";
+    ts.limit = kLegendTitleLimit;
     DrawText(&l, 0, 0, title, ts);
     y = kAxisTitleSize + kLegendTitlePadding;
   }
@@ -1565,6 +1567,7 @@ Layer Drawer::DrawLegend(const json& legend, const Scope& scope) {
   TextStyle label;
   label.size = kAxisLabelSize;
   label.baseline = "middle";
+  label.limit = kLegendLabelLimit;
 
   const bool gradient =
       legend.value("type", main->discrete() ? "symbol" : "gradient") == "gradient";
