@@ -20,9 +20,10 @@
 // vega::SubsetError naming the part, never drawn wrong; the tests draw every
 // figure of the runs they make, so a new figure that needs more fails there.
 //
-// Why not node and Vega's own SVG renderer: starting node and running Vega's
-// dataflow cost several times what the whole calibration of a camera on a
-// bench costs; drawing the spec here takes about a millisecond.
+// Why not Vega itself, headless in node: node's start and Vega's dataflow
+// cost several times the whole calibration of a camera on a bench, where a
+// figure drawn here takes about half a millisecond (figures_benchmark's
+// BM_BenchFiguresSvg).
 #pragma once
 
 #include <nlohmann/json.hpp>
