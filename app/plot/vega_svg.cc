@@ -161,6 +161,8 @@ std::string Hex(const Rgb& c) {
 
 // d3's piecewise(interpolateRgb, colours)(t).
 std::string Piecewise(const std::vector<Rgb>& colours, double t) {
+  // No colour for no position (a log scale's domain reaching 0): not drawn.
+  if (!std::isfinite(t)) return "";
   const size_t n = colours.size() - 1;
   if (n == 0) return Hex(colours[0]);
   const double s = t * n;
