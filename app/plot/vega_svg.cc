@@ -237,17 +237,23 @@ std::vector<double> Ticks(double start, double stop, double count) {
   const double step = TickIncrement(start, stop, count);
   std::vector<double> ticks;
   if (step == 0 || !std::isfinite(step)) return ticks;
+  // d3 counts the ticks, then places tick i at (r0 + i) * step: counted here
+  // too, so that a domain far from 0 for its width (where r0 + 1 == r0 in
+  // floating point) still ends; a count beyond any axis's draws none.
+  constexpr double kMaxTicks = 10000;
   if (step > 0) {
     double r0 = std::round(start / step), r1 = std::round(stop / step);
     if (r0 * step < start) ++r0;
     if (r1 * step > stop) --r1;
-    for (double r = r0; r <= r1; ++r) ticks.push_back(r * step);
+    if (!(r1 - r0 < kMaxTicks)) return ticks;
+    for (int i = 0; i <= static_cast<int>(r1 - r0); ++i) ticks.push_back((r0 + i) * step);
   } else {
     const double s = -step;
     double r0 = std::round(start * s), r1 = std::round(stop * s);
     if (r0 / s < start) ++r0;
     if (r1 / s > stop) --r1;
-    for (double r = r0; r <= r1; ++r) ticks.push_back(r / s);
+    if (!(r1 - r0 < kMaxTicks)) return ticks;
+    for (int i = 0; i <= static_cast<int>(r1 - r0); ++i) ticks.push_back((r0 + i) / s);
   }
   if (reverse) std::reverse(ticks.begin(), ticks.end());
   return ticks;

@@ -488,6 +488,20 @@ TEST(VegaSvg, LinearAxisHasD3TicksWithLabelsAtTheStepsPrecision) {
                                       "3,500", "4,000", "4,500", "5,000"}));
 }
 
+// A domain far from 0 for its width (nanosecond time stamps over a few
+// seconds): its tick index r0 + 1 equals r0 in floating point, so ticks that
+// counted by adding 1 would never end. The drawing ends, with finite ticks.
+TEST(VegaSvg, ADomainFarFromZeroForItsWidthIsDrawn) {
+  const json spec = json::parse(R"({
+    "width": 300, "height": 10,
+    "scales": [{"name": "x", "type": "linear", "zero": false, "range": [0, 300],
+                "domain": [1.6e18, 1.6000000000000005e18]}],
+    "axes": [{"orient": "bottom", "scale": "x", "tickCount": 5}]})");
+  const std::string svg = vega::DrawSvg(spec);
+  EXPECT_NE(svg.find("<svg"), std::string::npos);
+  EXPECT_EQ(svg.find("NaN"), std::string::npos);
+}
+
 TEST(VegaSvg, NiceDomainExtendsToTheTicksAroundIt) {
   // [13, 87] with nice: [10, 90] (d3's nice with 10 ticks: a step of 10),
   // so that 10 and 90 lie on the range's ends, 640 px apart.
