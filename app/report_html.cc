@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "app/markup.h"
 #include "app/plot/vega.h"
 #include "app/reports.h"
 #include "libcalib/text/number_text.h"
@@ -15,30 +16,6 @@ namespace rtscalib::app {
 namespace {
 
 using nlohmann::json;
-
-std::string Esc(const std::string& s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 std::string Mm(double m) { return Fmt("%.4g", m * 1e3); }
 
@@ -78,11 +55,11 @@ std::string Img(const Figure& f) {
   // "</" would end the script element early; "<\/" is the same JSON string.
   for (size_t at = spec.find("</"); at != std::string::npos; at = spec.find("</", at + 3))
     spec.replace(at, 2, "<\\/");
-  return "<figure class=\"vega\" id=\"fig-" + Esc(f.name) + "\" data-figure=\"" + Esc(f.name) +
-         "\" aria-label=\"" + Esc(f.title) +
+  return "<figure class=\"vega\" id=\"fig-" + EscapeMarkup(f.name) + "\" data-figure=\"" + EscapeMarkup(f.name) +
+         "\" aria-label=\"" + EscapeMarkup(f.title) +
          "\"><div class=\"plot\"></div><script type=\"application/json\" "
          "id=\"spec-" +
-         Esc(f.name) + "\">" + spec + "</script><figcaption>" + Esc(f.caption) +
+         EscapeMarkup(f.name) + "\">" + spec + "</script><figcaption>" + EscapeMarkup(f.caption) +
          "</figcaption></figure>\n";
 }
 
@@ -190,11 +167,11 @@ std::string RankingTable(const Diagnosis& d) {
       << (r.recommended                  ? "sig"
           : r.redundant || !r.observable ? "red"
                                          : "")
-      << "\"><td class=num>" << ++i << "</td><td><b>" << Esc(r.name) << "</b><br><span class=small>"
-      << Esc(Info(r.effect).signature) << "</span></td><td class=num>"
+      << "\"><td class=num>" << ++i << "</td><td><b>" << EscapeMarkup(r.name) << "</b><br><span class=small>"
+      << EscapeMarkup(Info(r.effect).signature) << "</span></td><td class=num>"
       << Fmt("%.4g", r.rms_before * (mm ? 1e3 : 1)) << " &rarr; "
       << Fmt("%.4g", r.rms_after * (mm ? 1e3 : 1)) << (mm ? " mm" : " px")
-      << "<br><span class=small>" << (r.after_source == "refined" ? "refit" : Esc(r.after_source))
+      << "<br><span class=small>" << (r.after_source == "refined" ? "refit" : EscapeMarkup(r.after_source))
       << ", gain " << Fmt("%.2g", 100 * r.gain) << " %"
       << (r.significant && !r.worthwhile ? " (not worth adding)" : "")
       << "</span></td><td class=num>"
@@ -207,19 +184,19 @@ std::string RankingTable(const Diagnosis& d) {
                            : "no")
       << "</td><td class=est>" << ValueCell(r) << "</td><td class=notes>";
     std::vector<std::string> notes;
-    if (!r.note.empty()) notes.push_back(Esc(r.note));
+    if (!r.note.empty()) notes.push_back(EscapeMarkup(r.note));
     if (!r.aliases.empty()) {
       std::string a = "same structure as: ";
       for (size_t k = 0; k < r.aliases.size(); ++k) a += (k ? ", " : "") + r.aliases[k];
-      notes.push_back(Esc(a));
+      notes.push_back(EscapeMarkup(a));
     }
     if (!r.needs.empty()) {
       std::string n = "would help: ";
       for (size_t k = 0; k < r.needs.size(); ++k) n += (k ? "; " : "") + r.needs[k];
-      notes.push_back(Esc(n));
+      notes.push_back(EscapeMarkup(n));
     }
     for (size_t k = 0; k < notes.size(); ++k) o << (k ? "<br>" : "") << notes[k];
-    o << "</td><td class=cfg><code>" << Esc(r.config_line) << "</code></td></tr>\n";
+    o << "</td><td class=cfg><code>" << EscapeMarkup(r.config_line) << "</code></td></tr>\n";
   }
   o << "</table><p class=small>Sorted best first: the effects worth adding (significant and "
        "buying at least "
@@ -246,14 +223,14 @@ std::string HarmonicTable(const std::vector<Harmonic>& hs, bool explained, doubl
        "<th>p</th>"
     << (explained ? "<th>explained by</th>" : "") << "</tr>\n";
   for (const Harmonic& h : hs) {
-    o << "<tr><td>" << Esc(HarmonicName(h.probe, unit_length)) << "</td><td>"
+    o << "<tr><td>" << EscapeMarkup(HarmonicName(h.probe, unit_length)) << "</td><td>"
       << ReadingName(h.probe.reading) << "</td><td class=num>" << h.probe.face
       << "</td><td class=num>" << Fmt("%.3g", h.amplitude) << " &plusmn; "
-      << Fmt("%.2g", h.amplitude_sigma) << " " << Esc(h.unit) << "</td><td class=num>"
+      << Fmt("%.2g", h.amplitude_sigma) << " " << EscapeMarkup(h.unit) << "</td><td class=num>"
       << Fmt("%.0f", h.phase_deg) << "</td><td class=num>" << Fmt("%.2g", h.p_value) << "</td>";
     if (explained)
       o << "<td>"
-        << (h.explained_by.empty() ? "<b>nothing in the catalogue</b>" : Esc(h.explained_by))
+        << (h.explained_by.empty() ? "<b>nothing in the catalogue</b>" : EscapeMarkup(h.explained_by))
         << "</td>";
     o << "</tr>\n";
   }
@@ -292,15 +269,15 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
       report.contains("rtscalib") ? report["rtscalib"].value("run", std::string()) : "";
   o << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
     << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-    << "<title>rtscalib report " << Esc(run) << "</title><style>" << kStyle
+    << "<title>rtscalib report " << EscapeMarkup(run) << "</title><style>" << kStyle
     << "</style></head><body>\n";
-  o << "<h1>rtscalib report</h1><p class=meta>run " << Esc(run) << " &middot; config <code>"
-    << Esc(config.config_path) << "</code> &middot; ";
+  o << "<h1>rtscalib report</h1><p class=meta>run " << EscapeMarkup(run) << " &middot; config <code>"
+    << EscapeMarkup(config.config_path) << "</code> &middot; ";
   if (!r.obs.records.empty() || r.obs.pixels.empty()) {
-    o << r.obs.records.size() << " records (" << Esc(r.obs.records_source) << "), ";
+    o << r.obs.records.size() << " records (" << EscapeMarkup(r.obs.records_source) << "), ";
   }
   o << r.obs.pixels.size() << " image points"
-    << (r.obs.pixels.empty() ? "" : " (" + Esc(r.obs.pixels_source) + ")");
+    << (r.obs.pixels.empty() ? "" : " (" + EscapeMarkup(r.obs.pixels_source) + ")");
   if (r.calibration.model.kinematics != Kinematics::kNone) {
     o << " &middot; readings given in " << AngleUnitName(r.obs.angle_unit);
   }
@@ -316,11 +293,11 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     o << "<section class=\"verdict" << (ok ? " ok" : "")
       << "\" id=\"verdict\"><h2 style=\"border:none;margin-top:4px\">Verdict</h2>\n";
     for (size_t i = 0; i < d.verdict.size(); ++i) {
-      o << "<p" << (i == 1 ? " class=lead" : "") << ">" << Esc(d.verdict[i]) << "</p>\n";
+      o << "<p" << (i == 1 ? " class=lead" : "") << ">" << EscapeMarkup(d.verdict[i]) << "</p>\n";
     }
     if (next) {
       o << "<p>Add it with this line in the config, then run again:<br><code>"
-        << Esc(next->config_line) << "</code></p>\n";
+        << EscapeMarkup(next->config_line) << "</code></p>\n";
     }
     o << "</section>\n";
   } else {
@@ -334,14 +311,14 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   if (!r.calibration.ladder.empty() || has_history) {
     o << "<h2 id=\"ladder\">Watch the error fall</h2>\n";
     if (!r.calibration.ladder.empty()) {
-      o << "<h3>This run: forward stepwise (" << Esc(r.calibration.ladder_stop)
+      o << "<h3>This run: forward stepwise (" << EscapeMarkup(r.calibration.ladder_stop)
         << ")</h3><table><tr><th>step</th><th>added</th>"
            "<th>model</th><th>EDM rms [mm]</th><th>camera rms [mm]</th><th>pixels rms "
            "[px]</th><th>BIC</th></tr>\n";
       for (size_t i = 0; i < r.calibration.ladder.size(); ++i) {
         const LadderStep& s = r.calibration.ladder[i];
-        o << "<tr><td class=num>" << i << "</td><td>" << Esc(s.added.empty() ? "(start)" : s.added)
-          << "</td><td>" << Esc(s.model_description) << "</td>" << GroupCells(s.rms)
+        o << "<tr><td class=num>" << i << "</td><td>" << EscapeMarkup(s.added.empty() ? "(start)" : s.added)
+          << "</td><td>" << EscapeMarkup(s.model_description) << "</td>" << GroupCells(s.rms)
           << "<td class=num>" << Fmt("%.1f", s.bic) << "</td></tr>\n";
       }
       o << "</table>\n";
@@ -363,7 +340,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
         const std::string px = final.contains("pixels") && final["pixels"].value("n", 0) > 0
                                    ? Fmt("%.4g", final["pixels"].value("rms_px", 0.0))
                                    : "-";
-        o << "<tr><td>" << Esc(name) << "</td><td>" << Esc(kin) << ", effects: [" << Esc(eff)
+        o << "<tr><td>" << EscapeMarkup(name) << "</td><td>" << EscapeMarkup(kin) << ", effects: [" << EscapeMarkup(eff)
           << "]</td><td class=num>" << rms("edm") << "</td><td class=num>" << rms("cam")
           << "</td><td class=num>" << px << "</td></tr>\n";
       };
@@ -406,9 +383,9 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
         << "<table><tr><th>structure</th><th>p</th><th>explained by</th><th>points to</th></tr>\n";
       for (const auto* list : {&d.structure.unexplained, &d.structure.explained}) {
         for (const StructureFinding& f : *list) {
-          o << "<tr><td>" << Esc(f.description) << "</td><td>" << Fmt("%.1e", f.p_value)
-            << "</td><td>" << Esc(f.explained_by.empty() ? "-" : f.explained_by) << "</td><td>"
-            << Esc(f.unexplained ? f.points_to : "-") << "</td></tr>\n";
+          o << "<tr><td>" << EscapeMarkup(f.description) << "</td><td>" << Fmt("%.1e", f.p_value)
+            << "</td><td>" << EscapeMarkup(f.explained_by.empty() ? "-" : f.explained_by) << "</td><td>"
+            << EscapeMarkup(f.unexplained ? f.points_to : "-") << "</td></tr>\n";
         }
       }
       o << "</table>\n";
@@ -440,7 +417,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     for (const OutlierEntry& e : d.outliers.worst) {
       const bool px = e.group == ObsGroup::kPixel;
       o << "<tr><td class=num>" << Fmt("%.2f", e.w) << "</td><td>"
-        << (e.flagged ? "<b>yes</b>" : "no") << "</td><td>" << Esc(e.where) << "</td><td class=num>"
+        << (e.flagged ? "<b>yes</b>" : "no") << "</td><td>" << EscapeMarkup(e.where) << "</td><td class=num>"
         << (px ? Fmt("%.3g px", e.size) : Fmt("%.3g mm", e.size * 1e3)) << "</td></tr>\n";
     }
     o << "</table>\n";
@@ -465,7 +442,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   o << "</table>\n<p class=small>Refinement "
     << (r.calibration.fit.converged ? "converged" : "did NOT converge") << " in "
     << r.calibration.fit.iterations << " iterations; " << r.calibration.fit.excluded_critical
-    << " rows in the critical regions excluded. " << Esc(FitSigmasText(r.calibration.fit, !r.obs.records.empty()))
+    << " rows in the critical regions excluded. " << EscapeMarkup(FitSigmasText(r.calibration.fit, !r.obs.records.empty()))
     << "</p>\n";
 
   const Coverage& cov = r.calibration.coverage;
@@ -483,11 +460,11 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     o << "</table>\n";
     if (!r.calibration.coverage_warnings.empty()) {
       o << "<ul>";
-      for (const std::string& w : r.calibration.coverage_warnings) o << "<li>" << Esc(w) << "</li>";
+      for (const std::string& w : r.calibration.coverage_warnings) o << "<li>" << EscapeMarkup(w) << "</li>";
       o << "</ul>\n";
     }
     if (const std::string hint = PlanHint(config, r); !hint.empty()) {
-      o << "<p>" << Esc(hint) << "</p>\n";
+      o << "<p>" << EscapeMarkup(hint) << "</p>\n";
     }
   }
   if (!r.uncertainty_maps.empty()) {
@@ -504,7 +481,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     const UncertaintyMapOptions& u = r.uncertainty_options;
     const bool up_to_rotation = r.uncertainty_maps.front().up_to_rotation;
     o << "</table>\n<p class=small>1 sigma, worst direction, of the pixel where "
-      << Esc(MapSubject(r.uncertainty_maps.front(), u)) << " is seen, from the "
+      << EscapeMarkup(MapSubject(r.uncertainty_maps.front(), u)) << " is seen, from the "
       << (r.full_covariance ? "fit's full covariance" : "sigmas alone (no full covariance)")
       << (up_to_rotation
               ? " of the camera's intrinsics and distortion, less what a turn of the camera undoes "
@@ -524,7 +501,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
   o << "<h2 id=\"variables\">Residuals against the variables</h2>\n" << Figures(figs, "variables");
   o << "<h2 id=\"histograms\">Residual distributions</h2>\n" << Figures(figs, "histograms");
   if (!r.calibration.gross_rows.empty()) {
-    o << "<h2 id=\"gross\">Gross errors</h2>\n<pre class=small>" << Esc(GrossRowsText(r))
+    o << "<h2 id=\"gross\">Gross errors</h2>\n<pre class=small>" << EscapeMarkup(GrossRowsText(r))
       << "</pre>\n";
   }
   std::vector<std::string> notes = r.notes;
@@ -532,7 +509,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
     notes.push_back(report["figures"]["note"].get<std::string>());
   if (!notes.empty()) {
     o << "<h2>Notes</h2><ul class=small>";
-    for (const std::string& n : notes) o << "<li>" << Esc(n) << "</li>";
+    for (const std::string& n : notes) o << "<li>" << EscapeMarkup(n) << "</li>";
     o << "</ul>\n";
   }
   o << "<p class=small>rtscalib 0.1.0 &middot; report.json holds every number of this "
@@ -542,7 +519,7 @@ std::string ReportHtml(const RunConfig& config, const PipelineResult& r, const j
 }
 
 std::string FigurePage(const Figure& f) {
-  return "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" + Esc(f.title) +
+  return "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" + EscapeMarkup(f.title) +
          "</title><style>" + kStyle + "</style></head><body>\n" + Img(f) + FigureScripts() +
          "</body></html>\n";
 }

@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "app/markup.h"
+
 namespace rtscalib::app::vega {
 
 using json = nlohmann::json;
@@ -68,30 +70,6 @@ std::string Num(double v) {
   while (!s.empty() && s.back() == '0') s.pop_back();
   if (!s.empty() && s.back() == '.') s.pop_back();
   return s == "-0" ? "0" : s;
-}
-
-std::string Escape(const std::string& s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
 }
 
 // The text of a value as Vega shows it (String(value)).
@@ -653,9 +631,9 @@ void DrawText(Layer* l, double x, double y, const std::string& raw, const TextSt
             ")" + (s.angle != 0 ? " rotate(" + Num(s.angle) + ")" : std::string()) +
             "\" text-anchor=\"" + anchor + "\" font-family=\"sans-serif\" font-size=\"" +
             Num(s.size) + "px\"" + (s.bold ? " font-weight=\"bold\"" : "") + " fill=\"" +
-            Escape(s.fill) + "\"" +
+            EscapeMarkup(s.fill) + "\"" +
             (s.opacity != 1 ? " opacity=\"" + Num(s.opacity) + "\"" : std::string()) + ">" +
-            Escape(text) + "</text>";
+            EscapeMarkup(text) + "</text>";
   // The box: the text's rectangle about its anchor, rotated.
   const double left = s.align == "center" ? -w / 2 : s.align == "right" ? -w : 0;
   // Vega's text bounds: from round(0.8 size) above the alphabetic baseline.
@@ -670,7 +648,7 @@ std::string Paint(const char* attr, const std::string& colour, double opacity) {
   if (colour.empty() || colour == "none" || colour == "transparent") {
     return std::string(" ") + attr + "=\"none\"";
   }
-  std::string s = std::string(" ") + attr + "=\"" + Escape(colour) + "\"";
+  std::string s = std::string(" ") + attr + "=\"" + EscapeMarkup(colour) + "\"";
   if (opacity != 1) s += std::string(" ") + attr + "-opacity=\"" + Num(opacity) + "\"";
   return s;
 }
@@ -756,7 +734,7 @@ void DrawSymbol(Layer* l, double x, double y, const SymbolStyle& s) {
 void DrawLine(Layer* l, double x1, double y1, double x2, double y2, const std::string& stroke,
               double width, const std::string& extra = "") {
   l->svg += "<line x1=\"" + Num(x1) + "\" y1=\"" + Num(y1) + "\" x2=\"" + Num(x2) + "\" y2=\"" +
-            Num(y2) + "\" stroke=\"" + Escape(stroke) + "\"" +
+            Num(y2) + "\" stroke=\"" + EscapeMarkup(stroke) + "\"" +
             (width != 1 ? " stroke-width=\"" + Num(width) + "\"" : std::string()) + extra + "/>";
   l->box.Add(x1, y1);
   l->box.Add(x2, y2);
@@ -1421,7 +1399,7 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
                "\" height=\"" + Num(y1 - y0) + "\" preserveAspectRatio=\"" +
                (aspect.is_boolean() && !aspect.get<bool>() ? "none" : "xMidYMid") + "\"" +
                (o != 1 ? " opacity=\"" + Num(o) + "\"" : std::string()) + " xlink:href=\"" +
-               Escape(url) + "\"/>";
+               EscapeMarkup(url) + "\"/>";
       l.box.Add(x0, y0);
       l.box.Add(x1, y1);
     }
@@ -1739,7 +1717,7 @@ std::string DrawSvg(const json& spec) {
       Num(w) + "\" height=\"" + Num(h) + "\" viewBox=\"0 0 " + Num(w) + " " + Num(h) + "\">";
   if (!drawer.defs().empty()) svg += "<defs>" + drawer.defs() + "</defs>";
   if (!background.empty()) {
-    svg += "<rect width=\"" + Num(w) + "\" height=\"" + Num(h) + "\" fill=\"" + Escape(background) +
+    svg += "<rect width=\"" + Num(w) + "\" height=\"" + Num(h) + "\" fill=\"" + EscapeMarkup(background) +
            "\"/>";
   }
   svg += "<g transform=\"translate(" + Num(pad + left) + "," + Num(pad + top) + ")\">" + l.svg +
