@@ -382,6 +382,8 @@ Scale::Scale(const json& spec, const std::function<std::vector<const json*>(cons
       lo = std::min(lo, x);
       hi = std::max(hi, x);
     }
+    // A literal domain of two values keeps their order: a reversed axis
+    // (the zenith angle of face 2 runs from 360 down to 180).
     if (d.is_array() && d.size() == 2) {
       lo = Number(d[0]);
       hi = Number(d[1]);
@@ -755,7 +757,6 @@ class Scope {
   const Scope* parent() const { return parent_; }
 
   void AddData(const std::string& name, Rows rows) { data_[name] = std::move(rows); }
-  void Own(std::shared_ptr<json> values) { owned_.push_back(std::move(values)); }
   const Rows& Data(const std::string& name) const {
     for (const Scope* s = this; s != nullptr; s = s->parent_) {
       auto it = s->data_.find(name);
@@ -770,6 +771,15 @@ class Scope {
       if (it != s->scales_.end()) return *it->second;
     }
     Refuse("scale '" + name + "' that no scope defines");
+  }
+  // `l` clipped to this scope's rectangle (a clip path made once): what
+  // lies outside is neither drawn nor part of the bounds.
+  void Clip(Layer* l, std::string* defs, int* counter) const {
+    l->svg = "<g clip-path=\"url(#" + ClipId(defs, counter) + ")\">" + l->svg + "</g>";
+    l->box.x1 = std::max(l->box.x1, 0.0);
+    l->box.y1 = std::max(l->box.y1, 0.0);
+    l->box.x2 = std::min(l->box.x2, width_);
+    l->box.y2 = std::min(l->box.y2, height_);
   }
   // A clip path of this scope's rectangle, made once.
   std::string ClipId(std::string* defs, int* counter) const {
@@ -786,7 +796,6 @@ class Scope {
   double width_, height_;
   std::map<std::string, Rows> data_;
   std::map<std::string, std::unique_ptr<Scale>> scales_;
-  std::vector<std::shared_ptr<json>> owned_;
   mutable std::string clip_id_;
 };
 
@@ -969,10 +978,12 @@ class Drawer {
   void ReadScales(const json& spec, Scope* scope);
   Layer DrawScope(const json& spec, Scope* scope, bool top);
   void DrawMark(const json& mark, const Scope& scope, Layer* l);
-  Layer DrawGroup(const json& mark, const Scope& scope, const json& datum, double* x, double* y);
+  // A group mark (not a facet): its drawing in its own frame, its place
+  // and size.
+  Layer DrawGroup(const json& mark, const Scope& scope, double* x, double* y, double* w, double* h);
   void DrawAxis(const json& axis, const Scope& scope, Layer* l);
   Layer DrawLegend(const json& legend, const Scope& scope);
-  void DrawTitle(const json& title, Layer* l, bool top);
+  void DrawTitle(const json& title, Layer* l);
 
   std::string defs_;
   int clips_ = 0;
@@ -1071,10 +1082,9 @@ Layer Drawer::DrawScope(const json& spec, Scope* scope, bool top) {
   if (spec.contains("marks")) {
     for (const json& m : spec["marks"]) {
       if (grid && m.value("type", "") == "group" && !m.contains("from")) {
-        double x = 0, y = 0;
-        cells.push_back(DrawGroup(m, *scope, json::object(), &x, &y));
-        const Encoding e(m, *scope);
-        sizes.emplace_back(e.Num("width", json::object(), 0), e.Num("height", json::object(), 0));
+        double x = 0, y = 0, w = 0, h = 0;  // the grid places the panel: x, y unused
+        cells.push_back(DrawGroup(m, *scope, &x, &y, &w, &h));
+        sizes.emplace_back(w, h);
       } else {
         DrawMark(m, *scope, &l);
       }
@@ -1141,38 +1151,30 @@ Layer Drawer::DrawScope(const json& spec, Scope* scope, bool top) {
       top_x += t.box.x2 - t.box.x1 + kLegendMargin * 2;
     }
   }
-  if (spec.contains("title")) DrawTitle(spec["title"], &l, top);
+  if (spec.contains("title")) DrawTitle(spec["title"], &l);
   return l;
 }
 
-Layer Drawer::DrawGroup(const json& mark, const Scope& scope, const json& datum, double* x,
-                        double* y) {
+Layer Drawer::DrawGroup(const json& mark, const Scope& scope, double* x, double* y, double* w,
+                        double* h) {
   const Encoding e(mark, scope);
+  const json datum = json::object();
   *x = e.Num("x", datum, 0);
   *y = e.Num("y", datum, 0);
-  const double w = e.Num("width", datum, 0), h = e.Num("height", datum, 0);
-  Scope child(&scope, w, h);
+  *w = e.Num("width", datum, 0);
+  *h = e.Num("height", datum, 0);
+  Scope child(&scope, *w, *h);
   Layer inner = DrawScope(mark, &child, false);
   // The group's own rectangle (its frame), under its content.
   const std::string fill = e.Str("fill", datum, ""), stroke = e.Str("stroke", datum, "");
   if (!fill.empty() || !stroke.empty()) {
-    inner.svg = "<rect x=\"0\" y=\"0\" width=\"" + Num(w) + "\" height=\"" + Num(h) + "\"" +
+    inner.svg = "<rect x=\"0\" y=\"0\" width=\"" + Num(*w) + "\" height=\"" + Num(*h) + "\"" +
                 Paint("fill", fill, e.Num("fillOpacity", datum, 1)) +
                 (stroke.empty() ? std::string() : Paint("stroke", stroke, 1)) + "/>" + inner.svg;
     inner.box.Add(0, 0);
-    inner.box.Add(w, h);
+    inner.box.Add(*w, *h);
   }
-  if (mark.value("clip", false)) {
-    Layer clipped;
-    clipped.svg =
-        "<g clip-path=\"url(#" + child.ClipId(&defs_, &clips_) + ")\">" + inner.svg + "</g>";
-    clipped.box = inner.box;
-    clipped.box.x1 = std::max(clipped.box.x1, 0.0);
-    clipped.box.y1 = std::max(clipped.box.y1, 0.0);
-    clipped.box.x2 = std::min(clipped.box.x2, w);
-    clipped.box.y2 = std::min(clipped.box.y2, h);
-    return clipped;
-  }
+  if (mark.value("clip", false)) child.Clip(&inner, &defs_, &clips_);
   return inner;
 }
 
@@ -1204,13 +1206,15 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
         groups[i].push_back(r);
       }
       const Encoding e(mark, scope);
+      // Each facet draws the group's content: the mark without its facet
+      // and its own encoding (the group's place and size, evaluated here).
+      json inner = mark;
+      inner.erase("from");
+      inner.erase("encode");
       for (size_t i = 0; i < keys.size(); ++i) {
         const json datum = {{by, keys[i]}};
         Scope child(&scope, e.Num("width", datum, 0), e.Num("height", datum, 0));
         child.AddData(f.at("name").get<std::string>(), groups[i]);
-        json inner = mark;
-        inner.erase("from");
-        inner.erase("encode");
         Layer l = DrawScope(inner, &child, false);
         if (mark.value("clip", false)) {
           l.svg = "<g clip-path=\"url(#" + child.ClipId(&defs_, &clips_) + ")\">" + l.svg + "</g>";
@@ -1219,8 +1223,8 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
       }
       return;
     }
-    double x = 0, y = 0;
-    Layer l = DrawGroup(mark, scope, json::object(), &x, &y);
+    double x = 0, y = 0, w = 0, h = 0;
+    Layer l = DrawGroup(mark, scope, &x, &y, &w, &h);
     out->Append(l, x, y);
     return;
   }
@@ -1406,13 +1410,7 @@ void Drawer::DrawMark(const json& mark, const Scope& scope, Layer* out) {
   } else {
     Refuse("mark type '" + type + "'");
   }
-  if (mark.value("clip", false) && !l.svg.empty()) {
-    l.svg = "<g clip-path=\"url(#" + scope.ClipId(&defs_, &clips_) + ")\">" + l.svg + "</g>";
-    l.box.x1 = std::max(l.box.x1, 0.0);
-    l.box.y1 = std::max(l.box.y1, 0.0);
-    l.box.x2 = std::min(l.box.x2, scope.width());
-    l.box.y2 = std::min(l.box.y2, scope.height());
-  }
+  if (mark.value("clip", false) && !l.svg.empty()) scope.Clip(&l, &defs_, &clips_);
   out->Append(l, 0, 0);
 }
 
@@ -1624,7 +1622,7 @@ Layer Drawer::DrawLegend(const json& legend, const Scope& scope) {
   return l;
 }
 
-void Drawer::DrawTitle(const json& title, Layer* l, bool top) {
+void Drawer::DrawTitle(const json& title, Layer* l) {
   std::string text;
   std::vector<std::string> subtitle;
   double size = 13, sub_size = 12, offset = kTitleOffset;
@@ -1652,7 +1650,6 @@ void Drawer::DrawTitle(const json& title, Layer* l, bool top) {
     offset = title.value("offset", offset);
     anchor = title.value("anchor", anchor);
   }
-  (void)top;
   const Box b = l->box.empty() ? Box{0, 0, 0, 0} : l->box;
   // Vega's line height of text of several lines: its font size + 2.
   const double line = sub_size + 2;
