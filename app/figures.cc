@@ -198,6 +198,8 @@ void FigureFiles::Write(size_t index, const RenderedFigure* drawn) {
   WriteFileAtomic(base.string() + ".vg.json", f->second + "\n");
   if (drawn == nullptr) return;
   WriteFileAtomic(base.string() + ".svg", drawn->svg);
+  // No PNG without librsvg, or when librsvg refused the SVG.
+  if (drawn->png.empty()) return;
   WriteFileAtomic(base.string() + ".png",
                   std::string_view(reinterpret_cast<const char*>(drawn->png.data()),
                                    drawn->png.size()));
@@ -216,12 +218,16 @@ std::vector<std::vector<std::string>> FigureFiles::Finish(std::string* note,
     // The specs of figures that were not drawn.
     Write(i, nullptr);
     written.push_back({f.first.name + ".vg.json"});
-    if (i < drawn.size() && !drawn[i].png.empty()) {
-      written.back().push_back(f.first.name + ".svg");
-      written.back().push_back(f.first.name + ".png");
-    } else if (i < drawn.size()) {
-      *note += std::string(note->empty() ? "figures: " : "; ") + f.first.name +
-               " has no SVG or PNG (" + drawn[i].error + ")";
+    if (i < drawn.size()) {
+      const RenderedFigure& d = drawn[i];
+      if (!d.svg.empty()) written.back().push_back(f.first.name + ".svg");
+      if (!d.png.empty()) written.back().push_back(f.first.name + ".png");
+      // A missing librsvg is said once, in the renderer's note; a figure
+      // that could not be drawn, or whose PNG librsvg refused, by name.
+      if (d.svg.empty() || !d.error.empty()) {
+        *note += std::string(note->empty() ? "figures: " : "; ") + f.first.name + " has no " +
+                 (d.svg.empty() ? "SVG or PNG" : "PNG") + " (" + d.error + ")";
+      }
     }
     figures->push_back(std::move(f.first));
   }

@@ -55,9 +55,9 @@ std::vector<Figure> MakeUncertaintyFigures(const PipelineResult& result);
 std::vector<Figure> MakeFigures(const PipelineResult& result, const nlohmann::json& history);
 
 // The files of figures handed over one at a time (Add), drawn while the
-// next ones are made: <dir>/<name>.vg.json for each figure and, when the
-// PNG renderer is installed (app/plot/vega.h), <name>.svg and <name>.png, each
-// figure's written as soon as its PNG is drawn. `renderer`: one started
+// next ones are made: <dir>/<name>.vg.json, <name>.svg and, when librsvg
+// is installed (app/plot/vega.h), <name>.png for each figure, written as
+// soon as the figure is drawn. `renderer`: one started
 // earlier (the run starts its own when it has read its config, app/plot/vega.h),
 // else one is started here.
 class FigureFiles {

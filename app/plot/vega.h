@@ -39,7 +39,9 @@ const std::string& VegaRuntime(std::string* missing = nullptr);
 
 struct RenderedFigure {
   std::string svg;                 // empty when this spec failed: `error` says why
-  std::vector<unsigned char> png;  // empty when svg is
+  // Empty when svg is, without librsvg, or when librsvg refused the SVG
+  // (`error` says why).
+  std::vector<unsigned char> png;
   std::string error;
 };
 
